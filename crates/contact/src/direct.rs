@@ -1,0 +1,698 @@
+//! The time-stepped direct problem (P): global Newton on equilibrium coupled with a
+//! primal-dual active set for frictionless contact, adaptive step cutting, and the
+//! recorded trajectory that the adjoint replays.
+//!
+//! At step i (DESIGN.md §1): local backward-Euler updates at every Gauss point give
+//! `sigma_i(u_i)` and the tangent `C_i`; equilibrium `sum_g w_g B^T sigma_i = G^T lambda_i`
+//! holds on the free dofs; on the active set `A_i` the contact dofs are prescribed,
+//! `u_z,k = phi(r_k) - U_i`, and `lambda_k = -f_int,z,k` is the nodal reaction. The set is
+//! updated by releasing nodes with `lambda_k < 0` and activating nodes with `gap_k < 0`.
+
+use indentify_fe::{Discretization, DofMap, FeError, Pattern, QP_PER_ELEMENT, SparseCholesky};
+use indentify_laws::{Law, Mat4, Vec4};
+use indentify_mesh::Mesh;
+
+use crate::ContactError;
+use crate::history::Schedule;
+use crate::punch::Punch;
+
+/// Numerical options of the direct solver.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverOptions {
+    /// Relative tolerance on the equilibrium residual (inf-norm over free dofs, relative
+    /// to the largest internal force component).
+    pub residual_tol: f64,
+    /// Maximum global Newton iterations per step (counting re-solves after active-set changes).
+    pub max_iterations: usize,
+    /// Maximum number of successive halvings of a step before giving up.
+    pub max_cuts: u32,
+    /// Relative tolerance on penetration (times the current depth) before a node is activated.
+    pub gap_tol: f64,
+    /// Relative tolerance on tensile reactions (times the current force) before a node is released.
+    pub lambda_tol: f64,
+    /// Keep stresses and displacements of every step (needed by the adjoint and VTU output).
+    pub record_fields: bool,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        SolverOptions {
+            residual_tol: 1e-10,
+            max_iterations: 60,
+            max_cuts: 8,
+            gap_tol: 1e-10,
+            lambda_tol: 1e-10,
+            record_fields: true,
+        }
+    }
+}
+
+/// The direct problem's fixed data: mesh, Gauss-point geometry, dofs, pattern, contact
+/// candidates and punch. Built once, solved for many parameter sets.
+#[derive(Debug)]
+pub struct Model {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Gauss-point geometry.
+    pub disc: Discretization,
+    /// Dof map with the supports eliminated (axis u_r = 0, bottom u_z = 0).
+    pub dofs: DofMap,
+    /// Sparsity pattern of the tangent over equations.
+    pub pattern: Pattern,
+    /// Contact candidate nodes (the `top` node set, sorted by r).
+    pub candidates: Vec<usize>,
+    /// `phi(r_k)` of each candidate (mm).
+    pub candidate_profile: Vec<f64>,
+    /// Lumped full-circle area `int N_k 2 pi r dr` of each candidate (mm^2), for pressures.
+    pub candidate_area: Vec<f64>,
+    /// The punch.
+    pub punch: Punch,
+}
+
+impl Model {
+    /// Assembles the model for a mesh with `axis`, `bottom` and `top` node sets.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] for an invalid punch or a mesh without a `top` set.
+    pub fn new(mesh: Mesh, punch: Punch) -> Result<Model, ContactError> {
+        punch.validate()?;
+        let candidates = mesh.node_set("top").to_vec();
+        if candidates.len() < 3 || candidates.len() % 2 == 0 {
+            return Err(ContactError::Input {
+                field: "mesh.top",
+                value: format!("{} nodes", candidates.len()),
+                allowed: "an odd number >= 3 of top nodes (quadratic edges, sorted by r)".into(),
+            });
+        }
+        let disc = Discretization::new(&mesh);
+        let dofs = DofMap::cylinder(&mesh);
+        let pattern = Pattern::new(&disc, &dofs);
+        let r: Vec<f64> = candidates.iter().map(|&n| mesh.nodes[n][0]).collect();
+        let candidate_profile = r.iter().map(|&x| punch.profile(x)).collect();
+        // lumped areas of quadratic edges (r0, rm, r1): int N_k 2 pi r dr, 3-point Gauss
+        let mut candidate_area = vec![0.0; r.len()];
+        for e in (0..r.len() - 1).step_by(2) {
+            let (r0, r1) = (r[e], r[e + 2]);
+            let p = (0.6f64).sqrt();
+            for (xi, w) in [(-p, 5.0 / 9.0), (0.0, 8.0 / 9.0), (p, 5.0 / 9.0)] {
+                let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+                let rr = 0.5 * (r0 + r1) + 0.5 * xi * (r1 - r0);
+                let jac = 0.5 * (r1 - r0);
+                for k in 0..3 {
+                    candidate_area[e + k] += w * n[k] * 2.0 * std::f64::consts::PI * rr * jac;
+                }
+            }
+        }
+        Ok(Model {
+            mesh,
+            disc,
+            dofs,
+            pattern,
+            candidates,
+            candidate_profile,
+            candidate_area,
+            punch,
+        })
+    }
+
+    /// Radius of candidate `k` (mm).
+    pub fn candidate_r(&self, k: usize) -> f64 {
+        self.mesh.nodes[self.candidates[k]][0]
+    }
+}
+
+/// What the solver records at each converged step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepRecord {
+    /// End time of the step (s).
+    pub t: f64,
+    /// Step length (s).
+    pub dt: f64,
+    /// Punch depth `U_i` (mm).
+    pub depth: f64,
+    /// Punch force `F_i = sum_k lambda_k` (N, full circle).
+    pub force: f64,
+    /// Contact radius: radius of the outermost active node (mm), 0 without contact.
+    pub contact_radius: f64,
+    /// Active candidates (indices into [`Model::candidates`]), increasing.
+    pub active: Vec<u32>,
+    /// Nodal reactions `lambda_k` of the active candidates (N), same order as `active`.
+    pub lambda: Vec<f64>,
+    /// Global Newton iterations (linear solves) of this step.
+    pub iterations: u32,
+    /// Active-set changes during this step.
+    pub active_set_changes: u32,
+    /// `true` for steps ending on a time of the schedule, `false` for sub-steps of a cut.
+    pub on_schedule: bool,
+    /// Index of the schedule time this step ends at (or heads to, for a sub-step).
+    pub schedule_index: usize,
+}
+
+/// Fields of one converged step, kept when [`SolverOptions::record_fields`] is set.
+#[derive(Clone, PartialEq)]
+pub struct StepFields {
+    /// Displacements, all dofs (mm).
+    pub u: Vec<f64>,
+    /// Converged stress at every Gauss point (MPa, Mandel).
+    pub sigma: Vec<Vec4>,
+}
+
+impl std::fmt::Debug for StepFields {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "StepFields {{ {} dofs, {} Gauss points }}",
+            self.u.len(),
+            self.sigma.len()
+        )
+    }
+}
+
+/// The recorded forward run: one record per converged step (sub-steps included), the
+/// fields of the initial state (index 0) and of every step (`fields[i + 1]` for `steps[i]`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trajectory {
+    /// Step records in time order.
+    pub steps: Vec<StepRecord>,
+    /// Fields: initial state then one per step (empty unless recorded).
+    pub fields: Vec<StepFields>,
+    /// Parameters of the run.
+    pub params: Vec<f64>,
+    /// Wall-clock split of the run.
+    pub timing: Timing,
+}
+
+impl Trajectory {
+    /// The records ending on schedule times, in order (sub-steps of cut steps left out).
+    pub fn schedule_steps(&self) -> impl Iterator<Item = &StepRecord> {
+        self.steps.iter().filter(|s| s.on_schedule)
+    }
+
+    /// Force at each schedule time, starting with 0 for the initial state.
+    pub fn forces(&self) -> Vec<f64> {
+        std::iter::once(0.0)
+            .chain(self.schedule_steps().map(|s| s.force))
+            .collect()
+    }
+
+    /// Bytes held by the recorded fields and records (an estimate of the memory the
+    /// adjoint's replay needs).
+    pub fn recorded_bytes(&self) -> usize {
+        let f: usize = self
+            .fields
+            .iter()
+            .map(|f| 8 * f.u.len() + 32 * f.sigma.len())
+            .sum();
+        let s: usize = self
+            .steps
+            .iter()
+            .map(|s| std::mem::size_of::<StepRecord>() + 12 * s.active.len())
+            .sum();
+        f + s
+    }
+
+    /// Total global iterations over all steps.
+    pub fn total_iterations(&self) -> u64 {
+        self.steps.iter().map(|s| s.iterations as u64).sum()
+    }
+}
+
+/// Wall-clock time split of a run (s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timing {
+    /// Local updates and internal forces.
+    pub local: f64,
+    /// Tangent assembly.
+    pub assembly: f64,
+    /// Numeric factorizations.
+    pub factorization: f64,
+    /// Triangular solves.
+    pub solve: f64,
+    /// Whole run.
+    pub total: f64,
+    /// Number of numeric factorizations.
+    pub factorizations: usize,
+}
+
+/// A step failure the driver reacts to by cutting the step.
+#[derive(Clone, Debug, PartialEq)]
+enum StepFailure {
+    Local {
+        qp: usize,
+        reason: String,
+        factor: f64,
+    },
+    Newton {
+        residual: f64,
+    },
+    Cycling {
+        changes: u32,
+    },
+    Linear(String),
+}
+
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StepFailure::Local { qp, reason, .. } => {
+                write!(
+                    f,
+                    "local update failed at Gauss point {qp} (element {}): {reason}",
+                    qp / QP_PER_ELEMENT
+                )
+            }
+            StepFailure::Newton { residual } => write!(
+                f,
+                "global Newton did not converge (relative residual {residual:.3e})"
+            ),
+            StepFailure::Cycling { changes } => {
+                write!(f, "active set cycling after {changes} changes")
+            }
+            StepFailure::Linear(m) => write!(f, "linear solve failed: {m}"),
+        }
+    }
+}
+
+/// The state carried from step to step.
+#[derive(Clone, Debug)]
+struct State {
+    t: f64,
+    /// Largest internal-force component seen in converged steps: the residual's scale
+    /// when the current forces vanish (full unloading).
+    f_scale: f64,
+    u: Vec<f64>,
+    sigma: Vec<Vec4>,
+    active: Vec<bool>,
+}
+
+/// Reusable solver workspace: the symbolic factorization and scratch vectors, so that
+/// repeated runs (an optimizer's iterations) allocate and analyse nothing new.
+#[derive(Debug)]
+pub struct DirectSolver {
+    chol: SparseCholesky,
+    k_values: Vec<f64>,
+    k_constrained: Vec<f64>,
+    tangents: Vec<Mat4>,
+    eps: Vec<[f64; 4]>,
+    f_int: Vec<f64>,
+    rhs: Vec<f64>,
+    aux: Vec<f64>,
+    /// Key of the tangent currently in `k_values` for a linear law: (params, dt bits).
+    k_key: Option<(Vec<u64>, u64)>,
+    /// Key of the current factorization: tangent key and active set.
+    factor_key: Option<(Vec<u64>, u64, Vec<bool>)>,
+}
+
+impl DirectSolver {
+    /// Analyses the model's pattern once.
+    ///
+    /// # Errors
+    /// [`ContactError::Fe`] if the symbolic factorization fails.
+    pub fn new(model: &Model) -> Result<DirectSolver, ContactError> {
+        let chol = SparseCholesky::analyse(&model.pattern)?;
+        let n = model.dofs.n_eq;
+        let nq = model.disc.n_qp();
+        Ok(DirectSolver {
+            chol,
+            k_values: vec![0.0; model.pattern.nnz()],
+            k_constrained: vec![0.0; model.pattern.nnz()],
+            tangents: vec![Mat4::ZERO; nq],
+            eps: vec![[0.0; 4]; nq],
+            f_int: vec![0.0; model.disc.n_dofs()],
+            rhs: vec![0.0; n],
+            aux: vec![0.0; n],
+            k_key: None,
+            factor_key: None,
+        })
+    }
+
+    /// Runs the whole schedule for parameters `c` of `law`.
+    ///
+    /// # Errors
+    /// [`ContactError::Parameters`] for inadmissible parameters;
+    /// [`ContactError::StepFailed`] when a step fails even after `max_cuts` halvings, carrying
+    /// the trajectory up to the last converged step.
+    pub fn run(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        schedule: &Schedule,
+        opts: &SolverOptions,
+    ) -> Result<Trajectory, ContactError> {
+        law.check_params(c)?;
+        let start = std::time::Instant::now();
+        let nq = model.disc.n_qp();
+        let mut state = State {
+            t: schedule.t[0],
+            f_scale: 0.0,
+            u: vec![0.0; model.disc.n_dofs()],
+            sigma: vec![Vec4::ZERO; nq],
+            active: vec![false; model.candidates.len()],
+        };
+        let mut traj = Trajectory {
+            params: c.to_vec(),
+            ..Default::default()
+        };
+        if opts.record_fields {
+            traj.fields.push(StepFields {
+                u: state.u.clone(),
+                sigma: state.sigma.clone(),
+            });
+        }
+        let factorizations0 = self.chol.n_factorizations;
+        for j in 1..schedule.t.len() {
+            // targets still to reach, last first; a failed step pushes its midpoint
+            let mut targets = vec![(schedule.t[j], 0u32)];
+            while let Some(&(t1, level)) = targets.last() {
+                let u1 = schedule.depth_at(t1);
+                match self.step(model, law, c, &state, t1, u1, opts, &mut traj.timing) {
+                    Ok((rec_state, mut rec)) => {
+                        targets.pop();
+                        rec.on_schedule = targets.is_empty();
+                        rec.schedule_index = j;
+                        state = rec_state;
+                        if opts.record_fields {
+                            traj.fields.push(StepFields {
+                                u: state.u.clone(),
+                                sigma: state.sigma.clone(),
+                            });
+                        }
+                        traj.steps.push(rec);
+                    }
+                    Err(fail) => {
+                        if level >= opts.max_cuts {
+                            traj.timing.total = start.elapsed().as_secs_f64();
+                            return Err(ContactError::StepFailed {
+                                step: j,
+                                t: t1,
+                                cuts: level,
+                                reason: fail.to_string(),
+                                partial: Box::new(traj),
+                            });
+                        }
+                        let factor = match fail {
+                            StepFailure::Local { factor, .. } => factor.clamp(0.1, 0.5),
+                            _ => 0.5,
+                        };
+                        let tm = state.t + factor * (t1 - state.t);
+                        targets.push((tm, level + 1));
+                        // the remaining part keeps its level so repeated failures keep cutting
+                        let n = targets.len();
+                        targets[n - 2].1 = level + 1;
+                    }
+                }
+            }
+        }
+        traj.timing.factorizations = self.chol.n_factorizations - factorizations0;
+        traj.timing.total = start.elapsed().as_secs_f64();
+        Ok(traj)
+    }
+
+    /// Local updates at every Gauss point for displacement `u` from `state`; fills
+    /// `sigma_out`, `self.tangents` and `self.f_int`.
+    fn evaluate(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        state: &State,
+        u: &[f64],
+        dt: f64,
+        sigma_out: &mut [Vec4],
+    ) -> Result<(), StepFailure> {
+        let disc = &model.disc;
+        for e in 0..disc.elements.len() {
+            let dofs = disc.element_dofs(e);
+            let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
+            for g in 0..QP_PER_ELEMENT {
+                let q = QP_PER_ELEMENT * e + g;
+                self.eps[q] = disc.qp[q].strain(&due);
+                let up = law
+                    .update(c, &state.sigma[q], &Vec4(self.eps[q]), dt)
+                    .map_err(|f| StepFailure::Local {
+                        qp: q,
+                        reason: f.reason,
+                        factor: f.suggested_dt_factor,
+                    })?;
+                sigma_out[q] = up.sigma;
+                self.tangents[q] = up.tangent;
+            }
+        }
+        disc.internal_force(sigma_out, &mut self.f_int);
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        state: &State,
+        t1: f64,
+        depth: f64,
+        opts: &SolverOptions,
+        timing: &mut Timing,
+    ) -> Result<(State, StepRecord), StepFailure> {
+        let dt = t1 - state.t;
+        let nc = model.candidates.len();
+        let n_eq = model.dofs.n_eq;
+        let mut u = state.u.clone();
+        let mut sigma = state.sigma.clone();
+        let mut active = state.active.clone();
+        // predictor: activate nodes that the new depth makes penetrate
+        for k in 0..nc {
+            if !active[k] && gap(model, k, depth, &u) < 0.0 {
+                active[k] = true;
+            }
+        }
+        let zdof = |k: usize| 2 * model.candidates[k] + 1;
+        let mut seen: Vec<Vec<bool>> = vec![active.clone()];
+        let mut changes = 0u32;
+        let mut iterations = 0u32;
+        let param_key: Vec<u64> = c.iter().map(|v| v.to_bits()).collect();
+        let mut constrained = vec![false; n_eq];
+        let mut single_change = false;
+        loop {
+            let tl = std::time::Instant::now();
+            self.evaluate(model, law, c, state, &u, dt, &mut sigma)?;
+            timing.local += tl.elapsed().as_secs_f64();
+            // residual on free, unconstrained equations
+            constrained.fill(false);
+            for k in 0..nc {
+                if active[k] {
+                    if let Some(e) = model.dofs.equation(zdof(k)) {
+                        constrained[e] = true;
+                    }
+                }
+            }
+            let mut res: f64 = 0.0;
+            let mut fmax: f64 = 0.0;
+            for (d, &e) in model.dofs.eq.iter().enumerate() {
+                if e != indentify_fe::dofs::NO_EQ {
+                    fmax = fmax.max(self.f_int[d].abs());
+                    if !constrained[e as usize] {
+                        res = res.max(self.f_int[d].abs());
+                    }
+                }
+            }
+            let targets_met = (0..nc).filter(|&k| active[k]).all(|k| {
+                let target = model.candidate_profile[k] - depth;
+                (u[zdof(k)] - target).abs() <= 1e-13 * (1.0 + target.abs())
+            });
+            let scale = fmax.max(state.f_scale);
+            let rel = if scale > 0.0 { res / scale } else { res };
+            if iterations > 0 && targets_met && (rel <= opts.residual_tol || res == 0.0) {
+                // equilibrium holds for this active set: check complementarity
+                let force: f64 = (0..nc)
+                    .filter(|&k| active[k])
+                    .map(|k| -self.f_int[zdof(k)])
+                    .sum();
+                let ltol = opts.lambda_tol * force.abs().max(1e-300);
+                let gtol = opts.gap_tol * depth.abs().max(1e-12);
+                let mut worst: Option<(usize, f64)> = None;
+                let mut violations = Vec::new();
+                for k in 0..nc {
+                    let v = if active[k] {
+                        let lam = -self.f_int[zdof(k)];
+                        if lam < -ltol {
+                            -lam / force.abs().max(1e-300)
+                        } else {
+                            0.0
+                        }
+                    } else {
+                        let g = gap(model, k, depth, &u);
+                        if g < -gtol {
+                            -g / depth.abs().max(1e-12)
+                        } else {
+                            0.0
+                        }
+                    };
+                    if v > 0.0 {
+                        violations.push(k);
+                        if worst.is_none_or(|(_, w)| v > w) {
+                            worst = Some((k, v));
+                        }
+                    }
+                }
+                if violations.is_empty() {
+                    let rec = self.record(model, &active, &u, t1, dt, depth, iterations, changes);
+                    let f_scale = state.f_scale.max(fmax);
+                    return Ok((
+                        State {
+                            t: t1,
+                            f_scale,
+                            u,
+                            sigma,
+                            active,
+                        },
+                        rec,
+                    ));
+                }
+                let flip: Vec<usize> = if single_change {
+                    vec![worst.map_or(0, |w| w.0)]
+                } else {
+                    violations
+                };
+                for k in flip {
+                    active[k] = !active[k];
+                }
+                changes += 1;
+                if seen.contains(&active) {
+                    if single_change {
+                        return Err(StepFailure::Cycling { changes });
+                    }
+                    single_change = true;
+                }
+                seen.push(active.clone());
+                continue;
+            }
+            if iterations as usize >= opts.max_iterations {
+                return Err(StepFailure::Newton { residual: rel });
+            }
+            iterations += 1;
+            // tangent: reuse for linear laws with the same parameters and step length
+            let ta = std::time::Instant::now();
+            let key = (param_key.clone(), dt.to_bits());
+            let linear = law.is_linear();
+            if !(linear && self.k_key.as_ref() == Some(&key)) {
+                model
+                    .pattern
+                    .assemble_b_c_b(&model.disc, &self.tangents, &mut self.k_values);
+                self.k_key = linear.then(|| key.clone());
+                self.factor_key = None;
+            }
+            timing.assembly += ta.elapsed().as_secs_f64();
+            constrained.fill(false);
+            for k in 0..nc {
+                if active[k] {
+                    if let Some(e) = model.dofs.equation(zdof(k)) {
+                        constrained[e] = true;
+                    }
+                }
+            }
+            let fkey = (key.0, key.1, active.clone());
+            if !(linear && self.factor_key.as_ref() == Some(&fkey)) {
+                let tf = std::time::Instant::now();
+                model
+                    .pattern
+                    .constrain(&self.k_values, &constrained, &mut self.k_constrained);
+                self.chol
+                    .factorize(&self.k_constrained)
+                    .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+                self.factor_key = linear.then_some(fkey);
+                timing.factorization += tf.elapsed().as_secs_f64();
+            }
+            // right-hand side: -R on free equations, prescribed increments on constrained ones
+            let ts = std::time::Instant::now();
+            self.aux.fill(0.0);
+            for k in 0..nc {
+                if active[k] {
+                    if let Some(e) = model.dofs.equation(zdof(k)) {
+                        self.aux[e] = model.candidate_profile[k] - depth - u[zdof(k)];
+                    }
+                }
+            }
+            self.rhs.fill(0.0);
+            model
+                .pattern
+                .sym_mul_add(&self.k_values, &self.aux, &mut self.rhs);
+            for (d, &e) in model.dofs.eq.iter().enumerate() {
+                if e != indentify_fe::dofs::NO_EQ {
+                    let e = e as usize;
+                    self.rhs[e] = if constrained[e] {
+                        self.k_constrained[model.pattern.diag[e]] * self.aux[e]
+                    } else {
+                        -self.f_int[d] - self.rhs[e]
+                    };
+                }
+            }
+            self.chol.solve_in_place(&mut self.rhs);
+            for (d, &e) in model.dofs.eq.iter().enumerate() {
+                if e != indentify_fe::dofs::NO_EQ {
+                    u[d] += self.rhs[e as usize];
+                }
+            }
+            timing.solve += ts.elapsed().as_secs_f64();
+            if u.iter().any(|v| !v.is_finite()) {
+                return Err(StepFailure::Linear("non-finite displacement".into()));
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &self,
+        model: &Model,
+        active: &[bool],
+        _u: &[f64],
+        t: f64,
+        dt: f64,
+        depth: f64,
+        iterations: u32,
+        changes: u32,
+    ) -> StepRecord {
+        let idx: Vec<u32> = (0..active.len())
+            .filter(|&k| active[k])
+            .map(|k| k as u32)
+            .collect();
+        let lambda: Vec<f64> = idx
+            .iter()
+            .map(|&k| -self.f_int[2 * model.candidates[k as usize] + 1])
+            .collect();
+        StepRecord {
+            t,
+            dt,
+            depth,
+            force: lambda.iter().sum(),
+            contact_radius: idx.last().map_or(0.0, |&k| model.candidate_r(k as usize)),
+            active: idx,
+            lambda,
+            iterations,
+            active_set_changes: changes,
+            on_schedule: true,
+            schedule_index: 0,
+        }
+    }
+}
+
+/// Gap `phi(r_k) - U - u_z,k` of candidate k (mm).
+fn gap(model: &Model, k: usize, depth: f64, u: &[f64]) -> f64 {
+    model.candidate_profile[k] - depth - u[2 * model.candidates[k] + 1]
+}
+
+/// Nodal pressures of a step: `lambda_k / int N_k 2 pi r dr` at the active candidates (MPa),
+/// as `(r, p)` pairs sorted by r.
+pub fn nodal_pressures(model: &Model, rec: &StepRecord) -> Vec<(f64, f64)> {
+    rec.active
+        .iter()
+        .zip(&rec.lambda)
+        .map(|(&k, &l)| {
+            (
+                model.candidate_r(k as usize),
+                l / model.candidate_area[k as usize],
+            )
+        })
+        .collect()
+}

@@ -1,0 +1,187 @@
+//! Depth-driven loading histories: piecewise-linear segments (load / hold / unload and
+//! any sequence), or a measured depth record, turned into the time grid of the driver.
+
+use serde::{Deserialize, Serialize};
+
+use crate::ContactError;
+
+/// One piecewise-linear segment: move linearly to `depth` (mm) over `duration` (s) in
+/// `steps` equal time steps.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Segment {
+    /// Duration (s), > 0.
+    pub duration: f64,
+    /// Punch depth at the end of the segment (mm, positive into the body).
+    pub depth: f64,
+    /// Number of time steps, >= 1.
+    pub steps: usize,
+}
+
+/// The discrete schedule: times `t[0] < t[1] < ...` (s) and punch depths `depth[i]` (mm).
+/// Index 0 is the initial, stress-free state; steps are `1..len`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Schedule {
+    /// Times (s), strictly increasing.
+    pub t: Vec<f64>,
+    /// Depth of the punch tip below the undeformed surface (mm).
+    pub depth: Vec<f64>,
+}
+
+impl Schedule {
+    /// Builds the schedule of consecutive segments starting at `t = 0`, depth 0.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] for an empty list, a non-positive duration (which would make
+    /// time non-monotonic), zero steps or a non-finite depth, naming `history.segments[i]`.
+    pub fn from_segments(segments: &[Segment]) -> Result<Schedule, ContactError> {
+        if segments.is_empty() {
+            return Err(ContactError::Input {
+                field: "history.segments",
+                value: "[]".into(),
+                allowed: "at least one segment (duration, depth, steps)".into(),
+            });
+        }
+        let mut t = vec![0.0];
+        let mut depth = vec![0.0];
+        for (i, s) in segments.iter().enumerate() {
+            if !(s.duration.is_finite() && s.duration > 0.0) {
+                return Err(ContactError::Input {
+                    field: "history.segments[].duration",
+                    value: format!("{} (segment {i})", s.duration),
+                    allowed: "a duration > 0 s (time must increase)".into(),
+                });
+            }
+            if !s.depth.is_finite() {
+                return Err(ContactError::Input {
+                    field: "history.segments[].depth",
+                    value: format!("{} (segment {i})", s.depth),
+                    allowed: "a finite depth (mm)".into(),
+                });
+            }
+            if !(1..=1_000_000).contains(&s.steps) {
+                return Err(ContactError::Input {
+                    field: "history.segments[].steps",
+                    value: format!("{} (segment {i})", s.steps),
+                    allowed: "an integer in [1, 1000000]".into(),
+                });
+            }
+            let (t0, d0) = (*t.last().unwrap_or(&0.0), *depth.last().unwrap_or(&0.0));
+            for k in 1..=s.steps {
+                let f = k as f64 / s.steps as f64;
+                t.push(t0 + f * s.duration);
+                depth.push(d0 + f * (s.depth - d0));
+            }
+        }
+        Ok(Schedule { t, depth })
+    }
+
+    /// A schedule from a measured record `(t_i, h_i)`; the first point is the initial state.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] if fewer than 2 points, lengths differ, a value is not finite,
+    /// or time does not strictly increase (naming the index).
+    pub fn from_record(t: &[f64], depth: &[f64]) -> Result<Schedule, ContactError> {
+        if t.len() != depth.len() || t.len() < 2 {
+            return Err(ContactError::Input {
+                field: "history.record",
+                value: format!("{} times and {} depths", t.len(), depth.len()),
+                allowed: "at least 2 points with as many times as depths".into(),
+            });
+        }
+        for i in 0..t.len() {
+            if !t[i].is_finite() || !depth[i].is_finite() {
+                return Err(ContactError::Input {
+                    field: "history.record",
+                    value: format!("point {i}: t = {}, h = {}", t[i], depth[i]),
+                    allowed: "finite values".into(),
+                });
+            }
+            if i > 0 && !(t[i] > t[i - 1]) {
+                return Err(ContactError::Input {
+                    field: "history.record.t",
+                    value: format!("t[{i}] = {} after t[{}] = {}", t[i], i - 1, t[i - 1]),
+                    allowed: "strictly increasing times".into(),
+                });
+            }
+        }
+        Ok(Schedule {
+            t: t.to_vec(),
+            depth: depth.to_vec(),
+        })
+    }
+
+    /// Number of time steps (`t.len() - 1`).
+    pub fn n_steps(&self) -> usize {
+        self.t.len() - 1
+    }
+
+    /// Depth at time `t`, linearly interpolated (clamped at the ends).
+    pub fn depth_at(&self, t: f64) -> f64 {
+        let n = self.t.len();
+        if t <= self.t[0] {
+            return self.depth[0];
+        }
+        if t >= self.t[n - 1] {
+            return self.depth[n - 1];
+        }
+        let i = self.t.partition_point(|&x| x <= t) - 1;
+        let f = (t - self.t[i]) / (self.t[i + 1] - self.t[i]);
+        self.depth[i] + f * (self.depth[i + 1] - self.depth[i])
+    }
+}
+
+/// The trapezoid of DESIGN.md §5: ramp to `h_max` in `t_load`, hold `t_hold`, unload to 0
+/// in `t_unload`, `steps` per segment.
+pub fn trapezoid(
+    h_max: f64,
+    t_load: f64,
+    t_hold: f64,
+    t_unload: f64,
+    steps: usize,
+) -> Vec<Segment> {
+    vec![
+        Segment {
+            duration: t_load,
+            depth: h_max,
+            steps,
+        },
+        Segment {
+            duration: t_hold,
+            depth: h_max,
+            steps,
+        },
+        Segment {
+            duration: t_unload,
+            depth: 0.0,
+            steps,
+        },
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trapezoid_schedule() {
+        let s = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).unwrap();
+        assert_eq!(s.n_steps(), 90);
+        assert!((s.t[30] - 1.0).abs() < 1e-15 && (s.depth[30] - 0.1).abs() < 1e-15);
+        assert!((s.depth[60] - 0.1).abs() < 1e-15 && s.depth[90].abs() < 1e-15);
+        assert!((s.depth_at(0.5) - 0.05).abs() < 1e-15);
+    }
+
+    #[test]
+    fn bad_histories_are_rejected() {
+        let e = Schedule::from_segments(&[Segment {
+            duration: -1.0,
+            depth: 0.1,
+            steps: 3,
+        }])
+        .unwrap_err();
+        assert!(e.to_string().contains("duration"), "{e}");
+        let e = Schedule::from_record(&[0.0, 1.0, 0.5], &[0.0, 0.1, 0.2]).unwrap_err();
+        assert!(e.to_string().contains("t[2] = 0.5"), "{e}");
+    }
+}

@@ -1,0 +1,52 @@
+//! Frictionless contact of a rigid axisymmetric punch and the time-stepped direct problem
+//! (P) of indentify: punch profiles ([`Punch`]), depth histories ([`Schedule`]), the
+//! model ([`Model`]) and solver ([`DirectSolver`]) whose run is a recorded [`Trajectory`].
+//!
+//! Units: mm, N (full circle), MPa, s. The punch is driven by its depth `U(t)` (positive
+//! into the body, which lies below z = 0). This crate owns time stepping; it knows
+//! nothing of adjoints, costs or optimizers.
+
+pub mod direct;
+pub mod history;
+pub mod punch;
+
+pub use direct::{
+    DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory, nodal_pressures,
+};
+pub use history::{Schedule, Segment, trapezoid};
+pub use punch::Punch;
+
+/// Errors of the direct problem.
+#[derive(Debug, thiserror::Error)]
+pub enum ContactError {
+    /// An input outside its admissible range.
+    #[error("`{field}` = {value} is not allowed: expected {allowed}")]
+    Input {
+        /// Dotted config path of the field.
+        field: &'static str,
+        /// Offending value, as text.
+        value: String,
+        /// What is allowed.
+        allowed: String,
+    },
+    /// Inadmissible law parameters.
+    #[error(transparent)]
+    Parameters(#[from] indentify_laws::LawError),
+    /// A linear-algebra failure outside of a step (symbolic analysis).
+    #[error(transparent)]
+    Fe(#[from] indentify_fe::FeError),
+    /// A step failed even after cutting it `cuts` times; `partial` holds the converged steps.
+    #[error("step {step} (t = {t} s) failed after {cuts} step cuts: {reason}")]
+    StepFailed {
+        /// Schedule index of the step.
+        step: usize,
+        /// Target time of the failing (sub-)step (s).
+        t: f64,
+        /// Number of halvings tried.
+        cuts: u32,
+        /// Why the last attempt failed.
+        reason: String,
+        /// The trajectory up to the last converged step.
+        partial: Box<Trajectory>,
+    },
+}

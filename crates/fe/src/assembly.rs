@@ -1,0 +1,220 @@
+//! Fixed sparsity pattern (lower triangle, CSC, over equations) built once from the mesh,
+//! refilled by [`Pattern::assemble_b_c_b`] and modified for Dirichlet constraints by
+//! [`Pattern::constrain`] without changing the structure.
+
+use indentify_laws::Mat4;
+
+use crate::dofs::{DofMap, NO_EQ};
+use crate::geometry::{Discretization, QP_PER_ELEMENT};
+
+const NONE: u32 = u32::MAX;
+
+/// Lower-triangular CSC structure of the global stiffness over equations, and the
+/// scatter map from element entries to value positions.
+#[derive(Clone, Debug)]
+pub struct Pattern {
+    /// Number of equations.
+    pub n: usize,
+    /// Column pointers (length n+1).
+    pub col_ptr: Vec<usize>,
+    /// Row indices, sorted within each column, all `>= column`.
+    pub row_idx: Vec<usize>,
+    /// Position of the diagonal entry of each column.
+    pub diag: Vec<usize>,
+    /// For element `e`, entry `(a, b)` of its 16x16 matrix goes to `scatter[256 e + 16 a + b]`
+    /// (or nowhere, `u32::MAX`: an eliminated dof or the upper triangle).
+    scatter: Vec<u32>,
+}
+
+impl Pattern {
+    /// Builds the structure from the element connectivity and dof map.
+    pub fn new(disc: &Discretization, dofs: &DofMap) -> Pattern {
+        let n = dofs.n_eq;
+        let ne = disc.elements.len();
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for e in 0..ne {
+            let eqs = disc.element_dofs(e).map(|d| dofs.eq[d]);
+            for &i in &eqs {
+                for &j in &eqs {
+                    if i != NO_EQ && j != NO_EQ && i >= j {
+                        cols[j as usize].push(i as usize);
+                    }
+                }
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        let mut diag = Vec::with_capacity(n);
+        col_ptr.push(0);
+        for (j, c) in cols.iter_mut().enumerate() {
+            c.sort_unstable();
+            c.dedup();
+            diag.push(row_idx.len());
+            debug_assert_eq!(c.first(), Some(&j));
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let mut scatter = vec![NONE; 256 * ne];
+        for e in 0..ne {
+            let eqs = disc.element_dofs(e).map(|d| dofs.eq[d]);
+            for a in 0..16 {
+                for b in 0..16 {
+                    let (i, j) = (eqs[a], eqs[b]);
+                    if i != NO_EQ && j != NO_EQ && i >= j {
+                        let (i, j) = (i as usize, j as usize);
+                        let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+                        let pos = col_ptr[j] + col.binary_search(&i).expect("entry in pattern");
+                        scatter[256 * e + 16 * a + b] = pos as u32;
+                    }
+                }
+            }
+        }
+        Pattern {
+            n,
+            col_ptr,
+            row_idx,
+            diag,
+            scatter,
+        }
+    }
+
+    /// Number of stored (lower-triangle) entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Assembles `K = sum_g w_g B_g^T C_g B_g` into `values` (overwritten), with one
+    /// tangent `C_g` per Gauss point.
+    pub fn assemble_b_c_b(&self, disc: &Discretization, c: &[Mat4], values: &mut [f64]) {
+        self.assemble_with(disc, |q| &c[q], values);
+    }
+
+    /// As [`Pattern::assemble_b_c_b`] with the same tangent at every Gauss point.
+    pub fn assemble_b_c_b_uniform(&self, disc: &Discretization, c: &Mat4, values: &mut [f64]) {
+        self.assemble_with(disc, |_| c, values);
+    }
+
+    fn assemble_with<'a>(
+        &self,
+        disc: &Discretization,
+        c: impl Fn(usize) -> &'a Mat4,
+        values: &mut [f64],
+    ) {
+        values.fill(0.0);
+        for e in 0..disc.elements.len() {
+            let mut ke = [[0.0; 16]; 16];
+            for g in 0..QP_PER_ELEMENT {
+                let q = QP_PER_ELEMENT * e + g;
+                let qp = &disc.qp[q];
+                let cm = &c(q).0;
+                // cb = w C B (4 x 16)
+                let mut cb = [[0.0; 16]; 4];
+                for i in 0..4 {
+                    for k in 0..4 {
+                        let f = cm[i][k] * qp.w;
+                        if f != 0.0 {
+                            for (o, b) in cb[i].iter_mut().zip(&qp.b[k]) {
+                                *o += f * b;
+                            }
+                        }
+                    }
+                }
+                for a in 0..16 {
+                    for i in 0..4 {
+                        let bia = qp.b[i][a];
+                        if bia != 0.0 {
+                            for (o, v) in ke[a][..=a].iter_mut().zip(&cb[i][..=a]) {
+                                *o += bia * v;
+                            }
+                        }
+                    }
+                }
+            }
+            let map = &self.scatter[256 * e..256 * (e + 1)];
+            for a in 0..16 {
+                for b in 0..16 {
+                    let pos = map[16 * a + b];
+                    if pos != NONE {
+                        // ke holds the lower triangle a >= b; use symmetry otherwise.
+                        values[pos as usize] += if a >= b { ke[a][b] } else { ke[b][a] };
+                    }
+                }
+            }
+        }
+    }
+
+    /// `y += K x` for the symmetric matrix stored as its lower triangle in `values`.
+    pub fn sym_mul_add(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        for j in 0..self.n {
+            let xj = x[j];
+            let mut acc = 0.0;
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[p];
+                let v = values[p];
+                if i == j {
+                    acc += v * xj;
+                } else {
+                    y[i] += v * xj;
+                    acc += v * x[i];
+                }
+            }
+            y[j] += acc;
+        }
+    }
+
+    /// Copies `src` into `dst` with the rows and columns of the constrained equations
+    /// replaced by the identity scaled by the original diagonal (kept for conditioning).
+    /// Returns nothing; the constrained equation `k` then reads `K_kk x_k = K_kk xbar_k`.
+    pub fn constrain(&self, src: &[f64], constrained: &[bool], dst: &mut [f64]) {
+        dst.copy_from_slice(src);
+        for j in 0..self.n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[p];
+                if (constrained[i] || constrained[j]) && i != j {
+                    dst[p] = 0.0;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indentify_laws::elastic::isotropic_stiffness;
+    use indentify_mesh::CylinderMesher;
+
+    #[test]
+    fn rigid_translation_along_z_is_in_the_kernel() {
+        let m = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 3,
+            nz: 2,
+            grading_r: 1.2,
+            grading_z: 1.0,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&m);
+        let dofs = DofMap::new(disc.n_dofs(), &[]);
+        let pat = Pattern::new(&disc, &dofs);
+        let mut k = vec![0.0; pat.nnz()];
+        pat.assemble_b_c_b_uniform(&disc, &isotropic_stiffness(100.0, 0.3), &mut k);
+        let x: Vec<f64> = (0..dofs.n_eq).map(|d| (d % 2) as f64).collect();
+        let mut y = vec![0.0; dofs.n_eq];
+        pat.sym_mul_add(&k, &x, &mut y);
+        assert!(
+            y.iter().all(|v| v.abs() < 1e-10),
+            "{:?}",
+            y.iter().cloned().fold(0.0, f64::max)
+        );
+        // and the energy of a radial expansion u_r = r is positive
+        let x: Vec<f64> = (0..dofs.n_eq)
+            .map(|d| if d % 2 == 0 { m.nodes[d / 2][0] } else { 0.0 })
+            .collect();
+        let mut y = vec![0.0; dofs.n_eq];
+        pat.sym_mul_add(&k, &x, &mut y);
+        assert!(x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>() > 0.0);
+    }
+}

@@ -1,0 +1,255 @@
+//! The standard-generalized-material trait: compliance `S(c)`, flow `g = dPhi/dsigma`, its
+//! Hessian `H`, parameter derivatives and the implicit (backward Euler) local update.
+
+use crate::LawError;
+use crate::mandel::{Mat4, Vec4};
+
+/// Metadata of one material parameter: name, unit and admissible range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamInfo {
+    /// Short name as used in configs and reports (`E`, `nu`, `eta`, `K`, `m`, `sY`).
+    pub name: &'static str,
+    /// Unit in the internal system (N, mm, s, MPa).
+    pub unit: &'static str,
+    /// One-line description.
+    pub description: &'static str,
+    /// Lower bound of the admissible range.
+    pub min: f64,
+    /// Whether `min` itself is admissible.
+    pub min_inclusive: bool,
+    /// Upper bound of the admissible range.
+    pub max: f64,
+    /// Whether `max` itself is admissible.
+    pub max_inclusive: bool,
+}
+
+impl ParamInfo {
+    /// `true` when `v` is finite and inside the admissible range.
+    pub fn admits(&self, v: f64) -> bool {
+        v.is_finite()
+            && (v > self.min || (self.min_inclusive && v == self.min))
+            && (v < self.max || (self.max_inclusive && v == self.max))
+    }
+    /// The admissible range in interval notation, e.g. `(0, inf)` or `(-1, 0.5)`.
+    pub fn range_text(&self) -> String {
+        let fmt = |v: f64| {
+            if v.is_infinite() {
+                if v > 0.0 { "inf".into() } else { "-inf".into() }
+            } else {
+                format!("{v}")
+            }
+        };
+        format!(
+            "{}{}, {}{}",
+            if self.min_inclusive { '[' } else { '(' },
+            fmt(self.min),
+            fmt(self.max),
+            if self.max_inclusive { ']' } else { ')' }
+        )
+    }
+}
+
+/// Converged result of a local update at one quadrature point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalUpdate {
+    /// End-of-step stress `sigma_i` (MPa, Mandel).
+    pub sigma: Vec4,
+    /// Consistent tangent `C_i = (S + dt H(sigma_i))^-1` (MPa).
+    pub tangent: Mat4,
+    /// Local Newton iterations used (0 for closed-form updates).
+    pub iterations: u32,
+}
+
+/// Why a local update failed, with a suggested factor for the time step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LocalFailure {
+    /// What went wrong.
+    pub reason: String,
+    /// Suggested factor (< 1) by which to multiply the time step before retrying.
+    pub suggested_dt_factor: f64,
+}
+
+impl std::fmt::Display for LocalFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} (suggested step factor {})",
+            self.reason, self.suggested_dt_factor
+        )
+    }
+}
+
+/// A standard generalized material without hardening (paper §2.1): state is the stress
+/// alone; `eps = S(c) sigma + eps_p`, `d eps_p/dt = g(sigma, c) = dPhi/dsigma`.
+///
+/// Parameters `c` are an *input* of every method, never a field of the law, so that an
+/// optimizer only swaps the slice. Components follow [`Vec4`]'s Mandel order.
+///
+/// The backward-Euler local residual at step i (DESIGN.md §1) is
+/// `r(sigma_i) = S (sigma_i - sigma_{i-1}) + dt g(sigma_i) - deps = 0`, with Jacobian
+/// `A = S + dt H` and consistent tangent `C = A^-1`.
+pub trait Law: Send + Sync + std::fmt::Debug {
+    /// Name used in configs (`elastic`, `maxwell`, `norton-hoff`).
+    fn name(&self) -> &'static str;
+
+    /// Parameter metadata, in the order of the slice `c`.
+    fn params(&self) -> &'static [ParamInfo];
+
+    /// Compliance `S(c)` (1/MPa).
+    fn compliance(&self, c: &[f64]) -> Mat4;
+
+    /// `dS/dc_k`.
+    fn compliance_derivative(&self, c: &[f64], k: usize) -> Mat4;
+
+    /// Flow `g(sigma, c) = dPhi/dsigma` (1/s).
+    fn flow(&self, c: &[f64], sigma: &Vec4) -> Vec4;
+
+    /// Flow Hessian `H = d2Phi/dsigma2 = dg/dsigma`.
+    fn flow_hessian(&self, c: &[f64], sigma: &Vec4) -> Mat4;
+
+    /// `dg/dc_k` at fixed stress.
+    fn flow_param_derivative(&self, c: &[f64], sigma: &Vec4, k: usize) -> Vec4;
+
+    /// `true` when the consistent tangent depends only on `c` and `dt`, not on the state
+    /// (elasticity, Maxwell): the global tangent can then be reused across iterations and
+    /// steps of equal length.
+    fn is_linear(&self) -> bool {
+        false
+    }
+
+    /// Checks every parameter against its admissible range.
+    ///
+    /// # Errors
+    /// [`LawError::Parameter`] naming the first offending parameter, its value and range.
+    fn check_params(&self, c: &[f64]) -> Result<(), LawError> {
+        let infos = self.params();
+        if c.len() != infos.len() {
+            return Err(LawError::ParameterCount {
+                law: self.name(),
+                expected: infos.len(),
+                got: c.len(),
+            });
+        }
+        for (info, &v) in infos.iter().zip(c) {
+            if !info.admits(v) {
+                return Err(LawError::Parameter {
+                    law: self.name(),
+                    name: info.name,
+                    value: v,
+                    range: info.range_text(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether `J(c)` is differentiable at `c` with respect to every parameter (the
+    /// adjoint needs `Phi` twice differentiable).
+    ///
+    /// # Errors
+    /// A message naming the parameter and why, e.g. Norton-Hoff with `m <= 1`.
+    fn check_differentiable(&self, _c: &[f64]) -> Result<(), LawError> {
+        Ok(())
+    }
+
+    /// Derivative of the local residual with respect to `c_k` at the converged state:
+    /// `dr/dc_k = dS/dc_k (s1 - s0) + dt dg/dc_k(s1)`.
+    fn residual_param_derivative(
+        &self,
+        c: &[f64],
+        s0: &Vec4,
+        s1: &Vec4,
+        dt: f64,
+        k: usize,
+    ) -> Vec4 {
+        self.compliance_derivative(c, k).mul_vec(&(*s1 - *s0))
+            + self.flow_param_derivative(c, s1, k) * dt
+    }
+
+    /// Consistent tangent `C = (S + dt H(sigma))^-1` at a given end-of-step stress.
+    ///
+    /// # Errors
+    /// [`LocalFailure`] when `S + dt H` is singular.
+    fn tangent(&self, c: &[f64], sigma: &Vec4, dt: f64) -> Result<Mat4, LocalFailure> {
+        let a = self.compliance(c) + self.flow_hessian(c, sigma) * dt;
+        a.inverse().ok_or_else(|| LocalFailure {
+            reason: "singular local Jacobian S + dt H".into(),
+            suggested_dt_factor: 0.5,
+        })
+    }
+
+    /// Implicit local update from `s0` under the strain increment `deps` over `dt`.
+    ///
+    /// The default is a Newton iteration on `r(sigma)` started from the elastic trial
+    /// stress, with a backtracking line search on `|r|`; laws with a closed form or a
+    /// scalar return map override it.
+    ///
+    /// # Errors
+    /// [`LocalFailure`] with a suggested step factor when Newton does not converge.
+    fn update(
+        &self,
+        c: &[f64],
+        s0: &Vec4,
+        deps: &Vec4,
+        dt: f64,
+    ) -> Result<LocalUpdate, LocalFailure> {
+        default_newton_update(self, c, s0, deps, dt)
+    }
+}
+
+/// Generic backward-Euler Newton update used by [`Law::update`]'s default.
+///
+/// # Errors
+/// [`LocalFailure`] after 50 iterations or on a singular Jacobian.
+pub fn default_newton_update<L: Law + ?Sized>(
+    law: &L,
+    c: &[f64],
+    s0: &Vec4,
+    deps: &Vec4,
+    dt: f64,
+) -> Result<LocalUpdate, LocalFailure> {
+    let s = law.compliance(c);
+    let stiff = s.inverse().ok_or_else(|| LocalFailure {
+        reason: "singular compliance".into(),
+        suggested_dt_factor: 0.5,
+    })?;
+    let mut sigma = *s0 + stiff.mul_vec(deps);
+    let residual = |sig: &Vec4| s.mul_vec(&(*sig - *s0)) + law.flow(c, sig) * dt - *deps;
+    let scale = s.mul_vec(&sigma).max_abs().max(deps.max_abs()).max(1e-300);
+    let mut r = residual(&sigma);
+    for it in 0..50 {
+        if r.max_abs() <= 1e-12 * scale {
+            let tangent = law.tangent(c, &sigma, dt)?;
+            return Ok(LocalUpdate {
+                sigma,
+                tangent,
+                iterations: it,
+            });
+        }
+        let a = s + law.flow_hessian(c, &sigma) * dt;
+        let ainv = a.inverse().ok_or_else(|| LocalFailure {
+            reason: format!("singular local Jacobian at iteration {it}"),
+            suggested_dt_factor: 0.5,
+        })?;
+        let step = ainv.mul_vec(&r);
+        let mut alpha = 1.0;
+        let r0 = r.norm();
+        loop {
+            let trial = sigma - step * alpha;
+            let rt = residual(&trial);
+            if rt.is_finite() && (rt.norm() < r0 || alpha < 1e-4) {
+                sigma = trial;
+                r = rt;
+                break;
+            }
+            alpha *= 0.5;
+        }
+    }
+    Err(LocalFailure {
+        reason: format!(
+            "local Newton did not converge in 50 iterations (|r| = {:.3e})",
+            r.norm()
+        ),
+        suggested_dt_factor: 0.25,
+    })
+}

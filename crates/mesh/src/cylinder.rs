@@ -1,0 +1,251 @@
+//! Structured mesher for the cylindrical specimen, graded geometrically towards the axis
+//! and the top surface.
+
+use std::collections::BTreeMap;
+
+use crate::{Mesh, MeshError};
+
+/// A cylinder of radius `radius` and height `height` (mm), occupying
+/// `0 <= r <= radius`, `-height <= z <= 0`, cut into `nr x nz` Q8 elements.
+///
+/// Element sizes grow geometrically by `grading_r` from the axis outwards and by
+/// `grading_z` from the top surface downwards (1 = uniform): the first size is
+/// `h0 = L (q - 1) / (q^n - 1)`. DESIGN.md §5's default (10 x 10 mm, 20 x 20, q = 1.3)
+/// gives a smallest element of 0.016 mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CylinderMesher {
+    /// Radius (mm), > 0.
+    pub radius: f64,
+    /// Height (mm), > 0.
+    pub height: f64,
+    /// Elements along r, >= 1.
+    pub nr: usize,
+    /// Elements along z, >= 1.
+    pub nz: usize,
+    /// Size ratio between neighbouring elements along r (>= 1, growing away from the axis).
+    pub grading_r: f64,
+    /// Size ratio between neighbouring elements along z (>= 1, growing away from the top).
+    pub grading_z: f64,
+}
+
+/// Cumulative positions `0 = x_0 < ... < x_n = length` of a geometric grading with ratio `q`.
+pub fn graded_positions(length: f64, n: usize, q: f64) -> Vec<f64> {
+    let h0 = if (q - 1.0).abs() < 1e-12 {
+        length / n as f64
+    } else {
+        length * (q - 1.0) / (q.powi(n as i32) - 1.0)
+    };
+    let mut x = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    x.push(0.0);
+    for k in 0..n {
+        acc += h0 * q.powi(k as i32);
+        x.push(acc);
+    }
+    x[n] = length;
+    x
+}
+
+impl CylinderMesher {
+    /// Validates the inputs.
+    ///
+    /// # Errors
+    /// [`MeshError::Input`] naming the field (as `specimen.<field>`), value and range.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        let positive = |field, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(MeshError::Input {
+                    field,
+                    value: v.to_string(),
+                    allowed: "a finite value > 0 (mm)",
+                })
+            }
+        };
+        positive("specimen.radius", self.radius)?;
+        positive("specimen.height", self.height)?;
+        for (field, n) in [("specimen.nr", self.nr), ("specimen.nz", self.nz)] {
+            if !(1..=2000).contains(&n) {
+                return Err(MeshError::Input {
+                    field,
+                    value: n.to_string(),
+                    allowed: "an integer in [1, 2000]",
+                });
+            }
+        }
+        for (field, q) in [
+            ("specimen.grading_r", self.grading_r),
+            ("specimen.grading_z", self.grading_z),
+        ] {
+            if !(q.is_finite() && (1.0..=3.0).contains(&q)) {
+                return Err(MeshError::Input {
+                    field,
+                    value: q.to_string(),
+                    allowed: "a ratio in [1, 3]",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Size of the smallest element edge along r and along z (mm).
+    pub fn smallest_sizes(&self) -> (f64, f64) {
+        let r = graded_positions(self.radius, self.nr, self.grading_r);
+        let z = graded_positions(self.height, self.nz, self.grading_z);
+        (r[1] - r[0], z[1] - z[0])
+    }
+
+    /// Builds the mesh with node sets `axis`, `bottom`, `outer`, `top` (sorted by r, then z).
+    ///
+    /// # Errors
+    /// [`MeshError::Input`] for invalid inputs.
+    pub fn build(&self) -> Result<Mesh, MeshError> {
+        self.validate()?;
+        let (nr, nz) = (self.nr, self.nz);
+        let rc = graded_positions(self.radius, nr, self.grading_r);
+        // z measured downwards from the top, then mapped to z = -depth.
+        let dc = graded_positions(self.height, nz, self.grading_z);
+        // Fine grid (2nr+1) x (2nz+1) without element centres; J counts from the bottom.
+        let r_at = |i: usize| {
+            if i % 2 == 0 {
+                rc[i / 2]
+            } else {
+                0.5 * (rc[i / 2] + rc[i / 2 + 1])
+            }
+        };
+        let z_at = |j: usize| {
+            let k = 2 * nz - j; // fine index measured from the top
+            -(if k % 2 == 0 {
+                dc[k / 2]
+            } else {
+                0.5 * (dc[k / 2] + dc[k / 2 + 1])
+            })
+        };
+        let (ni, nj) = (2 * nr + 1, 2 * nz + 1);
+        let mut id = vec![usize::MAX; ni * nj];
+        let mut nodes = Vec::new();
+        for j in 0..nj {
+            for i in 0..ni {
+                if i % 2 == 1 && j % 2 == 1 {
+                    continue;
+                }
+                id[j * ni + i] = nodes.len();
+                nodes.push([r_at(i), z_at(j)]);
+            }
+        }
+        let at = |i: usize, j: usize| id[j * ni + i];
+        let mut elements = Vec::with_capacity(nr * nz);
+        for ej in 0..nz {
+            for ei in 0..nr {
+                let (i, j) = (2 * ei, 2 * ej);
+                elements.push([
+                    at(i, j),
+                    at(i + 2, j),
+                    at(i + 2, j + 2),
+                    at(i, j + 2),
+                    at(i + 1, j),
+                    at(i + 2, j + 1),
+                    at(i + 1, j + 2),
+                    at(i, j + 1),
+                ]);
+            }
+        }
+        let mut sets = BTreeMap::new();
+        sets.insert("axis".to_string(), (0..nj).map(|j| at(0, j)).collect());
+        sets.insert(
+            "outer".to_string(),
+            (0..nj).map(|j| at(ni - 1, j)).collect(),
+        );
+        sets.insert("bottom".to_string(), (0..ni).map(|i| at(i, 0)).collect());
+        sets.insert("top".to_string(), (0..ni).map(|i| at(i, nj - 1)).collect());
+        Mesh::new(nodes, elements, sets)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn default_mesher() -> CylinderMesher {
+        CylinderMesher {
+            radius: 10.0,
+            height: 10.0,
+            nr: 20,
+            nz: 20,
+            grading_r: 1.3,
+            grading_z: 1.3,
+        }
+    }
+
+    #[test]
+    fn default_cylinder_counts_and_sizes() {
+        let m = default_mesher().build().unwrap();
+        assert_eq!(m.elements.len(), 400);
+        assert_eq!(m.nodes.len(), 41 * 41 - 400);
+        let (hr, hz) = default_mesher().smallest_sizes();
+        assert!(
+            (hr - 0.0159).abs() < 2e-4 && (hz - hr).abs() < 1e-15,
+            "{hr} {hz}"
+        );
+        let top = m.node_set("top");
+        assert_eq!(top.len(), 41);
+        assert!(top.windows(2).all(|w| m.nodes[w[0]][0] < m.nodes[w[1]][0]));
+        assert!(top.iter().all(|&n| m.nodes[n][1] == 0.0));
+        assert!(m.node_set("axis").iter().all(|&n| m.nodes[n][0] == 0.0));
+        assert!(m.node_set("bottom").iter().all(|&n| m.nodes[n][1] == -10.0));
+        assert!(m.node_set("outer").iter().all(|&n| m.nodes[n][0] == 10.0));
+    }
+
+    #[test]
+    fn total_area_is_the_rectangle() {
+        let m = CylinderMesher {
+            grading_r: 1.1,
+            grading_z: 1.7,
+            ..default_mesher()
+        }
+        .build()
+        .unwrap();
+        let area: f64 = (0..m.elements.len())
+            .map(|e| {
+                let x = m.element_coords(e);
+                crate::q8::gauss3x3()
+                    .iter()
+                    .map(|([a, b], w)| w * crate::q8::jacobian(&x, *a, *b).1)
+                    .sum::<f64>()
+            })
+            .sum();
+        assert!((area - 100.0).abs() < 1e-10);
+    }
+
+    #[test]
+    fn invalid_inputs_name_the_field() {
+        let e = CylinderMesher {
+            nr: 0,
+            ..default_mesher()
+        }
+        .build()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("specimen.nr") && e.contains("[1, 2000]"), "{e}");
+        let e = CylinderMesher {
+            radius: -1.0,
+            ..default_mesher()
+        }
+        .build()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("specimen.radius") && e.contains("-1"), "{e}");
+    }
+
+    #[test]
+    fn distorted_element_is_rejected() {
+        let mut m = default_mesher().build().unwrap();
+        let e0 = m.elements[0];
+        m.nodes[e0[2]] = [-1.0, -20.0];
+        assert!(matches!(
+            m.check_quality(),
+            Err(MeshError::Distorted { element: 0, .. })
+        ));
+    }
+}
