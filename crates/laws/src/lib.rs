@@ -1,5 +1,5 @@
 //! Constitutive laws of standard generalized materials for indentify: the [`Law`] trait,
-//! Mandel-form tensors, and the laws themselves ([`Elastic`] so far).
+//! Mandel-form tensors, and the laws themselves ([`Elastic`], [`Maxwell`]).
 //!
 //! Units: MPa for stresses and moduli, s for times. This crate knows nothing of
 //! elements, meshes or contact: it works at one material point.
@@ -7,10 +7,24 @@
 pub mod elastic;
 pub mod law;
 pub mod mandel;
+pub mod maxwell;
 
 pub use elastic::Elastic;
 pub use law::{Law, LocalFailure, LocalUpdate, ParamInfo};
 pub use mandel::{Mat4, Vec4};
+pub use maxwell::Maxwell;
+
+/// Names accepted by [`law_by_name`], in the order of increasing complexity.
+pub const LAW_NAMES: [&str; 2] = ["elastic", "maxwell"];
+
+/// The law registered under `name` (one of [`LAW_NAMES`]), or `None`.
+pub fn law_by_name(name: &str) -> Option<&'static dyn Law> {
+    match name {
+        "elastic" => Some(&Elastic),
+        "maxwell" => Some(&Maxwell),
+        _ => None,
+    }
+}
 
 /// Errors of this crate: parameters outside their admissible range or unknown laws.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -49,4 +63,18 @@ pub enum LawError {
         /// Explanation.
         why: &'static str,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_name_resolves_to_a_law_of_that_name() {
+        for name in LAW_NAMES {
+            let law = law_by_name(name).expect(name);
+            assert_eq!(law.name(), name);
+        }
+        assert!(law_by_name("hooke").is_none());
+    }
 }
