@@ -129,7 +129,7 @@ impl Mat4 {
         let tiny = 1e-13 * self.max_abs();
         for col in 0..4 {
             let piv = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-            if !(a[piv][col].abs() > tiny) || !a[piv][col].is_finite() {
+            if a[piv][col].abs() <= tiny || !a[piv][col].is_finite() {
                 return None;
             }
             a.swap(col, piv);

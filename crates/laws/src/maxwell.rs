@@ -99,7 +99,7 @@ impl Law for Maxwell {
         deps: &Vec4,
         dt: f64,
     ) -> Result<LocalUpdate, LocalFailure> {
-        if !(dt >= 0.0 && dt.is_finite()) {
+        if !dt.is_finite() || dt < 0.0 {
             return Err(LocalFailure {
                 reason: format!("maxwell: invalid time step dt = {dt}"),
                 suggested_dt_factor: 0.5,
