@@ -8,13 +8,15 @@
 //! `u_z,k = phi(r_k) - U_i`, and `lambda_k = -f_int,z,k` is the nodal reaction. The set is
 //! updated by releasing nodes with `lambda_k < 0` and activating nodes with `gap_k < 0`.
 
-use indentify_fe::{Discretization, DofMap, FeError, Pattern, QP_PER_ELEMENT, SparseCholesky};
+use indentify_fe::dofs::NO_EQ;
+use indentify_fe::{Discretization, DofMap, FeError, Pattern, QP_PER_ELEMENT};
 use indentify_laws::{Law, Mat4, Vec4};
 use indentify_mesh::Mesh;
 
 use crate::ContactError;
 use crate::history::Schedule;
 use crate::punch::Punch;
+use crate::system::ConstrainedSystem;
 
 /// Numerical options of the direct solver.
 #[derive(Clone, Debug, PartialEq)]
@@ -283,24 +285,21 @@ struct State {
     u: Vec<f64>,
     sigma: Vec<Vec4>,
     active: Vec<bool>,
+    /// Last step's increment of u_z at each candidate, and that step's length.
+    duz_last: Vec<f64>,
+    dt_last: f64,
 }
 
 /// Reusable solver workspace: the symbolic factorization and scratch vectors, so that
 /// repeated runs (an optimizer's iterations) allocate and analyse nothing new.
 #[derive(Debug)]
 pub struct DirectSolver {
-    chol: SparseCholesky,
-    k_values: Vec<f64>,
-    k_constrained: Vec<f64>,
+    system: ConstrainedSystem,
     tangents: Vec<Mat4>,
     eps: Vec<[f64; 4]>,
     f_int: Vec<f64>,
     rhs: Vec<f64>,
     aux: Vec<f64>,
-    /// Key of the tangent currently in `k_values` for a linear law: (params, dt bits).
-    k_key: Option<(Vec<u64>, u64)>,
-    /// Key of the current factorization: tangent key and active set.
-    factor_key: Option<(Vec<u64>, u64, Vec<bool>)>,
 }
 
 impl DirectSolver {
@@ -309,20 +308,15 @@ impl DirectSolver {
     /// # Errors
     /// [`ContactError::Fe`] if the symbolic factorization fails.
     pub fn new(model: &Model) -> Result<DirectSolver, ContactError> {
-        let chol = SparseCholesky::analyse(&model.pattern)?;
         let n = model.dofs.n_eq;
         let nq = model.disc.n_qp();
         Ok(DirectSolver {
-            chol,
-            k_values: vec![0.0; model.pattern.nnz()],
-            k_constrained: vec![0.0; model.pattern.nnz()],
+            system: ConstrainedSystem::new(model)?,
             tangents: vec![Mat4::ZERO; nq],
             eps: vec![[0.0; 4]; nq],
             f_int: vec![0.0; model.disc.n_dofs()],
             rhs: vec![0.0; n],
             aux: vec![0.0; n],
-            k_key: None,
-            factor_key: None,
         })
     }
 
@@ -349,6 +343,8 @@ impl DirectSolver {
             u: vec![0.0; model.disc.n_dofs()],
             sigma: vec![Vec4::ZERO; nq],
             active: vec![false; model.candidates.len()],
+            duz_last: vec![0.0; model.candidates.len()],
+            dt_last: 0.0,
         };
         let mut traj = Trajectory {
             params: c.to_vec(),
@@ -360,7 +356,8 @@ impl DirectSolver {
                 sigma: state.sigma.clone(),
             });
         }
-        let factorizations0 = self.chol.n_factorizations;
+        let factorizations0 = self.system.factorizations();
+        let seconds0 = self.system.seconds;
         for j in 1..schedule.t.len() {
             // targets still to reach, last first; a failed step pushes its midpoint
             let mut targets = vec![(schedule.t[j], 0u32)];
@@ -404,13 +401,17 @@ impl DirectSolver {
                 }
             }
         }
-        traj.timing.factorizations = self.chol.n_factorizations - factorizations0;
+        traj.timing.factorizations = self.system.factorizations() - factorizations0;
+        traj.timing.assembly = self.system.seconds[0] - seconds0[0];
+        traj.timing.factorization = self.system.seconds[1] - seconds0[1];
+        traj.timing.solve = self.system.seconds[2] - seconds0[2];
         traj.timing.total = start.elapsed().as_secs_f64();
         Ok(traj)
     }
 
     /// Local updates at every Gauss point for displacement `u` from `state`; fills
     /// `sigma_out`, `self.tangents` and `self.f_int`.
+    #[allow(clippy::too_many_arguments)]
     fn evaluate(
         &mut self,
         model: &Model,
@@ -461,9 +462,15 @@ impl DirectSolver {
         let mut u = state.u.clone();
         let mut sigma = state.sigma.clone();
         let mut active = state.active.clone();
-        // predictor: activate nodes that the new depth makes penetrate
+        // predictor: activate nodes that the new depth makes penetrate, with the surface
+        // displacement extrapolated from the last increment
+        let ratio = if state.dt_last > 0.0 {
+            dt / state.dt_last
+        } else {
+            0.0
+        };
         for k in 0..nc {
-            if !active[k] && gap(model, k, depth, &u) < 0.0 {
+            if !active[k] && gap(model, k, depth, &u) - ratio * state.duz_last[k] < 0.0 {
                 active[k] = true;
             }
         }
@@ -471,7 +478,6 @@ impl DirectSolver {
         let mut seen: Vec<Vec<bool>> = vec![active.clone()];
         let mut changes = 0u32;
         let mut iterations = 0u32;
-        let param_key: Vec<u64> = c.iter().map(|v| v.to_bits()).collect();
         let mut constrained = vec![false; n_eq];
         let mut single_change = false;
         loop {
@@ -490,7 +496,7 @@ impl DirectSolver {
             let mut res: f64 = 0.0;
             let mut fmax: f64 = 0.0;
             for (d, &e) in model.dofs.eq.iter().enumerate() {
-                if e != indentify_fe::dofs::NO_EQ {
+                if e != NO_EQ {
                     fmax = fmax.max(self.f_int[d].abs());
                     if !constrained[e as usize] {
                         res = res.max(self.f_int[d].abs());
@@ -539,16 +545,17 @@ impl DirectSolver {
                 if violations.is_empty() {
                     let rec = self.record(model, &active, &u, t1, dt, depth, iterations, changes);
                     let f_scale = state.f_scale.max(fmax);
-                    return Ok((
-                        State {
-                            t: t1,
-                            f_scale,
-                            u,
-                            sigma,
-                            active,
-                        },
-                        rec,
-                    ));
+                    let duz_last = (0..nc).map(|k| u[zdof(k)] - state.u[zdof(k)]).collect();
+                    let next = State {
+                        t: t1,
+                        f_scale,
+                        u,
+                        sigma,
+                        active,
+                        duz_last,
+                        dt_last: dt,
+                    };
+                    return Ok((next, rec));
                 }
                 let flip: Vec<usize> = if single_change {
                     vec![worst.map_or(0, |w| w.0)]
@@ -572,40 +579,13 @@ impl DirectSolver {
                 return Err(StepFailure::Newton { residual: rel });
             }
             iterations += 1;
-            // tangent: reuse for linear laws with the same parameters and step length
-            let ta = std::time::Instant::now();
-            let key = (param_key.clone(), dt.to_bits());
-            let linear = law.is_linear();
-            if !(linear && self.k_key.as_ref() == Some(&key)) {
-                model
-                    .pattern
-                    .assemble_b_c_b(&model.disc, &self.tangents, &mut self.k_values);
-                self.k_key = linear.then(|| key.clone());
-                self.factor_key = None;
-            }
-            timing.assembly += ta.elapsed().as_secs_f64();
-            constrained.fill(false);
-            for k in 0..nc {
-                if active[k] {
-                    if let Some(e) = model.dofs.equation(zdof(k)) {
-                        constrained[e] = true;
-                    }
-                }
-            }
-            let fkey = (key.0, key.1, active.clone());
-            if !(linear && self.factor_key.as_ref() == Some(&fkey)) {
-                let tf = std::time::Instant::now();
-                model
-                    .pattern
-                    .constrain(&self.k_values, &constrained, &mut self.k_constrained);
-                self.chol
-                    .factorize(&self.k_constrained)
-                    .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
-                self.factor_key = linear.then_some(fkey);
-                timing.factorization += tf.elapsed().as_secs_f64();
-            }
-            // right-hand side: -R on free equations, prescribed increments on constrained ones
-            let ts = std::time::Instant::now();
+            let reuse = law.is_linear().then_some((c, dt));
+            self.system.set_tangent(model, &self.tangents, reuse);
+            self.system.set_active(model, &active);
+            self.system
+                .factorize(model)
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+            // right-hand side: -R on free equations, prescribed increments on active ones
             self.aux.fill(0.0);
             for k in 0..nc {
                 if active[k] {
@@ -614,27 +594,17 @@ impl DirectSolver {
                     }
                 }
             }
-            self.rhs.fill(0.0);
-            model
-                .pattern
-                .sym_mul_add(&self.k_values, &self.aux, &mut self.rhs);
             for (d, &e) in model.dofs.eq.iter().enumerate() {
-                if e != indentify_fe::dofs::NO_EQ {
-                    let e = e as usize;
-                    self.rhs[e] = if constrained[e] {
-                        self.k_constrained[model.pattern.diag[e]] * self.aux[e]
-                    } else {
-                        -self.f_int[d] - self.rhs[e]
-                    };
+                if e != NO_EQ {
+                    self.rhs[e as usize] = -self.f_int[d];
                 }
             }
-            self.chol.solve_in_place(&mut self.rhs);
+            self.system.solve_dirichlet(model, &mut self.rhs, &self.aux);
             for (d, &e) in model.dofs.eq.iter().enumerate() {
-                if e != indentify_fe::dofs::NO_EQ {
+                if e != NO_EQ {
                     u[d] += self.rhs[e as usize];
                 }
             }
-            timing.solve += ts.elapsed().as_secs_f64();
             if u.iter().any(|v| !v.is_finite()) {
                 return Err(StepFailure::Linear("non-finite displacement".into()));
             }

@@ -9,12 +9,14 @@
 pub mod direct;
 pub mod history;
 pub mod punch;
+pub mod system;
 
 pub use direct::{
     DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory, nodal_pressures,
 };
 pub use history::{Schedule, Segment, trapezoid};
 pub use punch::Punch;
+pub use system::ConstrainedSystem;
 
 /// Errors of the direct problem.
 #[derive(Debug, thiserror::Error)]

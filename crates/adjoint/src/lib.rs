@@ -1,0 +1,338 @@
+//! Exact discrete adjoint and forward sensitivities of the indentation direct problem.
+//!
+//! From a [`Trajectory`] recorded by [`indentify_contact::DirectSolver`], [`Adjoint::gradient`]
+//! sweeps the steps in reversed time (DESIGN.md §3, paper §3) and returns `dJ/dc` for any
+//! `dJ/dF_i`; [`Adjoint::sensitivities`] differentiates the scheme forward and returns
+//! the Jacobian `dF_i/dc`. Both are exact for the discrete scheme (active sets held at their
+//! converged values) and use the same constrained tangents as the forward run.
+//!
+//! Derivation (docs/theory.md): linearizing step i with the active set fixed gives, per
+//! Gauss point, `dsigma_i = C_i (B du_i + q_i)` with `q_i = y_{i-1} - R_i dc`,
+//! `y_i = S dsigma_i - B du_i` (minus the viscoplastic-strain sensitivity),
+//! `R_i = dr_i/dc = dS/dc (sigma_i - sigma_{i-1}) + dt_i dg/dc(sigma_i)`, and
+//! `K_i du_i = -sum_g w B^T C_i q_i` on the free dofs with `du_i = 0` on the active contact
+//! dofs; `dF_i = -sum_{k in A_i} (sum_g w B^T dsigma_i)_k`. Transposing, with `mu_{I+1} = 0`:
+//! `K_i V_i = sum_g w B^T (C_i S - I) mu_{i+1}` with `V_i = dJ/dF_i` on `A_i`;
+//! `mu_i = C_i (S mu_{i+1} - B V_i)`; `dJ/dc = -sum_i sum_g w mu_i . R_i`.
+
+pub mod check;
+
+use indentify_contact::{ConstrainedSystem, Model, Trajectory};
+use indentify_fe::dofs::NO_EQ;
+use indentify_laws::{Law, LawError, Mat4, Vec4};
+
+/// Errors of the adjoint and sensitivity computations.
+#[derive(Debug, thiserror::Error)]
+pub enum AdjointError {
+    /// The trajectory was run without recording fields.
+    #[error(
+        "the trajectory has no recorded fields ({fields} for {steps} steps): run the direct problem with record_fields = true"
+    )]
+    NotRecorded {
+        /// Recorded field sets.
+        fields: usize,
+        /// Steps.
+        steps: usize,
+    },
+    /// `dJ/dF` has the wrong length.
+    #[error("dJ/dF has {got} entries but the trajectory has {expected} steps")]
+    Length {
+        /// Expected length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// The law is not differentiable at these parameters.
+    #[error(transparent)]
+    NotDifferentiable(#[from] LawError),
+    /// A tangent could not be formed or factorized at a step.
+    #[error("step {step} (t = {t} s): {reason}")]
+    Step {
+        /// Step index in the trajectory.
+        step: usize,
+        /// Time (s).
+        t: f64,
+        /// What failed.
+        reason: String,
+    },
+    /// Setting up the linear system failed.
+    #[error(transparent)]
+    Fe(#[from] indentify_fe::FeError),
+}
+
+/// Result of an adjoint sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradient {
+    /// `dJ/dc_k` in the law's parameter order.
+    pub dj_dc: Vec<f64>,
+    /// Wall time of the sweep (s).
+    pub seconds: f64,
+    /// Numeric factorizations the sweep needed.
+    pub factorizations: usize,
+}
+
+/// Result of the forward sensitivity computation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensitivities {
+    /// `dF_i/dc_k`: one row per trajectory step, one column per parameter.
+    pub df_dc: Vec<Vec<f64>>,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+impl Sensitivities {
+    /// `J^T rho`: the gradient of a cost with `dJ/dF_i = rho_i`.
+    pub fn transpose_mul(&self, rho: &[f64]) -> Vec<f64> {
+        let np = self.df_dc.first().map_or(0, |r| r.len());
+        let mut g = vec![0.0; np];
+        for (row, r) in self.df_dc.iter().zip(rho) {
+            for (gk, d) in g.iter_mut().zip(row) {
+                *gk += r * d;
+            }
+        }
+        g
+    }
+}
+
+/// Workspace for adjoint sweeps and sensitivities on one model (symbolic analysis once).
+#[derive(Debug)]
+pub struct Adjoint {
+    system: ConstrainedSystem,
+    tangents: Vec<Mat4>,
+    field_a: Vec<Vec4>,
+    field_b: Vec<Vec4>,
+    strain: Vec<[f64; 4]>,
+    full: Vec<f64>,
+    eq: Vec<f64>,
+    xbar: Vec<f64>,
+}
+
+impl Adjoint {
+    /// Prepares the workspace for `model`.
+    ///
+    /// # Errors
+    /// [`AdjointError::Fe`] if the symbolic analysis fails.
+    pub fn new(model: &Model) -> Result<Adjoint, AdjointError> {
+        let nq = model.disc.n_qp();
+        Ok(Adjoint {
+            system: ConstrainedSystem::new(model)?,
+            tangents: vec![Mat4::ZERO; nq],
+            field_a: vec![Vec4::ZERO; nq],
+            field_b: vec![Vec4::ZERO; nq],
+            strain: vec![[0.0; 4]; nq],
+            full: vec![0.0; model.disc.n_dofs()],
+            eq: vec![0.0; model.dofs.n_eq],
+            xbar: vec![0.0; model.dofs.n_eq],
+        })
+    }
+
+    /// Forms `C_i` at every Gauss point, sets the tangent, the active set of step `i`, and
+    /// factorizes.
+    fn prepare_step(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+        i: usize,
+    ) -> Result<(), AdjointError> {
+        let rec = &traj.steps[i];
+        let sigma1 = &traj.fields[i + 1].sigma;
+        let fail = |reason: String| AdjointError::Step {
+            step: i,
+            t: rec.t,
+            reason,
+        };
+        if law.is_linear() {
+            // the tangent does not depend on the state: one evaluation serves every point
+            let ct = law
+                .tangent(c, &Vec4::ZERO, rec.dt)
+                .map_err(|f| fail(f.reason))?;
+            self.tangents.fill(ct);
+        } else {
+            for (t, s) in self.tangents.iter_mut().zip(sigma1) {
+                *t = law
+                    .tangent(c, s, rec.dt)
+                    .map_err(|f| fail(f.reason.clone()))?;
+            }
+        }
+        self.system.set_tangent(
+            model,
+            &self.tangents,
+            law.is_linear().then_some((c, rec.dt)),
+        );
+        let mut active = vec![false; model.candidates.len()];
+        for &k in &rec.active {
+            active[k as usize] = true;
+        }
+        self.system.set_active(model, &active);
+        self.system
+            .factorize(model)
+            .map_err(|e| fail(e.to_string()))
+    }
+
+    /// Scatters an equation vector into the full dof vector `self.full` (0 on fixed dofs).
+    fn expand(&mut self, model: &Model) {
+        for (d, &e) in model.dofs.eq.iter().enumerate() {
+            self.full[d] = if e == NO_EQ { 0.0 } else { self.eq[e as usize] };
+        }
+    }
+
+    /// Restricts `self.full` to equations into `self.eq`.
+    fn restrict(&mut self, model: &Model) {
+        model.dofs.restrict(&self.full, &mut self.eq);
+    }
+
+    /// The adjoint gradient `dJ/dc` for a cost with `dJ/dF_i = dj_df[i]` at each step of
+    /// `traj` (0 for sub-steps the cost does not see).
+    ///
+    /// # Errors
+    /// [`AdjointError::NotRecorded`], [`AdjointError::Length`],
+    /// [`AdjointError::NotDifferentiable`] (e.g. Norton-Hoff with m <= 1), or a step failure.
+    pub fn gradient(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
+    ) -> Result<Gradient, AdjointError> {
+        let start = std::time::Instant::now();
+        let f0 = self.system.factorizations();
+        let n = traj.steps.len();
+        check_inputs(law, c, traj, dj_df.len())?;
+        let s = law.compliance(c);
+        let np = c.len();
+        let mut grad = vec![0.0; np];
+        // field_a holds mu_{i+1}, field_b receives mu_i
+        self.field_a.fill(Vec4::ZERO);
+        for i in (0..n).rev() {
+            let rec = &traj.steps[i];
+            let mu_next_is_zero = i + 1 == n;
+            if rec.active.is_empty() && dj_df[i] == 0.0 && mu_next_is_zero {
+                continue;
+            }
+            self.prepare_step(model, law, c, traj, i)?;
+            // b = sum_g w B^T (C S - I) mu_{i+1}
+            for q in 0..self.field_b.len() {
+                let sm = s.mul_vec(&self.field_a[q]);
+                self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+            }
+            model.disc.internal_force(&self.field_b, &mut self.full);
+            self.restrict(model);
+            // V = dJ/dF_i on the active contact dofs
+            for &k in &rec.active {
+                if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
+                    self.xbar[e] = dj_df[i];
+                }
+            }
+            let mut eq = std::mem::take(&mut self.eq);
+            self.system.solve_dirichlet(model, &mut eq, &self.xbar);
+            self.eq = eq;
+            self.expand(model);
+            model.disc.strains(&self.full, &mut self.strain);
+            // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i
+            let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
+            for q in 0..self.field_b.len() {
+                let sm = s.mul_vec(&self.field_a[q]);
+                let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
+                self.field_b[q] = mu;
+                let w = model.disc.qp[q].w;
+                for (k, g) in grad.iter_mut().enumerate() {
+                    *g -= w * mu
+                        .dot(&law.residual_param_derivative(c, &sig0[q], &sig1[q], rec.dt, k));
+                }
+            }
+            std::mem::swap(&mut self.field_a, &mut self.field_b);
+            self.xbar.fill(0.0);
+        }
+        Ok(Gradient {
+            dj_dc: grad,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.system.factorizations() - f0,
+        })
+    }
+
+    /// Forward sensitivities `dF_i/dc_k` of every step force by direct differentiation.
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient`].
+    pub fn sensitivities(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+    ) -> Result<Sensitivities, AdjointError> {
+        let start = std::time::Instant::now();
+        let n = traj.steps.len();
+        check_inputs(law, c, traj, n)?;
+        let s = law.compliance(c);
+        let np = c.len();
+        let nq = model.disc.n_qp();
+        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let mut df = vec![vec![0.0; np]; n];
+        let mut q_field = vec![Vec4::ZERO; nq];
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            self.prepare_step(model, law, c, traj, i)?;
+            let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
+            for k in 0..np {
+                // q = y_{i-1} - R_i e_k
+                for qp in 0..nq {
+                    q_field[qp] = y[k][qp]
+                        - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
+                    self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
+                }
+                model.disc.internal_force(&self.field_b, &mut self.full);
+                self.restrict(model);
+                self.xbar.fill(0.0);
+                let mut eq = std::mem::take(&mut self.eq);
+                self.system.solve_dirichlet(model, &mut eq, &self.xbar);
+                self.eq = eq;
+                self.expand(model);
+                model.disc.strains(&self.full, &mut self.strain);
+                for qp in 0..nq {
+                    let bv = Vec4(self.strain[qp]);
+                    let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
+                    self.field_b[qp] = dsig;
+                    y[k][qp] = s.mul_vec(&dsig) - bv;
+                }
+                model.disc.internal_force(&self.field_b, &mut self.full);
+                df[i][k] = -rec
+                    .active
+                    .iter()
+                    .map(|&a| self.full[2 * model.candidates[a as usize] + 1])
+                    .sum::<f64>();
+            }
+        }
+        Ok(Sensitivities {
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+fn check_inputs(
+    law: &dyn Law,
+    c: &[f64],
+    traj: &Trajectory,
+    n_rho: usize,
+) -> Result<(), AdjointError> {
+    let n = traj.steps.len();
+    if traj.fields.len() != n + 1 {
+        return Err(AdjointError::NotRecorded {
+            fields: traj.fields.len(),
+            steps: n,
+        });
+    }
+    if n_rho != n {
+        return Err(AdjointError::Length {
+            expected: n,
+            got: n_rho,
+        });
+    }
+    law.check_params(c)?;
+    law.check_differentiable(c)?;
+    Ok(())
+}
