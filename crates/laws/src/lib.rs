@@ -1,5 +1,6 @@
 //! Constitutive laws of standard generalized materials for indentify: the [`Law`] trait,
-//! Mandel-form tensors, and the laws themselves ([`Elastic`], [`Maxwell`]).
+//! Mandel-form tensors, and the laws themselves: [`Elastic`], [`Maxwell`] viscoelasticity
+//! and [`NortonHoff`] elastoviscoplasticity, found by name with [`law_by_name`].
 //!
 //! Units: MPa for stresses and moduli, s for times. This crate knows nothing of
 //! elements, meshes or contact: it works at one material point.
@@ -8,20 +9,23 @@ pub mod elastic;
 pub mod law;
 pub mod mandel;
 pub mod maxwell;
+pub mod norton_hoff;
 
 pub use elastic::Elastic;
 pub use law::{Law, LocalFailure, LocalUpdate, ParamInfo};
 pub use mandel::{Mat4, Vec4};
 pub use maxwell::Maxwell;
+pub use norton_hoff::NortonHoff;
 
 /// Names accepted by [`law_by_name`], in the order of increasing complexity.
-pub const LAW_NAMES: [&str; 2] = ["elastic", "maxwell"];
+pub const LAW_NAMES: [&str; 3] = ["elastic", "maxwell", "norton-hoff"];
 
 /// The law registered under `name` (one of [`LAW_NAMES`]), or `None`.
 pub fn law_by_name(name: &str) -> Option<&'static dyn Law> {
     match name {
         "elastic" => Some(&Elastic),
         "maxwell" => Some(&Maxwell),
+        "norton-hoff" => Some(&NortonHoff),
         _ => None,
     }
 }

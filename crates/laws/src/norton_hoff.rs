@@ -1,0 +1,441 @@
+//! Norton-Hoff elastoviscoplasticity with a yield stress (paper §2.1 and §5, eqs. 44-46):
+//! parameters `[E, nu, K, m, sY]`, scalar radial-return local update, closed-form tangent.
+
+use crate::LawError;
+use crate::elastic::{E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative};
+use crate::law::{Law, LocalFailure, LocalUpdate, ParamInfo};
+use crate::mandel::{Mat4, Vec4};
+use crate::maxwell::isotropic_operator;
+
+/// Norton-Hoff law, parameters `c = [E (MPa), nu (-), K (MPa s^(1/m)), m (-), sY (MPa)]`.
+///
+/// Pseudo-potential (paper §2.1) `Phi = K/(m+1) <(s_eq - sY)/K>_+^(m+1)` with `s` the
+/// deviator of `sigma` and `s_eq = sqrt(3/2 s:s)` the von Mises stress. With
+/// `x = <(s_eq - sY)/K>_+` (`x^m` in 1/s) and the normal `n = 3 s / (2 s_eq)`
+/// (`n:n = 3/2`):
+///
+/// - flow (eq. 46) `g = dPhi/dsigma = x^m n`; in uniaxial tension `g_zz = x^m`;
+/// - Hessian `H = (m/K) x^(m-1) n(x)n + x^m (3/(2 s_eq)) (P - (2/3) n(x)n)`, using
+///   `dn/dsigma = (3/(2 s_eq)) (P - (2/3) n(x)n)`;
+/// - below yield (`s_eq <= sY`) `g = 0` and `H = 0` (for `m = 1, sY = 0` the law is
+///   Maxwell with `eta = 2K/3` and `H = 3P/(2K)` also at `sigma = 0`);
+/// - parameter derivatives at fixed stress, from `dx/dK = -x/K` and `dx/dsY = -1/K`:
+///   `dg/dK = -(m/K) x^m n`, `dg/dm = x^m ln(x) n` (0 at `x = 0`),
+///   `dg/dsY = -(m/K) x^(m-1) n`, as in DESIGN.md §3 (checked against finite
+///   differences by the shared consistency tests). `dS/dE`, `dS/dnu` as for elasticity.
+///
+/// `m = 1` is admitted for forward runs, but the adjoint needs `m > 1`
+/// ([`Law::check_differentiable`]): for `m <= 1` the Hessian jumps across the yield
+/// surface.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NortonHoff;
+
+const K_INFO: ParamInfo = ParamInfo {
+    name: "K",
+    unit: "MPa s^(1/m)",
+    description: "viscosity (drag stress) of the Norton power law",
+    min: 0.0,
+    min_inclusive: false,
+    max: f64::INFINITY,
+    max_inclusive: false,
+};
+const M_INFO: ParamInfo = ParamInfo {
+    name: "m",
+    unit: "-",
+    description: "Norton exponent (m > 1 needed for the adjoint)",
+    min: 1.0,
+    min_inclusive: true,
+    max: f64::INFINITY,
+    max_inclusive: false,
+};
+const SY_INFO: ParamInfo = ParamInfo {
+    name: "sY",
+    unit: "MPa",
+    description: "yield (elasticity limit) stress",
+    min: 0.0,
+    min_inclusive: true,
+    max: f64::INFINITY,
+    max_inclusive: false,
+};
+
+const PARAMS: [ParamInfo; 5] = [E_INFO, NU_INFO, K_INFO, M_INFO, SY_INFO];
+
+/// Index of `K` in the parameter slice.
+const K: usize = 2;
+/// Index of `m` in the parameter slice.
+const M: usize = 3;
+/// Index of `sY` in the parameter slice.
+const SY: usize = 4;
+
+/// Viscoplastic state at one stress above yield.
+struct Overstress {
+    /// `x = (s_eq - sY)/K > 0`.
+    x: f64,
+    /// von Mises stress `s_eq > 0` (MPa).
+    s_eq: f64,
+    /// Normal `n = 3 s / (2 s_eq)`.
+    n: Vec4,
+}
+
+/// The overstress at `sigma`, `None` at or below yield.
+fn overstress(c: &[f64], sigma: &Vec4) -> Option<Overstress> {
+    let s = sigma.deviator();
+    let s_eq = (1.5 * s.dot(&s)).sqrt();
+    let x = (s_eq - c[SY]) / c[K];
+    (x > 0.0 && s_eq > 0.0).then(|| Overstress {
+        x,
+        s_eq,
+        n: s * (1.5 / s_eq),
+    })
+}
+
+/// Consistent tangent `(S + dt H)^-1` in closed form.
+///
+/// With the unit normal `N = sqrt(2/3) n` and `J = 1(x)1/3`,
+/// `S = P/(2G) + J/(3 kappa)` and `H = a (P - N(x)N) + (3/2) b N(x)N` where
+/// `a = 3 x^m / (2 s_eq)`, `b = (m/K) x^(m-1)`. All three projectors `P - N(x)N`,
+/// `N(x)N`, `J` are orthogonal, so
+/// `C = (P - N(x)N)/alpha + N(x)N/beta + 3 kappa J` with `alpha = 1/(2G) + dt a` and
+/// `beta = 1/(2G) + (3/2) dt b`.
+fn closed_tangent(c: &[f64], over: Option<&Overstress>, dt: f64) -> Mat4 {
+    let (e, nu, k, m, sy) = (c[0], c[1], c[K], c[M], c[SY]);
+    let inv_2g = (1.0 + nu) / e;
+    let kappa3 = e / (1.0 - 2.0 * nu);
+    match over {
+        Some(o) => {
+            let xm = o.x.powf(m);
+            let alpha = inv_2g + dt * 1.5 * xm / o.s_eq;
+            let beta = inv_2g + dt * 1.5 * (m / k) * o.x.powf(m - 1.0);
+            let unit = o.n * (2.0f64 / 3.0).sqrt();
+            let nn = unit.outer(&unit);
+            isotropic_operator(1.0 / alpha, kappa3) + nn * (1.0 / beta - 1.0 / alpha)
+        }
+        // Maxwell limit m = 1, sY = 0 at s = 0: H = 3P/(2K).
+        None if m == 1.0 && sy == 0.0 => isotropic_operator(1.0 / (inv_2g + 1.5 * dt / k), kappa3),
+        None => isotropic_operator(1.0 / inv_2g, kappa3),
+    }
+}
+
+fn failure(reason: String) -> LocalFailure {
+    LocalFailure {
+        reason,
+        suggested_dt_factor: 0.25,
+    }
+}
+
+/// Solves the scalar return equation `K x + b x^m = d` for `x > 0` (`b = 3 G dt >= 0`,
+/// `d = s_eq_trial - sY > 0`, `m >= 1`), returning `(x, iterations)`.
+///
+/// The root lies in `[x_lo, x_hi]` with `x_hi = min(d/K, (d/b)^(1/m))` (one term alone
+/// reaches `d`) and `x_lo = min(d/(2K), (d/(2b))^(1/m))` (neither term exceeds `d/2`),
+/// a bracket of ratio at most 2. Newton runs on `h(y) = ln(K e^y + b e^(m y)) - ln d`
+/// in `y = ln x`: `h` is increasing and convex (log-sum-exp of affine functions), with
+/// slope in `[1, m]`, so Newton started at `y_hi` decreases monotonically onto the root
+/// whatever `m`, `dt` or the size of the step; all terms are formed in logarithms, so
+/// nothing overflows. A bisection fallback guards against round-off, and a final Newton
+/// step in `x` polishes the root to a relative residual of a few ulps.
+fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalFailure> {
+    if b == 0.0 {
+        return Ok((d / k, 0));
+    }
+    let (ln_k, ln_b, ln_d) = (k.ln(), b.ln(), d.ln());
+    let ln_pow = |ln_num: f64| ln_num / m;
+    let mut y_hi = (ln_d - ln_k).min(ln_pow(ln_d - ln_b));
+    let mut y_lo =
+        (ln_d - ln_k - std::f64::consts::LN_2).min(ln_pow(ln_d - ln_b - std::f64::consts::LN_2));
+    if !(y_hi.is_finite() && y_lo.is_finite()) {
+        return Err(failure(format!(
+            "norton-hoff: cannot bracket the return equation (K = {k}, 3G dt = {b}, m = {m}, overstress = {d})"
+        )));
+    }
+    let mut y = y_hi;
+    for it in 1..=200u32 {
+        // h(y) = ln(K e^y + b e^(m y)) - ln d as a log-sum-exp.
+        let (l1, l2) = (ln_k + y, ln_b + m * y);
+        let lmax = l1.max(l2);
+        let (w1, w2) = ((l1 - lmax).exp(), (l2 - lmax).exp());
+        let h = lmax + (w1 + w2).ln() - ln_d;
+        let slope = (w1 + m * w2) / (w1 + w2);
+        if h > 0.0 {
+            y_hi = y;
+        } else {
+            y_lo = y;
+        }
+        let mut y_new = y - h / slope;
+        // Strictly inside the bracket (false for NaN and infinities too).
+        let inside = y_new > y_lo && y_new < y_hi;
+        if !inside {
+            y_new = 0.5 * (y_lo + y_hi);
+        }
+        let step = (y_new - y).abs();
+        y = y_new;
+        if step <= 1e-15 * (1.0 + y.abs()) || h == 0.0 || y_hi - y_lo <= 1e-15 * (1.0 + y.abs()) {
+            // Polish in x: f(x) = K x + b x^m - d, f' = K + m b x^(m-1).
+            let mut x = y.exp();
+            for _ in 0..2 {
+                let xm1 = x.powf(m - 1.0);
+                let f = k * x + b * xm1 * x - d;
+                let x_new = x - f / (k + m * b * xm1);
+                if x_new.is_finite() && x_new > 0.0 {
+                    x = x_new;
+                }
+            }
+            return Ok((x, it));
+        }
+    }
+    Err(failure(format!(
+        "norton-hoff: return equation did not converge (K = {k}, 3G dt = {b}, m = {m}, overstress = {d})"
+    )))
+}
+
+impl Law for NortonHoff {
+    fn name(&self) -> &'static str {
+        "norton-hoff"
+    }
+    fn params(&self) -> &'static [ParamInfo] {
+        &PARAMS
+    }
+    fn compliance(&self, c: &[f64]) -> Mat4 {
+        isotropic_compliance(c[0], c[1])
+    }
+    fn compliance_derivative(&self, c: &[f64], k: usize) -> Mat4 {
+        isotropic_compliance_derivative(c, k)
+    }
+    fn flow(&self, c: &[f64], sigma: &Vec4) -> Vec4 {
+        match overstress(c, sigma) {
+            Some(o) => o.n * o.x.powf(c[M]),
+            None => Vec4::ZERO,
+        }
+    }
+    fn flow_hessian(&self, c: &[f64], sigma: &Vec4) -> Mat4 {
+        let (k, m) = (c[K], c[M]);
+        match overstress(c, sigma) {
+            Some(o) => {
+                let nn = o.n.outer(&o.n);
+                let a = o.x.powf(m) * 1.5 / o.s_eq;
+                nn * ((m / k) * o.x.powf(m - 1.0))
+                    + (Mat4::deviatoric_projector() - nn * (2.0 / 3.0)) * a
+            }
+            None if m == 1.0 && c[SY] == 0.0 => Mat4::deviatoric_projector() * (1.5 / k),
+            None => Mat4::ZERO,
+        }
+    }
+    fn flow_param_derivative(&self, c: &[f64], sigma: &Vec4, k: usize) -> Vec4 {
+        let Some(o) = overstress(c, sigma) else {
+            return Vec4::ZERO;
+        };
+        let (kk, m) = (c[K], c[M]);
+        match k {
+            K => o.n * (-(m / kk) * o.x.powf(m)),
+            M => o.n * (o.x.powf(m) * o.x.ln()),
+            SY => o.n * (-(m / kk) * o.x.powf(m - 1.0)),
+            _ => Vec4::ZERO,
+        }
+    }
+    /// `m > 1` is required: `Phi` must be twice differentiable in `sigma` for the adjoint
+    /// state to exist (paper §3.3).
+    ///
+    /// # Errors
+    /// [`LawError::NotDifferentiable`] naming `m` when `m <= 1`.
+    fn check_differentiable(&self, c: &[f64]) -> Result<(), LawError> {
+        let m = c[M];
+        if m > 1.0 {
+            Ok(())
+        } else {
+            Err(LawError::NotDifferentiable {
+                law: self.name(),
+                name: "m",
+                value: m,
+                why: "the adjoint needs m > 1: Phi = K/(m+1) <(s_eq - sY)/K>_+^(m+1) must be \
+                      twice differentiable in sigma (paper §3.3), and for m <= 1 its Hessian \
+                      jumps across the yield surface",
+            })
+        }
+    }
+    /// Closed form of `(S + dt H(sigma))^-1`, see [`NortonHoff`]; never singular.
+    fn tangent(&self, c: &[f64], sigma: &Vec4, dt: f64) -> Result<Mat4, LocalFailure> {
+        Ok(closed_tangent(c, overstress(c, sigma).as_ref(), dt))
+    }
+    /// Radial return: backward Euler reduced to one scalar equation.
+    ///
+    /// Split `sigma = s + (tr sigma/3) 1` and `S = P/(2G) + J/(3 kappa)` with
+    /// `G = E/(2(1+nu))`, `3 kappa = E/(1-2nu)`. The flow is deviatoric, so the trace
+    /// part of `r(sigma1) = S (sigma1 - sigma0) + dt g(sigma1) - deps = 0` gives
+    /// `tr sigma1 = tr sigma0 + 3 kappa tr deps`, and the deviatoric part, with the trial
+    /// deviator `s_tr = s0 + 2G dev(deps)`, reads
+    /// `s1 + 2G dt x1^m (3 s1 / (2 s_eq1)) = s_tr`, i.e.
+    /// `s1 (1 + 3G dt x1^m / s_eq1) = s_tr`. The factor is a positive scalar, so `s1` is
+    /// parallel to `s_tr`: `s1 = s_tr s_eq1 / s_eq_tr`, and taking von Mises norms,
+    /// `s_eq1 + 3G dt <(s_eq1 - sY)/K>_+^m = s_eq_tr`. If `s_eq_tr <= sY` the step is
+    /// elastic (`s_eq1 = s_eq_tr` solves it with `x = 0`, and the left side is
+    /// increasing, so the root is unique). Otherwise `s_eq1 = sY + K x` with `x > 0` the
+    /// root of `K x + 3G dt x^m = s_eq_tr - sY`, solved by a safeguarded Newton in
+    /// `ln x` (see the bracket in the source). The tangent is the closed form of
+    /// [`Law::tangent`] at the converged state, the exact derivative of this map.
+    ///
+    /// # Errors
+    /// [`LocalFailure`] on non-finite input or a negative `dt`, or when the scalar
+    /// equation cannot be solved.
+    fn update(
+        &self,
+        c: &[f64],
+        s0: &Vec4,
+        deps: &Vec4,
+        dt: f64,
+    ) -> Result<LocalUpdate, LocalFailure> {
+        if !dt.is_finite() || dt < 0.0 || !s0.is_finite() || !deps.is_finite() {
+            return Err(failure(format!(
+                "norton-hoff: invalid input dt = {dt}, s0 = {s0:?}, deps = {deps:?}"
+            )));
+        }
+        let (e, nu, k, m, sy) = (c[0], c[1], c[K], c[M], c[SY]);
+        let g2 = e / (1.0 + nu);
+        let kappa3 = e / (1.0 - 2.0 * nu);
+        let s_tr = s0.deviator() + deps.deviator() * g2;
+        let spherical = Vec4::ONE * ((s0.trace() + kappa3 * deps.trace()) / 3.0);
+        let s_eq_tr = (1.5 * s_tr.dot(&s_tr)).sqrt();
+        let d = s_eq_tr - sy;
+        let (sigma, over, iterations) = if d > 0.0 && s_eq_tr > 0.0 {
+            let (x, it) = solve_overstress(k, 1.5 * g2 * dt, m, d)?;
+            let s_eq = sy + k * x;
+            let s1 = s_tr * (s_eq / s_eq_tr);
+            let over = Overstress {
+                x,
+                s_eq,
+                n: s_tr * (1.5 / s_eq_tr),
+            };
+            (s1 + spherical, Some(over), it)
+        } else {
+            (s_tr + spherical, None, 0)
+        };
+        if !sigma.is_finite() {
+            return Err(failure(format!(
+                "norton-hoff: non-finite stress from s0 = {s0:?}, deps = {deps:?}, dt = {dt}"
+            )));
+        }
+        Ok(LocalUpdate {
+            sigma,
+            tangent: closed_tangent(c, over.as_ref(), dt),
+            iterations,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reference problem R2 (DESIGN.md §5).
+    const C: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
+
+    fn residual(c: &[f64], s0: &Vec4, s1: &Vec4, deps: &Vec4, dt: f64) -> Vec4 {
+        NortonHoff.compliance(c).mul_vec(&(*s1 - *s0)) + NortonHoff.flow(c, s1) * dt - *deps
+    }
+
+    #[test]
+    fn uniaxial_flow_is_the_norton_rate() {
+        let g = NortonHoff.flow(&C, &Vec4([0.0, 800.0, 0.0, 0.0]));
+        let rate = (300.0f64 / 1500.0).powi(5);
+        assert!((g[1] - rate).abs() < 1e-15 * rate);
+        assert!((g[0] + 0.5 * rate).abs() < 1e-15 * rate);
+        assert_eq!(
+            NortonHoff.flow(&C, &Vec4([0.0, 499.0, 0.0, 0.0])),
+            Vec4::ZERO
+        );
+    }
+
+    /// The closed-form tangent is the inverse of `S + dt H` built from the Hessian.
+    #[test]
+    fn closed_tangent_inverts_the_local_jacobian() {
+        let sigma = Vec4([100.0, 900.0, -50.0, 300.0]);
+        let dt = 0.3;
+        let a = NortonHoff.compliance(&C) + NortonHoff.flow_hessian(&C, &sigma) * dt;
+        let t = NortonHoff.tangent(&C, &sigma, dt).unwrap();
+        assert!((a.mul_mat(&t) - Mat4::IDENTITY).max_abs() < 1e-12);
+    }
+
+    /// The scalar return map converges for huge steps and exponents, agreeing with the
+    /// backward-Euler residual to round-off. (Re-evaluating `x = (s_eq - sY)/K` from the
+    /// stress components loses `eps |sigma| / (K x)` relative accuracy, ~1e-11 for the
+    /// worst case here, a 1 MPa overstress on a 1e5 MPa trial stress.)
+    #[test]
+    fn return_map_survives_huge_steps_and_exponents() {
+        for m in [1.0, 1.5, 5.0, 20.0, 100.0] {
+            for (scale, dt) in [(1e-6, 1e-6), (1e-2, 1.0), (1.0, 1e3), (10.0, 1e-9)] {
+                let c = [1e5, 0.3, 1500.0, m, 500.0];
+                let s0 = Vec4([10.0, 20.0, -30.0, 5.0]);
+                let deps = Vec4([0.3, -1.0, 0.2, 0.4]) * scale;
+                let up = NortonHoff.update(&c, &s0, &deps, dt).unwrap();
+                let r = residual(&c, &s0, &up.sigma, &deps, dt);
+                let sc = deps.max_abs() + NortonHoff.compliance(&c).mul_vec(&up.sigma).max_abs();
+                assert!(r.max_abs() <= 1e-10 * sc, "m {m} scale {scale}: {r:?}");
+                assert!(up.iterations <= 60, "m {m}: {} iterations", up.iterations);
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_input_is_a_local_failure() {
+        let s0 = Vec4::ZERO;
+        let nan = Vec4([f64::NAN, 0.0, 0.0, 0.0]);
+        let ok = Vec4([0.0, 1e-2, 0.0, 0.0]);
+        let f = NortonHoff.update(&C, &s0, &nan, 0.1).unwrap_err();
+        assert!(f.suggested_dt_factor < 1.0 && f.reason.contains("norton-hoff"));
+        assert!(NortonHoff.update(&C, &s0, &ok, f64::INFINITY).is_err());
+        assert!(NortonHoff.update(&C, &s0, &ok, -1.0).is_err());
+        assert!(NortonHoff.update(&C, &nan, &ok, 1.0).is_err());
+    }
+
+    #[test]
+    fn parameter_ranges_are_enforced() {
+        assert!(NortonHoff.check_params(&C).is_ok());
+        assert!(
+            NortonHoff
+                .check_params(&[1e5, 0.3, 1500.0, 1.0, 0.0])
+                .is_ok()
+        );
+        for (bad, name, range) in [
+            ([1e5, 0.3, 0.0, 5.0, 500.0], "K", "(0, inf)"),
+            ([1e5, 0.3, -2.0, 5.0, 500.0], "K", "(0, inf)"),
+            ([1e5, 0.3, 1500.0, 0.5, 500.0], "m", "[1, inf)"),
+            ([1e5, 0.3, 1500.0, 5.0, -1.0], "sY", "[0, inf)"),
+            ([1e5, 0.5, 1500.0, 5.0, 500.0], "nu", "(-1, 0.5)"),
+            ([1e5, -1.2, 1500.0, 5.0, 500.0], "nu", "(-1, 0.5)"),
+            ([-1e5, 0.3, 1500.0, 5.0, 500.0], "E", "(0, inf)"),
+            ([1e5, 0.3, 1500.0, f64::NAN, 500.0], "m", "[1, inf)"),
+        ] {
+            let err = NortonHoff.check_params(&bad).unwrap_err();
+            match &err {
+                LawError::Parameter { name: n, .. } => assert_eq!(*n, name),
+                other => panic!("unexpected {other:?}"),
+            }
+            let text = err.to_string();
+            assert!(
+                text.contains(&format!("`{name}`")) && text.contains(range),
+                "{text}"
+            );
+        }
+        let text = NortonHoff
+            .check_params(&[1e5, 0.3, 1500.0, 0.5, 500.0])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            text.contains("0.5") && text.contains("norton-hoff"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn adjoint_requires_m_above_one() {
+        assert!(NortonHoff.check_differentiable(&C).is_ok());
+        for m in [1.0, 0.7] {
+            let err = NortonHoff
+                .check_differentiable(&[1e5, 0.3, 1500.0, m, 500.0])
+                .unwrap_err();
+            assert!(
+                matches!(err, LawError::NotDifferentiable { name: "m", value, .. } if value == m)
+            );
+            assert!(err.to_string().contains("twice differentiable"));
+        }
+    }
+}
