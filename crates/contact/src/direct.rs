@@ -28,6 +28,9 @@ pub struct SolverOptions {
     pub max_iterations: usize,
     /// Maximum number of successive halvings of a step before giving up.
     pub max_cuts: u32,
+    /// Relative residual below which the active set is checked (and corrected) before full
+    /// convergence: semi-smooth Newton on equilibrium and complementarity together.
+    pub active_set_check_tol: f64,
     /// Relative tolerance on penetration (times the current depth) before a node is activated.
     pub gap_tol: f64,
     /// Relative tolerance on tensile reactions (times the current force) before a node is released.
@@ -42,6 +45,7 @@ impl Default for SolverOptions {
             residual_tol: 1e-10,
             max_iterations: 60,
             max_cuts: 8,
+            active_set_check_tol: 1e-6,
             gap_tol: 1e-10,
             lambda_tol: 1e-10,
             record_fields: true,
@@ -481,6 +485,7 @@ impl DirectSolver {
         let mut constrained = vec![false; n_eq];
         let mut single_change = false;
         loop {
+            // every pass evaluates the current iterate once, then checks or solves
             let tl = std::time::Instant::now();
             self.evaluate(model, law, c, state, &u, dt, &mut sigma)?;
             timing.local += tl.elapsed().as_secs_f64();
@@ -509,8 +514,10 @@ impl DirectSolver {
             });
             let scale = fmax.max(state.f_scale);
             let rel = if scale > 0.0 { res / scale } else { res };
-            if iterations > 0 && targets_met && (rel <= opts.residual_tol || res == 0.0) {
-                // equilibrium holds for this active set: check complementarity
+            let converged = rel <= opts.residual_tol || res == 0.0;
+            // complementarity is checked once equilibrium for the current set is loosely met
+            // (semi-smooth Newton): a wrong set is corrected without a full Newton solve
+            if iterations > 0 && targets_met && (converged || rel <= opts.active_set_check_tol) {
                 let force: f64 = (0..nc)
                     .filter(|&k| active[k])
                     .map(|k| -self.f_int[zdof(k)])
@@ -542,7 +549,7 @@ impl DirectSolver {
                         }
                     }
                 }
-                if violations.is_empty() {
+                if violations.is_empty() && converged {
                     let rec = self.record(model, &active, &u, t1, dt, depth, iterations, changes);
                     let f_scale = state.f_scale.max(fmax);
                     let duz_last = (0..nc).map(|k| u[zdof(k)] - state.u[zdof(k)]).collect();
@@ -557,23 +564,24 @@ impl DirectSolver {
                     };
                     return Ok((next, rec));
                 }
-                let flip: Vec<usize> = if single_change {
-                    vec![worst.map_or(0, |w| w.0)]
-                } else {
-                    violations
-                };
-                for k in flip {
-                    active[k] = !active[k];
-                }
-                changes += 1;
-                if seen.contains(&active) {
-                    if single_change {
-                        return Err(StepFailure::Cycling { changes });
+                if !violations.is_empty() {
+                    let flip: Vec<usize> = if single_change {
+                        vec![worst.map_or(0, |w| w.0)]
+                    } else {
+                        violations
+                    };
+                    for k in flip {
+                        active[k] = !active[k];
                     }
-                    single_change = true;
+                    changes += 1;
+                    if seen.contains(&active) {
+                        if single_change {
+                            return Err(StepFailure::Cycling { changes });
+                        }
+                        single_change = true;
+                    }
+                    seen.push(active.clone());
                 }
-                seen.push(active.clone());
-                continue;
             }
             if iterations as usize >= opts.max_iterations {
                 return Err(StepFailure::Newton { residual: rel });
