@@ -99,6 +99,25 @@ impl Law for Elastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{Profile, law_consistency_tests, log_uniform, relative_param_step};
+    use proptest::prelude::*;
+
+    const PROFILE: Profile = Profile {
+        law: &Elastic,
+        stress_scale,
+        smooth_length,
+        param_step: relative_param_step,
+    };
+    fn stress_scale(c: &[f64]) -> f64 {
+        1e-3 * c[0]
+    }
+    fn smooth_length(_c: &[f64], _sigma: &Vec4) -> f64 {
+        f64::INFINITY
+    }
+    fn params() -> impl Strategy<Value = Vec<f64>> {
+        (log_uniform(1e2, 1e6), -0.9..0.49f64).prop_map(|(e, nu)| vec![e, nu])
+    }
+    law_consistency_tests!(consistency, PROFILE, params());
 
     #[test]
     fn stiffness_inverts_compliance() {

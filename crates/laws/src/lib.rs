@@ -10,6 +10,8 @@ pub mod law;
 pub mod mandel;
 pub mod maxwell;
 pub mod norton_hoff;
+#[cfg(test)]
+mod testing;
 
 pub use elastic::Elastic;
 pub use law::{Law, LocalFailure, LocalUpdate, ParamInfo};

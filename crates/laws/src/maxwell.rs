@@ -127,6 +127,26 @@ impl Law for Maxwell {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{Profile, law_consistency_tests, log_uniform, relative_param_step};
+    use proptest::prelude::*;
+
+    const PROFILE: Profile = Profile {
+        law: &Maxwell,
+        stress_scale,
+        smooth_length,
+        param_step: relative_param_step,
+    };
+    fn stress_scale(c: &[f64]) -> f64 {
+        1e-3 * c[0]
+    }
+    fn smooth_length(_c: &[f64], _sigma: &Vec4) -> f64 {
+        f64::INFINITY
+    }
+    fn params() -> impl Strategy<Value = Vec<f64>> {
+        (log_uniform(1e2, 1e6), -0.9..0.49f64, log_uniform(1e1, 1e7))
+            .prop_map(|(e, nu, eta)| vec![e, nu, eta])
+    }
+    law_consistency_tests!(consistency, PROFILE, params());
 
     const C: [f64; 3] = [20000.0, 0.3, 30000.0];
 
@@ -181,5 +201,120 @@ mod tests {
             .to_string();
         assert!(text.contains("-5") && text.contains("(0, inf)"), "{text}");
         assert!(Maxwell.check_params(&[1.0, 0.3]).is_err());
+    }
+
+    mod uniaxial {
+        //! Material-point validation of Maxwell in uniaxial stress against closed forms.
+        //!
+        //! ```text
+        //!        sigma_zz (strain or stress controlled)
+        //!           ^
+        //!      +----|----+   sigma_rr = sigma_tt = sigma_rz = 0
+        //!      |  one    |   (lateral strains free, found by Newton
+        //!      |  point  |    with the consistent tangent)
+        //!      +---------+
+        //! ```
+        //!
+        //! Axially, with `P sigma = sigma (-1/3, 2/3, -1/3)`, the law reads
+        //! `d eps_zz/dt = (d sigma/dt)/E + 2 sigma/(3 eta)`: a spring `E` in series with a
+        //! dashpot `3 eta/2`, relaxation time `tau = 3 eta/(2E)`. Parameters of R1
+        //! (DESIGN.md §5): `E = 20000 MPa, nu = 0.3, eta = 30000 MPa s`, `tau = 1.125 s`.
+        use super::*;
+        use crate::testing::{Axial, assert_first_order, uniaxial_history};
+
+        const C: [f64; 3] = [20000.0, 0.3, 30000.0];
+        const TAU: f64 = 1.5 * 30000.0 / 20000.0;
+
+        /// Instantaneous (dt = 0, elastic) axial strain step from rest.
+        fn strain_step(eps0: f64) -> (Vec4, Vec4) {
+            uniaxial_history(&Maxwell, &C, Vec4::ZERO, Vec4::ZERO, 0.0, 1, |_| {
+                Axial::Strain(eps0)
+            })
+        }
+
+        /// Maxwell uniaxial relaxation.
+        ///
+        /// Reference: `sigma(t) = E eps0 exp(-t/tau)` after a step `eps0` at `t = 0`
+        /// (solution of `d sigma/dt = -sigma/tau` at constant strain); backward Euler
+        /// gives exactly `sigma_n = E eps0 (1 + dt/tau)^-n`. Goal: the 3D update under
+        /// uniaxial stress reproduces the scalar scheme to round-off, and its error to
+        /// the exact curve at `T = 2 s` falls at first order.
+        #[test]
+        fn maxwell_uniaxial_relaxation() {
+            let (eps0, t_end) = (1e-3, 2.0);
+            let (s_el, e_el) = strain_step(eps0);
+            assert!((s_el[1] - C[0] * eps0).abs() < 1e-12 * C[0] * eps0);
+            assert!((e_el[0] + C[1] * eps0).abs() < 1e-15 && (e_el[2] - e_el[0]).abs() < 1e-15);
+            let exact = C[0] * eps0 * (-t_end / TAU).exp();
+            assert_first_order("maxwell relaxation", 10, |n| {
+                let dt = t_end / n as f64;
+                let (s, _) =
+                    uniaxial_history(&Maxwell, &C, s_el, e_el, dt, n, |_| Axial::Strain(0.0));
+                let scheme = C[0] * eps0 * (1.0 + dt / TAU).powi(-(n as i32));
+                assert!(
+                    (s[1] - scheme).abs() < 1e-12 * scheme,
+                    "{} vs {scheme}",
+                    s[1]
+                );
+                assert!(s[0].abs() < 1e-12 && s[2].abs() < 1e-12);
+                (s[1] - exact).abs() / exact
+            });
+        }
+
+        /// Maxwell at a constant strain rate.
+        ///
+        /// Reference: `d sigma/dt = E rate - sigma/tau`, `sigma(0) = 0`, hence
+        /// `sigma(t) = E rate tau (1 - exp(-t/tau))`. Goal: first-order convergence of
+        /// backward Euler at `T = 2 s`.
+        #[test]
+        fn maxwell_constant_strain_rate() {
+            let (rate, t_end) = (1e-3, 2.0);
+            let exact = C[0] * rate * TAU * (1.0 - (-t_end / TAU).exp());
+            assert_first_order("maxwell constant strain rate", 10, |n| {
+                let dt = t_end / n as f64;
+                let (s, e) = uniaxial_history(&Maxwell, &C, Vec4::ZERO, Vec4::ZERO, dt, n, |_| {
+                    Axial::Strain(rate * dt)
+                });
+                assert!((e[1] - rate * t_end).abs() < 1e-15);
+                (s[1] - exact).abs() / exact
+            });
+        }
+
+        /// Maxwell creep under constant stress.
+        ///
+        /// Reference: after an instantaneous load `sigma0`,
+        /// `eps_zz(t) = sigma0/E + 2 sigma0 t/(3 eta)` and
+        /// `eps_rr(t) = -nu sigma0/E - sigma0 t/(3 eta)` (incompressible dashpot). The
+        /// viscous rate is constant, so backward Euler is *exact* for any step: no
+        /// convergence order to observe, the test demands round-off agreement instead.
+        #[test]
+        fn maxwell_uniaxial_creep() {
+            let (sigma0, t_end) = (20.0, 3.0);
+            let (s_el, e_el) =
+                uniaxial_history(&Maxwell, &C, Vec4::ZERO, Vec4::ZERO, 0.0, 1, |_| {
+                    Axial::Stress(sigma0)
+                });
+            for n in [1, 7, 50] {
+                let dt = t_end / n as f64;
+                let (s, e) =
+                    uniaxial_history(&Maxwell, &C, s_el, e_el, dt, n, |_| Axial::Stress(sigma0));
+                let (e_zz, e_rr) = (
+                    sigma0 / C[0] + 2.0 * sigma0 * t_end / (3.0 * C[2]),
+                    -C[1] * sigma0 / C[0] - sigma0 * t_end / (3.0 * C[2]),
+                );
+                assert!((s[1] - sigma0).abs() < 1e-12 * sigma0);
+                assert!(
+                    (e[1] - e_zz).abs() < 1e-13 * e_zz,
+                    "n {n}: {} vs {e_zz}",
+                    e[1]
+                );
+                assert!(
+                    (e[0] - e_rr).abs() < 1e-13 * e_zz,
+                    "n {n}: {} vs {e_rr}",
+                    e[0]
+                );
+                assert!((e[2] - e_rr).abs() < 1e-13 * e_zz);
+            }
+        }
     }
 }

@@ -324,6 +324,48 @@ impl Law for NortonHoff {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{Profile, law_consistency_tests, log_uniform, relative_param_step};
+    use proptest::prelude::*;
+
+    const PROFILE: Profile = Profile {
+        law: &NortonHoff,
+        stress_scale,
+        smooth_length,
+        param_step,
+    };
+    fn stress_scale(c: &[f64]) -> f64 {
+        c[SY] + c[K]
+    }
+    /// Above yield `x^m` varies on the scale `(s_eq - sY)/m`; below, `g = 0` within the
+    /// distance `sY - s_eq` of the yield surface. `m = 1, sY = 0` is linear (Maxwell).
+    fn smooth_length(c: &[f64], sigma: &Vec4) -> f64 {
+        if c[M] == 1.0 && c[SY] == 0.0 {
+            return f64::INFINITY;
+        }
+        let d = sigma.von_mises() - c[SY];
+        if d > 0.0 { d / c[M] } else { -d }
+    }
+    /// A step in `sY` must not cross the yield surface (even for `m = 1, sY = 0`, where
+    /// `g` is smooth in `sigma` but not in `sY`): 1e-3 of `|s_eq - sY| / m`.
+    fn param_step(c: &[f64], sigma: &Vec4, k: usize) -> f64 {
+        if k == SY {
+            let d = (sigma.von_mises() - c[SY]).abs() / c[M];
+            1e-3 * d.min(c[K] + c[SY]).max(1e-9 * (c[K] + c[SY]))
+        } else {
+            relative_param_step(c, sigma, k)
+        }
+    }
+    fn params() -> impl Strategy<Value = Vec<f64>> {
+        (
+            log_uniform(1e4, 3e5),
+            -0.5..0.49f64,
+            log_uniform(10.0, 5000.0),
+            prop_oneof![Just(1.0), 1.0..20.0f64],
+            prop_oneof![Just(0.0), 0.0..1000.0f64],
+        )
+            .prop_map(|(e, nu, k, m, sy)| vec![e, nu, k, m, sy])
+    }
+    law_consistency_tests!(consistency, PROFILE, params());
 
     /// Reference problem R2 (DESIGN.md §5).
     const C: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
