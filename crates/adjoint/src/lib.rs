@@ -206,6 +206,7 @@ impl Adjoint {
         let mut grad = vec![0.0; np];
         // field_a holds mu_{i+1}, field_b receives mu_i
         self.field_a.fill(Vec4::ZERO);
+        let mut m_acc = Mat4::ZERO;
         for i in (0..n).rev() {
             let rec = &traj.steps[i];
             let mu_next_is_zero = i + 1 == n;
@@ -231,20 +232,37 @@ impl Adjoint {
             self.eq = eq;
             self.expand(model);
             model.disc.strains(&self.full, &mut self.strain);
-            // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i
+            // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i with
+            // R_i = dS/dc (s1 - s0) + dt dg/dc(s1): the dS/dc part is accumulated as
+            // M = sum w mu (x) (s1 - s0) and contracted with dS/dc once at the end
             let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
             for q in 0..self.field_b.len() {
                 let sm = s.mul_vec(&self.field_a[q]);
                 let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
                 self.field_b[q] = mu;
                 let w = model.disc.qp[q].w;
-                for (k, g) in grad.iter_mut().enumerate() {
-                    *g -= w * mu
-                        .dot(&law.residual_param_derivative(c, &sig0[q], &sig1[q], rec.dt, k));
+                let wmu = mu * w;
+                let ds = sig1[q] - sig0[q];
+                for a in 0..4 {
+                    for b in 0..4 {
+                        m_acc.0[a][b] += wmu[a] * ds[b];
+                    }
+                }
+                if sig1[q].max_abs() > 0.0 {
+                    for (k, g) in grad.iter_mut().enumerate() {
+                        *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
+                    }
                 }
             }
             std::mem::swap(&mut self.field_a, &mut self.field_b);
             self.xbar.fill(0.0);
+        }
+        for (k, g) in grad.iter_mut().enumerate() {
+            let dsk = law.compliance_derivative(c, k);
+            *g -= (0..4)
+                .flat_map(|a| (0..4).map(move |b| (a, b)))
+                .map(|(a, b)| dsk.0[a][b] * m_acc.0[a][b])
+                .sum::<f64>();
         }
         Ok(Gradient {
             dj_dc: grad,

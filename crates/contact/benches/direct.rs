@@ -1,2 +1,74 @@
-//! placeholder
-fn main() {}
+//! Benchmarks of the direct problem on the reference problems R0 (elastic), R1 (Maxwell)
+//! and R2 (Norton-Hoff) of DESIGN.md §5: 20 x 20 Q8, cone 68 deg, trapezoid 30 steps per
+//! segment. `cargo bench -p indentify-contact`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
+use indentify_mesh::CylinderMesher;
+
+fn reference_model() -> Model {
+    let mesh = CylinderMesher {
+        radius: 10.0,
+        height: 10.0,
+        nr: 20,
+        nz: 20,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    }
+    .build()
+    .expect("reference mesh");
+    Model::new(
+        mesh,
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+    )
+    .expect("reference model")
+}
+
+fn bench_forward(c: &mut Criterion) {
+    let model = reference_model();
+    let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
+    let cases: [(&str, &dyn Law, Vec<f64>); 3] = [
+        ("r0_elastic", &Elastic, vec![20000.0, 0.3]),
+        ("r1_maxwell", &Maxwell, vec![20000.0, 0.3, 30000.0]),
+        (
+            "r2_norton_hoff",
+            &NortonHoff,
+            vec![1e5, 0.3, 1500.0, 5.0, 500.0],
+        ),
+    ];
+    let mut group = c.benchmark_group("forward");
+    group.sample_size(10);
+    for (name, law, params) in cases {
+        let mut solver = DirectSolver::new(&model).expect("solver");
+        let opts = SolverOptions::default();
+        // one run to report the split, then the timed runs
+        let t = solver
+            .run(&model, law, &params, &schedule, &opts)
+            .expect("run");
+        eprintln!(
+            "{name}: {} steps, {} iterations, {} factorizations; local {:.1} ms, assembly {:.1} ms, factorization {:.1} ms, solve {:.1} ms, total {:.1} ms",
+            t.steps.len(),
+            t.total_iterations(),
+            t.timing.factorizations,
+            1e3 * t.timing.local,
+            1e3 * t.timing.assembly,
+            1e3 * t.timing.factorization,
+            1e3 * t.timing.solve,
+            1e3 * t.timing.total
+        );
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                solver
+                    .run(&model, law, &params, &schedule, &opts)
+                    .expect("run")
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_forward);
+criterion_main!(benches);

@@ -106,27 +106,30 @@ impl Pattern {
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
                 let qp = &disc.qp[q];
-                let cm = &c(q).0;
-                // cb = w C B (4 x 16)
+                let cm = &(c(q).0);
+                let h = std::f64::consts::FRAC_1_SQRT_2;
+                // cb = w C B (4 x 16), using the sparsity of B's columns:
+                // u_r of node b -> [dr, 0, nr, dz/sqrt2], u_z -> [0, dz, 0, dr/sqrt2]
                 let mut cb = [[0.0; 16]; 4];
-                for i in 0..4 {
-                    for k in 0..4 {
-                        let f = cm[i][k] * qp.w;
-                        if f != 0.0 {
-                            for (o, b) in cb[i].iter_mut().zip(&qp.b[k]) {
-                                *o += f * b;
-                            }
-                        }
+                for (b, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+                    let (br0, br2, br3) = (dr * qp.w, nr * qp.w, dz * h * qp.w);
+                    let (bz1, bz3) = (dz * qp.w, dr * h * qp.w);
+                    for i in 0..4 {
+                        let row = &cm[i];
+                        cb[i][2 * b] = row[0] * br0 + row[2] * br2 + row[3] * br3;
+                        cb[i][2 * b + 1] = row[1] * bz1 + row[3] * bz3;
                     }
                 }
-                for a in 0..16 {
-                    for i in 0..4 {
-                        let bia = qp.b[i][a];
-                        if bia != 0.0 {
-                            for (o, v) in ke[a][..=a].iter_mut().zip(&cb[i][..=a]) {
-                                *o += bia * v;
-                            }
-                        }
+                // ke += B^T cb, lower triangle only
+                for (a, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+                    let (ar0, ar2, ar3) = (*dr, *nr, dz * h);
+                    let (az1, az3) = (*dz, dr * h);
+                    let ra = 2 * a;
+                    for k in 0..=ra {
+                        ke[ra][k] += ar0 * cb[0][k] + ar2 * cb[2][k] + ar3 * cb[3][k];
+                    }
+                    for k in 0..=ra + 1 {
+                        ke[ra + 1][k] += az1 * cb[1][k] + az3 * cb[3][k];
                     }
                 }
             }

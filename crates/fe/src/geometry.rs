@@ -23,29 +23,38 @@ pub struct QuadPoint {
     pub w: f64,
     /// B operator, 4 rows x 16 columns (1/mm).
     pub b: [[f64; 16]; 4],
+    /// The same operator compactly, per node a: `[dN_a/dr, dN_a/dz, N_a/r]` (B is half
+    /// zeros; the hot kernels use this form).
+    pub dn: [[f64; 3]; 8],
 }
 
 impl QuadPoint {
     /// `B u_e` for the element's 16 displacement components.
     #[inline]
     pub fn strain(&self, ue: &[f64; 16]) -> [f64; 4] {
-        let mut e = [0.0; 4];
-        for (ei, row) in e.iter_mut().zip(&self.b) {
-            *ei = row.iter().zip(ue).map(|(b, u)| b * u).sum();
+        let (mut rr, mut zz, mut tt, mut rz) = (0.0, 0.0, 0.0, 0.0);
+        for (a, [dr, dz, nr]) in self.dn.iter().enumerate() {
+            let (ur, uz) = (ue[2 * a], ue[2 * a + 1]);
+            rr += dr * ur;
+            zz += dz * uz;
+            tt += nr * ur;
+            rz += dz * ur + dr * uz;
         }
-        e
+        [rr, zz, tt, rz / SQRT2]
     }
 
     /// Adds `scale * B^T s` to the element vector `fe`.
     #[inline]
     pub fn add_bt(&self, s: &[f64; 4], scale: f64, fe: &mut [f64; 16]) {
-        for (row, si) in self.b.iter().zip(s) {
-            let f = si * scale;
-            if f != 0.0 {
-                for (o, b) in fe.iter_mut().zip(row) {
-                    *o += b * f;
-                }
-            }
+        let (s0, s1, s2, s3) = (
+            s[0] * scale,
+            s[1] * scale,
+            s[2] * scale,
+            s[3] * scale / SQRT2,
+        );
+        for (a, [dr, dz, nr]) in self.dn.iter().enumerate() {
+            fe[2 * a] += dr * s0 + nr * s2 + dz * s3;
+            fe[2 * a + 1] += dz * s1 + dr * s3;
         }
     }
 }
@@ -85,6 +94,7 @@ impl Discretization {
                     z += n[a] * x[a][1];
                 }
                 let mut b = [[0.0; 16]; 4];
+                let mut dn = [[0.0; 3]; 8];
                 for a in 0..8 {
                     let dr = d[a][0] * inv[0][0] + d[a][1] * inv[1][0];
                     let dz = d[a][0] * inv[0][1] + d[a][1] * inv[1][1];
@@ -93,8 +103,10 @@ impl Discretization {
                     b[2][2 * a] = n[a] / r;
                     b[3][2 * a] = dz / SQRT2;
                     b[3][2 * a + 1] = dr / SQRT2;
+                    dn[a] = [dr, dz, n[a] / r];
                 }
                 qp.push(QuadPoint {
+                    dn,
                     r,
                     z,
                     w: 2.0 * std::f64::consts::PI * r * det * wg,
@@ -168,6 +180,39 @@ impl Discretization {
 mod tests {
     use super::*;
     use indentify_mesh::CylinderMesher;
+
+    #[test]
+    fn compact_kernels_match_the_dense_b_operator() {
+        let m = CylinderMesher {
+            radius: 2.0,
+            height: 3.0,
+            nr: 2,
+            nz: 2,
+            grading_r: 1.2,
+            grading_z: 1.4,
+        }
+        .build()
+        .unwrap();
+        let d = Discretization::new(&m);
+        let ue: [f64; 16] = std::array::from_fn(|k| ((k * 7 + 3) % 11) as f64 * 0.1 - 0.4);
+        let s = [1.5, -0.7, 0.3, 2.2];
+        for q in &d.qp {
+            let dense: Vec<f64> =
+                q.b.iter()
+                    .map(|row| row.iter().zip(&ue).map(|(b, u)| b * u).sum())
+                    .collect();
+            let compact = q.strain(&ue);
+            let mut fe = [0.0; 16];
+            q.add_bt(&s, 2.0, &mut fe);
+            for i in 0..4 {
+                assert!((dense[i] - compact[i]).abs() < 1e-13);
+            }
+            for k in 0..16 {
+                let dense_bt: f64 = (0..4).map(|i| q.b[i][k] * s[i] * 2.0).sum();
+                assert!((dense_bt - fe[k]).abs() < 1e-12);
+            }
+        }
+    }
 
     #[test]
     fn weights_integrate_the_cylinder_volume() {

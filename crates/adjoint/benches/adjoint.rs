@@ -1,0 +1,70 @@
+//! Benchmarks of the adjoint sweep against the forward solve on R1 (Maxwell) and R2
+//! (Norton-Hoff) of DESIGN.md §5. `cargo bench -p indentify-adjoint`; the ratio
+//! adjoint / forward is printed.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use indentify_adjoint::Adjoint;
+use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_laws::{Law, Maxwell, NortonHoff};
+use indentify_mesh::CylinderMesher;
+
+fn bench_adjoint(c: &mut Criterion) {
+    let mesh = CylinderMesher {
+        radius: 10.0,
+        height: 10.0,
+        nr: 20,
+        nz: 20,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    }
+    .build()
+    .expect("reference mesh");
+    let model = Model::new(
+        mesh,
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+    )
+    .expect("model");
+    let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
+    let cases: [(&str, &dyn Law, Vec<f64>); 2] = [
+        ("r1_maxwell", &Maxwell, vec![20000.0, 0.3, 30000.0]),
+        (
+            "r2_norton_hoff",
+            &NortonHoff,
+            vec![1e5, 0.3, 1500.0, 5.0, 500.0],
+        ),
+    ];
+    let mut group = c.benchmark_group("adjoint");
+    group.sample_size(10);
+    for (name, law, params) in cases {
+        let mut solver = DirectSolver::new(&model).expect("solver");
+        let traj = solver
+            .run(&model, law, &params, &schedule, &SolverOptions::default())
+            .expect("run");
+        // a cost with rho_i = F_i (data = 0): every step contributes
+        let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
+        let mut adj = Adjoint::new(&model).expect("adjoint");
+        let g = adj
+            .gradient(&model, law, &params, &traj, &rho)
+            .expect("gradient");
+        eprintln!(
+            "{name}: forward {:.1} ms, adjoint {:.1} ms (ratio {:.2}), adjoint factorizations {}, trajectory {:.1} MB",
+            1e3 * traj.timing.total,
+            1e3 * g.seconds,
+            g.seconds / traj.timing.total,
+            g.factorizations,
+            traj.recorded_bytes() as f64 / 1e6
+        );
+        group.bench_function(format!("{name}_gradient"), |b| {
+            b.iter(|| {
+                adj.gradient(&model, law, &params, &traj, &rho)
+                    .expect("gradient")
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_adjoint);
+criterion_main!(benches);
