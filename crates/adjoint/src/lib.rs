@@ -17,7 +17,9 @@
 
 pub mod check;
 
-use indentify_contact::{ConstrainedSystem, Model, Trajectory};
+use indentify_contact::{
+    ConstrainedSystem, DirectSolver, Model, Schedule, SolverOptions, StepRecord, Trajectory,
+};
 use indentify_fe::dofs::NO_EQ;
 use indentify_laws::{Law, LawError, Mat4, Vec4};
 
@@ -55,6 +57,9 @@ pub enum AdjointError {
         /// What failed.
         reason: String,
     },
+    /// Replaying a checkpointed segment failed or did not reproduce the run.
+    #[error("checkpoint replay: {0}")]
+    Replay(String),
     /// Setting up the linear system failed.
     #[error(transparent)]
     Fe(#[from] indentify_fe::FeError),
@@ -133,11 +138,10 @@ impl Adjoint {
         model: &Model,
         law: &dyn Law,
         c: &[f64],
-        traj: &Trajectory,
+        rec: &StepRecord,
+        sigma1: &[Vec4],
         i: usize,
     ) -> Result<(), AdjointError> {
-        let rec = &traj.steps[i];
-        let sigma1 = &traj.fields[i + 1].sigma;
         let fail = |reason: String| AdjointError::Step {
             step: i,
             t: rec.t,
@@ -199,76 +203,163 @@ impl Adjoint {
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
-        let n = traj.steps.len();
         check_inputs(law, c, traj, dj_df.len())?;
-        let s = law.compliance(c);
-        let np = c.len();
-        let mut grad = vec![0.0; np];
-        // field_a holds mu_{i+1}, field_b receives mu_i
+        let mut sweep = Sweep::new(law, c);
         self.field_a.fill(Vec4::ZERO);
-        let mut m_acc = Mat4::ZERO;
-        for i in (0..n).rev() {
-            let rec = &traj.steps[i];
-            let mu_next_is_zero = i + 1 == n;
-            if rec.active.is_empty() && dj_df[i] == 0.0 && mu_next_is_zero {
-                continue;
-            }
-            self.prepare_step(model, law, c, traj, i)?;
-            // b = sum_g w B^T (C S - I) mu_{i+1}
-            for q in 0..self.field_b.len() {
-                let sm = s.mul_vec(&self.field_a[q]);
-                self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
-            }
-            model.disc.internal_force(&self.field_b, &mut self.full);
-            self.restrict(model);
-            // V = dJ/dF_i on the active contact dofs
-            for &k in &rec.active {
-                if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
-                    self.xbar[e] = dj_df[i];
-                }
-            }
-            let mut eq = std::mem::take(&mut self.eq);
-            self.system.solve_dirichlet(model, &mut eq, &self.xbar);
-            self.eq = eq;
-            self.expand(model);
-            model.disc.strains(&self.full, &mut self.strain);
-            // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i with
-            // R_i = dS/dc (s1 - s0) + dt dg/dc(s1): the dS/dc part is accumulated as
-            // M = sum w mu (x) (s1 - s0) and contracted with dS/dc once at the end
-            let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
-            for q in 0..self.field_b.len() {
-                let sm = s.mul_vec(&self.field_a[q]);
-                let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
-                self.field_b[q] = mu;
-                let w = model.disc.qp[q].w;
-                let wmu = mu * w;
-                let ds = sig1[q] - sig0[q];
-                for a in 0..4 {
-                    for b in 0..4 {
-                        m_acc.0[a][b] += wmu[a] * ds[b];
-                    }
-                }
-                if sig1[q].max_abs() > 0.0 {
-                    for (k, g) in grad.iter_mut().enumerate() {
-                        *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
-                    }
-                }
-            }
-            std::mem::swap(&mut self.field_a, &mut self.field_b);
-            self.xbar.fill(0.0);
-        }
-        for (k, g) in grad.iter_mut().enumerate() {
-            let dsk = law.compliance_derivative(c, k);
-            *g -= (0..4)
-                .flat_map(|a| (0..4).map(move |b| (a, b)))
-                .map(|(a, b)| dsk.0[a][b] * m_acc.0[a][b])
-                .sum::<f64>();
+        for i in (0..traj.steps.len()).rev() {
+            let (rec, s0, s1) = (
+                &traj.steps[i],
+                &traj.fields[i].sigma,
+                &traj.fields[i + 1].sigma,
+            );
+            self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[i], i)?;
         }
         Ok(Gradient {
-            dj_dc: grad,
+            dj_dc: sweep.finish(law, c),
             seconds: start.elapsed().as_secs_f64(),
             factorizations: self.system.factorizations() - f0,
         })
+    }
+
+    /// The adjoint gradient of a run recorded with checkpoints instead of fields
+    /// ([`SolverOptions::checkpoint_every`]): each segment between checkpoints is replayed
+    /// by `solver` (the same deterministic computation), swept backward, and dropped, so
+    /// memory holds one segment's fields instead of the whole history.
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient`]; [`AdjointError::Replay`] if a replay fails or does not
+    /// reproduce the recorded steps.
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradient_replayed(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
+        solver: &mut DirectSolver,
+        schedule: &Schedule,
+        opts: &SolverOptions,
+    ) -> Result<Gradient, AdjointError> {
+        if traj.fields.len() == traj.steps.len() + 1 {
+            return self.gradient(model, law, c, traj, dj_df);
+        }
+        let start = std::time::Instant::now();
+        let f0 = self.system.factorizations();
+        let n = traj.steps.len();
+        if dj_df.len() != n {
+            return Err(AdjointError::Length {
+                expected: n,
+                got: dj_df.len(),
+            });
+        }
+        law.check_params(c)?;
+        law.check_differentiable(c)?;
+        if traj.checkpoints.first().is_none_or(|cp| cp.steps_done != 0) {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: n,
+            });
+        }
+        let mut sweep = Sweep::new(law, c);
+        self.field_a.fill(Vec4::ZERO);
+        let last = schedule.t.len() - 1;
+        for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+            let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+                Some(next) => (next.schedule_index, next.steps_done),
+                None => (last, n),
+            };
+            let seg = solver
+                .replay(model, law, c, schedule, opts, cp, j_end)
+                .map_err(|e| AdjointError::Replay(e.to_string()))?;
+            if seg.steps.len() != steps_end - cp.steps_done {
+                return Err(AdjointError::Replay(format!(
+                    "segment from schedule index {} replayed {} steps, the run had {}",
+                    cp.schedule_index,
+                    seg.steps.len(),
+                    steps_end - cp.steps_done
+                )));
+            }
+            for i in (0..seg.steps.len()).rev() {
+                let (rec, s0, s1) = (
+                    &seg.steps[i],
+                    &seg.fields[i].sigma,
+                    &seg.fields[i + 1].sigma,
+                );
+                let g = cp.steps_done + i;
+                self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[g], g)?;
+            }
+        }
+        Ok(Gradient {
+            dj_dc: sweep.finish(law, c),
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.system.factorizations() - f0,
+        })
+    }
+
+    /// One step of the reversed-time sweep: `self.field_a` holds `mu_{i+1}` on entry and
+    /// `mu_i` on exit.
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_step(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        sweep: &mut Sweep,
+        rec: &StepRecord,
+        sig0: &[Vec4],
+        sig1: &[Vec4],
+        rho: f64,
+        i: usize,
+    ) -> Result<(), AdjointError> {
+        // with mu_{i+1} = 0, no data and no contact, mu_i = 0: nothing to do
+        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() {
+            return Ok(());
+        }
+        sweep.mu_zero = false;
+        self.prepare_step(model, law, c, rec, sig1, i)?;
+        let s = sweep.s;
+        // b = sum_g w B^T (C S - I) mu_{i+1}
+        for q in 0..self.field_b.len() {
+            let sm = s.mul_vec(&self.field_a[q]);
+            self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+        }
+        model.disc.internal_force(&self.field_b, &mut self.full);
+        self.restrict(model);
+        // V = dJ/dF_i on the active contact dofs
+        for &k in &rec.active {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
+                self.xbar[e] = rho;
+            }
+        }
+        let mut eq = std::mem::take(&mut self.eq);
+        self.system.solve_dirichlet(model, &mut eq, &self.xbar);
+        self.eq = eq;
+        self.xbar.fill(0.0);
+        self.expand(model);
+        model.disc.strains(&self.full, &mut self.strain);
+        // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i with
+        // R_i = dS/dc (s1 - s0) + dt dg/dc(s1): the dS/dc part is accumulated as
+        // M = sum w mu (x) (s1 - s0) and contracted with dS/dc once at the end
+        for q in 0..self.field_b.len() {
+            let sm = s.mul_vec(&self.field_a[q]);
+            let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
+            self.field_b[q] = mu;
+            let wmu = mu * model.disc.qp[q].w;
+            let ds = sig1[q] - sig0[q];
+            for a in 0..4 {
+                for b in 0..4 {
+                    sweep.m_acc.0[a][b] += wmu[a] * ds[b];
+                }
+            }
+            if sig1[q].max_abs() > 0.0 {
+                for (k, g) in sweep.grad.iter_mut().enumerate() {
+                    *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
+                }
+            }
+        }
+        std::mem::swap(&mut self.field_a, &mut self.field_b);
+        Ok(())
     }
 
     /// Forward sensitivities `dF_i/dc_k` of every step force by direct differentiation.
@@ -293,7 +384,7 @@ impl Adjoint {
         let mut q_field = vec![Vec4::ZERO; nq];
         for i in 0..n {
             let rec = &traj.steps[i];
-            self.prepare_step(model, law, c, traj, i)?;
+            self.prepare_step(model, law, c, rec, &traj.fields[i + 1].sigma, i)?;
             let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
             for k in 0..np {
                 // q = y_{i-1} - R_i e_k
@@ -328,6 +419,40 @@ impl Adjoint {
             df_dc: df,
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// Accumulators of one reversed-time sweep.
+struct Sweep {
+    s: Mat4,
+    grad: Vec<f64>,
+    m_acc: Mat4,
+    mu_zero: bool,
+}
+
+impl Sweep {
+    fn new(law: &dyn Law, c: &[f64]) -> Sweep {
+        Sweep {
+            s: law.compliance(c),
+            grad: vec![0.0; c.len()],
+            m_acc: Mat4::ZERO,
+            mu_zero: true,
+        }
+    }
+
+    /// Adds the `dS/dc` contraction and returns `dJ/dc`.
+    fn finish(mut self, law: &dyn Law, c: &[f64]) -> Vec<f64> {
+        for (k, g) in self.grad.iter_mut().enumerate() {
+            let dsk = law.compliance_derivative(c, k);
+            let mut acc = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    acc += dsk.0[a][b] * self.m_acc.0[a][b];
+                }
+            }
+            *g -= acc;
+        }
+        self.grad
     }
 }
 

@@ -37,6 +37,9 @@ pub struct SolverOptions {
     pub lambda_tol: f64,
     /// Keep stresses and displacements of every step (needed by the adjoint and VTU output).
     pub record_fields: bool,
+    /// With `record_fields = false`, save the solver state every this many schedule steps
+    /// (0: never) so that the adjoint can replay segments instead of storing every step.
+    pub checkpoint_every: usize,
 }
 
 impl Default for SolverOptions {
@@ -49,6 +52,7 @@ impl Default for SolverOptions {
             gap_tol: 1e-10,
             lambda_tol: 1e-10,
             record_fields: true,
+            checkpoint_every: 0,
         }
     }
 }
@@ -182,6 +186,8 @@ pub struct Trajectory {
     pub steps: Vec<StepRecord>,
     /// Fields: initial state then one per step (empty unless recorded).
     pub fields: Vec<StepFields>,
+    /// Saved states every [`SolverOptions::checkpoint_every`] schedule steps (empty when 0).
+    pub checkpoints: Vec<Checkpoint>,
     /// Parameters of the run.
     pub params: Vec<f64>,
     /// Wall-clock split of the run.
@@ -214,7 +220,8 @@ impl Trajectory {
             .iter()
             .map(|s| std::mem::size_of::<StepRecord>() + 12 * s.active.len())
             .sum();
-        f + s
+        let c: usize = self.checkpoints.iter().map(Checkpoint::bytes).sum();
+        f + s + c
     }
 
     /// Total global iterations over all steps.
@@ -280,7 +287,7 @@ impl std::fmt::Display for StepFailure {
 }
 
 /// The state carried from step to step.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct State {
     t: f64,
     /// Largest internal-force component seen in converged steps: the residual's scale
@@ -292,6 +299,49 @@ struct State {
     /// Last step's increment of u_z at each candidate, and that step's length.
     duz_last: Vec<f64>,
     dt_last: f64,
+}
+
+impl State {
+    fn initial(model: &Model, t0: f64) -> State {
+        let nc = model.candidates.len();
+        State {
+            t: t0,
+            f_scale: 0.0,
+            u: vec![0.0; model.disc.n_dofs()],
+            sigma: vec![Vec4::ZERO; model.disc.n_qp()],
+            active: vec![false; nc],
+            duz_last: vec![0.0; nc],
+            dt_last: 0.0,
+        }
+    }
+}
+
+/// A saved solver state at a schedule time, from which [`DirectSolver::replay`] recomputes
+/// the following steps exactly (checkpointing bounds the memory of the adjoint's replay).
+#[derive(Clone, PartialEq)]
+pub struct Checkpoint {
+    /// Schedule index of the saved state.
+    pub schedule_index: usize,
+    /// Number of trajectory steps (sub-steps included) before this state.
+    pub steps_done: usize,
+    state: State,
+}
+
+impl Checkpoint {
+    /// Bytes held by the saved state.
+    pub fn bytes(&self) -> usize {
+        8 * self.state.u.len() + 32 * self.state.sigma.len() + 17 * self.state.active.len()
+    }
+}
+
+impl std::fmt::Debug for Checkpoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Checkpoint {{ schedule_index: {}, steps_done: {} }}",
+            self.schedule_index, self.steps_done
+        )
+    }
 }
 
 /// Reusable solver workspace: the symbolic factorization and scratch vectors, so that
@@ -339,22 +389,98 @@ impl DirectSolver {
         opts: &SolverOptions,
     ) -> Result<Trajectory, ContactError> {
         law.check_params(c)?;
-        let start = std::time::Instant::now();
-        let nq = model.disc.n_qp();
-        let mut state = State {
-            t: schedule.t[0],
-            f_scale: 0.0,
-            u: vec![0.0; model.disc.n_dofs()],
-            sigma: vec![Vec4::ZERO; nq],
-            active: vec![false; model.candidates.len()],
-            duz_last: vec![0.0; model.candidates.len()],
-            dt_last: 0.0,
-        };
         let mut traj = Trajectory {
             params: c.to_vec(),
             ..Default::default()
         };
-        if opts.record_fields {
+        let state = State::initial(model, schedule.t[0]);
+        let last = schedule.t.len() - 1;
+        self.advance(
+            model,
+            law,
+            c,
+            schedule,
+            opts,
+            state,
+            0,
+            last,
+            &mut traj,
+            opts.record_fields,
+            opts.checkpoint_every,
+        )?;
+        Ok(traj)
+    }
+
+    /// Replays the run from `checkpoint` up to schedule index `j_end`, recording fields:
+    /// the returned trajectory's `fields[0]` is the checkpoint's state and its steps are
+    /// those of the original run from `checkpoint.steps_done` on (the computation is
+    /// deterministic, so they are the same steps).
+    ///
+    /// # Errors
+    /// As [`DirectSolver::run`]; also [`ContactError::Input`] if `j_end` is before the
+    /// checkpoint or beyond the schedule.
+    #[allow(clippy::too_many_arguments)]
+    pub fn replay(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        schedule: &Schedule,
+        opts: &SolverOptions,
+        checkpoint: &Checkpoint,
+        j_end: usize,
+    ) -> Result<Trajectory, ContactError> {
+        if j_end < checkpoint.schedule_index || j_end >= schedule.t.len() {
+            return Err(ContactError::Input {
+                field: "replay.j_end",
+                value: j_end.to_string(),
+                allowed: format!(
+                    "a schedule index in [{}, {}]",
+                    checkpoint.schedule_index,
+                    schedule.t.len() - 1
+                ),
+            });
+        }
+        let mut traj = Trajectory {
+            params: c.to_vec(),
+            ..Default::default()
+        };
+        let state = checkpoint.state.clone();
+        self.advance(
+            model,
+            law,
+            c,
+            schedule,
+            opts,
+            state,
+            checkpoint.schedule_index,
+            j_end,
+            &mut traj,
+            true,
+            0,
+        )?;
+        Ok(traj)
+    }
+
+    /// Steps from `state` (at schedule index `j0`) to schedule index `j1`, appending to
+    /// `traj`; stores fields when `record`, and a checkpoint every `every` schedule steps.
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        schedule: &Schedule,
+        opts: &SolverOptions,
+        mut state: State,
+        j0: usize,
+        j1: usize,
+        traj: &mut Trajectory,
+        record: bool,
+        every: usize,
+    ) -> Result<(), ContactError> {
+        let start = std::time::Instant::now();
+        if record {
             traj.fields.push(StepFields {
                 u: state.u.clone(),
                 sigma: state.sigma.clone(),
@@ -362,8 +488,15 @@ impl DirectSolver {
         }
         let factorizations0 = self.system.factorizations();
         let seconds0 = self.system.seconds;
-        for j in 1..schedule.t.len() {
-            // targets still to reach, last first; a failed step pushes its midpoint
+        for j in j0 + 1..=j1 {
+            if every > 0 && (j - 1 - j0) % every == 0 {
+                traj.checkpoints.push(Checkpoint {
+                    schedule_index: j - 1,
+                    steps_done: traj.steps.len(),
+                    state: state.clone(),
+                });
+            }
+            // targets still to reach, last first; a failed step pushes an intermediate time
             let mut targets = vec![(schedule.t[j], 0u32)];
             while let Some(&(t1, level)) = targets.last() {
                 let u1 = schedule.depth_at(t1);
@@ -373,7 +506,7 @@ impl DirectSolver {
                         rec.on_schedule = targets.is_empty();
                         rec.schedule_index = j;
                         state = rec_state;
-                        if opts.record_fields {
+                        if record {
                             traj.fields.push(StepFields {
                                 u: state.u.clone(),
                                 sigma: state.sigma.clone(),
@@ -383,13 +516,13 @@ impl DirectSolver {
                     }
                     Err(fail) => {
                         if level >= opts.max_cuts {
-                            traj.timing.total = start.elapsed().as_secs_f64();
+                            traj.timing.total += start.elapsed().as_secs_f64();
                             return Err(ContactError::StepFailed {
                                 step: j,
                                 t: t1,
                                 cuts: level,
                                 reason: fail.to_string(),
-                                partial: Box::new(traj),
+                                partial: Box::new(std::mem::take(traj)),
                             });
                         }
                         let factor = match fail {
@@ -405,12 +538,12 @@ impl DirectSolver {
                 }
             }
         }
-        traj.timing.factorizations = self.system.factorizations() - factorizations0;
-        traj.timing.assembly = self.system.seconds[0] - seconds0[0];
-        traj.timing.factorization = self.system.seconds[1] - seconds0[1];
-        traj.timing.solve = self.system.seconds[2] - seconds0[2];
-        traj.timing.total = start.elapsed().as_secs_f64();
-        Ok(traj)
+        traj.timing.factorizations += self.system.factorizations() - factorizations0;
+        traj.timing.assembly += self.system.seconds[0] - seconds0[0];
+        traj.timing.factorization += self.system.seconds[1] - seconds0[1];
+        traj.timing.solve += self.system.seconds[2] - seconds0[2];
+        traj.timing.total += start.elapsed().as_secs_f64();
+        Ok(())
     }
 
     /// Local updates at every Gauss point for displacement `u` from `state`; fills

@@ -12,7 +12,8 @@ pub mod punch;
 pub mod system;
 
 pub use direct::{
-    DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory, nodal_pressures,
+    Checkpoint, DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
+    nodal_pressures,
 };
 pub use history::{Schedule, Segment, trapezoid};
 pub use punch::Punch;
