@@ -480,4 +480,206 @@ mod tests {
             assert!(err.to_string().contains("twice differentiable"));
         }
     }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(crate::testing::proptest_cases()))]
+
+        /// The system shall reduce Norton-Hoff with `m = 1, sY = 0` to Maxwell with
+        /// `eta = 2K/3`: `g = x n = (s_eq/K) 3 s/(2 s_eq) = 3 s/(2K) = s/eta`, so the
+        /// updates, tangents, flows, Hessians coincide and `dg/dK = (2/3) dg/deta`.
+        #[test]
+        fn m_one_without_yield_is_maxwell_with_eta_two_thirds_k(
+            e in log_uniform(1e3, 1e6),
+            nu in -0.9..0.49f64,
+            k in log_uniform(1.0, 1e5),
+            a in prop::array::uniform4(-1.0..1.0f64),
+            b in prop::array::uniform4(-1.0..1.0f64),
+            mag in -5.0..0.0f64,
+            dt in log_uniform(1e-4, 1e2),
+        ) {
+            use crate::maxwell::Maxwell;
+            let nh = [e, nu, k, 1.0, 0.0];
+            let mx = [e, nu, 2.0 * k / 3.0];
+            let s0 = Vec4(a) * (1e-3 * e);
+            let deps = Vec4(b) * 10f64.powf(mag);
+            let u_nh = NortonHoff.update(&nh, &s0, &deps, dt).unwrap();
+            let u_mx = Maxwell.update(&mx, &s0, &deps, dt).unwrap();
+            let scale = u_mx.sigma.max_abs() + s0.max_abs();
+            prop_assert!((u_nh.sigma - u_mx.sigma).max_abs() <= 1e-12 * scale,
+                "{:?} vs {:?}", u_nh.sigma, u_mx.sigma);
+            prop_assert!((u_nh.tangent - u_mx.tangent).max_abs()
+                <= 1e-12 * u_mx.tangent.max_abs());
+            for sigma in [s0, u_mx.sigma] {
+                let (g_nh, g_mx) = (NortonHoff.flow(&nh, &sigma), Maxwell.flow(&mx, &sigma));
+                prop_assert!((g_nh - g_mx).max_abs() <= 1e-12 * g_mx.max_abs());
+                let (h_nh, h_mx) =
+                    (NortonHoff.flow_hessian(&nh, &sigma), Maxwell.flow_hessian(&mx, &sigma));
+                prop_assert!((h_nh - h_mx).max_abs() <= 1e-12 * h_mx.max_abs());
+                let dk = NortonHoff.flow_param_derivative(&nh, &sigma, K);
+                let deta = Maxwell.flow_param_derivative(&mx, &sigma, 2) * (2.0 / 3.0);
+                prop_assert!((dk - deta).max_abs() <= 1e-12 * deta.max_abs());
+            }
+            // At sigma = 0 too (the Hessian's special case).
+            let zero = NortonHoff.flow_hessian(&nh, &Vec4::ZERO);
+            prop_assert!((zero - Maxwell.flow_hessian(&mx, &Vec4::ZERO)).max_abs()
+                <= 1e-12 * zero.max_abs());
+        }
+    }
+
+    mod uniaxial {
+        //! Material-point validation of Norton-Hoff in uniaxial stress against closed
+        //! forms (and one high-accuracy ODE integration).
+        //!
+        //! ```text
+        //!        sigma_zz (strain or stress controlled)
+        //!           ^
+        //!      +----|----+   sigma_rr = sigma_tt = sigma_rz = 0
+        //!      |  one    |   (lateral strains free, found by Newton
+        //!      |  point  |    with the consistent tangent)
+        //!      +---------+
+        //! ```
+        //!
+        //! In uniaxial stress `sigma > 0`: `s_eq = sigma`, `n_zz = 1`,
+        //! `n_rr = n_tt = -1/2`, so `d eps_zz/dt = (d sigma/dt)/E + <(sigma - sY)/K>_+^m`
+        //! and the plastic flow is incompressible. Backward Euler on the 3D law reduces to
+        //! backward Euler on this scalar equation. Parameters of R2 (DESIGN.md §5):
+        //! `E = 1e5 MPa, nu = 0.3, K = 1500 MPa s^(1/5), m = 5, sY = 500 MPa`.
+        use super::*;
+        use crate::testing::{Axial, assert_first_order, uniaxial_history};
+
+        const E: f64 = C[0];
+        const KK: f64 = C[K];
+        const MM: f64 = C[M];
+        const SYY: f64 = C[SY];
+
+        fn rate(sigma: f64) -> f64 {
+            ((sigma - SYY) / KK).max(0.0).powf(MM)
+        }
+
+        /// Norton creep at constant stress.
+        ///
+        /// Reference: after an instantaneous load `sigma0`, the plastic rate is the
+        /// constant `((sigma0 - sY)/K)^m`, so `eps_zz(t) = sigma0/E + rate t` and
+        /// `eps_rr(t) = -nu sigma0/E - rate t/2`; below yield no creep. Backward Euler is
+        /// exact for a constant rate: the test demands round-off agreement for any step.
+        #[test]
+        fn norton_hoff_uniaxial_creep() {
+            let t_end = 10.0;
+            for sigma0 in [400.0, 800.0, 1200.0] {
+                let (s_el, e_el) =
+                    uniaxial_history(&NortonHoff, &C, Vec4::ZERO, Vec4::ZERO, 0.0, 1, |_| {
+                        Axial::Stress(sigma0)
+                    });
+                assert!((e_el[1] - sigma0 / E).abs() < 1e-15);
+                for n in [1, 7, 50] {
+                    let dt = t_end / n as f64;
+                    let (s, e) = uniaxial_history(&NortonHoff, &C, s_el, e_el, dt, n, |_| {
+                        Axial::Stress(sigma0)
+                    });
+                    let e_zz = sigma0 / E + rate(sigma0) * t_end;
+                    let e_rr = -C[1] * sigma0 / E - 0.5 * rate(sigma0) * t_end;
+                    assert!((s[1] - sigma0).abs() < 1e-12 * sigma0);
+                    assert!(
+                        (e[1] - e_zz).abs() < 1e-13 * e_zz,
+                        "{sigma0} {n}: {} vs {e_zz}",
+                        e[1]
+                    );
+                    assert!(
+                        (e[0] - e_rr).abs() < 1e-13 * e_zz,
+                        "{sigma0} {n}: {} vs {e_rr}",
+                        e[0]
+                    );
+                }
+            }
+            // The plastic rate itself: ((800 - 500)/1500)^5 = 3.2e-4 /s.
+            assert!((rate(800.0) - 3.2e-4).abs() < 1e-18);
+        }
+
+        /// Norton relaxation at constant strain.
+        ///
+        /// Reference: with `u = sigma - sY > 0`, constant strain gives
+        /// `du/dt = -E (u/K)^m`, separable:
+        /// `u(t) = [u0^(1-m) + (m-1) E t / K^m]^(-1/(m-1))` (closed form, `m > 1`, any
+        /// `sY >= 0`; `u` stays positive, the stress tends to `sY`). Step: `sigma0 = 1000
+        /// MPa` applied instantaneously. Goal: first-order convergence at `T = 1 s`.
+        #[test]
+        fn norton_hoff_uniaxial_relaxation() {
+            let (sigma0, t_end) = (1000.0, 1.0);
+            let (s_el, e_el) =
+                uniaxial_history(&NortonHoff, &C, Vec4::ZERO, Vec4::ZERO, 0.0, 1, |_| {
+                    Axial::Strain(sigma0 / E)
+                });
+            assert!((s_el[1] - sigma0).abs() < 1e-12 * sigma0);
+            let u0: f64 = sigma0 - SYY;
+            let exact = SYY
+                + (u0.powf(1.0 - MM) + (MM - 1.0) * E * t_end / KK.powf(MM))
+                    .powf(-1.0 / (MM - 1.0));
+            assert!(exact > SYY + 100.0 && exact < sigma0 - 100.0, "{exact}");
+            assert_first_order("norton-hoff relaxation", 20, |n| {
+                let dt = t_end / n as f64;
+                let (s, _) =
+                    uniaxial_history(&NortonHoff, &C, s_el, e_el, dt, n, |_| Axial::Strain(0.0));
+                assert!(s[0].abs() < 1e-10 && s[2].abs() < 1e-10);
+                (s[1] - exact).abs() / exact
+            });
+        }
+
+        /// Norton steady flow stress at a constant strain rate.
+        ///
+        /// Reference: `d sigma/dt = E (rate - ((sigma - sY)/K)^m)` has the stable fixed
+        /// point `sigma_ss = sY + K rate^(1/m)`, reached exponentially (rate
+        /// `E m x^(m-1)/K`, about 8.4 /s here). Backward Euler has the same fixed point,
+        /// so after the transient the computed stress equals `sigma_ss` to round-off
+        /// whatever the step. Goal: `sigma(5 s) = sigma_ss` to 1e-9 for 50 and 500 steps.
+        #[test]
+        fn norton_hoff_steady_stress_at_constant_strain_rate() {
+            let (eps_rate, t_end): (f64, f64) = (1e-2, 5.0);
+            let sigma_ss = SYY + KK * eps_rate.powf(1.0 / MM);
+            for n in [50, 500] {
+                let dt = t_end / n as f64;
+                let (s, _) =
+                    uniaxial_history(&NortonHoff, &C, Vec4::ZERO, Vec4::ZERO, dt, n, |_| {
+                        Axial::Strain(eps_rate * dt)
+                    });
+                assert!(
+                    (s[1] - sigma_ss).abs() < 1e-9 * sigma_ss,
+                    "n {n}: {} vs {sigma_ss}",
+                    s[1]
+                );
+            }
+        }
+
+        /// Norton transient at a constant strain rate.
+        ///
+        /// Reference: no closed form for the transient of
+        /// `d sigma/dt = E (rate - <(sigma - sY)/K>_+^m)`, `sigma(0) = 0`; the reference
+        /// is this scalar ODE integrated by classical RK4 with 2^17 steps (error ~1e-15
+        /// relative, the right-hand side being C^4 across yield for m = 5). Yield at
+        /// 0.5 s; goal: first-order convergence of backward Euler at `T = 0.8 s`.
+        #[test]
+        fn norton_hoff_constant_strain_rate_transient() {
+            let (eps_rate, t_end) = (1e-2, 0.8);
+            let f = |sig: f64| E * (eps_rate - rate(sig));
+            let steps = 1 << 17;
+            let h = t_end / steps as f64;
+            let mut sig = 0.0;
+            for _ in 0..steps {
+                let k1 = f(sig);
+                let k2 = f(sig + 0.5 * h * k1);
+                let k3 = f(sig + 0.5 * h * k2);
+                let k4 = f(sig + h * k3);
+                sig += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            }
+            let exact = sig;
+            assert!(exact > SYY + 100.0, "{exact}");
+            assert_first_order("norton-hoff constant strain rate", 40, |n| {
+                let dt = t_end / n as f64;
+                let (s, _) =
+                    uniaxial_history(&NortonHoff, &C, Vec4::ZERO, Vec4::ZERO, dt, n, |_| {
+                        Axial::Strain(eps_rate * dt)
+                    });
+                (s[1] - exact).abs() / exact
+            });
+        }
+    }
 }

@@ -90,20 +90,31 @@ pub(crate) fn fd<F: Fn(f64) -> Vec4>(f: F, h: f64) -> Vec4 {
     (f(-2.0 * h) - f(2.0 * h) + (f(h) - f(-h)) * 8.0) * (1.0 / (12.0 * h))
 }
 
-/// `max |a - b| / max(|a|, |b|, floor)`.
-pub(crate) fn rel_err(a: &[f64], b: &[f64], floor: f64) -> f64 {
+/// Relative disagreement of an analytic derivative `a` with its finite-difference
+/// estimate `b`, beyond the round-off `noise` of the estimate:
+/// `max(max |a - b| - noise, 0) / max(|a|, |b|)` (0 when both vanish).
+pub(crate) fn rel_err(a: &[f64], b: &[f64], noise: f64) -> f64 {
     let diff = a
         .iter()
         .zip(b)
         .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-    let big = a.iter().chain(b).fold(floor, |m, v| m.max(v.abs()));
-    if big == 0.0 { 0.0 } else { diff / big }
+    let big = a.iter().chain(b).fold(0.0f64, |m, v| m.max(v.abs()));
+    let excess = (diff - noise).max(0.0);
+    if excess == 0.0 { 0.0 } else { excess / big }
 }
 
-/// Prints `err` when `LAWS_FD_REPORT` is set (to gather the agreement levels observed).
-fn report(law: &dyn Law, check: &str, err: f64) {
+/// Round-off of the finite-difference stencil [`fd`] applied to values of magnitude
+/// `f_max` computed to a few ulps: `64 eps f_max / h`.
+pub(crate) fn fd_noise(f_max: f64, h: f64) -> f64 {
+    64.0 * f64::EPSILON * f_max / h
+}
+
+/// Prints `err` and the raw relative difference of `a` and `b` (round-off included) when
+/// `LAWS_FD_REPORT` is set, to gather the agreement levels observed.
+fn report(law: &dyn Law, check: &str, err: f64, a: &[f64], b: &[f64]) {
     if std::env::var_os("LAWS_FD_REPORT").is_some() {
-        eprintln!("FDREPORT {} {check} {err:e}", law.name());
+        let raw = rel_err(a, b, 0.0);
+        eprintln!("FDREPORT {} {check} {err:e} {raw:e}", law.name());
     }
 }
 
@@ -135,7 +146,7 @@ fn stress_step(p: &Profile, c: &[f64], sigmas: &[&Vec4]) -> Option<f64> {
         .iter()
         .map(|s| (p.smooth_length)(c, s))
         .fold(f64::INFINITY, f64::min);
-    (length > 1e-4 * scale).then(|| 1e-3 * length.min(scale))
+    (length > 1e-4 * scale).then(|| 1e-2 * length.min(scale))
 }
 
 /// (a) The tangent returned by `update` is `d sigma1 / d deps` (finite differences of
@@ -159,13 +170,20 @@ pub(crate) fn check_tangent(p: &Profile, k: &Case) -> Result<(), TestCaseError> 
         )
     };
     let c_fd = columns([col(0), col(1), col(2), col(3)]);
-    let err = rel_err(flat(&up.tangent), flat(&c_fd), 0.0);
+    let noise = fd_noise(up.sigma.max_abs() + k.s0.max_abs(), h);
+    let err = rel_err(flat(&up.tangent), flat(&c_fd), noise);
     let regime = if law.flow(&k.c, &up.sigma) == Vec4::ZERO {
         "elastic-step"
     } else {
         "flowing-step"
     };
-    report(law, &format!("tangent_vs_fd_update[{regime}]"), err);
+    report(
+        law,
+        &format!("tangent_vs_fd_update[{regime}]"),
+        err,
+        flat(&up.tangent),
+        flat(&c_fd),
+    );
     prop_assert!(
         err < FD_TOL,
         "tangent vs FD: rel err {err:e}\n{:?}\n{:?}",
@@ -174,7 +192,7 @@ pub(crate) fn check_tangent(p: &Profile, k: &Case) -> Result<(), TestCaseError> 
     );
     let t = law.tangent(&k.c, &up.sigma, k.dt).map_err(fail)?;
     let err = rel_err(flat(&t), flat(&up.tangent), 0.0);
-    prop_assert!(err < 1e-12, "tangent() vs update().tangent: {err:e}");
+    prop_assert!(err < 1e-9, "tangent() vs update().tangent: {err:e}");
     Ok(())
 }
 
@@ -198,8 +216,10 @@ pub(crate) fn check_previous_stress_derivative(p: &Profile, k: &Case) -> Result<
     };
     let d_fd = columns([col(0), col(1), col(2), col(3)]);
     let cs = up.tangent.mul_mat(&law.compliance(&k.c));
-    let err = rel_err(flat(&cs), flat(&d_fd), 0.0);
-    report(law, "ds1_ds0_vs_fd", err);
+    let noise = fd_noise(up.sigma.max_abs() + k.s0.max_abs(), h);
+    let err = rel_err(flat(&cs), flat(&d_fd), noise);
+    report(law, "ds1_ds0_vs_fd", err, flat(&cs), flat(&d_fd));
+
     prop_assert!(err < FD_TOL, "C S vs FD: rel err {err:e}\n{cs:?}\n{d_fd:?}");
     Ok(())
 }
@@ -235,8 +255,8 @@ pub(crate) fn check_residual_param_derivative(p: &Profile, k: &Case) -> Result<(
         };
         let exact = law.residual_param_derivative(&k.c, &k.s0, &s1, k.dt, i);
         let approx = fd(r, h);
-        let err = rel_err(&exact.0, &approx.0, 1e-9 * scale / h);
-        report(law, &format!("dr_dc{i}_vs_fd"), err);
+        let err = rel_err(&exact.0, &approx.0, fd_noise(scale, h));
+        report(law, &format!("dr_dc{i}_vs_fd"), err, &exact.0, &approx.0);
         prop_assert!(
             err < FD_TOL,
             "dr/dc_{i} vs FD: rel err {err:e}\n{exact:?}\n{approx:?}"
@@ -256,9 +276,9 @@ pub(crate) fn check_flow_hessian(p: &Profile, k: &Case) -> Result<(), TestCaseEr
         let col = |j: usize| fd(|t| law.flow(&k.c, &(sigma + unit(j) * t)), h);
         let h_fd = columns([col(0), col(1), col(2), col(3)]);
         let exact = law.flow_hessian(&k.c, &sigma);
-        let floor = 1e-9 * law.flow(&k.c, &sigma).max_abs() / h;
-        let err = rel_err(flat(&exact), flat(&h_fd), floor);
-        report(law, "hessian_vs_fd_flow", err);
+        let noise = fd_noise(law.flow(&k.c, &sigma).max_abs(), h);
+        let err = rel_err(flat(&exact), flat(&h_fd), noise);
+        report(law, "hessian_vs_fd_flow", err, flat(&exact), flat(&h_fd));
         prop_assert!(
             err < FD_TOL,
             "H vs FD: rel err {err:e}\n{exact:?}\n{h_fd:?}"
@@ -286,9 +306,9 @@ pub(crate) fn check_flow_param_derivative(p: &Profile, k: &Case) -> Result<(), T
             };
             let exact = law.flow_param_derivative(&k.c, &sigma, i);
             let approx = fd(g, h);
-            let floor = 1e-9 * law.flow(&k.c, &sigma).max_abs() / h;
-            let err = rel_err(&exact.0, &approx.0, floor);
-            report(law, &format!("dg_dc{i}_vs_fd"), err);
+            let noise = fd_noise(law.flow(&k.c, &sigma).max_abs(), h);
+            let err = rel_err(&exact.0, &approx.0, noise);
+            report(law, &format!("dg_dc{i}_vs_fd"), err, &exact.0, &approx.0);
             prop_assert!(
                 err < FD_TOL,
                 "dg/dc_{i} vs FD: rel err {err:e}\n{exact:?}\n{approx:?}"
@@ -304,7 +324,7 @@ pub(crate) fn check_residual(p: &Profile, k: &Case) -> Result<(), TestCaseError>
     let s1 = law.update(&k.c, &k.s0, &k.deps, k.dt).map_err(fail)?.sigma;
     let r = law.compliance(&k.c).mul_vec(&(s1 - k.s0)) + law.flow(&k.c, &s1) * k.dt - k.deps;
     let err = r.max_abs() / residual_scale(law, k, &s1);
-    report(law, "residual", err);
+    report(law, "residual", err, &[], &[]);
     prop_assert!(err < RESIDUAL_TOL, "|r(s1)| relative {err:e}: {r:?}");
     Ok(())
 }
