@@ -132,17 +132,28 @@ fn failure(reason: String) -> LocalFailure {
 /// in `y = ln x`: `h` is increasing and convex (log-sum-exp of affine functions), with
 /// slope in `[1, m]`, so Newton started at `y_hi` decreases monotonically onto the root
 /// whatever `m`, `dt` or the size of the step; all terms are formed in logarithms, so
-/// nothing overflows. A bisection fallback guards against round-off, and a final Newton
-/// step in `x` polishes the root to a relative residual of a few ulps.
+/// nothing overflows. A bisection fallback guards against round-off, and two Newton
+/// steps in `x` polish the root to a relative residual of a few ulps. At most 8
+/// iterations over 23,400 cases spanning `m` in [1, 50] and 25 decades of `3G dt`
+/// (test `return_equation_converges_fast_over_a_wide_grid`).
+///
+/// # Errors
+/// [`LocalFailure`] when the bracket is not finite (non-positive or non-finite inputs)
+/// or after 200 iterations.
 fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalFailure> {
     if b == 0.0 {
         return Ok((d / k, 0));
     }
     let (ln_k, ln_b, ln_d) = (k.ln(), b.ln(), d.ln());
     let ln_pow = |ln_num: f64| ln_num / m;
+    // The exact bounds, widened by a few ulps so that round-off in forming them cannot
+    // exclude a root sitting on one of them (e.g. m = 1 and K = 3G dt: x = x_lo).
+    let widen = |y: f64| 1e-13 * (1.0 + y.abs());
     let mut y_hi = (ln_d - ln_k).min(ln_pow(ln_d - ln_b));
+    y_hi += widen(y_hi);
     let mut y_lo =
         (ln_d - ln_k - std::f64::consts::LN_2).min(ln_pow(ln_d - ln_b - std::f64::consts::LN_2));
+    y_lo -= widen(y_lo);
     if !(y_hi.is_finite() && y_lo.is_finite()) {
         return Err(failure(format!(
             "norton-hoff: cannot bracket the return equation (K = {k}, 3G dt = {b}, m = {m}, overstress = {d})"
@@ -161,15 +172,17 @@ fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalF
         } else {
             y_lo = y;
         }
-        let mut y_new = y - h / slope;
-        // Strictly inside the bracket (false for NaN and infinities too).
-        let inside = y_new > y_lo && y_new < y_hi;
-        if !inside {
-            y_new = 0.5 * (y_lo + y_hi);
-        }
-        let step = (y_new - y).abs();
-        y = y_new;
-        if step <= 1e-15 * (1.0 + y.abs()) || h == 0.0 || y_hi - y_lo <= 1e-15 * (1.0 + y.abs()) {
+        let dy = -h / slope;
+        // Newton converges quadratically: once the step is below 1e-10 (relative in x)
+        // the next iterate is exact to round-off; the polish below finishes in x.
+        let converged = h == 0.0 || dy.abs() <= 1e-10;
+        y = if converged || (y + dy >= y_lo && y + dy <= y_hi) {
+            y + dy
+        } else {
+            // Outside the (closed) bracket, or NaN: bisect.
+            0.5 * (y_lo + y_hi)
+        };
+        if converged || y_hi - y_lo <= 1e-15 * (1.0 + y.abs()) {
             // Polish in x: f(x) = K x + b x^m - d, f' = K + m b x^(m-1).
             let mut x = y.exp();
             for _ in 0..2 {
@@ -411,7 +424,7 @@ mod tests {
                 let r = residual(&c, &s0, &up.sigma, &deps, dt);
                 let sc = deps.max_abs() + NortonHoff.compliance(&c).mul_vec(&up.sigma).max_abs();
                 assert!(r.max_abs() <= 1e-10 * sc, "m {m} scale {scale}: {r:?}");
-                assert!(up.iterations <= 60, "m {m}: {} iterations", up.iterations);
+                assert!(up.iterations <= 8, "m {m}: {} iterations", up.iterations);
             }
         }
     }
@@ -479,6 +492,28 @@ mod tests {
             );
             assert!(err.to_string().contains("twice differentiable"));
         }
+    }
+
+    /// The system shall solve the scalar return equation `K x + 3G dt x^m = d` to a
+    /// relative residual of 1e-14 in at most 8 Newton iterations over 23,400 cases:
+    /// `m` from 1 to 50, `K` over 9 decades, `3G dt` over 25, overstress `d` over 13.
+    #[test]
+    fn return_equation_converges_fast_over_a_wide_grid() {
+        let mut worst = 0;
+        for m in [1.0, 1.1, 1.5, 2.0, 5.0, 10.0, 20.0, 50.0] {
+            for lk in -2..=6 {
+                for lb in -12..=12 {
+                    for ld in -6..=6 {
+                        let (k, b, d) = (10f64.powi(lk), 10f64.powi(lb), 10f64.powi(ld));
+                        let (x, it) = solve_overstress(k, b, m, d).unwrap();
+                        let f = k * x + b * x.powf(m) - d;
+                        assert!(f.abs() <= 1e-14 * d, "m {m} K {k} b {b} d {d}: f = {f}");
+                        worst = worst.max(it);
+                    }
+                }
+            }
+        }
+        assert!(worst <= 8, "{worst} iterations");
     }
 
     proptest! {

@@ -138,8 +138,9 @@ fn flat(m: &Mat4) -> &[f64] {
     m.0.as_flattened()
 }
 
-/// Stress-space step for finite differences around `sigma`: 1e-3 of the smooth length,
-/// at most 1e-3 of the stress scale. `None` when too close to a kink to test.
+/// Stress-space step for finite differences around `sigmas`: 1e-2 of the smallest smooth
+/// length (truncation of the fourth-order stencil ~1e-8), at most 1e-2 of the stress
+/// scale. `None` when closer to a kink than 1e-4 of the stress scale.
 fn stress_step(p: &Profile, c: &[f64], sigmas: &[&Vec4]) -> Option<f64> {
     let scale = (p.stress_scale)(c);
     let length = sigmas
