@@ -42,6 +42,13 @@ pub fn isotropic_stiffness(e: f64, nu: f64) -> Mat4 {
     Mat4::IDENTITY * g2 + Mat4::one_one() * lambda
 }
 
+/// The isotropic operator `a P + b J`, `J = 1(x)1/3` the spherical projector: `P` and `J`
+/// are orthogonal projectors, so `(a P + b J)^-1 = P/a + J/b`.
+#[inline]
+pub(crate) fn isotropic_operator(a: f64, b: f64) -> Mat4 {
+    Mat4::deviatoric_projector() * a + Mat4::one_one() * (b / 3.0)
+}
+
 /// `dS/dc_k` for `k` = 0 (E) or 1 (nu); zero otherwise.
 pub(crate) fn isotropic_compliance_derivative(c: &[f64], k: usize) -> Mat4 {
     let (e, nu) = (c[0], c[1]);

@@ -1,7 +1,9 @@
 //! Maxwell viscoelasticity (paper §4, eqs. 41-43): isotropic elasticity in series with a
 //! linear deviatoric dashpot, parameters `[E, nu, eta]`, closed-form local update.
 
-use crate::elastic::{E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative};
+use crate::elastic::{
+    E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative, isotropic_operator,
+};
 use crate::law::{Law, LocalFailure, LocalUpdate, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 
@@ -44,12 +46,6 @@ const ETA: usize = 2;
 fn jacobian_parts(c: &[f64], dt: f64) -> (f64, f64) {
     let (e, nu, eta) = (c[0], c[1], c[2]);
     ((1.0 + nu) / e + dt / eta, (1.0 - 2.0 * nu) / e)
-}
-
-/// The isotropic operator `a P + b J` with `J = 1(x)1/3`.
-#[inline]
-pub(crate) fn isotropic_operator(a: f64, b: f64) -> Mat4 {
-    Mat4::deviatoric_projector() * a + Mat4::one_one() * (b / 3.0)
 }
 
 impl Law for Maxwell {

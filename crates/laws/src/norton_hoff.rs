@@ -2,10 +2,11 @@
 //! parameters `[E, nu, K, m, sY]`, scalar radial-return local update, closed-form tangent.
 
 use crate::LawError;
-use crate::elastic::{E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative};
+use crate::elastic::{
+    E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative, isotropic_operator,
+};
 use crate::law::{Law, LocalFailure, LocalUpdate, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
-use crate::maxwell::isotropic_operator;
 
 /// Norton-Hoff law, parameters `c = [E (MPa), nu (-), K (MPa s^(1/m)), m (-), sY (MPa)]`.
 ///
