@@ -1,0 +1,347 @@
+//! `indentify init`: annotated template configurations, one per law, set to the reference
+//! problems of DESIGN.md §5 (the files in `examples/` are exactly this output).
+
+use std::io::Write as _;
+
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use serde_json::Value;
+
+use crate::config::{Config, LawSpec, Reference, library_law};
+
+/// Arguments of `indentify init`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The law of the template: its values are those of reference problem R0, R1 or R2.
+    #[arg(value_enum)]
+    pub law: LawKind,
+}
+
+/// The laws `init` has a template for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LawKind {
+    /// Linear isotropic elasticity (R0, Sneddon's cone).
+    Elastic,
+    /// Maxwell viscoelasticity (R1).
+    Maxwell,
+    /// Norton-Hoff viscoplasticity with a yield stress (R2).
+    NortonHoff,
+}
+
+impl LawKind {
+    /// The reference problem of this law.
+    pub fn reference(self) -> Reference {
+        match self {
+            LawKind::Elastic => Reference::R0Elastic,
+            LawKind::Maxwell => Reference::R1Maxwell,
+            LawKind::NortonHoff => Reference::R2NortonHoff,
+        }
+    }
+}
+
+/// Prints the template to stdout.
+///
+/// # Errors
+/// A closed standard output.
+pub fn run(args: &Args) -> Result<()> {
+    let reference = args.law.reference();
+    let text = template(reference);
+    std::io::stdout()
+        .lock()
+        .write_all(text.as_bytes())
+        .context("cannot write the template to standard output")
+}
+
+/// The annotated template of a reference problem.
+pub fn template(reference: Reference) -> String {
+    let law = match reference {
+        Reference::R0Elastic => "elastic",
+        Reference::R1Maxwell => "maxwell",
+        Reference::R2NortonHoff => "norton-hoff",
+    };
+    annotated(
+        &reference.config(),
+        &[
+            format!(
+                "{} (examples/{}).",
+                reference.title(),
+                reference.example_file()
+            ),
+            format!(
+                "indentify configuration written by `indentify init {law}`; \
+                 run it with `indentify simulate FILE.ron`."
+            ),
+        ],
+    )
+}
+
+/// A configuration as RON text with comments on every field (units, admissible ranges,
+/// alternatives); `header` lines open the file. Parses back to `cfg` exactly.
+pub fn annotated(cfg: &Config, header: &[String]) -> String {
+    let mut out = String::new();
+    for line in header {
+        out.push_str(&format!("// {line}\n"));
+    }
+    out.push_str(
+        "//\n\
+         // Units: N, mm, s, MPa. Every field is required except `solver`; an unknown or\n\
+         // mistyped field is an error. Any scalar can be overridden on the command line by its\n\
+         // dotted path, e.g. `--set law.E=25000 --set specimen.nr=10 --set history.segments.0.depth=0.2`.\n\
+         (\n",
+    );
+
+    let s = &cfg.specimen;
+    out.push_str(
+        "    // Cylindrical specimen 0 <= r <= radius, -height <= z <= 0 (the punch presses on z = 0),\n\
+         \x20   // cut into nr x nz 8-node quadrilaterals whose sizes grow geometrically away from the\n\
+         \x20   // axis (ratio grading_r) and away from the top surface (ratio grading_z).\n\
+         \x20   specimen: (\n",
+    );
+    block(
+        &mut out,
+        "        ",
+        &[
+            (format!("radius: {},", num(s.radius)), "mm, > 0".into()),
+            (format!("height: {},", num(s.height)), "mm, > 0".into()),
+            (
+                format!("nr: {},", s.nr),
+                "elements along r, an integer in [1, 2000]".into(),
+            ),
+            (
+                format!("nz: {},", s.nz),
+                "elements along z, an integer in [1, 2000]".into(),
+            ),
+            (
+                format!("grading_r: {},", num(s.grading_r)),
+                "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)".into(),
+            ),
+            (
+                format!("grading_z: {},", num(s.grading_z)),
+                "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)".into(),
+            ),
+        ],
+    );
+    out.push_str("    ),\n");
+
+    out.push_str(
+        "    // Rigid frictionless punch (lengths in mm, half-angles from the axis in degrees), one of\n\
+         \x20   //   Cone(half_angle_deg: 68.0)                     half-angle in (0, 90); 70.3 = Berkovich-equivalent\n\
+         \x20   //   Sphere(radius: 1.0)                            exact spherical profile, radius > 0\n\
+         \x20   //   Flat(radius: 0.5)                              flat-ended cylinder, radius > 0\n\
+         \x20   //   SpheroCone(radius: 1.0, half_angle_deg: 68.0)  spherical tip blended tangentially into a cone\n\
+         \x20   //   Tabulated(r: [0.0, 1.0], z: [0.0, 0.4])        heights z above the tip at increasing radii r\n",
+    );
+    let punch = serde_json::to_value(&cfg.punch).unwrap_or(Value::Null);
+    out.push_str(&format!("    punch: {},\n", ron_inline(&punch)));
+
+    let forms: Vec<String> = Reference::ALL
+        .iter()
+        .map(|r| {
+            let l = r.config().law;
+            let names: Vec<&str> = l.named_params().iter().map(|(n, _)| *n).collect();
+            format!("{}({})", l.variant(), names.join(", "))
+        })
+        .collect();
+    out.push_str(&format!(
+        "    // Constitutive law, one of {}.\n    law: {}(\n",
+        forms.join(", "),
+        cfg.law.variant()
+    ));
+    block(&mut out, "        ", &law_lines(&cfg.law));
+    out.push_str("    ),\n");
+
+    out.push_str(
+        "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
+         \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
+         \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
+         \x20   history: (\n        segments: [\n",
+    );
+    let mut previous = 0.0;
+    let lines: Vec<(String, String)> = cfg
+        .history
+        .segments
+        .iter()
+        .map(|seg| {
+            let what = if seg.depth > previous {
+                "load"
+            } else if seg.depth < previous {
+                "unload"
+            } else {
+                "hold"
+            };
+            previous = seg.depth;
+            (
+                format!(
+                    "(duration: {}, depth: {}, steps: {}),",
+                    num(seg.duration),
+                    num(seg.depth),
+                    seg.steps
+                ),
+                what.into(),
+            )
+        })
+        .collect();
+    block(&mut out, "            ", &lines);
+    out.push_str("        ],\n    ),\n");
+
+    let o = &cfg.solver;
+    out.push_str(
+        "    // Optional: numerical options of the direct solver (the defaults are shown).\n    solver: (\n",
+    );
+    block(
+        &mut out,
+        "        ",
+        &[
+            (
+                format!("residual_tol: {},", num(o.residual_tol)),
+                "relative equilibrium residual, in (0, 1)".into(),
+            ),
+            (
+                format!("max_iterations: {},", o.max_iterations),
+                "global Newton iterations per step, in [1, 10000]".into(),
+            ),
+            (
+                format!("max_cuts: {},", o.max_cuts),
+                "halvings of a failing step before giving up, in [0, 30]".into(),
+            ),
+            (
+                format!("active_set_check_tol: {},", num(o.active_set_check_tol)),
+                "relative residual at which the active set is checked, in [0, 1)".into(),
+            ),
+            (
+                format!("gap_tol: {},", num(o.gap_tol)),
+                "relative penetration before a node is activated, in [0, 1)".into(),
+            ),
+            (
+                format!("lambda_tol: {},", num(o.lambda_tol)),
+                "relative tensile reaction before a node is released, in [0, 1)".into(),
+            ),
+        ],
+    );
+    out.push_str("    ),\n)\n");
+    out
+}
+
+/// `name: value,` lines of the law with the library's description, unit and range.
+fn law_lines(law: &LawSpec) -> Vec<(String, String)> {
+    let infos = library_law(law.name()).map(|l| l.params()).unwrap_or(&[]);
+    law.named_params()
+        .iter()
+        .map(|(name, v)| {
+            let note = infos.iter().find(|i| i.name == *name).map_or_else(
+                || "(no metadata in indentify_laws)".to_string(),
+                |i| format!("{} ({}), in {}", i.description, i.unit, i.range_text()),
+            );
+            (format!("{name}: {},", num(*v)), note)
+        })
+        .collect()
+}
+
+/// Appends `indent + code  // comment` lines with the comments aligned.
+fn block(out: &mut String, indent: &str, lines: &[(String, String)]) {
+    let width = lines.iter().map(|(c, _)| c.len()).max().unwrap_or(0);
+    for (code, comment) in lines {
+        out.push_str(&format!("{indent}{code:<width$} // {comment}\n"));
+    }
+}
+
+/// A float as RON text that parses back to the same bits (`20000.0`, `1e-10`).
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// One-line RON of a serialized value: `Cone(half_angle_deg: 68.0)`, `[0.0, 1.0]`.
+fn ron_inline(v: &Value) -> String {
+    let fields = |map: &serde_json::Map<String, Value>| {
+        map.iter()
+            .map(|(k, v)| format!("{k}: {}", ron_inline(v)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match v {
+        Value::Object(map) => match map.iter().next() {
+            Some((variant, Value::Object(inner)))
+                if map.len() == 1 && variant.starts_with(|c: char| c.is_ascii_uppercase()) =>
+            {
+                format!("{variant}({})", fields(inner))
+            }
+            _ => format!("({})", fields(map)),
+        },
+        Value::Array(a) => format!(
+            "[{}]",
+            a.iter().map(ron_inline).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Number(n) => match n.as_f64() {
+            Some(f) if n.is_f64() => num(f),
+            _ => n.to_string(),
+        },
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::parse;
+    use indentify_contact::Punch;
+
+    #[test]
+    fn every_template_parses_back_exactly() {
+        for r in Reference::ALL {
+            let text = template(r);
+            let cfg = parse(&text, "template").unwrap();
+            assert_eq!(cfg, r.config(), "{text}");
+            cfg.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn annotated_round_trips_every_punch_and_odd_numbers() {
+        let punches = [
+            Punch::Sphere { radius: 0.25 },
+            Punch::Flat { radius: 1e-3 },
+            Punch::SpheroCone {
+                radius: 0.1,
+                half_angle_deg: 70.3,
+            },
+            Punch::Tabulated {
+                r: vec![0.0, 0.1, 1.0],
+                z: vec![0.0, 0.01, 0.7],
+            },
+        ];
+        for punch in punches {
+            let mut cfg = Reference::R2NortonHoff.config();
+            cfg.punch = punch;
+            cfg.solver.residual_tol = 1.234_567_890_123e-11;
+            cfg.specimen.radius = 1.0 / 3.0;
+            let text = annotated(&cfg, &[]);
+            assert_eq!(parse(&text, "t").unwrap(), cfg, "{text}");
+        }
+    }
+
+    #[test]
+    fn shipped_examples_are_the_init_output() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        for (kind, r) in [
+            ("elastic", Reference::R0Elastic),
+            ("maxwell", Reference::R1Maxwell),
+            ("norton-hoff", Reference::R2NortonHoff),
+        ] {
+            let shipped = std::fs::read_to_string(dir.join(r.example_file())).unwrap();
+            assert!(
+                shipped == template(r),
+                "examples/{} is stale: regenerate it with \
+                 `cargo run -p indentify-cli -- init {kind} > examples/{}`",
+                r.example_file(),
+                r.example_file()
+            );
+        }
+    }
+
+    #[test]
+    fn template_comments_carry_library_ranges() {
+        let t = template(Reference::R2NortonHoff);
+        assert!(t.contains("sY: 500.0,"), "{t}");
+        assert!(t.contains("nu: 0.3,") && t.contains("(-1, 0.5)"), "{t}");
+    }
+}

@@ -1,0 +1,5 @@
+//! The subcommands of `indentify`, one module each.
+
+pub mod check;
+pub mod init;
+pub mod simulate;

@@ -1,0 +1,150 @@
+//! `indentify simulate`: runs the direct problem of a configuration and writes the
+//! force-depth curve (CSV) and, on request, the fields of every step (VTU + PVD).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indentify_contact::{ContactError, DirectSolver, Model, Trajectory};
+
+use crate::config;
+use crate::output;
+
+/// Arguments of `indentify simulate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Configuration file (RON); `indentify init elastic` prints an annotated one.
+    pub config: PathBuf,
+
+    /// Write the curve here instead of standard output: CSV with header `t,h,F,a`
+    /// (s, mm, N, mm), one row per schedule time from the initial state (0,0,0,0).
+    #[arg(short, long, value_name = "CURVE.csv")]
+    pub out: Option<PathBuf>,
+
+    /// Also write the fields of every step for ParaView into DIR: `step_NNNN.vtu` (mesh:
+    /// displacement (u_r, u_z, 0) and contact pressure at the nodes; element averages of
+    /// stress [rr, zz, tt, rz], von_mises, viscoplastic strain eps_p = eps - S sigma
+    /// [rr, zz, tt, rz] and eps_p_eq), `gauss_NNNN.vtu` (the same at the Gauss points,
+    /// unsmoothed) and `steps.pvd` (both, by time).
+    #[arg(long, value_name = "DIR")]
+    pub vtu: Option<PathBuf>,
+
+    /// Override a scalar of the configuration by its dotted path (repeatable), e.g.
+    /// `--set law.E=25000 --set specimen.nr=10 --set punch.half_angle_deg=70.3
+    /// --set history.segments.0.depth=0.2 --set solver.max_cuts=4`.
+    #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+    pub sets: Vec<String>,
+}
+
+/// Runs the simulation and writes its outputs; a summary goes to standard error.
+///
+/// # Errors
+/// An invalid configuration, an output that cannot be written, or a step that fails even
+/// after cutting (the curve up to the last converged step is still written).
+pub fn run(args: &Args) -> Result<()> {
+    let start = Instant::now();
+    let name = args.config.display().to_string();
+    let cfg = config::load(&args.config, &args.sets)?;
+    let (law, params) = cfg.law.build()?;
+    let mesher = cfg.specimen.mesher();
+    let mesh = mesher
+        .build()
+        .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
+    let (n_nodes, n_elements) = (mesh.nodes.len(), mesh.elements.len());
+    let model = Model::new(mesh, cfg.punch.clone())
+        .with_context(|| format!("cannot build the model of `{name}`"))?;
+    let schedule = cfg.schedule()?;
+    let opts = cfg.solver.options(args.vtu.is_some());
+    let mut solver = DirectSolver::new(&model)?;
+
+    let (traj, failure): (Trajectory, Option<String>) =
+        match solver.run(&model, law, &params, &schedule, &opts) {
+            Ok(t) => (t, None),
+            Err(ContactError::StepFailed {
+                step,
+                t,
+                cuts,
+                reason,
+                partial,
+            }) => (
+                *partial,
+                Some(format!(
+                    "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
+                )),
+            ),
+            Err(e) => return Err(e).context(format!("cannot simulate `{name}`")),
+        };
+
+    let rows = output::curve(&schedule, &traj);
+    output::write_curve(args.out.as_deref(), &rows)?;
+    let vtu_states = match &args.vtu {
+        Some(dir) => Some((
+            dir,
+            output::write_vtu_series(dir, &model, law, &params, &traj)?,
+        )),
+        None => None,
+    };
+
+    // first row of largest force
+    let peak = rows
+        .iter()
+        .copied()
+        .fold(rows[0], |best, r| if r.f > best.f { r } else { best });
+    let params_text: Vec<String> = law
+        .params()
+        .iter()
+        .zip(&params)
+        .map(|(i, v)| format!("{} = {v}", i.name))
+        .collect();
+    let (dr, dz) = mesher.smallest_sizes();
+    let tm = &traj.timing;
+    eprintln!(
+        "indentify simulate {name}\n  \
+         law {} ({}), punch {}\n  \
+         mesh {} x {} Q8 ({n_nodes} nodes, {n_elements} elements, smallest {dr:.3e} x {dz:.3e} mm)\n  \
+         {} of {} schedule steps ({} sub-steps from cuts), {} Newton iterations, {} factorizations\n  \
+         max force {:.6} N at t = {} s, h = {} mm (contact radius {:.6} mm)\n  \
+         wall time {:.3} s (solver {:.3} s: local {:.3}, assembly {:.3}, factorization {:.3}, solve {:.3})",
+        law.name(),
+        params_text.join(", "),
+        cfg.punch.describe(),
+        mesher.nr,
+        mesher.nz,
+        rows.len() - 1,
+        schedule.n_steps(),
+        traj.steps.len() - (rows.len() - 1),
+        traj.total_iterations(),
+        tm.factorizations,
+        peak.f,
+        peak.t,
+        peak.h,
+        peak.a,
+        start.elapsed().as_secs_f64(),
+        tm.total,
+        tm.local,
+        tm.assembly,
+        tm.factorization,
+        tm.solve,
+    );
+    let curve_to = args
+        .out
+        .as_ref()
+        .map_or("standard output".to_string(), |p| {
+            format!("`{}`", p.display())
+        });
+    eprintln!("  curve ({} rows) written to {curve_to}", rows.len());
+    if let Some((dir, n)) = vtu_states {
+        eprintln!(
+            "  {n} states written to `{}` (open steps.pvd in ParaView)",
+            dir.display()
+        );
+    }
+    if let Some(why) = failure {
+        bail!(
+            "the simulation of `{name}` stopped: {why}; the curve up to t = {} s was written \
+             (try smaller steps in `history.segments` or a larger `solver.max_cuts`)",
+            rows.last().map_or(0.0, |r| r.t)
+        );
+    }
+    Ok(())
+}

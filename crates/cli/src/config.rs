@@ -1,0 +1,804 @@
+//! The RON configuration of a simulation (specimen, punch, law, history, solver options),
+//! its `--set key.path=value` overrides and its validation, with errors naming the field.
+//!
+//! Loading goes text -> typed [`Config`] (serde/ron, `deny_unknown_fields` everywhere, so
+//! a mistyped or missing field is an error with `file:line:column` and the field's dotted
+//! path) -> `--set` overrides (through a `serde_json::Value`, so any scalar can be reached
+//! by its path) -> [`Config::validate`], which asks each library to check its own inputs.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
+use indentify_contact::{Punch, Schedule, Segment, SolverOptions};
+use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
+use indentify_mesh::CylinderMesher;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+/// A whole simulation: what `indentify simulate` reads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "config")]
+pub struct Config {
+    /// The cylindrical specimen and its mesh.
+    pub specimen: Specimen,
+    /// The rigid punch (the contact crate's own type).
+    pub punch: Punch,
+    /// The constitutive law and its parameters.
+    pub law: LawSpec,
+    /// The depth history of the punch.
+    pub history: History,
+    /// Numerical options of the direct solver (optional, defaults from [`SolverOptions`]).
+    #[serde(default)]
+    pub solver: SolverConfig,
+}
+
+/// Cylinder `0 <= r <= radius`, `-height <= z <= 0` (mm), `nr x nz` Q8 elements graded
+/// towards the axis and the top surface; mirrors [`CylinderMesher`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "specimen")]
+pub struct Specimen {
+    /// Radius (mm).
+    pub radius: f64,
+    /// Height (mm).
+    pub height: f64,
+    /// Elements along r.
+    pub nr: usize,
+    /// Elements along z.
+    pub nz: usize,
+    /// Size ratio of neighbouring elements along r (1 = uniform).
+    pub grading_r: f64,
+    /// Size ratio of neighbouring elements along z (1 = uniform).
+    pub grading_z: f64,
+}
+
+impl Specimen {
+    /// The mesher for this specimen.
+    pub fn mesher(&self) -> CylinderMesher {
+        CylinderMesher {
+            radius: self.radius,
+            height: self.height,
+            nr: self.nr,
+            nz: self.nz,
+            grading_r: self.grading_r,
+            grading_z: self.grading_z,
+        }
+    }
+}
+
+/// The law and its parameters; field names are the laws' [`indentify_laws::ParamInfo`]
+/// names, so `law.E`, `law.nu`, `law.eta`, `law.K`, `law.m`, `law.sY` in configs and `--set`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "law")]
+pub enum LawSpec {
+    /// Linear isotropic elasticity `[E, nu]`.
+    Elastic {
+        /// Young's modulus (MPa).
+        #[serde(rename = "E")]
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+    },
+    /// Maxwell viscoelasticity `[E, nu, eta]`: `g = P sigma / eta`.
+    Maxwell {
+        /// Young's modulus (MPa).
+        #[serde(rename = "E")]
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+        /// Viscosity (MPa s).
+        eta: f64,
+    },
+    /// Norton-Hoff viscoplasticity with yield `[E, nu, K, m, sY]`.
+    NortonHoff {
+        /// Young's modulus (MPa).
+        #[serde(rename = "E")]
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+        /// Viscous resistance (MPa s^(1/m)).
+        #[serde(rename = "K")]
+        k: f64,
+        /// Rate exponent.
+        m: f64,
+        /// Yield stress (MPa).
+        #[serde(rename = "sY")]
+        s_y: f64,
+    },
+}
+
+impl LawSpec {
+    /// The law's name as in `indentify_laws` (`elastic`, `maxwell`, `norton-hoff`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            LawSpec::Elastic { .. } => "elastic",
+            LawSpec::Maxwell { .. } => "maxwell",
+            LawSpec::NortonHoff { .. } => "norton-hoff",
+        }
+    }
+
+    /// The variant's name in configs (`Elastic`, `Maxwell`, `NortonHoff`).
+    pub fn variant(&self) -> &'static str {
+        match self {
+            LawSpec::Elastic { .. } => "Elastic",
+            LawSpec::Maxwell { .. } => "Maxwell",
+            LawSpec::NortonHoff { .. } => "NortonHoff",
+        }
+    }
+
+    /// `(name, value)` of every parameter, in the config's field order.
+    pub fn named_params(&self) -> Vec<(&'static str, f64)> {
+        match *self {
+            LawSpec::Elastic { e, nu } => vec![("E", e), ("nu", nu)],
+            LawSpec::Maxwell { e, nu, eta } => vec![("E", e), ("nu", nu), ("eta", eta)],
+            LawSpec::NortonHoff { e, nu, k, m, s_y } => {
+                vec![("E", e), ("nu", nu), ("K", k), ("m", m), ("sY", s_y)]
+            }
+        }
+    }
+
+    /// The library law and the parameter vector in the order of its `params()`, checked
+    /// against the admissible ranges.
+    ///
+    /// # Errors
+    /// A law this build does not provide, a parameter name the library does not know, or a
+    /// value outside its range (`law.nu = 0.5 is not allowed: expected a value in (-1, 0.5)`).
+    pub fn build(&self) -> Result<(&'static dyn Law, Vec<f64>)> {
+        let law = library_law(self.name())?;
+        let given = self.named_params();
+        let params = law
+            .params()
+            .iter()
+            .map(|info| {
+                given
+                    .iter()
+                    .find(|(n, _)| *n == info.name)
+                    .map(|&(_, v)| v)
+                    .ok_or_else(|| {
+                        anyhow!(
+                            "law `{}` of indentify_laws expects a parameter `{}` that the \
+                             configuration does not have (it has {})",
+                            law.name(),
+                            info.name,
+                            names(given.iter().map(|(n, _)| *n))
+                        )
+                    })
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        match law.check_params(&params) {
+            Ok(()) => Ok((law, params)),
+            Err(LawError::Parameter { name, value, .. }) => {
+                let info = law.params().iter().find(|i| i.name == name);
+                let (range, what) = info.map_or_else(
+                    || (String::new(), String::new()),
+                    |i| (i.range_text(), format!(" ({}, {})", i.description, i.unit)),
+                );
+                bail!("law.{name} = {value} is not allowed: expected a value in {range}{what}")
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+}
+
+/// The `indentify_laws` law called `name`.
+///
+/// # Errors
+/// A name the library does not register (a CLI variant without a library law).
+pub fn library_law(name: &str) -> Result<&'static dyn Law> {
+    law_by_name(name).ok_or_else(|| {
+        anyhow!(
+            "law `{name}` is not available in indentify_laws (available: {})",
+            LAW_NAMES.join(", ")
+        )
+    })
+}
+
+/// The punch's depth history: consecutive piecewise-linear segments from `t = 0`, `h = 0`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "history")]
+pub struct History {
+    /// Segments `(duration, depth, steps)` (the contact crate's own type).
+    pub segments: Vec<Segment>,
+}
+
+/// Numerical options of the direct solver; every field is optional and defaults to
+/// [`SolverOptions::default`]. Whether fields are recorded is decided by the command.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields, rename = "solver")]
+pub struct SolverConfig {
+    /// Relative tolerance on the equilibrium residual.
+    pub residual_tol: f64,
+    /// Maximum global Newton iterations per step.
+    pub max_iterations: usize,
+    /// Maximum number of successive halvings of a failing step.
+    pub max_cuts: u32,
+    /// Relative residual below which the active set is checked before full convergence.
+    pub active_set_check_tol: f64,
+    /// Relative penetration tolerance before a node is activated.
+    pub gap_tol: f64,
+    /// Relative tensile-reaction tolerance before a node is released.
+    pub lambda_tol: f64,
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        let d = SolverOptions::default();
+        SolverConfig {
+            residual_tol: d.residual_tol,
+            max_iterations: d.max_iterations,
+            max_cuts: d.max_cuts,
+            active_set_check_tol: d.active_set_check_tol,
+            gap_tol: d.gap_tol,
+            lambda_tol: d.lambda_tol,
+        }
+    }
+}
+
+impl SolverConfig {
+    /// The solver options, recording fields when `record_fields`.
+    pub fn options(&self, record_fields: bool) -> SolverOptions {
+        SolverOptions {
+            residual_tol: self.residual_tol,
+            max_iterations: self.max_iterations,
+            max_cuts: self.max_cuts,
+            active_set_check_tol: self.active_set_check_tol,
+            gap_tol: self.gap_tol,
+            lambda_tol: self.lambda_tol,
+            record_fields,
+            ..SolverOptions::default()
+        }
+    }
+
+    /// Checks the ranges (the contact crate does not check its options).
+    ///
+    /// # Errors
+    /// The first field out of range, its value and what is allowed.
+    pub fn validate(&self) -> Result<()> {
+        let tol = |field: &str, v: f64, strict: bool| {
+            if v.is_finite() && (v > 0.0 || (!strict && v == 0.0)) && v < 1.0 {
+                Ok(())
+            } else {
+                let lo = if strict { "(0" } else { "[0" };
+                Err(anyhow!(
+                    "solver.{field} = {v} is not allowed: expected a tolerance in {lo}, 1)"
+                ))
+            }
+        };
+        tol("residual_tol", self.residual_tol, true)?;
+        tol("active_set_check_tol", self.active_set_check_tol, false)?;
+        tol("gap_tol", self.gap_tol, false)?;
+        tol("lambda_tol", self.lambda_tol, false)?;
+        if !(1..=10_000).contains(&self.max_iterations) {
+            bail!(
+                "solver.max_iterations = {} is not allowed: expected an integer in [1, 10000]",
+                self.max_iterations
+            );
+        }
+        if self.max_cuts > 30 {
+            bail!(
+                "solver.max_cuts = {} is not allowed: expected an integer in [0, 30]",
+                self.max_cuts
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The reference problems of DESIGN.md §5 (and the `init` templates).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// R0: elastic, E = 20000 MPa, nu = 0.3 (Sneddon's cone).
+    R0Elastic,
+    /// R1: Maxwell, E = 20000 MPa, nu = 0.3, eta = 30000 MPa s.
+    R1Maxwell,
+    /// R2: Norton-Hoff, E = 1e5 MPa, nu = 0.3, K = 1500 MPa s^(1/m), m = 5, sY = 500 MPa.
+    R2NortonHoff,
+}
+
+impl Reference {
+    /// All reference problems.
+    pub const ALL: [Reference; 3] = [
+        Reference::R0Elastic,
+        Reference::R1Maxwell,
+        Reference::R2NortonHoff,
+    ];
+
+    /// Id and one-line title, e.g. `R0 of DESIGN.md §5: elastic cone indentation`.
+    pub fn title(&self) -> &'static str {
+        match self {
+            Reference::R0Elastic => {
+                "R0 of DESIGN.md §5: elastic cone indentation (Sneddon's solution)"
+            }
+            Reference::R1Maxwell => "R1 of DESIGN.md §5: Maxwell viscoelastic cone indentation",
+            Reference::R2NortonHoff => {
+                "R2 of DESIGN.md §5: Norton-Hoff viscoplastic cone indentation"
+            }
+        }
+    }
+
+    /// File name of the shipped example, e.g. `r0-elastic.ron`.
+    pub fn example_file(&self) -> &'static str {
+        match self {
+            Reference::R0Elastic => "r0-elastic.ron",
+            Reference::R1Maxwell => "r1-maxwell.ron",
+            Reference::R2NortonHoff => "r2-norton-hoff.ron",
+        }
+    }
+
+    /// The configuration: cylinder 10 x 10 mm, 20 x 20 Q8 graded 1.3 towards the axis and
+    /// the top, cone of half-angle 68 deg, trapezoid 0 -> 0.1 mm in 1 s, hold 1 s, unload
+    /// in 1 s, 30 steps per segment.
+    pub fn config(&self) -> Config {
+        let law = match self {
+            Reference::R0Elastic => LawSpec::Elastic {
+                e: 20000.0,
+                nu: 0.3,
+            },
+            Reference::R1Maxwell => LawSpec::Maxwell {
+                e: 20000.0,
+                nu: 0.3,
+                eta: 30000.0,
+            },
+            Reference::R2NortonHoff => LawSpec::NortonHoff {
+                e: 1e5,
+                nu: 0.3,
+                k: 1500.0,
+                m: 5.0,
+                s_y: 500.0,
+            },
+        };
+        Config {
+            specimen: Specimen {
+                radius: 10.0,
+                height: 10.0,
+                nr: 20,
+                nz: 20,
+                grading_r: 1.3,
+                grading_z: 1.3,
+            },
+            punch: Punch::Cone {
+                half_angle_deg: 68.0,
+            },
+            law,
+            history: History {
+                segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
+            },
+            solver: SolverConfig::default(),
+        }
+    }
+}
+
+impl Config {
+    /// Checks every input through the library that owns it: mesh sizes and counts,
+    /// punch geometry, law parameters, history, solver options.
+    ///
+    /// # Errors
+    /// The first invalid input, naming its field, value and what is allowed.
+    pub fn validate(&self) -> Result<()> {
+        self.specimen.mesher().validate()?;
+        self.punch.validate()?;
+        self.law.build()?;
+        self.schedule()?;
+        self.solver.validate()
+    }
+
+    /// The discrete time schedule of the history.
+    ///
+    /// # Errors
+    /// An empty history, a non-positive duration, zero steps or a non-finite depth.
+    pub fn schedule(&self) -> Result<Schedule> {
+        Ok(Schedule::from_segments(&self.history.segments)?)
+    }
+}
+
+/// Reads, overrides and validates the configuration file `path`.
+///
+/// # Errors
+/// An unreadable file, a syntax or type error (with `file:line:column` and the field),
+/// an invalid `--set`, or an invalid value.
+pub fn load(path: &Path, sets: &[String]) -> Result<Config> {
+    let name = path.display().to_string();
+    let src = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the configuration file `{name}`"))?;
+    let config = parse(&src, &name)?;
+    let config = apply_sets(config, sets)?;
+    let via = if sets.is_empty() {
+        String::new()
+    } else {
+        format!(" (after --set {})", sets.join(" --set "))
+    };
+    config
+        .validate()
+        .with_context(|| format!("invalid configuration `{name}`{via}"))?;
+    Ok(config)
+}
+
+/// Parses a RON configuration; `name` (the file name) prefixes error positions.
+///
+/// # Errors
+/// Syntax and type errors as `name:line:column: message (at `dotted.path`)`, followed by
+/// the offending source line.
+pub fn parse(src: &str, name: &str) -> Result<Config> {
+    ron::Options::default()
+        .from_str::<Config>(src)
+        .map_err(|e| anyhow!(describe_ron_error(src, name, &e)))
+        .with_context(|| format!("cannot parse the configuration `{name}`"))
+}
+
+/// `name:line:col: message (at `path`)` and the source line with a caret.
+fn describe_ron_error(src: &str, name: &str, e: &ron::error::SpannedError) -> String {
+    use ron::error::Error as E;
+    let pos = e.span.start;
+    let mut msg = format!("{name}:{}:{}: {}", pos.line, pos.col, e.code);
+    let (outer, key) = field_path_at(src, pos.line, pos.col);
+    let join = |last: &str| {
+        let mut parts = outer.clone();
+        parts.push(last.to_string());
+        parts.join(".")
+    };
+    let location = match &e.code {
+        // the position is at the unknown key itself, or at the end of the incomplete struct
+        E::NoSuchStructField { found, .. } => format!("at `{}`", join(found)),
+        E::MissingStructField { field, .. } => format!("`{}` is required", join(field)),
+        _ => match key {
+            Some(k) => format!("at `{}`", join(&k)),
+            None if outer.is_empty() => "at the top level".into(),
+            None => format!("in `{}`", outer.join(".")),
+        },
+    };
+    msg.push_str(&format!(" ({location})"));
+    if let Some(text) = src.lines().nth(pos.line.saturating_sub(1)) {
+        let gutter = pos.line.to_string();
+        let caret_at: String = text
+            .chars()
+            .take(pos.col.saturating_sub(1))
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
+        msg.push_str(&format!(
+            "\n {gutter} | {text}\n {} | {caret_at}^",
+            " ".repeat(gutter.len())
+        ));
+    }
+    msg
+}
+
+/// Where 1-based `line`/`col` (in characters) of RON text lies: the dotted path of the
+/// enclosing struct or list (`history.segments.1`) and the last field key seen in the
+/// innermost struct (`duration`), if any. A light tokenizer: identifiers followed by `:`
+/// are struct fields, commas count list elements, enum variant names are skipped.
+fn field_path_at(src: &str, line: usize, col: usize) -> (Vec<String>, Option<String>) {
+    #[derive(Debug)]
+    enum Frame {
+        Struct(Option<String>),
+        List(usize),
+    }
+    // characters up to the position
+    let mut upto = String::new();
+    for (i, l) in src.split('\n').enumerate() {
+        if i + 1 < line {
+            upto.push_str(l);
+            upto.push('\n');
+        } else {
+            upto.extend(l.chars().take(col.saturating_sub(1)));
+            break;
+        }
+    }
+    let chars: Vec<char> = upto.chars().collect();
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '/' && chars.get(i + 1) == Some(&'/') {
+            while i < chars.len() && chars[i] != '\n' {
+                i += 1;
+            }
+        } else if c == '/' && chars.get(i + 1) == Some(&'*') {
+            i += 2;
+            while i + 1 < chars.len() && !(chars[i] == '*' && chars[i + 1] == '/') {
+                i += 1;
+            }
+            i += 2;
+        } else if c == '"' {
+            i += 1;
+            while i < chars.len() && chars[i] != '"' {
+                i += if chars[i] == '\\' { 2 } else { 1 };
+            }
+            i += 1;
+        } else if c == '(' || c == '{' {
+            stack.push(Frame::Struct(None));
+            i += 1;
+        } else if c == '[' {
+            stack.push(Frame::List(0));
+            i += 1;
+        } else if c == ')' || c == '}' || c == ']' {
+            stack.pop();
+            i += 1;
+        } else if c == ',' {
+            if let Some(Frame::List(n)) = stack.last_mut() {
+                *n += 1;
+            }
+            i += 1;
+        } else if c.is_alphabetic() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            let ident: String = chars[start..i].iter().collect();
+            let mut j = i;
+            while j < chars.len() && chars[j].is_whitespace() {
+                j += 1;
+            }
+            if chars.get(j) == Some(&':') {
+                if let Some(Frame::Struct(key)) = stack.last_mut() {
+                    *key = Some(ident);
+                }
+            }
+        } else {
+            i += 1;
+        }
+    }
+    let key = match stack.pop() {
+        Some(Frame::Struct(key)) => key,
+        Some(list @ Frame::List(_)) => {
+            stack.push(list);
+            None
+        }
+        None => None,
+    };
+    let outer = stack
+        .iter()
+        .filter_map(|f| match f {
+            Frame::Struct(key) => key.clone(),
+            Frame::List(n) => Some(n.to_string()),
+        })
+        .collect();
+    (outer, key)
+}
+
+/// Applies `--set key.path=value` overrides in order.
+///
+/// # Errors
+/// A malformed override, an unknown path (listing the keys available where it failed), a
+/// path to a non-scalar, or a value of the wrong type.
+pub fn apply_sets(config: Config, sets: &[String]) -> Result<Config> {
+    if sets.is_empty() {
+        return Ok(config);
+    }
+    let mut value = serde_json::to_value(&config).context("cannot represent the configuration")?;
+    for set in sets {
+        let (path, text) = set.split_once('=').ok_or_else(|| {
+            anyhow!("--set `{set}` is not of the form key.path=value (e.g. --set law.E=25000)")
+        })?;
+        set_scalar(&mut value, path.trim(), text.trim())
+            .with_context(|| format!("cannot apply --set {set}"))?;
+    }
+    serde_json::from_value(value).map_err(|e| {
+        anyhow!(
+            "the configuration after --set {} is invalid: {e}",
+            sets.join(" --set ")
+        )
+    })
+}
+
+/// Replaces the scalar at dotted `path` of `root` by `text`, parsed like the old value.
+fn set_scalar(root: &mut Value, path: &str, text: &str) -> Result<()> {
+    if path.is_empty() {
+        bail!("empty key path; available keys: {}", keys_of(root));
+    }
+    let mut node = root;
+    let mut here = String::new();
+    for key in path.split('.') {
+        node = descend(node, key, &here)?;
+        if !here.is_empty() {
+            here.push('.');
+        }
+        here.push_str(key);
+    }
+    let new = match &*node {
+        Value::Number(n) if n.is_f64() => {
+            let v: f64 = text.parse().map_err(|_| {
+                anyhow!("`{path}` holds a number, and `{text}` is not one (e.g. 2.5e4)")
+            })?;
+            Value::from(serde_json::Number::from_f64(v).ok_or_else(|| {
+                anyhow!("`{path}` = {text} is not allowed: expected a finite number")
+            })?)
+        }
+        Value::Number(_) => {
+            let v: u64 = text.parse().map_err(|_| {
+                anyhow!("`{path}` holds a non-negative integer, and `{text}` is not one")
+            })?;
+            Value::from(v)
+        }
+        Value::Bool(_) => Value::Bool(text.parse().map_err(|_| {
+            anyhow!("`{path}` holds a boolean, and `{text}` is neither true nor false")
+        })?),
+        Value::String(_) => Value::String(text.to_string()),
+        Value::Null => bail!("`{path}` holds no value that --set can replace"),
+        other => bail!(
+            "`{path}` is not a scalar: it holds {}; set one of its scalars instead",
+            match other {
+                Value::Array(a) => format!("a list of {} (keys 0..{})", a.len(), a.len()),
+                _ => format!("the keys {}", keys_of(other)),
+            }
+        ),
+    };
+    *node = new;
+    Ok(())
+}
+
+/// The child `key` of `node`: an object field, a list index, or a field of the single
+/// variant an externally tagged enum holds (`punch.half_angle_deg` for `{"Cone": {...}}`).
+fn descend<'a>(node: &'a mut Value, key: &str, here: &str) -> Result<&'a mut Value> {
+    let at = if here.is_empty() {
+        "the top level".to_string()
+    } else {
+        format!("`{here}`")
+    };
+    let listing = keys_of(node);
+    match node {
+        Value::Object(map) => {
+            if map.contains_key(key) {
+                return Ok(map.get_mut(key).expect("key checked just above"));
+            }
+            if map.len() == 1 {
+                let (variant, inner) = map.iter_mut().next().expect("one entry");
+                let is_variant = variant.starts_with(|c: char| c.is_ascii_uppercase());
+                if let (true, Value::Object(fields)) = (is_variant, inner) {
+                    let fields_listing = names(fields.keys().map(String::as_str));
+                    return fields.get_mut(key).ok_or_else(|| {
+                        anyhow!(
+                            "unknown key `{key}` at {at} ({variant}); available keys: \
+                             {fields_listing}"
+                        )
+                    });
+                }
+            }
+            bail!("unknown key `{key}` at {at}; available keys: {listing}")
+        }
+        Value::Array(list) => {
+            let n = list.len();
+            let i: usize = key.parse().map_err(|_| {
+                anyhow!("`{key}` is not an index of the list at {at}; available keys: 0..{n}")
+            })?;
+            list.get_mut(i).ok_or_else(|| {
+                anyhow!("index {i} is out of the list at {at}, which has {n} elements (0..{n})")
+            })
+        }
+        _ => bail!("unknown key `{key}`: {at} is a scalar and has no keys"),
+    }
+}
+
+/// The keys of an object (or of its single enum variant's fields), or `0..n` for a list.
+fn keys_of(node: &Value) -> String {
+    match node {
+        Value::Object(map) => match map.iter().next() {
+            Some((variant, Value::Object(fields)))
+                if map.len() == 1 && variant.starts_with(|c: char| c.is_ascii_uppercase()) =>
+            {
+                format!(
+                    "{} (of {variant})",
+                    names(fields.keys().map(String::as_str))
+                )
+            }
+            _ => names(map.keys().map(String::as_str)),
+        },
+        Value::Array(a) => format!("0..{}", a.len()),
+        _ => "none (a scalar)".into(),
+    }
+}
+
+/// `a, b, c` from names.
+fn names<'a>(it: impl Iterator<Item = &'a str>) -> String {
+    it.collect::<Vec<_>>().join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn r0() -> Config {
+        Reference::R0Elastic.config()
+    }
+
+    fn set(cfg: Config, s: &str) -> Result<Config> {
+        apply_sets(cfg, &[s.to_string()])
+    }
+
+    #[test]
+    fn shipped_examples_are_the_reference_problems() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        for r in Reference::ALL {
+            let path = dir.join(r.example_file());
+            let src = std::fs::read_to_string(&path).unwrap();
+            let cfg = parse(&src, r.example_file()).unwrap();
+            assert_eq!(cfg, r.config(), "{}", r.example_file());
+        }
+    }
+
+    #[test]
+    fn set_reaches_law_mesh_punch_history_and_solver() {
+        let c = set(r0(), "law.E=25000").unwrap();
+        assert_eq!(
+            c.law,
+            LawSpec::Elastic {
+                e: 25000.0,
+                nu: 0.3
+            }
+        );
+        let c = set(c, "specimen.nr=10").unwrap();
+        assert_eq!(c.specimen.nr, 10);
+        let c = set(c, "punch.half_angle_deg=70.3").unwrap();
+        assert_eq!(
+            c.punch,
+            Punch::Cone {
+                half_angle_deg: 70.3
+            }
+        );
+        let c = set(c, "history.segments.0.depth=0.2").unwrap();
+        assert_eq!(c.history.segments[0].depth, 0.2);
+        let c = set(c, "solver.max_cuts=3").unwrap();
+        assert_eq!(c.solver.max_cuts, 3);
+        let c = set(c, "punch.Cone.half_angle_deg=60").unwrap();
+        assert_eq!(
+            c.punch,
+            Punch::Cone {
+                half_angle_deg: 60.0
+            }
+        );
+    }
+
+    #[test]
+    fn set_errors_name_the_path_and_the_choices() {
+        let e = format!("{:#}", set(r0(), "law.G=1").unwrap_err());
+        assert!(e.contains("`G`") && e.contains("E, nu"), "{e}");
+        let e = format!("{:#}", set(r0(), "speciman.nr=1").unwrap_err());
+        assert!(e.contains("history, law, punch, solver, specimen"), "{e}");
+        let e = format!("{:#}", set(r0(), "specimen.nr=2.5").unwrap_err());
+        assert!(e.contains("specimen.nr") && e.contains("integer"), "{e}");
+        let e = format!("{:#}", set(r0(), "law.E=abc").unwrap_err());
+        assert!(e.contains("law.E") && e.contains("abc"), "{e}");
+        let e = format!("{:#}", set(r0(), "history.segments.7.depth=1").unwrap_err());
+        assert!(e.contains("0..3"), "{e}");
+        let e = format!("{:#}", set(r0(), "history=1").unwrap_err());
+        assert!(e.contains("segments"), "{e}");
+        let e = format!("{:#}", set(r0(), "law.E").unwrap_err());
+        assert!(e.contains("key.path=value"), "{e}");
+    }
+
+    #[test]
+    fn ron_errors_carry_position_and_field_path() {
+        let src = "(\n  specimen: (radius: 10.0, height: 10.0, nr: -1, nz: 20, grading_r: 1.3, grading_z: 1.3),\n)";
+        let e = format!("{:#}", parse(src, "x.ron").unwrap_err());
+        assert!(e.contains("x.ron:2:") && e.contains("specimen.nr"), "{e}");
+        let src = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/r0-elastic.ron"),
+        )
+        .unwrap();
+        let bad = src.replacen("depth: 0.0", "depth: \"deep\"", 1);
+        let e = format!("{:#}", parse(&bad, "x.ron").unwrap_err());
+        assert!(e.contains("history.segments.2.depth"), "{e}");
+    }
+
+    #[test]
+    fn field_path_tracks_structs_lists_and_variants() {
+        let src = "(a: (b: 1, c: [ (d: 1), (d: 2, e: X(f: 3)) ]))";
+        let col = src.find("3)").unwrap() + 1;
+        let (outer, key) = field_path_at(src, 1, col);
+        assert_eq!(outer.join("."), "a.c.1.e");
+        assert_eq!(key.as_deref(), Some("f"));
+        let (outer, key) = field_path_at(src, 1, src.find("(d: 2").unwrap() + 1);
+        assert_eq!((outer.join("."), key), ("a.c.1".to_string(), None));
+    }
+
+    #[test]
+    fn law_parameters_follow_the_library_order_and_ranges() {
+        let (law, p) = r0().law.build().unwrap();
+        let names: Vec<_> = law.params().iter().map(|i| i.name).collect();
+        assert_eq!(names, ["E", "nu"]);
+        assert_eq!(p, [20000.0, 0.3]);
+        let e = LawSpec::Elastic { e: 1.0, nu: 0.5 }
+            .build()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("law.nu = 0.5") && e.contains("(-1, 0.5)"), "{e}");
+    }
+}

@@ -1,0 +1,264 @@
+//! Files the CLI writes: the force-depth curve as CSV, and the per-step fields of a run as
+//! VTU files (mesh with cell averages, and Gauss-point clouds) indexed by a PVD collection.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use indentify_contact::{Model, Schedule, Trajectory, nodal_pressures};
+use indentify_fe::QP_PER_ELEMENT;
+use indentify_laws::mandel::SQRT2;
+use indentify_laws::{Law, Vec4};
+use indentify_mesh::vtu::{Field, mesh_to_vtu, points_to_vtu};
+
+/// One row of the curve: time (s), depth (mm), force (N, full circle), contact radius (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurveRow {
+    /// Time (s).
+    pub t: f64,
+    /// Punch depth (mm).
+    pub h: f64,
+    /// Punch force (N).
+    pub f: f64,
+    /// Contact radius (mm).
+    pub a: f64,
+}
+
+/// The curve at the schedule times: the initial state, then every step that ends on a
+/// schedule time (sub-steps of cut steps left out).
+pub fn curve(schedule: &Schedule, traj: &Trajectory) -> Vec<CurveRow> {
+    std::iter::once(CurveRow {
+        t: schedule.t[0],
+        h: schedule.depth[0],
+        f: 0.0,
+        a: 0.0,
+    })
+    .chain(traj.schedule_steps().map(|s| CurveRow {
+        t: s.t,
+        h: s.depth,
+        f: s.force,
+        a: s.contact_radius,
+    }))
+    .collect()
+}
+
+/// Writes the curve as CSV with header `t,h,F,a` (s, mm, N, mm) to `out`.
+///
+/// # Errors
+/// An I/O error of the writer.
+pub fn write_curve_csv<W: Write>(out: W, rows: &[CurveRow]) -> Result<()> {
+    let mut w = csv::Writer::from_writer(out);
+    w.write_record(["t", "h", "F", "a"])?;
+    for r in rows {
+        w.write_record([r.t, r.h, r.f, r.a].map(|v| v.to_string()))?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Writes the curve to the file `path`, or to standard output when `None`.
+///
+/// # Errors
+/// The file cannot be created or written.
+pub fn write_curve(path: Option<&Path>, rows: &[CurveRow]) -> Result<()> {
+    match path {
+        Some(p) => {
+            let file = std::fs::File::create(p)
+                .with_context(|| format!("cannot create the curve file `{}`", p.display()))?;
+            write_curve_csv(std::io::BufWriter::new(file), rows)
+                .with_context(|| format!("cannot write the curve file `{}`", p.display()))
+        }
+        None => write_curve_csv(std::io::stdout().lock(), rows)
+            .context("cannot write the curve to standard output"),
+    }
+}
+
+/// Gauss-point fields of one recorded state, physical tensor components `[rr, zz, tt, rz]`.
+struct QpFields {
+    /// Stress (MPa), 4 per point.
+    stress: Vec<f64>,
+    /// von Mises equivalent stress (MPa).
+    von_mises: Vec<f64>,
+    /// Viscoplastic strain `eps - S sigma`, 4 per point.
+    eps_p: Vec<f64>,
+    /// Equivalent viscoplastic strain `sqrt(2/3 e:e)` of its deviator `e`.
+    eps_p_eq: Vec<f64>,
+}
+
+/// Mandel `[rr, zz, tt, sqrt2 rz]` to tensor components `[rr, zz, tt, rz]`.
+fn physical(m: &Vec4) -> [f64; 4] {
+    [m.0[0], m.0[1], m.0[2], m.0[3] / SQRT2]
+}
+
+fn qp_fields(model: &Model, law: &dyn Law, params: &[f64], u: &[f64], sigma: &[Vec4]) -> QpFields {
+    let nq = model.disc.n_qp();
+    let mut eps = vec![[0.0; 4]; nq];
+    model.disc.strains(u, &mut eps);
+    let s = law.compliance(params);
+    let mut f = QpFields {
+        stress: Vec::with_capacity(4 * nq),
+        von_mises: Vec::with_capacity(nq),
+        eps_p: Vec::with_capacity(4 * nq),
+        eps_p_eq: Vec::with_capacity(nq),
+    };
+    for (sig, e) in sigma.iter().zip(&eps) {
+        let ep = Vec4(*e) - s.mul_vec(sig);
+        let dev = ep.deviator();
+        f.stress.extend(physical(sig));
+        f.von_mises.push(sig.von_mises());
+        f.eps_p.extend(physical(&ep));
+        f.eps_p_eq.push((2.0 / 3.0 * dev.dot(&dev)).sqrt());
+    }
+    f
+}
+
+/// Volume average over each element's Gauss points (weights `w_g`) of a field with
+/// `ncomp` components per point.
+fn cell_average(model: &Model, values: &[f64], ncomp: usize) -> Vec<f64> {
+    let ne = model.disc.elements.len();
+    let mut out = vec![0.0; ncomp * ne];
+    for e in 0..ne {
+        let mut wsum = 0.0;
+        for g in 0..QP_PER_ELEMENT {
+            let q = QP_PER_ELEMENT * e + g;
+            let w = model.disc.qp[q].w;
+            wsum += w;
+            for c in 0..ncomp {
+                out[ncomp * e + c] += w * values[ncomp * q + c];
+            }
+        }
+        for v in &mut out[ncomp * e..ncomp * (e + 1)] {
+            *v /= wsum;
+        }
+    }
+    out
+}
+
+/// Writes `step_NNNN.vtu` (mesh: point displacement `(u_r, u_z, 0)` and contact pressure;
+/// cell volume averages of stress, von Mises stress, viscoplastic strain and its equivalent)
+/// and `gauss_NNNN.vtu` (the same fields at the Gauss points, unsmoothed) for every
+/// recorded state (0 = initial, then every converged step, sub-steps included), and
+/// `steps.pvd` indexing both by time. Returns the number of states written.
+///
+/// # Errors
+/// The directory or a file cannot be created or written, or the trajectory holds no fields.
+pub fn write_vtu_series(
+    dir: &Path,
+    model: &Model,
+    law: &dyn Law,
+    params: &[f64],
+    traj: &Trajectory,
+) -> Result<usize> {
+    anyhow::ensure!(
+        traj.fields.len() == traj.steps.len() + 1,
+        "the run recorded {} field states for {} steps: nothing consistent to write",
+        traj.fields.len(),
+        traj.steps.len()
+    );
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the VTU directory `{}`", dir.display()))?;
+    let n_nodes = model.mesh.nodes.len();
+    let positions: Vec<[f64; 2]> = model.disc.qp.iter().map(|q| [q.r, q.z]).collect();
+    let mut pvd = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n",
+    );
+    for (k, state) in traj.fields.iter().enumerate() {
+        let t = if k == 0 { 0.0 } else { traj.steps[k - 1].t };
+        let mut disp = vec![0.0; 3 * n_nodes];
+        for n in 0..n_nodes {
+            disp[3 * n] = state.u[2 * n];
+            disp[3 * n + 1] = state.u[2 * n + 1];
+        }
+        let mut pressure = vec![0.0; n_nodes];
+        if k > 0 {
+            let rec = &traj.steps[k - 1];
+            for (&cand, (_, p)) in rec.active.iter().zip(nodal_pressures(model, rec)) {
+                pressure[model.candidates[cand as usize]] = p;
+            }
+        }
+        let q = qp_fields(model, law, params, &state.u, &state.sigma);
+        let cell = (
+            cell_average(model, &q.stress, 4),
+            cell_average(model, &q.von_mises, 1),
+            cell_average(model, &q.eps_p, 4),
+            cell_average(model, &q.eps_p_eq, 1),
+        );
+        let field = |name, ncomp, values| Field {
+            name,
+            ncomp,
+            values,
+        };
+        let mesh_doc = mesh_to_vtu(
+            &model.mesh,
+            &[
+                field("displacement", 3, &disp),
+                field("contact_pressure", 1, &pressure),
+            ],
+            &[
+                field("stress", 4, &cell.0),
+                field("von_mises", 1, &cell.1),
+                field("eps_p", 4, &cell.2),
+                field("eps_p_eq", 1, &cell.3),
+            ],
+        );
+        let gauss_doc = points_to_vtu(
+            &positions,
+            &[
+                field("stress", 4, &q.stress),
+                field("von_mises", 1, &q.von_mises),
+                field("eps_p", 4, &q.eps_p),
+                field("eps_p_eq", 1, &q.eps_p_eq),
+            ],
+        );
+        let mesh_name = format!("step_{k:04}.vtu");
+        let gauss_name = format!("gauss_{k:04}.vtu");
+        for (name, doc) in [(&mesh_name, mesh_doc), (&gauss_name, gauss_doc)] {
+            let path = dir.join(name);
+            std::fs::write(&path, doc)
+                .with_context(|| format!("cannot write `{}`", path.display()))?;
+        }
+        pvd.push_str(&format!(
+            "<DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{mesh_name}\"/>\n\
+             <DataSet timestep=\"{t}\" group=\"\" part=\"1\" file=\"{gauss_name}\"/>\n"
+        ));
+    }
+    pvd.push_str("</Collection>\n</VTKFile>\n");
+    let path = dir.join("steps.pvd");
+    std::fs::write(&path, pvd).with_context(|| format!("cannot write `{}`", path.display()))?;
+    Ok(traj.fields.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_has_the_header_and_one_line_per_row() {
+        let rows = [
+            CurveRow {
+                t: 0.0,
+                h: 0.0,
+                f: 0.0,
+                a: 0.0,
+            },
+            CurveRow {
+                t: 0.5,
+                h: 0.05,
+                f: 12.5,
+                a: 0.01,
+            },
+        ];
+        let mut buf = Vec::new();
+        write_curve_csv(&mut buf, &rows).unwrap();
+        assert_eq!(
+            String::from_utf8(buf).unwrap(),
+            "t,h,F,a\n0,0,0,0\n0.5,0.05,12.5,0.01\n"
+        );
+    }
+
+    #[test]
+    fn physical_components_undo_the_mandel_weight() {
+        let p = physical(&Vec4([1.0, 2.0, 3.0, 4.0 * SQRT2]));
+        assert!((p[3] - 4.0).abs() < 1e-14);
+    }
+}
