@@ -32,8 +32,18 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run the direct problem of a configuration: force-depth curve (CSV), optional fields (VTU).
+    #[command(
+        after_help = "A summary (law, mesh, steps, Newton iterations, max force, wall time) \
+                            goes to standard error. The exit status is non-zero for an invalid \
+                            configuration, and for a step that fails even after cutting (the \
+                            curve up to the failure is written all the same).\n\n\
+                            Examples:\n  \
+                            indentify simulate examples/r0-elastic.ron --out curve.csv\n  \
+                            indentify simulate examples/r1-maxwell.ron --set law.eta=60000 --vtu fields/"
+    )]
     Simulate(commands::simulate::Args),
     /// Print an annotated template configuration (the reference problem of the chosen law).
+    #[command(after_help = "Example: indentify init norton-hoff > my-test.ron")]
     Init(commands::init::Args),
     /// Validate a configuration and its --set overrides without solving; print it resolved.
     Check(commands::check::Args),

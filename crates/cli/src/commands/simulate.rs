@@ -55,6 +55,15 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("cannot build the model of `{name}`"))?;
     let schedule = cfg.schedule()?;
     let opts = cfg.solver.options(args.vtu.is_some());
+    // fail on unwritable outputs before solving
+    if let Some(p) = &args.out {
+        std::fs::File::create(p)
+            .with_context(|| format!("cannot create the curve file `{}`", p.display()))?;
+    }
+    if let Some(dir) = &args.vtu {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the VTU directory `{}`", dir.display()))?;
+    }
     let mut solver = DirectSolver::new(&model)?;
 
     let (traj, failure): (Trajectory, Option<String>) =
@@ -132,7 +141,8 @@ pub fn run(args: &Args) -> Result<()> {
         .map_or("standard output".to_string(), |p| {
             format!("`{}`", p.display())
         });
-    eprintln!("  curve ({} rows) written to {curve_to}", rows.len());
+    let plural = if rows.len() == 1 { "" } else { "s" };
+    eprintln!("  curve ({} row{plural}) written to {curve_to}", rows.len());
     if let Some((dir, n)) = vtu_states {
         eprintln!(
             "  {n} states written to `{}` (open steps.pvd in ParaView)",
