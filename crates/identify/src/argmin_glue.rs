@@ -1,0 +1,109 @@
+//! The bridge between argmin and the identification: the scaled objective as an argmin
+//! problem, and a wrapper solver that records the history and applies this crate's
+//! stopping rules after every iteration (argmin's own tolerances are switched off).
+
+use argmin::core::{
+    CostFunction, Error, Gradient, IterState, KV, Problem as ArgminProblem, Solver, State,
+    TerminationReason, TerminationStatus,
+};
+
+use crate::linalg::norm2;
+use crate::optimize::{Monitor, Objective, StopReason};
+
+/// `&Objective` as an argmin problem in the scaled variables `y`.
+pub(crate) struct ArgminObjective<'a, 'p> {
+    pub objective: &'a Objective<'p>,
+}
+
+impl CostFunction for ArgminObjective<'_, '_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, y: &Vec<f64>) -> Result<f64, Error> {
+        self.objective.value(y).map_err(|e| self.objective.fail(e))
+    }
+}
+
+impl Gradient for ArgminObjective<'_, '_> {
+    type Param = Vec<f64>;
+    type Gradient = Vec<f64>;
+    fn gradient(&self, y: &Vec<f64>) -> Result<Vec<f64>, Error> {
+        self.objective
+            .value_and_gradient(y)
+            .map(|(_, g)| g)
+            .map_err(|e| self.objective.fail(e))
+    }
+}
+
+/// An argmin solver wrapped so that, before each iteration (and after the last), the
+/// current iterate is recorded and the stopping rules are checked.
+pub(crate) struct Monitored<'a, 'm, 'p, S> {
+    pub inner: S,
+    pub monitor: &'a Monitor<'m, 'p>,
+}
+
+impl<O, S, H: Clone> Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>
+    for Monitored<'_, '_, '_, S>
+where
+    S: Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>,
+{
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut ArgminProblem<O>,
+        state: IterState<Vec<f64>, Vec<f64>, (), H, (), f64>,
+    ) -> Result<(IterState<Vec<f64>, Vec<f64>, (), H, (), f64>, Option<KV>), Error> {
+        self.inner.init(problem, state)
+    }
+
+    /// One inner iteration; for BFGS (an inverse Hessian in the state) the update is
+    /// skipped when the curvature condition `s.y > 0` fails, which an Armijo-only line
+    /// search does not guarantee (J is not convex in log-scaled parameters far from the
+    /// optimum) and which argmin's BFGS does not check: an indefinite `H` would give an
+    /// ascent direction and the next line search would stall.
+    fn next_iter(
+        &mut self,
+        problem: &mut ArgminProblem<O>,
+        state: IterState<Vec<f64>, Vec<f64>, (), H, (), f64>,
+    ) -> Result<(IterState<Vec<f64>, Vec<f64>, (), H, (), f64>, Option<KV>), Error> {
+        let x0 = state.get_param().cloned();
+        let g0 = state.get_gradient().cloned();
+        let h0 = state.get_inv_hessian().cloned();
+        let (mut next, kv) = self.inner.next_iter(problem, state)?;
+        if let (Some(x0), Some(g0), Some(h0), Some(x1), Some(g1)) =
+            (x0, g0, h0, next.get_param(), next.get_gradient())
+        {
+            let s: Vec<f64> = x1.iter().zip(&x0).map(|(a, b)| a - b).collect();
+            let y: Vec<f64> = g1.iter().zip(&g0).map(|(a, b)| a - b).collect();
+            let sy: f64 = s.iter().zip(&y).map(|(a, b)| a * b).sum();
+            if !(sy > 1e-12 * norm2(&s) * norm2(&y)) {
+                next = next.inv_hessian(h0);
+                self.monitor
+                    .skipped_updates
+                    .set(self.monitor.skipped_updates.get() + 1);
+            }
+        }
+        Ok((next, kv))
+    }
+
+    fn terminate(
+        &mut self,
+        state: &IterState<Vec<f64>, Vec<f64>, (), H, (), f64>,
+    ) -> TerminationStatus {
+        let (Some(y), Some(g)) = (state.get_param(), state.get_gradient()) else {
+            return TerminationStatus::NotTerminated;
+        };
+        match self
+            .monitor
+            .iterate(state.get_iter() as usize, y, state.get_cost(), g)
+        {
+            Some(StopReason::MaxIterations) => {
+                TerminationStatus::Terminated(TerminationReason::MaxItersReached)
+            }
+            Some(_) => TerminationStatus::Terminated(TerminationReason::SolverConverged),
+            None => TerminationStatus::NotTerminated,
+        }
+    }
+}

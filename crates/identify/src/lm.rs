@@ -1,0 +1,100 @@
+//! Projected Levenberg-Marquardt on the forward-sensitivity Jacobian.
+//!
+//! Residuals `r_i = sqrt(kappa w_i / J_ref) (F_i - F_i^exp)` so that `f = |r|^2 / 2` is the
+//! internal objective of [`crate::optimize`]; Jacobian `A_ik = sqrt(kappa w_i / J_ref)
+//! dF_i/dc_k dc_k/dy_k` (scaled variables). Step: `(A^T A + lambda diag(A^T A)) d = -A^T r`,
+//! trial `y + d` projected onto the box; accepted if `f` decreases (then `lambda /= 3`),
+//! otherwise `lambda *= 4` and retry. Each accepted iterate costs one forward solve and one
+//! sensitivity solve; each rejected trial one forward solve.
+
+use crate::IdentifyError;
+use crate::linalg::{inverse, mat_vec, normal_matrix, transpose_mul};
+use crate::optimize::Monitor;
+
+/// Residuals and scaled Jacobian at `y`: `(f, r, A, grad f)`.
+type Linearization = (f64, Vec<f64>, Vec<Vec<f64>>, Vec<f64>);
+
+fn linearize(monitor: &Monitor<'_, '_>, y: &[f64]) -> Result<Linearization, IdentifyError> {
+    let o = monitor.objective;
+    let p = o.eval.borrow().problem();
+    let c = o.param.to_physical(y);
+    let forces = o.eval.borrow_mut().forces(&c)?;
+    let jac = o.eval.borrow_mut().jacobian(&c)?;
+    let s = o.kappa.get() / o.j_ref;
+    let np = o.param.n_free();
+    let mut r = Vec::new();
+    let mut a = Vec::new();
+    for i in 0..forces.len() {
+        let w = p.weights[i];
+        if w == 0.0 {
+            continue;
+        }
+        let sw = (s * w).sqrt();
+        r.push(sw * (forces[i] - p.target[i]));
+        // the chain rule (dc/dy, zero outside the box) from the parameterization
+        let row: Vec<f64> = o.param.scaled_gradient(y, &c, &jac[i]);
+        a.push(row.iter().map(|v| sw * v).collect::<Vec<f64>>());
+    }
+    let f = 0.5 * r.iter().map(|v| v * v).sum::<f64>();
+    let g = transpose_mul(&a, &r, np);
+    Ok((f, r, a, g))
+}
+
+/// Runs LM from `y0`, reporting each accepted iterate to the monitor.
+pub(crate) fn run(monitor: &Monitor<'_, '_>, y0: &[f64]) -> Result<(), IdentifyError> {
+    let o = monitor.objective;
+    let max_trials = monitor_max_trials(monitor);
+    let mut y = o.param.project(y0);
+    let (mut f, _, mut a, mut g) = linearize(monitor, &y)?;
+    let np = y.len();
+    let mut lambda = 1e-3;
+    let mut iter = 0usize;
+    loop {
+        if monitor.iterate(iter, &y, f, &g).is_some() {
+            return Ok(());
+        }
+        let ata = normal_matrix(&a, np);
+        let mut accepted = false;
+        for _ in 0..max_trials {
+            let mut m = ata.clone();
+            for k in 0..np {
+                m[k][k] += lambda * ata[k][k].max(1e-12 * (1.0 + ata[k][k]));
+            }
+            let Some(inv) = inverse(&m) else {
+                lambda *= 4.0;
+                continue;
+            };
+            let d = mat_vec(&inv, &g);
+            let trial: Vec<f64> = y.iter().zip(&d).map(|(v, dv)| v - dv).collect();
+            let trial = o.param.project(&trial);
+            let c = o.param.to_physical(&trial);
+            let jt = o.eval.borrow_mut().cost(&c)?;
+            let ft = o.kappa.get() * jt / o.j_ref;
+            if ft < f {
+                let (f1, _, a1, g1) = linearize(monitor, &trial)?;
+                y = trial;
+                f = f1;
+                a = a1;
+                g = g1;
+                lambda = (lambda / 3.0).max(1e-12);
+                accepted = true;
+                break;
+            }
+            lambda *= 4.0;
+        }
+        if !accepted {
+            return Err(IdentifyError::Stalled {
+                iterations: iter,
+                cost: f,
+                reason: format!(
+                    "Levenberg-Marquardt found no decrease in {max_trials} damped steps (lambda = {lambda:.1e})"
+                ),
+            });
+        }
+        iter += 1;
+    }
+}
+
+fn monitor_max_trials(monitor: &Monitor<'_, '_>) -> usize {
+    monitor.stop_criteria().max_line_search_evaluations
+}

@@ -1,0 +1,921 @@
+//! Minimization of `J` over the box of free parameters: the configuration
+//! ([`IdentifyConfig`]), the run ([`identify`], [`resume`], [`multistart`]), the iteration
+//! history delivered to an observer callback as it goes, and the result.
+//!
+//! The optimizers work on the scaled variables `y` of [`Parameterization`] and on the
+//! internal objective `f(y) = kappa J(c(P(y))) / J_ref` with `J_ref` the
+//! [`Problem::reference_cost`] and `kappa` chosen at the start so that the first
+//! steepest-descent step has length [`IdentifyConfig::initial_step`] in `y` (infinity
+//! norm): with identity as the initial inverse Hessian, BFGS's first trial point then moves
+//! the parameters by at most a factor `exp(initial_step)` (log scaling), whatever the
+//! units of `J`. Stopping rules are expressed on `J / J_ref` (see [`StopCriteria`]).
+//!
+//! Methods ([`Method`]):
+//! - `Bfgs`: argmin BFGS with backtracking line search under the Armijo condition (the
+//!   paper's algorithm, §4.2, after Gill-Murray-Wright); bounds by projection.
+//! - `Lbfgs`: argmin L-BFGS with the More-Thuente line search; bounds by projection.
+//! - `Lbfgsb`: L-BFGS-B (rcompat-lbfgsb), bounds handled by the method itself.
+//! - `LevenbergMarquardt`: projected LM on the sensitivity Jacobian (one forward and one
+//!   sensitivity solve per accepted iteration).
+
+use std::cell::{Cell, RefCell};
+
+use argmin::core::{Error as ArgminError, Executor};
+use argmin::solver::linesearch::condition::ArmijoCondition;
+use argmin::solver::linesearch::{BacktrackingLineSearch, MoreThuenteLineSearch};
+use argmin::solver::quasinewton::{BFGS, LBFGS};
+
+use crate::IdentifyError;
+use crate::argmin_glue::{ArgminObjective, Monitored};
+use crate::identifiability::Identifiability;
+use crate::linalg::{norm_inf, norm2};
+use crate::params::{ParamSpec, Parameterization};
+use crate::problem::{Evaluator, Problem};
+
+/// The optimization method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// BFGS with Armijo backtracking (the paper's algorithm); bounds by projection.
+    Bfgs,
+    /// L-BFGS (memory `m`) with the More-Thuente line search; bounds by projection.
+    Lbfgs {
+        /// Stored correction pairs.
+        memory: usize,
+    },
+    /// L-BFGS-B (memory `m`): bounds handled by the method (rcompat-lbfgsb, feature `lbfgsb`).
+    Lbfgsb {
+        /// Stored correction pairs.
+        memory: usize,
+    },
+    /// Projected Levenberg-Marquardt on the forward-sensitivity Jacobian.
+    LevenbergMarquardt,
+}
+
+impl Method {
+    /// Short name for reports (`bfgs`, `lbfgs`, `lbfgsb`, `lm`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Bfgs => "bfgs",
+            Method::Lbfgs { .. } => "lbfgs",
+            Method::Lbfgsb { .. } => "lbfgsb",
+            Method::LevenbergMarquardt => "lm",
+        }
+    }
+
+    /// The method of a name as [`Method::name`] gives it (memory 5 for the limited-memory ones).
+    pub fn from_name(name: &str) -> Option<Method> {
+        match name {
+            "bfgs" => Some(Method::Bfgs),
+            "lbfgs" => Some(Method::Lbfgs { memory: 5 }),
+            "lbfgsb" => Some(Method::Lbfgsb { memory: 5 }),
+            "lm" => Some(Method::LevenbergMarquardt),
+            _ => None,
+        }
+    }
+}
+
+/// When to stop. Costs are relative, `J / J_ref` with `J_ref = 1/2 sum w_i (F_i^exp)^2`;
+/// gradients are `|P grad_y J| / J_ref` (2-norm of the projected gradient with respect
+/// to the scaled variables, so that each parameter counts by its relative change).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StopCriteria {
+    /// Stop when `|P grad_y J| / J_ref <= gradient_tol`.
+    pub gradient_tol: f64,
+    /// Stop when one iteration decreases `J` by at most `relative_decrease_tol * J`.
+    pub relative_decrease_tol: f64,
+    /// Stop when `J / J_ref <= target_cost` (0 disables it).
+    pub target_cost: f64,
+    /// Iteration limit (counted from the original start across resumes).
+    pub max_iterations: usize,
+    /// A line search (or an LM step-size search) that needs more trial points than this
+    /// has stalled.
+    pub max_line_search_evaluations: usize,
+    /// A stall at `J / J_ref` below this is the round-off floor of the forward solver:
+    /// reported as converged ([`StopReason::RoundOff`]).
+    pub roundoff_cost: f64,
+}
+
+impl Default for StopCriteria {
+    fn default() -> Self {
+        StopCriteria {
+            gradient_tol: 1e-9,
+            relative_decrease_tol: 1e-10,
+            target_cost: 0.0,
+            max_iterations: 100,
+            max_line_search_evaluations: 30,
+            roundoff_cost: 1e-16,
+        }
+    }
+}
+
+/// Everything an identification run needs besides the [`Problem`]: what is free, the
+/// method and the stopping rules. The CLI builds it from its RON config.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IdentifyConfig {
+    /// One entry per law parameter (free with start / bounds / scaling, or fixed).
+    pub params: Vec<ParamSpec>,
+    /// Optimization method.
+    pub method: Method,
+    /// Stopping rules.
+    pub stop: StopCriteria,
+    /// Length (infinity norm, scaled variables) of the first steepest-descent trial step;
+    /// 0.5 = at most a factor e^0.5 = 1.65 on a log-scaled parameter.
+    pub initial_step: f64,
+    /// Compute the [`Identifiability`] summary at the end (one sensitivity solve).
+    pub identifiability: bool,
+}
+
+impl IdentifyConfig {
+    /// BFGS-Armijo with default stopping rules and the identifiability summary.
+    pub fn new(params: Vec<ParamSpec>) -> IdentifyConfig {
+        IdentifyConfig {
+            params,
+            method: Method::Bfgs,
+            stop: StopCriteria::default(),
+            initial_step: 0.5,
+            identifiability: true,
+        }
+    }
+
+    fn validate(&self) -> Result<(), IdentifyError> {
+        let s = &self.stop;
+        let check = |ok: bool, field: &'static str, value: f64, allowed: &'static str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(IdentifyError::InvalidOption {
+                    field,
+                    value: value.to_string(),
+                    allowed,
+                })
+            }
+        };
+        check(
+            s.gradient_tol >= 0.0 && s.gradient_tol.is_finite(),
+            "stop.gradient_tol",
+            s.gradient_tol,
+            "a finite value >= 0",
+        )?;
+        check(
+            s.relative_decrease_tol >= 0.0 && s.relative_decrease_tol < 1.0,
+            "stop.relative_decrease_tol",
+            s.relative_decrease_tol,
+            "a value in [0, 1)",
+        )?;
+        check(
+            s.target_cost >= 0.0 && s.target_cost.is_finite(),
+            "stop.target_cost",
+            s.target_cost,
+            "a finite value >= 0",
+        )?;
+        check(
+            s.max_line_search_evaluations >= 1,
+            "stop.max_line_search_evaluations",
+            s.max_line_search_evaluations as f64,
+            "an integer >= 1",
+        )?;
+        check(
+            self.initial_step > 0.0 && self.initial_step.is_finite(),
+            "initial_step",
+            self.initial_step,
+            "a finite value > 0",
+        )?;
+        match self.method {
+            Method::Lbfgs { memory } | Method::Lbfgsb { memory } => check(
+                (1..=100).contains(&memory),
+                "method.memory",
+                memory as f64,
+                "an integer in [1, 100]",
+            ),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// One line of the iteration history: the iterate after `iteration` iterations.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IterationRecord {
+    /// Iterations done (0 = the start), counted across resumes.
+    pub iteration: usize,
+    /// Full law parameter vector (physical units, law order).
+    pub params: Vec<f64>,
+    /// `J` (N^2).
+    pub cost: f64,
+    /// `|P grad_y J|` (N^2; gradient with respect to the scaled variables, projected).
+    pub grad_norm: f64,
+    /// Forward solves so far.
+    pub forward_solves: usize,
+    /// Adjoint sweeps so far.
+    pub adjoint_solves: usize,
+    /// Sensitivity (Jacobian) solves so far.
+    pub sensitivity_solves: usize,
+    /// Wall time since the start (s).
+    pub seconds: f64,
+}
+
+/// Why a run stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StopReason {
+    /// `|P grad_y J| / J_ref <= gradient_tol`.
+    GradientNorm,
+    /// One iteration decreased `J` by at most `relative_decrease_tol * J`.
+    RelativeDecrease,
+    /// `J / J_ref <= target_cost`.
+    TargetCost,
+    /// No further decrease possible with `J` at the forward solver's round-off.
+    RoundOff,
+    /// The iteration limit.
+    MaxIterations,
+    /// No decrease could be found (line search or LM damping exhausted, or the optimizer
+    /// library gave up); the message says why.
+    Stalled(String),
+}
+
+impl StopReason {
+    /// `true` for the convergence criteria (gradient, decrease, target, round-off).
+    pub fn is_converged(&self) -> bool {
+        matches!(
+            self,
+            StopReason::GradientNorm
+                | StopReason::RelativeDecrease
+                | StopReason::TargetCost
+                | StopReason::RoundOff
+        )
+    }
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StopReason::GradientNorm => write!(f, "gradient norm below tolerance"),
+            StopReason::RelativeDecrease => write!(f, "relative decrease below tolerance"),
+            StopReason::TargetCost => write!(f, "target cost reached"),
+            StopReason::RoundOff => write!(f, "cost at the solver's round-off"),
+            StopReason::MaxIterations => write!(f, "iteration limit reached"),
+            StopReason::Stalled(why) => write!(f, "stalled: {why}"),
+        }
+    }
+}
+
+/// One law parameter at the end of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamOutcome {
+    /// Name.
+    pub name: &'static str,
+    /// Unit.
+    pub unit: &'static str,
+    /// Identified (`true`) or held fixed.
+    pub free: bool,
+    /// Start (or fixed value).
+    pub start: f64,
+    /// Final value.
+    pub value: f64,
+    /// Lower bound (free ones; the value itself for fixed ones).
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+    /// The final value sits on its lower bound.
+    pub at_lower: bool,
+    /// The final value sits on its upper bound.
+    pub at_upper: bool,
+}
+
+/// The outcome of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IdentifyResult {
+    /// Law name.
+    pub law: &'static str,
+    /// Method used.
+    pub method: Method,
+    /// Every law parameter with start, final value and bound hits.
+    pub params: Vec<ParamOutcome>,
+    /// Final full parameter vector.
+    pub c: Vec<f64>,
+    /// `J` at the start (N^2).
+    pub initial_cost: f64,
+    /// `J` at the end (N^2).
+    pub cost: f64,
+    /// `J_ref` (N^2), the scale of the relative criteria.
+    pub reference_cost: f64,
+    /// Iterations (across resumes).
+    pub iterations: usize,
+    /// Forward solves (the cost evaluations that needed a solve).
+    pub forward_solves: usize,
+    /// Adjoint sweeps.
+    pub adjoint_solves: usize,
+    /// Sensitivity solves (LM, identifiability).
+    pub sensitivity_solves: usize,
+    /// Why it stopped.
+    pub stop_reason: StopReason,
+    /// Wall time (s, across resumes).
+    pub seconds: f64,
+    /// The history, as delivered to the observer.
+    pub history: Vec<IterationRecord>,
+    /// Identifiability at the end (if asked for and computable).
+    pub identifiability: Option<Identifiability>,
+}
+
+impl IdentifyResult {
+    /// `Ok` when the run met a convergence criterion.
+    ///
+    /// # Errors
+    /// [`IdentifyError::Stalled`] otherwise (iteration limit or stall), with the reason.
+    pub fn ensure_converged(&self) -> Result<(), IdentifyError> {
+        if self.stop_reason.is_converged() {
+            Ok(())
+        } else {
+            Err(IdentifyError::Stalled {
+                iterations: self.iterations,
+                cost: self.cost,
+                reason: self.stop_reason.to_string(),
+            })
+        }
+    }
+
+    /// Final values of the free parameters (law order).
+    pub fn free_values(&self) -> Vec<f64> {
+        self.params
+            .iter()
+            .filter(|p| p.free)
+            .map(|p| p.value)
+            .collect()
+    }
+}
+
+/// A point with its internal cost and gradient: `(y, f, g)`.
+pub(crate) type Point = (Vec<f64>, f64, Vec<f64>);
+
+/// The scaled objective shared by all methods: `f(y) = kappa J(c(P(y))) / J_ref` and its
+/// gradient, on top of the cached [`Evaluator`].
+pub(crate) struct Objective<'p> {
+    pub eval: RefCell<Evaluator<'p>>,
+    pub param: Parameterization,
+    pub j_ref: f64,
+    pub kappa: Cell<f64>,
+    /// Cost-only evaluations since the last gradient (a line search in progress).
+    line_evals: Cell<usize>,
+    max_line_evals: usize,
+    /// The error behind the last failed call (argmin only carries text).
+    error: RefCell<Option<IdentifyError>>,
+    /// Last point with a gradient, in internal units.
+    pub last: RefCell<Option<Point>>,
+}
+
+impl<'p> Objective<'p> {
+    fn new(eval: Evaluator<'p>, param: Parameterization, max_line_evals: usize) -> Objective<'p> {
+        let j_ref = eval.problem().reference_cost();
+        Objective {
+            eval: RefCell::new(eval),
+            param,
+            j_ref,
+            kappa: Cell::new(1.0),
+            line_evals: Cell::new(0),
+            max_line_evals,
+            error: RefCell::new(None),
+            last: RefCell::new(None),
+        }
+    }
+
+    /// `f(y)`.
+    pub fn value(&self, y: &[f64]) -> Result<f64, IdentifyError> {
+        let n = self.line_evals.get() + 1;
+        self.line_evals.set(n);
+        if n > self.max_line_evals {
+            return Err(IdentifyError::Stalled {
+                iterations: 0,
+                cost: f64::NAN,
+                reason: format!(
+                    "the line search found no acceptable point in {} trial points",
+                    self.max_line_evals
+                ),
+            });
+        }
+        if y.iter().any(|v| !v.is_finite()) {
+            return Ok(f64::INFINITY);
+        }
+        let c = self.param.to_physical(y);
+        let j = self.eval.borrow_mut().cost(&c)?;
+        Ok(self.kappa.get() * j / self.j_ref)
+    }
+
+    /// `(f(y), grad f(y))`.
+    pub fn value_and_gradient(&self, y: &[f64]) -> Result<(f64, Vec<f64>), IdentifyError> {
+        self.line_evals.set(0);
+        let c = self.param.to_physical(y);
+        let (j, dj) = self.eval.borrow_mut().cost_and_gradient(&c)?;
+        let s = self.kappa.get() / self.j_ref;
+        let g: Vec<f64> = self
+            .param
+            .scaled_gradient(y, &c, &dj)
+            .iter()
+            .map(|v| v * s)
+            .collect();
+        let f = s * j;
+        *self.last.borrow_mut() = Some((y.to_vec(), f, g.clone()));
+        Ok((f, g))
+    }
+
+    /// Keeps `e` for the caller and gives argmin its text.
+    pub fn fail(&self, e: IdentifyError) -> ArgminError {
+        let msg = e.to_string();
+        *self.error.borrow_mut() = Some(e);
+        ArgminError::msg(msg)
+    }
+
+    fn take_error(&self) -> Option<IdentifyError> {
+        self.error.borrow_mut().take()
+    }
+}
+
+/// History, observer and stopping rules, consulted after every iteration.
+pub(crate) struct Monitor<'a, 'p> {
+    pub objective: &'a Objective<'p>,
+    stop: StopCriteria,
+    observer: RefCell<&'a mut dyn FnMut(&IterationRecord)>,
+    pub history: RefCell<Vec<IterationRecord>>,
+    offset: IterationRecord,
+    prev_cost: Cell<f64>,
+    pub reason: RefCell<Option<StopReason>>,
+    /// BFGS updates skipped because the curvature condition failed.
+    pub skipped_updates: Cell<usize>,
+}
+
+impl<'a, 'p> Monitor<'a, 'p> {
+    /// Records the iterate `y` after `iter` iterations of this run, with internal cost `f`
+    /// and gradient `g`; returns a stop reason when a criterion is met.
+    pub fn iterate(&self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> Option<StopReason> {
+        let o = self.objective;
+        let to_j = o.j_ref / o.kappa.get();
+        let cost = f * to_j;
+        let yp = o.param.project(y);
+        let pg = o.param.projected_gradient(&yp, g);
+        let grad_norm = norm2(&pg) * to_j;
+        let counts = o.eval.borrow().counts();
+        let seconds = o.eval.borrow().elapsed();
+        let rec = IterationRecord {
+            iteration: self.offset.iteration + iter,
+            params: o.param.to_physical(y),
+            cost,
+            grad_norm,
+            forward_solves: self.offset.forward_solves + counts.forward,
+            adjoint_solves: self.offset.adjoint_solves + counts.adjoint,
+            sensitivity_solves: self.offset.sensitivity_solves + counts.sensitivities,
+            seconds: self.offset.seconds + seconds,
+        };
+        // the same iterate may be reported twice (argmin's final check): record it once
+        let repeated = self
+            .history
+            .borrow()
+            .last()
+            .is_some_and(|l| l.iteration == rec.iteration && l.params == rec.params);
+        if !repeated {
+            (self.observer.borrow_mut())(&rec);
+            self.history.borrow_mut().push(rec.clone());
+        }
+        let prev = self.prev_cost.replace(cost);
+        let s = &self.stop;
+        let reason = if cost / o.j_ref <= s.target_cost {
+            Some(StopReason::TargetCost)
+        } else if grad_norm / o.j_ref <= s.gradient_tol {
+            Some(StopReason::GradientNorm)
+        } else if iter > 0 && prev.is_finite() && prev - cost <= s.relative_decrease_tol * prev {
+            Some(StopReason::RelativeDecrease)
+        } else if rec.iteration >= s.max_iterations {
+            Some(StopReason::MaxIterations)
+        } else {
+            None
+        };
+        if reason.is_some() {
+            *self.reason.borrow_mut() = reason.clone();
+        }
+        reason
+    }
+
+    /// The stopping rules.
+    pub fn stop_criteria(&self) -> &StopCriteria {
+        &self.stop
+    }
+
+    fn last(&self) -> Option<IterationRecord> {
+        self.history.borrow().last().cloned()
+    }
+}
+
+/// Runs an identification from the starts in `config` and delivers every iterate (the
+/// start included) to `observer` as soon as it is accepted.
+///
+/// # Errors
+/// Configuration errors ([`Parameterization::new`]'s, [`IdentifyError::InvalidOption`],
+/// [`IdentifyError::TooFewPoints`] when there are not more weighted data than free
+/// parameters, [`IdentifyError::MethodUnavailable`]); [`IdentifyError::Forward`] /
+/// [`IdentifyError::Adjoint`] when the start itself cannot be solved or differentiated.
+/// A failure later in the run ends it with [`StopReason::Stalled`] and the best iterate,
+/// not with an error.
+pub fn identify(
+    problem: &Problem,
+    config: &IdentifyConfig,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<IdentifyResult, IdentifyError> {
+    run(problem, config, None, observer)
+}
+
+/// Continues a run from its last recorded iterate `last` (as written by the observer):
+/// the start is `last.params`, iterations, solve counts and time continue from the
+/// record's. Quasi-Newton curvature is not recorded and starts afresh.
+///
+/// # Errors
+/// As [`identify`]; [`IdentifyError::StartOutsideBounds`] if the record lies outside the
+/// configured bounds; [`IdentifyError::InvalidSpec`] if it has the wrong length.
+pub fn resume(
+    problem: &Problem,
+    config: &IdentifyConfig,
+    last: &IterationRecord,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<IdentifyResult, IdentifyError> {
+    run(problem, config, Some(last), observer)
+}
+
+/// Results of a multi-start identification.
+#[derive(Debug)]
+pub struct MultiStart {
+    /// One outcome per start, in order.
+    pub runs: Vec<Result<IdentifyResult, IdentifyError>>,
+    /// Index of the run with the lowest final cost among the successful ones.
+    pub best: Option<usize>,
+}
+
+/// Runs [`identify`] from each of `starts` (values of the free parameters, in law order;
+/// the rest of `config` is shared). The observer receives the start index with each
+/// record. Runs are sequential; callers wanting parallel runs call [`identify`] from
+/// threads (a [`Problem`] is `Sync`).
+///
+/// # Errors
+/// [`IdentifyError::InvalidSpec`] when a start has the wrong number of values; errors of
+/// single runs are kept in [`MultiStart::runs`].
+pub fn multistart(
+    problem: &Problem,
+    config: &IdentifyConfig,
+    starts: &[Vec<f64>],
+    observer: &mut dyn FnMut(usize, &IterationRecord),
+) -> Result<MultiStart, IdentifyError> {
+    let n_free = config.params.iter().filter(|p| p.free).count();
+    let mut runs = Vec::new();
+    for (i, s) in starts.iter().enumerate() {
+        if s.len() != n_free {
+            return Err(IdentifyError::InvalidSpec {
+                name: format!("starts[{i}]"),
+                why: format!("{} values for {n_free} free parameters", s.len()),
+            });
+        }
+        let cfg = with_starts(config, s);
+        runs.push(identify(problem, &cfg, &mut |r| observer(i, r)));
+    }
+    let best = runs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.as_ref().ok().map(|r| (i, r.cost)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i);
+    Ok(MultiStart { runs, best })
+}
+
+/// `config` with the free parameters' starts replaced by `starts` (law order).
+pub fn with_starts(config: &IdentifyConfig, starts: &[f64]) -> IdentifyConfig {
+    let mut cfg = config.clone();
+    for (p, &s) in cfg.params.iter_mut().filter(|p| p.free).zip(starts) {
+        p.value = Some(s);
+    }
+    cfg
+}
+
+fn run(
+    problem: &Problem,
+    config: &IdentifyConfig,
+    resume_from: Option<&IterationRecord>,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<IdentifyResult, IdentifyError> {
+    config.validate()?;
+    let mut param = Parameterization::new(problem.law, &config.params)?;
+    let starts = param.base.clone();
+    let offset = match resume_from {
+        Some(r) => {
+            if r.params.len() != param.base.len() {
+                return Err(IdentifyError::InvalidSpec {
+                    name: "resume".into(),
+                    why: format!(
+                        "the record has {} parameters, law `{}` has {}",
+                        r.params.len(),
+                        param.law,
+                        param.base.len()
+                    ),
+                });
+            }
+            param.check_inside(&r.params)?;
+            for f in param.free.iter_mut() {
+                param.base[f.index] = r.params[f.index];
+                f.start = r.params[f.index];
+            }
+            r.clone()
+        }
+        None => IterationRecord {
+            iteration: 0,
+            params: vec![],
+            cost: f64::NAN,
+            grad_norm: f64::NAN,
+            forward_solves: 0,
+            adjoint_solves: 0,
+            sensitivity_solves: 0,
+            seconds: 0.0,
+        },
+    };
+    let n_data = problem.n_data();
+    if n_data <= param.n_free() {
+        return Err(IdentifyError::TooFewPoints {
+            got: n_data,
+            needed: param.n_free() + 1,
+            why: format!(
+                "more weighted data than the {} free parameters",
+                param.n_free()
+            ),
+        });
+    }
+    if matches!(config.method, Method::Lbfgsb { .. }) && !cfg!(feature = "lbfgsb") {
+        return Err(IdentifyError::MethodUnavailable("lbfgsb"));
+    }
+    let eval = Evaluator::new(problem)?;
+    let objective = Objective::new(eval, param, config.stop.max_line_search_evaluations);
+    let y0 = objective.param.to_scaled(&objective.param.base);
+    // kappa from the start's gradient (one forward + one adjoint, cached for the optimizer)
+    let (_, g0) = objective.value_and_gradient(&y0)?;
+    let c0 = objective.param.to_physical(&y0);
+    let initial_cost = objective.eval.borrow_mut().cost(&c0)?;
+    let gmax = norm_inf(&g0);
+    if gmax > 0.0 && gmax.is_finite() {
+        objective.kappa.set(config.initial_step / gmax);
+    }
+    *objective.last.borrow_mut() = None;
+    let monitor = Monitor {
+        objective: &objective,
+        stop: config.stop,
+        observer: RefCell::new(observer),
+        history: RefCell::new(Vec::new()),
+        offset,
+        prev_cost: Cell::new(f64::NAN),
+        reason: RefCell::new(None),
+        skipped_updates: Cell::new(0),
+    };
+    let outcome = match config.method {
+        Method::Bfgs => run_bfgs(&monitor, &y0),
+        Method::Lbfgs { memory } => run_lbfgs(&monitor, &y0, memory),
+        Method::Lbfgsb { memory } => run_lbfgsb(&monitor, &y0, memory, &config.stop),
+        Method::LevenbergMarquardt => crate::lm::run(&monitor, &y0),
+    };
+    // a failure inside the run ends it as a stall at the last recorded iterate
+    let mut reason = match outcome {
+        Ok(()) => monitor
+            .reason
+            .borrow()
+            .clone()
+            .unwrap_or(StopReason::Stalled(
+                "the optimizer stopped without a reason".into(),
+            )),
+        Err(e) => {
+            let e = objective.take_error().unwrap_or(e);
+            if monitor.history.borrow().is_empty() {
+                return Err(e);
+            }
+            match e {
+                IdentifyError::Stalled { reason, .. } => StopReason::Stalled(reason),
+                other => StopReason::Stalled(other.to_string()),
+            }
+        }
+    };
+    let Some(last) = monitor.last() else {
+        return Err(IdentifyError::Optimizer("no iterate was recorded".into()));
+    };
+    if matches!(reason, StopReason::Stalled(_))
+        && last.cost / objective.j_ref <= config.stop.roundoff_cost
+    {
+        reason = StopReason::RoundOff;
+    }
+    let history = monitor.history.into_inner();
+    let param = &objective.param;
+    let identifiability = if config.identifiability {
+        let mut ev = objective.eval.borrow_mut();
+        ev.jacobian(&last.params).ok().map(|jac| {
+            let free: Vec<usize> = param.free.iter().map(|f| f.index).collect();
+            Identifiability::from_jacobian(
+                &jac,
+                &problem.weights,
+                last.cost,
+                &last.params,
+                &free,
+                param.free_names(),
+            )
+        })
+    } else {
+        None
+    };
+    let counts = objective.eval.borrow().counts();
+    let seconds = objective.eval.borrow().elapsed();
+    let infos = problem.law.params();
+    let params = infos
+        .iter()
+        .enumerate()
+        .map(|(k, info)| {
+            let f = param.free.iter().find(|f| f.index == k);
+            let v = last.params[k];
+            ParamOutcome {
+                name: info.name,
+                unit: info.unit,
+                free: f.is_some(),
+                start: starts[k],
+                value: v,
+                lower: f.map_or(v, |f| f.lower),
+                upper: f.map_or(v, |f| f.upper),
+                at_lower: f.is_some_and(|f| v <= f.lower),
+                at_upper: f.is_some_and(|f| v >= f.upper),
+            }
+        })
+        .collect();
+    Ok(IdentifyResult {
+        law: problem.law.name(),
+        method: config.method,
+        params,
+        c: last.params.clone(),
+        initial_cost: if resume_from.is_some() {
+            history.first().map_or(initial_cost, |h| h.cost)
+        } else {
+            initial_cost
+        },
+        cost: last.cost,
+        reference_cost: objective.j_ref,
+        iterations: last.iteration,
+        forward_solves: offset_sum(resume_from, |r| r.forward_solves) + counts.forward,
+        adjoint_solves: offset_sum(resume_from, |r| r.adjoint_solves) + counts.adjoint,
+        sensitivity_solves: offset_sum(resume_from, |r| r.sensitivity_solves)
+            + counts.sensitivities,
+        stop_reason: reason,
+        seconds: offset_sum(resume_from, |r| r.seconds) + seconds,
+        history,
+        identifiability,
+    })
+}
+
+fn offset_sum<T: Default>(r: Option<&IterationRecord>, f: impl Fn(&IterationRecord) -> T) -> T {
+    r.map(f).unwrap_or_default()
+}
+
+fn argmin_outcome(r: Result<(), ArgminError>) -> Result<(), IdentifyError> {
+    r.map_err(|e| IdentifyError::Optimizer(e.to_string()))
+}
+
+fn run_bfgs(monitor: &Monitor<'_, '_>, y0: &[f64]) -> Result<(), IdentifyError> {
+    let n = y0.len();
+    let armijo = ArmijoCondition::new(1e-4).map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    let ls = BacktrackingLineSearch::new(armijo)
+        .rho(0.5)
+        .map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    let bfgs: BFGS<_, f64> = BFGS::new(ls)
+        .with_tolerance_grad(0.0)
+        .and_then(|b| b.with_tolerance_cost(0.0))
+        .map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    let eye: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect();
+    let solver = Monitored {
+        inner: bfgs,
+        monitor,
+    };
+    let problem = ArgminObjective {
+        objective: monitor.objective,
+    };
+    argmin_outcome(
+        Executor::new(problem, solver)
+            .configure(|s| s.param(y0.to_vec()).inv_hessian(eye))
+            .ctrlc(false)
+            .timer(false)
+            .run()
+            .map(|_| ()),
+    )
+}
+
+fn run_lbfgs(monitor: &Monitor<'_, '_>, y0: &[f64], memory: usize) -> Result<(), IdentifyError> {
+    let ls: MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64> = MoreThuenteLineSearch::new();
+    let lbfgs: LBFGS<_, Vec<f64>, Vec<f64>, f64> = LBFGS::new(ls, memory)
+        .with_tolerance_grad(0.0)
+        .and_then(|b| b.with_tolerance_cost(0.0))
+        .map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    let solver = Monitored {
+        inner: lbfgs,
+        monitor,
+    };
+    let problem = ArgminObjective {
+        objective: monitor.objective,
+    };
+    argmin_outcome(
+        Executor::new(problem, solver)
+            .configure(|s| s.param(y0.to_vec()))
+            .ctrlc(false)
+            .timer(false)
+            .run()
+            .map(|_| ()),
+    )
+}
+
+#[cfg(feature = "lbfgsb")]
+fn run_lbfgsb(
+    monitor: &Monitor<'_, '_>,
+    y0: &[f64],
+    memory: usize,
+    stop: &StopCriteria,
+) -> Result<(), IdentifyError> {
+    use rcompat_lbfgsb::{
+        ArithmeticProfile, Bounds, OptimControl, OptimEvent, optim_lbfgsb_with_gradient_observed,
+    };
+    let o = monitor.objective;
+    let (lo, hi) = o.param.scaled_bounds();
+    let bounds = Bounds::new(lo, hi).map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    let mut control = OptimControl::default_for_dimension(y0.len());
+    control.maxit = stop.max_iterations.saturating_sub(monitor.offset.iteration);
+    control.lmm = memory;
+    // pgtol acts on the infinity norm of the projected internal gradient; the 2-norm
+    // rule is applied by the monitor after each accepted step
+    control.pgtol = stop.gradient_tol * o.kappa.get() / (y0.len() as f64).sqrt();
+    control.factr = stop.relative_decrease_tol / f64::EPSILON;
+    let failed: RefCell<Option<IdentifyError>> = RefCell::new(None);
+    let stopped = Cell::new(false);
+    let fcall = |y: &[f64]| -> f64 {
+        if stopped.get() {
+            return f64::INFINITY;
+        }
+        match o.value(y) {
+            Ok(f) => f,
+            Err(e) => {
+                failed.borrow_mut().get_or_insert(e);
+                f64::INFINITY
+            }
+        }
+    };
+    let gcall = |y: &[f64]| -> Vec<f64> {
+        match o.value_and_gradient(y) {
+            Ok((_, g)) => g,
+            Err(e) => {
+                failed.borrow_mut().get_or_insert(e);
+                vec![0.0; y.len()]
+            }
+        }
+    };
+    let iter = Cell::new(0usize);
+    let report = |iteration: usize| {
+        if let Some((y, f, g)) = o.last.borrow().clone() {
+            if monitor.iterate(iteration, &y, f, &g).is_some() {
+                stopped.set(true);
+            }
+        }
+    };
+    report(0);
+    if stopped.get() {
+        return Ok(());
+    }
+    let observer = |ev: OptimEvent| {
+        if let OptimEvent::Accepted { iteration, .. } = ev {
+            iter.set(iteration);
+            report(iteration);
+        }
+    };
+    let res = optim_lbfgsb_with_gradient_observed(
+        y0.to_vec(),
+        bounds,
+        fcall,
+        gcall,
+        control,
+        ArithmeticProfile::legacy(),
+        observer,
+    )
+    .map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
+    if let Some(e) = failed.into_inner() {
+        if !stopped.get() {
+            return Err(e);
+        }
+    }
+    if monitor.reason.borrow().is_none() {
+        let reason = match res.convergence {
+            0 => StopReason::RelativeDecrease,
+            1 => StopReason::MaxIterations,
+            _ => StopReason::Stalled(format!("L-BFGS-B: {}", res.message)),
+        };
+        *monitor.reason.borrow_mut() = Some(reason);
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "lbfgsb"))]
+fn run_lbfgsb(
+    _monitor: &Monitor<'_, '_>,
+    _y0: &[f64],
+    _memory: usize,
+    _stop: &StopCriteria,
+) -> Result<(), IdentifyError> {
+    Err(IdentifyError::MethodUnavailable("lbfgsb"))
+}
