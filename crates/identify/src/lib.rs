@@ -20,6 +20,38 @@
 //! - [`noise`]: seeded multiplicative noise (SplitMix64, reproducible everywhere).
 //! - [`linalg`]: the few small dense routines the above need.
 //!
+//! Use (what `indentify identify` does):
+//!
+//! ```no_run
+//! use indentify_contact::{Model, Punch, Schedule, SolverOptions, trapezoid};
+//! use indentify_identify::{ForceRecord, IdentifyConfig, Method, ParamSpec, Problem, identify};
+//! use indentify_mesh::CylinderMesher;
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let mesh = CylinderMesher { radius: 10.0, height: 10.0, nr: 20, nz: 20,
+//!     grading_r: 1.3, grading_z: 1.3 }.build()?;
+//! let model = Model::new(mesh, Punch::Cone { half_angle_deg: 68.0 })?;
+//! let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30))?;
+//! let record = ForceRecord::new(vec![0.0, 1.0, 2.0, 3.0], vec![0.0, 250.0, 200.0, 0.0])?;
+//! let law = indentify_laws::law_by_name("maxwell").unwrap();
+//! let problem = Problem::new(model, law, schedule, &record, None, SolverOptions::default())?;
+//! let mut config = IdentifyConfig::new(vec![
+//!     ParamSpec::free("E", 4000.0, 1e3, 1e6),      // start, lower, upper (log-scaled)
+//!     ParamSpec::fixed("nu", 0.3),
+//!     ParamSpec::free("eta", 70000.0, 1e3, 1e7),
+//! ]);
+//! config.method = Method::Bfgs;
+//! let result = identify(&problem, &config, &mut |rec| {
+//!     // one line of history.csv per accepted iterate, written as it comes
+//!     println!("{} {:?} {:e} {:e}", rec.iteration, rec.params, rec.cost, rec.grad_norm);
+//! })?;
+//! for p in &result.params {
+//!     println!("{} = {} {} (start {}, bound hit: {})", p.name, p.value, p.unit, p.start,
+//!         p.at_lower || p.at_upper);
+//! }
+//! result.ensure_converged()?; // a stall or the iteration limit becomes an error here
+//! # Ok(()) }
+//! ```
+//!
 //! Invariants: this crate does no file IO and prints nothing (the CLI and xtask write
 //! histories and reports from the observer callback and the result structs); it alone
 //! knows argmin; every parameter vector it hands to other crates is the law's full vector

@@ -311,6 +311,10 @@ pub struct IdentifyResult {
     pub seconds: f64,
     /// The history, as delivered to the observer.
     pub history: Vec<IterationRecord>,
+    /// Forces at the schedule times for the start (N; index 0 = initial state).
+    pub initial_forces: Vec<f64>,
+    /// Forces at the schedule times for the final parameters (N).
+    pub forces: Vec<f64>,
     /// Identifiability at the end (if asked for and computable).
     pub identifiability: Option<Identifiability>,
 }
@@ -649,6 +653,7 @@ fn run(
     let (_, g0) = objective.value_and_gradient(&y0)?;
     let c0 = objective.param.to_physical(&y0);
     let initial_cost = objective.eval.borrow_mut().cost(&c0)?;
+    let initial_forces = objective.eval.borrow_mut().forces(&c0)?;
     let gmax = norm_inf(&g0);
     if gmax > 0.0 && gmax.is_finite() {
         objective.kappa.set(config.initial_step / gmax);
@@ -716,6 +721,11 @@ fn run(
     } else {
         None
     };
+    let forces = objective
+        .eval
+        .borrow_mut()
+        .forces(&last.params)
+        .unwrap_or_default();
     let counts = objective.eval.borrow().counts();
     let seconds = objective.eval.borrow().elapsed();
     let infos = problem.law.params();
@@ -758,6 +768,8 @@ fn run(
         stop_reason: reason,
         seconds: offset_sum(resume_from, |r| r.seconds) + seconds,
         history,
+        initial_forces,
+        forces,
         identifiability,
     })
 }

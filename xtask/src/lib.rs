@@ -1,0 +1,7 @@
+//! Library side of `cargo xtask`: the paper-table runs and renderers ([`paper`]), the
+//! document writer ([`doc`]) and a small SVG plotter ([`svg`]), shared by the binary and
+//! the snapshot test.
+
+pub mod doc;
+pub mod paper;
+pub mod svg;
