@@ -6,14 +6,20 @@
 //! path) -> `--set` overrides (through a `serde_json::Value`, so any scalar can be reached
 //! by its path) -> [`Config::validate`], which asks each library to check its own inputs.
 
+mod identify;
+
 use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
-use indentify_contact::{Punch, Schedule, Segment, SolverOptions};
+use indentify_contact::{Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::CylinderMesher;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
+
+pub use identify::{
+    IdentifySection, MethodName, Overrides, ParamSetting, ScalingName, fixed_item, name_value,
+};
 
 /// A whole simulation: what `indentify simulate` reads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -30,6 +36,9 @@ pub struct Config {
     /// Numerical options of the direct solver (optional, defaults from [`SolverOptions`]).
     #[serde(default)]
     pub solver: SolverConfig,
+    /// What `indentify identify` identifies and how (optional; see [`IdentifySection`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identify: Option<IdentifySection>,
 }
 
 /// Cylinder `0 <= r <= radius`, `-height <= z <= 0` (mm), `nr x nz` Q8 elements graded
@@ -363,6 +372,50 @@ impl Reference {
                 segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
             },
             solver: SolverConfig::default(),
+            identify: Some(self.identify_section()),
+        }
+    }
+
+    /// The identification of the reference problem (nu fixed at 0.3, log scaling; BFGS with
+    /// Armijo backtracking, Levenberg-Marquardt for R2) from the paper's first starting point: R1 Table I
+    /// `(E, eta) = (4000, 70000)`, R2 Table III test 1 `(E, K, m, sY) = (130000, 800, 2, 1000)`;
+    /// R0 from `E = 4000`. Bounds as in `cargo xtask paper-tables`.
+    pub fn identify_section(&self) -> IdentifySection {
+        let free = |start: f64, lower: f64, upper: f64| ParamSetting::Free {
+            start: Some(start),
+            lower: Some(lower),
+            upper: Some(upper),
+            scaling: Some(ScalingName::Log),
+        };
+        let nu = ParamSetting::Fixed { value: Some(0.3) };
+        let params: Vec<(&str, ParamSetting)> = match self {
+            Reference::R0Elastic => vec![("E", free(4000.0, 1e3, 1e6)), ("nu", nu)],
+            Reference::R1Maxwell => vec![
+                ("E", free(4000.0, 1e3, 1e6)),
+                ("nu", nu),
+                ("eta", free(70000.0, 1e3, 1e7)),
+            ],
+            Reference::R2NortonHoff => vec![
+                ("E", free(130000.0, 1e4, 1e6)),
+                ("nu", nu),
+                ("K", free(800.0, 10.0, 1e5)),
+                ("m", free(2.0, 1.1, 30.0)),
+                ("sY", free(1000.0, 1.0, 5000.0)),
+            ],
+        };
+        IdentifySection {
+            params: params
+                .into_iter()
+                .map(|(n, s)| (n.to_string(), s))
+                .collect(),
+            // R2's m-sY valley takes BFGS 40-60 iterations; LM on the sensitivity Jacobian
+            // about 10 (docs/paper-tables.md)
+            method: if *self == Reference::R2NortonHoff {
+                MethodName::Lm
+            } else {
+                MethodName::Bfgs
+            },
+            ..IdentifySection::default()
         }
     }
 }
@@ -378,7 +431,11 @@ impl Config {
         self.punch.validate()?;
         self.law.build()?;
         self.schedule()?;
-        self.solver.validate()
+        self.solver.validate()?;
+        if let Some(id) = &self.identify {
+            id.validate(&self.law)?;
+        }
+        Ok(())
     }
 
     /// The discrete time schedule of the history.
@@ -387,6 +444,21 @@ impl Config {
     /// An empty history, a non-positive duration, zero steps or a non-finite depth.
     pub fn schedule(&self) -> Result<Schedule> {
         Ok(Schedule::from_segments(&self.history.segments)?)
+    }
+
+    /// The direct problem's model (meshed specimen and punch); `name` is the configuration
+    /// file, for messages.
+    ///
+    /// # Errors
+    /// A mesh or model that the libraries reject (excluded by [`Config::validate`]).
+    pub fn model(&self, name: &str) -> Result<Model> {
+        let mesh = self
+            .specimen
+            .mesher()
+            .build()
+            .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
+        Model::new(mesh, self.punch.clone())
+            .with_context(|| format!("cannot build the model of `{name}`"))
     }
 }
 
@@ -399,7 +471,15 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Config> {
     let name = path.display().to_string();
     let src = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read the configuration file `{name}`"))?;
-    let config = parse(&src, &name)?;
+    load_str(&src, &name, sets)
+}
+
+/// [`load`] on the text `src` of a configuration called `name`.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_str(src: &str, name: &str, sets: &[String]) -> Result<Config> {
+    let config = parse(src, name)?;
     let config = apply_sets(config, sets)?;
     let via = if sets.is_empty() {
         String::new()
@@ -419,6 +499,7 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Config> {
 /// the offending source line.
 pub fn parse(src: &str, name: &str) -> Result<Config> {
     ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
         .from_str::<Config>(src)
         .map_err(|e| anyhow!(describe_ron_error(src, name, &e)))
         .with_context(|| format!("cannot parse the configuration `{name}`"))
@@ -612,7 +693,12 @@ fn set_scalar(root: &mut Value, path: &str, text: &str) -> Result<()> {
             anyhow!("`{path}` holds a boolean, and `{text}` is neither true nor false")
         })?),
         Value::String(_) => Value::String(text.to_string()),
-        Value::Null => bail!("`{path}` holds no value that --set can replace"),
+        // an optional value left out (`start` of a free parameter): a number, else text
+        Value::Null => match (text.parse::<u64>(), text.parse::<f64>()) {
+            (Ok(v), _) => Value::from(v),
+            (_, Ok(v)) if v.is_finite() => Value::from(v),
+            _ => Value::String(text.to_string()),
+        },
         other => bail!(
             "`{path}` is not a scalar: it holds {}; set one of its scalars instead",
             match other {
@@ -751,7 +837,10 @@ mod tests {
         let e = format!("{:#}", set(r0(), "law.G=1").unwrap_err());
         assert!(e.contains("`G`") && e.contains("E, nu"), "{e}");
         let e = format!("{:#}", set(r0(), "speciman.nr=1").unwrap_err());
-        assert!(e.contains("history, law, punch, solver, specimen"), "{e}");
+        assert!(
+            e.contains("history, identify, law, punch, solver, specimen"),
+            "{e}"
+        );
         let e = format!("{:#}", set(r0(), "specimen.nr=2.5").unwrap_err());
         assert!(e.contains("specimen.nr") && e.contains("integer"), "{e}");
         let e = format!("{:#}", set(r0(), "law.E=abc").unwrap_err());

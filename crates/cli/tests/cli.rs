@@ -2,54 +2,14 @@
 //! overrides, VTU output, `init` templates, and bad input rejected with a message naming
 //! the field (never a panic).
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-fn indentify(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_indentify"))
-        .args(args)
-        .output()
-        .expect("the indentify binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn assert_ok(o: &Output) {
-    assert!(o.status.success(), "failed: {}", stderr(o));
-}
-
-/// Non-zero exit, every needle in standard error, no panic.
-fn assert_rejected(o: &Output, needles: &[&str], case: &str) {
-    let err = stderr(o);
-    assert!(!o.status.success(), "{case}: accepted; stderr:\n{err}");
-    assert!(!err.contains("panicked"), "{case}: panicked:\n{err}");
-    assert!(err.contains("error: "), "{case}: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{case}: `{n}` missing from:\n{err}");
-    }
-}
-
-/// Rows `[t, h, F, a]` of a CSV curve, after checking its header.
-fn parse_curve(text: &str) -> Vec<[f64; 4]> {
-    let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("t,h,F,a"));
-    lines
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
-            [v[0], v[1], v[2], v[3]]
-        })
-        .collect()
-}
+use common::{
+    COARSE, assert_ok, assert_rejected, examples, indentify, parse_curve, stderr, stdout,
+};
 
 /// A copy of `examples/r0-elastic.ron` with `from` replaced by `to` (which must occur).
 fn r0_variant(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
@@ -59,20 +19,6 @@ fn r0_variant(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
     std::fs::write(&path, src.replacen(from, to, 1)).unwrap();
     path
 }
-
-/// A coarse, short run for smoke tests: 6 x 6 mesh, 4 steps per segment.
-const COARSE: [&str; 10] = [
-    "--set",
-    "specimen.nr=6",
-    "--set",
-    "specimen.nz=6",
-    "--set",
-    "history.segments.0.steps=4",
-    "--set",
-    "history.segments.1.steps=4",
-    "--set",
-    "history.segments.2.steps=4",
-];
 
 #[test]
 fn r0_matches_sneddon_within_two_percent_and_writes_91_rows() {
@@ -157,7 +103,10 @@ fn set_rejects_unknown_paths_listing_the_available_keys() {
         ("law.G=1", &["`G`", "E, nu"]),
         (
             "speciman.nr=3",
-            &["`speciman`", "history, law, punch, solver, specimen"],
+            &[
+                "`speciman`",
+                "history, identify, law, punch, solver, specimen",
+            ],
         ),
         ("specimen.nr=2.5", &["specimen.nr", "integer"]),
         ("history.segments.5.depth=1", &["index 5", "0..3"]),
@@ -414,7 +363,15 @@ fn help_describes_commands_and_options() {
     let o = indentify(&["--help"]);
     assert_ok(&o);
     let h = stdout(&o);
-    for w in ["simulate", "init", "check", "N, mm, s, MPa"] {
+    for w in [
+        "simulate",
+        "init",
+        "check",
+        "gradient",
+        "gradient-check",
+        "identify",
+        "N, mm, s, MPa",
+    ] {
         assert!(h.contains(w), "{w} in {h}");
     }
     let o = indentify(&["simulate", "--help"]);
@@ -424,4 +381,34 @@ fn help_describes_commands_and_options() {
     }
     let h = stdout(&indentify(&["init", "--help"]));
     assert!(h.contains("norton-hoff"), "{h}");
+    let h = stdout(&indentify(&["simulate", "--help"]));
+    for w in ["--noise", "--seed", "SplitMix64"] {
+        assert!(h.contains(w), "{w} in {h}");
+    }
+    let h = stdout(&indentify(&["gradient", "--help"]));
+    for w in ["--data", "--json", "--checkpoint", "t_i", "m <= 1"] {
+        assert!(h.contains(w), "{w} in {h}");
+    }
+    let h = stdout(&indentify(&["gradient-check", "--help"]));
+    for w in ["--rel-step", "--tol", "--scan", "1.1", "0.97", "1e-8"] {
+        assert!(h.contains(w), "{w} in {h}");
+    }
+    let h = stdout(&indentify(&["identify", "--help"]));
+    for w in [
+        "--data",
+        "--out",
+        "--method",
+        "--free",
+        "--fixed",
+        "--start",
+        "--max-iter",
+        "--resume",
+        "--quiet",
+        "result.json",
+        "history.csv",
+        "fit.csv",
+        "(4000, 70000)",
+    ] {
+        assert!(h.contains(w), "{w} in {h}");
+    }
 }

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use serde_json::Value;
 
-use crate::config::{Config, LawSpec, Reference, library_law};
+use crate::config::{Config, IdentifySection, LawSpec, ParamSetting, Reference, library_law};
 
 /// Arguments of `indentify init`.
 #[derive(Debug, clap::Args)]
@@ -69,7 +69,7 @@ pub fn template(reference: Reference) -> String {
             ),
             format!(
                 "indentify configuration written by `indentify init {law}`; \
-                 run it with `indentify simulate FILE.ron`."
+                 run it with `indentify simulate FILE.ron` or `indentify identify FILE.ron`."
             ),
         ],
     )
@@ -84,7 +84,7 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
     }
     out.push_str(
         "//\n\
-         // Units: N, mm, s, MPa. Every field is required except `solver`; an unknown or\n\
+         // Units: N, mm, s, MPa. Every field is required except `solver` and `identify`; an unknown or\n\
          // mistyped field is an error. Any scalar can be overridden on the command line by its\n\
          // dotted path, e.g. `--set law.E=25000 --set specimen.nr=10 --set history.segments.0.depth=0.2`.\n\
          (\n",
@@ -218,8 +218,143 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
             ),
         ],
     );
-    out.push_str("    ),\n)\n");
+    out.push_str("    ),\n");
+    if let Some(id) = &cfg.identify {
+        identify_block(&mut out, cfg, id);
+    }
+    out.push_str(")\n");
     out
+}
+
+/// The annotated `identify: (...)` section.
+fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
+    out.push_str(
+        "    // Optional: what `indentify identify` identifies, and how. A parameter listed in `params`\n\
+         \x20   // is Free (identified from `start` within [lower, upper]; the optimizer sees Log: ln c,\n\
+         \x20   // Bounds: (c - lower)/(upper - lower), or Linear: c/|start|) or Fixed (held at `value`).\n\
+         \x20   // An omitted start or value is the `law` value, omitted bounds the law's admissible range,\n\
+         \x20   // an omitted scaling Log (Linear if the lower bound is negative); a parameter not listed\n\
+         \x20   // is held at its `law` value; without this section every parameter but nu is identified\n\
+         \x20   // from its `law` value. Without --data, the data are this file's curve simulated at its\n\
+         \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
+         \x20   identify: (\n        params: {\n",
+    );
+    let infos = library_law(cfg.law.name())
+        .map(|l| l.params())
+        .unwrap_or(&[]);
+    let mut listed: Vec<&str> = cfg
+        .law
+        .named_params()
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| id.params.contains_key(*n))
+        .collect();
+    // names the law does not have (rejected on load) keep their place at the end
+    let extra: Vec<&str> = id
+        .params
+        .keys()
+        .map(String::as_str)
+        .filter(|n| !listed.contains(n))
+        .collect();
+    listed.extend(extra);
+    let mut lines = Vec::new();
+    for name in listed {
+        let code = match id.params[name] {
+            ParamSetting::Free {
+                start,
+                lower,
+                upper,
+                scaling,
+            } => {
+                let mut fields: Vec<String> =
+                    [("start", start), ("lower", lower), ("upper", upper)]
+                        .iter()
+                        .filter_map(|(k, v)| v.map(|v| format!("{k}: {}", num(v))))
+                        .collect();
+                if let Some(sc) = scaling {
+                    fields.push(format!("scaling: {sc:?}"));
+                }
+                format!("\"{name}\": Free({}),", fields.join(", "))
+            }
+            ParamSetting::Fixed { value: Some(v) } => {
+                format!("\"{name}\": Fixed(value: {}),", num(v))
+            }
+            ParamSetting::Fixed { value: None } => format!("\"{name}\": Fixed(),"),
+        };
+        let note = infos
+            .iter()
+            .find(|i| i.name == name)
+            .map_or_else(String::new, |i| format!("{} ({})", i.description, i.unit));
+        lines.push((code, note));
+    }
+    block(out, "            ", &lines);
+    out.push_str("        },\n");
+    let st = &id.stop;
+    block(
+        out,
+        "        ",
+        &[
+            (
+                format!("method: {:?},", id.method),
+                "Bfgs (BFGS + Armijo backtracking, the paper's), Lbfgs (More-Thuente), \
+                 Lbfgsb (bounds in the method), Lm (Levenberg-Marquardt)"
+                    .into(),
+            ),
+            (
+                format!("memory: {},", id.memory),
+                "correction pairs of Lbfgs and Lbfgsb, in [1, 100]".into(),
+            ),
+            (
+                format!("initial_step: {},", num(id.initial_step)),
+                "first trial step in scaled variables (0.5: a factor e^0.5 on a Log parameter)"
+                    .into(),
+            ),
+        ],
+    );
+    out.push_str("        stop: (\n");
+    block(
+        out,
+        "            ",
+        &[
+            (
+                format!("gradient_tol: {},", num(st.gradient_tol)),
+                "|projected gradient in scaled variables| / J_ref, J_ref = 1/2 sum F_exp^2".into(),
+            ),
+            (
+                format!("relative_decrease_tol: {},", num(st.relative_decrease_tol)),
+                "relative decrease of J over one iteration, in [0, 1)".into(),
+            ),
+            (
+                format!("target_cost: {},", num(st.target_cost)),
+                "J / J_ref to stop at (0: off)".into(),
+            ),
+            (
+                format!("max_iterations: {},", st.max_iterations),
+                "iteration limit".into(),
+            ),
+            (
+                format!(
+                    "max_line_search_evaluations: {},",
+                    st.max_line_search_evaluations
+                ),
+                "trial points of one line search before it has stalled".into(),
+            ),
+            (
+                format!("roundoff_cost: {},", num(st.roundoff_cost)),
+                "J / J_ref under which a stall counts as converged".into(),
+            ),
+        ],
+    );
+    out.push_str("        ),\n");
+    block(
+        out,
+        "        ",
+        &[(
+            format!("identifiability: {},", id.identifiability),
+            "standard deviations and correlations at the optimum (one sensitivity solve)".into(),
+        )],
+    );
+    out.push_str("    ),\n");
 }
 
 /// `name: value,` lines of the law with the library's description, unit and range.

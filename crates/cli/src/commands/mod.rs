@@ -1,5 +1,8 @@
 //! The subcommands of `indentify`, one module each.
 
 pub mod check;
+pub mod gradient;
+pub mod gradient_check;
+pub mod identify;
 pub mod init;
 pub mod simulate;

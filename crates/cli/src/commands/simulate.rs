@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indentify_contact::{ContactError, DirectSolver, Model, Trajectory};
+use indentify_identify::multiplicative_noise;
 
 use crate::config;
 use crate::output;
@@ -29,6 +30,16 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub vtu: Option<PathBuf>,
 
+    /// Perturb the written force multiplicatively, F_i (1 + A xi_i) with xi_i uniform in
+    /// [-1, 1) drawn in row order (the initial row included) from SplitMix64 seeded with
+    /// --seed: the same curve on every machine. 0.1 is the paper's 10% noise.
+    #[arg(long, value_name = "A")]
+    pub noise: Option<f64>,
+
+    /// Seed of the noise generator (with --noise).
+    #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
+    pub seed: u64,
+
     /// Override a scalar of the configuration by its dotted path (repeatable), e.g.
     /// `--set law.E=25000 --set specimen.nr=10 --set punch.half_angle_deg=70.3
     /// --set history.segments.0.depth=0.2 --set solver.max_cuts=4`.
@@ -44,6 +55,11 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let start = Instant::now();
     let name = args.config.display().to_string();
+    if let Some(a) = args.noise {
+        if !(0.0..1.0).contains(&a) {
+            bail!("--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)");
+        }
+    }
     let cfg = config::load(&args.config, &args.sets)?;
     let (law, params) = cfg.law.build()?;
     let mesher = cfg.specimen.mesher();
@@ -84,7 +100,16 @@ pub fn run(args: &Args) -> Result<()> {
             Err(e) => return Err(e).context(format!("cannot simulate `{name}`")),
         };
 
-    let rows = output::curve(&schedule, &traj);
+    let mut rows = output::curve(&schedule, &traj);
+    if let Some(a) = args.noise {
+        let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
+        for (r, f) in rows
+            .iter_mut()
+            .zip(multiplicative_noise(&forces, a, args.seed))
+        {
+            r.f = f;
+        }
+    }
     output::write_curve(args.out.as_deref(), &rows)?;
     let vtu_states = match &args.vtu {
         Some(dir) => Some((
@@ -142,6 +167,12 @@ pub fn run(args: &Args) -> Result<()> {
             format!("`{}`", p.display())
         });
     let plural = if rows.len() == 1 { "" } else { "s" };
+    if let Some(a) = args.noise {
+        eprintln!(
+            "  force perturbed: F (1 + {a} xi), xi uniform in [-1, 1) from SplitMix64 seed {}",
+            args.seed
+        );
+    }
     eprintln!("  curve ({} row{plural}) written to {curve_to}", rows.len());
     if let Some((dir, n)) = vtu_states {
         eprintln!(

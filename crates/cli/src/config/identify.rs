@@ -1,0 +1,630 @@
+//! The optional `identify` section of a configuration — which law parameters are identified
+//! (start, bounds, scaling) and which are held, the optimizer and its stopping rules — its
+//! command-line overrides (`--free`, `--fixed`, `--start`, `--method`, `--max-iter`), and
+//! its mapping onto [`indentify_identify::IdentifyConfig`].
+//!
+//! Resolution, per law parameter: an entry of `identify.params` if there is one; a
+//! parameter that `params` does not list is held at its `law` value; without the section
+//! (or with an empty `params`) every parameter but `nu` is free from its `law` value. An
+//! omitted start or fixed value is the `law` value; omitted bounds are the law's admissible
+//! range; the default scaling is `Log`, or `Linear` when the lower bound is negative.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, anyhow, bail};
+use indentify_identify::{
+    IdentifyConfig, Method, ParamSpec, Parameterization, Scaling, StopCriteria,
+};
+use indentify_laws::Law;
+use serde::{Deserialize, Serialize};
+
+use super::LawSpec;
+
+/// The `identify: (...)` section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "identify")]
+pub struct IdentifySection {
+    /// Law parameters by name (`"E"`, `"nu"`, `"eta"`, ...): free or fixed.
+    #[serde(default)]
+    pub params: BTreeMap<String, ParamSetting>,
+    /// The optimizer.
+    #[serde(default)]
+    pub method: MethodName,
+    /// Correction pairs kept by `Lbfgs` and `Lbfgsb`.
+    #[serde(default = "default_memory")]
+    pub memory: usize,
+    /// First trial step, infinity norm in the scaled variables (0.5: at most a factor
+    /// e^0.5 on a log-scaled parameter).
+    #[serde(default = "default_initial_step")]
+    pub initial_step: f64,
+    /// Stopping rules.
+    #[serde(default)]
+    pub stop: StopSection,
+    /// Compute the identifiability summary at the end (one sensitivity solve).
+    #[serde(default = "default_true")]
+    pub identifiability: bool,
+}
+
+fn default_memory() -> usize {
+    5
+}
+
+fn default_initial_step() -> f64 {
+    IdentifyConfig::new(vec![]).initial_step
+}
+
+fn default_true() -> bool {
+    true
+}
+
+impl Default for IdentifySection {
+    fn default() -> Self {
+        IdentifySection {
+            params: BTreeMap::new(),
+            method: MethodName::default(),
+            memory: default_memory(),
+            initial_step: default_initial_step(),
+            stop: StopSection::default(),
+            identifiability: true,
+        }
+    }
+}
+
+/// One law parameter: identified or held.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ParamSetting {
+    /// Identified from `start` within `[lower, upper]`.
+    Free {
+        /// Start (default: the `law` value).
+        #[serde(default)]
+        start: Option<f64>,
+        /// Lower bound (default: the law's admissible minimum).
+        #[serde(default)]
+        lower: Option<f64>,
+        /// Upper bound (default: the law's admissible maximum).
+        #[serde(default)]
+        upper: Option<f64>,
+        /// Scaling of the optimizer variable (default: `Log` when the lower bound is >= 0,
+        /// else `Linear`).
+        #[serde(default)]
+        scaling: Option<ScalingName>,
+    },
+    /// Held at `value` (default: the `law` value).
+    Fixed {
+        /// The value.
+        #[serde(default)]
+        value: Option<f64>,
+    },
+}
+
+impl ParamSetting {
+    /// Free with every value defaulted.
+    pub const FREE: ParamSetting = ParamSetting::Free {
+        start: None,
+        lower: None,
+        upper: None,
+        scaling: None,
+    };
+    /// Held at the `law` value.
+    pub const FIXED: ParamSetting = ParamSetting::Fixed { value: None };
+}
+
+/// The optimizers, as named in configs (`Bfgs`) and on the command line (`bfgs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+pub enum MethodName {
+    /// BFGS with Armijo backtracking (the paper's algorithm); bounds by projection.
+    #[default]
+    Bfgs,
+    /// L-BFGS with the More-Thuente line search; bounds by projection.
+    Lbfgs,
+    /// L-BFGS-B: bounds handled by the method.
+    Lbfgsb,
+    /// Projected Levenberg-Marquardt on the forward-sensitivity Jacobian.
+    Lm,
+}
+
+impl MethodName {
+    /// The library's method.
+    pub fn method(self, memory: usize) -> Method {
+        match self {
+            MethodName::Bfgs => Method::Bfgs,
+            MethodName::Lbfgs => Method::Lbfgs { memory },
+            MethodName::Lbfgsb => Method::Lbfgsb { memory },
+            MethodName::Lm => Method::LevenbergMarquardt,
+        }
+    }
+}
+
+/// Scalings of a free parameter (see `indentify_identify::Scaling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ScalingName {
+    /// `y = ln c`.
+    #[default]
+    Log,
+    /// `y = (c - lower) / (upper - lower)` (finite bounds).
+    Bounds,
+    /// `y = c / |start|`.
+    Linear,
+}
+
+impl ScalingName {
+    fn scaling(self) -> Scaling {
+        match self {
+            ScalingName::Log => Scaling::Log,
+            ScalingName::Bounds => Scaling::Bounds,
+            ScalingName::Linear => Scaling::Linear,
+        }
+    }
+}
+
+/// Stopping rules (see `indentify_identify::StopCriteria`); costs relative to
+/// `J_ref = 1/2 sum F_exp,i^2`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StopSection {
+    /// Stop when `|projected scaled gradient| / J_ref` is at most this.
+    pub gradient_tol: f64,
+    /// Stop when an iteration decreases `J` by at most this fraction.
+    pub relative_decrease_tol: f64,
+    /// Stop when `J / J_ref` is at most this (0: off).
+    pub target_cost: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+    /// Trial points of one line search before it has stalled.
+    pub max_line_search_evaluations: usize,
+    /// A stall with `J / J_ref` below this is the solver's round-off: converged.
+    pub roundoff_cost: f64,
+}
+
+impl Default for StopSection {
+    fn default() -> Self {
+        let d = StopCriteria::default();
+        StopSection {
+            gradient_tol: d.gradient_tol,
+            relative_decrease_tol: d.relative_decrease_tol,
+            target_cost: d.target_cost,
+            max_iterations: d.max_iterations,
+            max_line_search_evaluations: d.max_line_search_evaluations,
+            roundoff_cost: d.roundoff_cost,
+        }
+    }
+}
+
+impl StopSection {
+    fn criteria(&self) -> StopCriteria {
+        StopCriteria {
+            gradient_tol: self.gradient_tol,
+            relative_decrease_tol: self.relative_decrease_tol,
+            target_cost: self.target_cost,
+            max_iterations: self.max_iterations,
+            max_line_search_evaluations: self.max_line_search_evaluations,
+            roundoff_cost: self.roundoff_cost,
+        }
+    }
+}
+
+/// What the command line changes in the section.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// `--free`: exactly these parameters are identified, the others held.
+    pub free: Option<Vec<String>>,
+    /// `--fixed name[=value]`.
+    pub fixed: Vec<(String, Option<f64>)>,
+    /// `--start name=value`.
+    pub starts: Vec<(String, f64)>,
+    /// `--method`.
+    pub method: Option<MethodName>,
+    /// `--max-iter`.
+    pub max_iterations: Option<usize>,
+}
+
+/// Parses `name=value` (`flag` names the option in messages).
+///
+/// # Errors
+/// No `=`, an empty name or value, or a value that is not a finite number.
+pub fn name_value(flag: &str, text: &str) -> Result<(String, f64)> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| anyhow!("{flag} {text}: expected name=value (e.g. {flag} E=5000)"))?;
+    let (name, value) = (name.trim(), value.trim());
+    if name.is_empty() {
+        bail!("{flag} {text}: no parameter name before `=`");
+    }
+    if value.is_empty() {
+        bail!("{flag} {text}: no value after `=` (e.g. {flag} {name}=0.3)");
+    }
+    let v: f64 = value
+        .parse()
+        .map_err(|_| anyhow!("{flag} {text}: `{value}` is not a number"))?;
+    if !v.is_finite() {
+        bail!("{flag} {text}: expected a finite number");
+    }
+    Ok((name.to_string(), v))
+}
+
+/// Parses a `--fixed` item: `name` (held at its `law` value) or `name=value`.
+///
+/// # Errors
+/// As [`name_value`] (`nu=` without a value included).
+pub fn fixed_item(text: &str) -> Result<(String, Option<f64>)> {
+    if text.contains('=') {
+        let (n, v) = name_value("--fixed", text).map_err(|e| {
+            anyhow!(
+                "{e}; or write --fixed {} to hold it at its law value",
+                text.split('=').next().unwrap_or(text).trim()
+            )
+        })?;
+        Ok((n, Some(v)))
+    } else if text.trim().is_empty() {
+        bail!("--fixed: empty parameter name")
+    } else {
+        Ok((text.trim().to_string(), None))
+    }
+}
+
+impl IdentifySection {
+    /// The parameter settings in the law's order, after the resolution rules of the module
+    /// and the command-line `overrides`.
+    ///
+    /// # Errors
+    /// A parameter name the law does not have (in the section or on the command line), a
+    /// parameter both in `--free` and `--fixed`, a `--start` for a held parameter.
+    pub fn settings(
+        section: Option<&IdentifySection>,
+        law: &dyn Law,
+        overrides: &Overrides,
+    ) -> Result<Vec<(&'static str, ParamSetting)>> {
+        let names: Vec<&'static str> = law.params().iter().map(|i| i.name).collect();
+        let unknown = |what: &str, name: &str| {
+            anyhow!(
+                "{what}: law `{}` has no parameter `{name}`; its parameters are {}",
+                law.name(),
+                names.join(", ")
+            )
+        };
+        let listed = section.map(|s| &s.params).filter(|p| !p.is_empty());
+        if let Some(params) = listed {
+            if let Some(n) = params.keys().find(|n| !names.contains(&n.as_str())) {
+                return Err(unknown(&format!("identify.params.{n}"), n));
+            }
+        }
+        let mut settings: Vec<(&'static str, ParamSetting)> = names
+            .iter()
+            .map(|&n| {
+                let s = match listed {
+                    Some(p) => p.get(n).copied().unwrap_or(ParamSetting::FIXED),
+                    None if n == "nu" => ParamSetting::FIXED,
+                    None => ParamSetting::FREE,
+                };
+                (n, s)
+            })
+            .collect();
+        if let Some(free) = &overrides.free {
+            if let Some(n) = free.iter().find(|n| !names.contains(&n.as_str())) {
+                return Err(unknown(&format!("--free {}", free.join(",")), n));
+            }
+            for (n, s) in &mut settings {
+                let wanted = free.iter().any(|f| f == n);
+                match (wanted, &s) {
+                    (true, ParamSetting::Fixed { .. }) => *s = ParamSetting::FREE,
+                    (false, ParamSetting::Free { .. }) => *s = ParamSetting::FIXED,
+                    _ => {}
+                }
+            }
+        }
+        for (name, value) in &overrides.fixed {
+            let Some(k) = names.iter().position(|n| n == name) else {
+                return Err(unknown(&format!("--fixed {name}"), name));
+            };
+            if overrides
+                .free
+                .as_ref()
+                .is_some_and(|f| f.iter().any(|f| f == name))
+            {
+                bail!("`{name}` is both in --free and in --fixed");
+            }
+            settings[k].1 = ParamSetting::Fixed { value: *value };
+        }
+        for (name, v) in &overrides.starts {
+            let Some(k) = names.iter().position(|n| n == name) else {
+                return Err(unknown(&format!("--start {name}={v}"), name));
+            };
+            match &mut settings[k].1 {
+                ParamSetting::Free { start, .. } => *start = Some(*v),
+                ParamSetting::Fixed { .. } => {
+                    let free: Vec<&str> = settings
+                        .iter()
+                        .filter(|(_, s)| matches!(s, ParamSetting::Free { .. }))
+                        .map(|(n, _)| *n)
+                        .collect();
+                    bail!(
+                        "--start {name}={v}: `{name}` is held fixed (the free parameters are {}); \
+                         make it free with --free or in identify.params",
+                        if free.is_empty() {
+                            "none".to_string()
+                        } else {
+                            free.join(", ")
+                        }
+                    );
+                }
+            }
+        }
+        Ok(settings)
+    }
+
+    /// The identification library's configuration: the section (or its defaults) with the
+    /// overrides, every omitted value taken from `law`, checked by the library's
+    /// [`Parameterization`] before any solve.
+    ///
+    /// # Errors
+    /// As [`IdentifySection::settings`]; a start outside its bounds, bounds that exclude each
+    /// other, a bound outside the law's range, an option out of range (each naming the
+    /// parameter or field).
+    pub fn resolve(
+        section: Option<&IdentifySection>,
+        law: &LawSpec,
+        overrides: &Overrides,
+    ) -> Result<IdentifyConfig> {
+        let (lib_law, values) = law.build()?;
+        let defaults = IdentifySection::default();
+        let s = section.unwrap_or(&defaults);
+        s.validate_options()?;
+        let settings = IdentifySection::settings(section, lib_law, overrides)?;
+        let specs: Vec<ParamSpec> = settings
+            .iter()
+            .zip(&values)
+            .map(|((name, setting), &law_value)| match *setting {
+                ParamSetting::Free {
+                    start,
+                    lower,
+                    upper,
+                    scaling,
+                } => {
+                    let min = info_min(lib_law, name);
+                    let auto = if lower.unwrap_or(min) >= 0.0 {
+                        ScalingName::Log
+                    } else {
+                        ScalingName::Linear
+                    };
+                    ParamSpec {
+                        name: name.to_string(),
+                        free: true,
+                        value: Some(start.unwrap_or(law_value)),
+                        lower,
+                        upper,
+                        scaling: scaling.unwrap_or(auto).scaling(),
+                    }
+                }
+                ParamSetting::Fixed { value } => ParamSpec {
+                    name: name.to_string(),
+                    free: false,
+                    value: Some(value.unwrap_or(law_value)),
+                    lower: None,
+                    upper: None,
+                    scaling: Scaling::Log,
+                },
+            })
+            .collect();
+        Parameterization::new(lib_law, &specs).map_err(|e| {
+            let field = match &e {
+                indentify_identify::IdentifyError::NothingFree => "identify.params".to_string(),
+                _ => specs
+                    .iter()
+                    .find(|p| e.to_string().contains(&format!("`{}`", p.name)))
+                    .map_or("identify.params".to_string(), |p| {
+                        format!("identify.params.{}", p.name)
+                    }),
+            };
+            anyhow!(e).context(format!("invalid identification setting `{field}`"))
+        })?;
+        let mut stop = s.stop.criteria();
+        if let Some(n) = overrides.max_iterations {
+            stop.max_iterations = n;
+        }
+        Ok(IdentifyConfig {
+            params: specs,
+            method: overrides.method.unwrap_or(s.method).method(s.memory),
+            stop,
+            initial_step: s.initial_step,
+            identifiability: s.identifiability,
+        })
+    }
+
+    /// Range checks of the options (the library repeats them; here they name the field).
+    fn validate_options(&self) -> Result<()> {
+        let st = &self.stop;
+        let field = |name: &str, v: String, allowed: &str| {
+            anyhow!("identify.{name} = {v} is not allowed: expected {allowed}")
+        };
+        if !(1..=100).contains(&self.memory) {
+            return Err(field(
+                "memory",
+                self.memory.to_string(),
+                "an integer in [1, 100]",
+            ));
+        }
+        if !(self.initial_step > 0.0 && self.initial_step.is_finite()) {
+            return Err(field(
+                "initial_step",
+                self.initial_step.to_string(),
+                "a finite value > 0",
+            ));
+        }
+        for (name, v) in [
+            ("stop.gradient_tol", st.gradient_tol),
+            ("stop.target_cost", st.target_cost),
+            ("stop.roundoff_cost", st.roundoff_cost),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(field(name, v.to_string(), "a finite value >= 0"));
+            }
+        }
+        if !(st.relative_decrease_tol >= 0.0 && st.relative_decrease_tol < 1.0) {
+            return Err(field(
+                "stop.relative_decrease_tol",
+                st.relative_decrease_tol.to_string(),
+                "a value in [0, 1)",
+            ));
+        }
+        if st.max_line_search_evaluations == 0 {
+            return Err(field(
+                "stop.max_line_search_evaluations",
+                "0".into(),
+                "an integer >= 1",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the section against the configuration's law (what `indentify check` reports).
+    ///
+    /// # Errors
+    /// As [`IdentifySection::resolve`] without overrides.
+    pub fn validate(&self, law: &LawSpec) -> Result<()> {
+        IdentifySection::resolve(Some(self), law, &Overrides::default())
+            .map(|_| ())
+            .context("invalid `identify` section")
+    }
+}
+
+/// The admissible minimum of parameter `name` of `law`.
+fn info_min(law: &dyn Law, name: &str) -> f64 {
+    law.params()
+        .iter()
+        .find(|i| i.name == name)
+        .map_or(0.0, |i| i.min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Reference;
+
+    fn maxwell() -> LawSpec {
+        Reference::R1Maxwell.config().law
+    }
+
+    fn free_names(cfg: &IdentifyConfig) -> Vec<&str> {
+        cfg.params
+            .iter()
+            .filter(|p| p.free)
+            .map(|p| p.name.as_str())
+            .collect()
+    }
+
+    #[test]
+    fn without_a_section_every_parameter_but_nu_is_free_from_the_law() {
+        let cfg = IdentifySection::resolve(None, &maxwell(), &Overrides::default()).unwrap();
+        assert_eq!(free_names(&cfg), ["E", "eta"]);
+        assert_eq!(cfg.params[0].value, Some(20000.0));
+        assert_eq!(cfg.params[1].value, Some(0.3));
+        assert_eq!(cfg.method, Method::Bfgs);
+    }
+
+    #[test]
+    fn overrides_free_fix_start_and_limit() {
+        let ov = Overrides {
+            free: Some(vec!["E".into(), "nu".into()]),
+            fixed: vec![],
+            starts: vec![("nu".into(), 0.25)],
+            method: Some(MethodName::Lbfgs),
+            max_iterations: Some(7),
+        };
+        let cfg = IdentifySection::resolve(None, &maxwell(), &ov).unwrap();
+        assert_eq!(free_names(&cfg), ["E", "nu"]);
+        assert_eq!(cfg.params[1].value, Some(0.25));
+        assert_eq!(cfg.params[2].value, Some(30000.0));
+        assert_eq!(cfg.method, Method::Lbfgs { memory: 5 });
+        assert_eq!(cfg.stop.max_iterations, 7);
+        let ov = Overrides {
+            fixed: vec![("eta".into(), Some(1e4))],
+            ..Default::default()
+        };
+        let cfg = IdentifySection::resolve(None, &maxwell(), &ov).unwrap();
+        assert_eq!(free_names(&cfg), ["E"]);
+        assert_eq!(cfg.params[2].value, Some(1e4));
+    }
+
+    #[test]
+    fn bad_settings_name_the_parameter() {
+        let err = |section: Option<&IdentifySection>, ov: Overrides| {
+            format!(
+                "{:#}",
+                IdentifySection::resolve(section, &maxwell(), &ov).unwrap_err()
+            )
+        };
+        let e = err(
+            None,
+            Overrides {
+                starts: vec![("nu".into(), 0.2)],
+                ..Default::default()
+            },
+        );
+        assert!(
+            e.contains("`nu` is held fixed") && e.contains("E, eta"),
+            "{e}"
+        );
+        let e = err(
+            None,
+            Overrides {
+                free: Some(vec!["G".into()]),
+                ..Default::default()
+            },
+        );
+        assert!(
+            e.contains("no parameter `G`") && e.contains("E, nu, eta"),
+            "{e}"
+        );
+        let mut s = IdentifySection::default();
+        s.params.insert(
+            "E".into(),
+            ParamSetting::Free {
+                start: Some(500.0),
+                lower: Some(1000.0),
+                upper: Some(1e6),
+                scaling: None,
+            },
+        );
+        let e = err(Some(&s), Overrides::default());
+        assert!(
+            e.contains("identify.params.E") && e.contains("outside its bounds"),
+            "{e}"
+        );
+        s.params.insert(
+            "E".into(),
+            ParamSetting::Free {
+                start: Some(5000.0),
+                lower: Some(1e6),
+                upper: Some(1000.0),
+                scaling: Some(ScalingName::Log),
+            },
+        );
+        let e = err(Some(&s), Overrides::default());
+        assert!(e.contains("exclude each other"), "{e}");
+        let e = err(
+            None,
+            Overrides {
+                free: Some(vec![]),
+                ..Default::default()
+            },
+        );
+        assert!(e.contains("no free parameter"), "{e}");
+    }
+
+    #[test]
+    fn command_line_items_parse_with_clear_errors() {
+        assert_eq!(
+            name_value("--start", "E=5e3").unwrap(),
+            ("E".into(), 5000.0)
+        );
+        assert_eq!(fixed_item("nu").unwrap(), ("nu".into(), None));
+        assert_eq!(fixed_item("nu=0.25").unwrap(), ("nu".into(), Some(0.25)));
+        let e = fixed_item("nu=").unwrap_err().to_string();
+        assert!(e.contains("no value") && e.contains("--fixed nu"), "{e}");
+        let e = name_value("--start", "E").unwrap_err().to_string();
+        assert!(e.contains("name=value"), "{e}");
+        let e = name_value("--start", "E=abc").unwrap_err().to_string();
+        assert!(e.contains("`abc` is not a number"), "{e}");
+    }
+}
