@@ -206,8 +206,9 @@ impl Plot {
                 }
             }
             // legend
+            // legend in the upper left corner, where rising curves leave room
             let ly = mt + 16.0 + 16.0 * k as f64;
-            let lx = w - mr - 190.0;
+            let lx = ml + 10.0;
             match ser.style {
                 Style::Markers => {
                     let _ = writeln!(

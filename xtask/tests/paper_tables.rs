@@ -35,7 +35,7 @@ fn paper_tables_coarse_subset() {
         max_iterations_r2: 60,
         valleys: false,
         method_r2: Method::LevenbergMarquardt,
-        max_iterations_bfgs_r2: 80,
+        max_iterations_bfgs_r2: 70,
     };
     let jobs: Vec<_> = paper::all_jobs()
         .into_iter()
