@@ -280,8 +280,8 @@ paper's Fig. 11 in numbers: the curve constrains a combination of them much bett
   at the percent level. (The paper's text says "within 2.5%" while its Table II lists 2.9% and 3.1%
   on E for the first realization.)
 - **Time.** The paper reports no times. Ours are wall times on 2 shared cores, with {threads} runs in
-  parallel; an R1 forward solve takes about 0.2 s, an adjoint sweep 0.13 s; R2 about 1.3 s and
-  0.35 s (forward sensitivities of 4 parameters 0.8 s).
+  parallel; an R1 forward solve takes about 0.2 s, an adjoint sweep 0.13 s; R2 1-2 s (depending
+  on the load) and 0.35 s (forward sensitivities of 4 parameters 0.8 s).
 
 ## Snapshot
 

@@ -305,6 +305,10 @@ pub struct IdentifyResult {
     pub adjoint_solves: usize,
     /// Sensitivity solves (LM, identifiability).
     pub sensitivity_solves: usize,
+    /// Requests (cost, gradient, forces, Jacobian) answered by the evaluation cache.
+    pub cache_hits: usize,
+    /// Distinct parameter points requested by this run (excluding a resumed run's past).
+    pub distinct_points: usize,
     /// Why it stopped.
     pub stop_reason: StopReason,
     /// Wall time (s, across resumes).
@@ -765,6 +769,8 @@ fn run(
         adjoint_solves: offset_sum(resume_from, |r| r.adjoint_solves) + counts.adjoint,
         sensitivity_solves: offset_sum(resume_from, |r| r.sensitivity_solves)
             + counts.sensitivities,
+        cache_hits: counts.cache_hits,
+        distinct_points: counts.distinct_points,
         stop_reason: reason,
         seconds: offset_sum(resume_from, |r| r.seconds) + seconds,
         history,

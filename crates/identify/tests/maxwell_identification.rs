@@ -178,7 +178,11 @@ fn bfgs_run_spends_one_adjoint_per_iterate_and_no_repeated_forward() {
             assert!(r.adjoint_solves <= r.forward_solves);
         }
         assert!(r.forward_solves >= r.history.len());
-        // forward solves == distinct points: the cache never lets a point be solved twice
+        // forward solves == distinct points requested: no point was solved twice, although
+        // argmin asked for the cost and the gradient of every iterate in separate calls
+        assert_eq!(r.forward_solves, r.distinct_points);
+        assert!(r.cache_hits >= r.history.len(), "{} hits", r.cache_hits);
+        // the same holds for an evaluator driven by hand
         let mut ev = Evaluator::new(&p).unwrap();
         for h in &r.history {
             ev.cost_and_gradient(&h.params).unwrap();
