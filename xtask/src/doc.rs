@@ -172,7 +172,7 @@ same discretization (the paper did the same with CASTEM2000), on the schedule's 
 `J = 1/2 sum_i (F_i - F_i^exp)^2` over them, unit weights. Free parameters are log-scaled; nu = 0.3 is
 fixed; bounds E in [1e3, 1e6], eta in [1e3, 1e7] (R1) and E in [1e4, 1e6], K in [10, 1e5],
 m in [1.1, 30], sY in [1, 5000] (R2); none is active at any optimum below. Relative errors are
-`(ours - truth) / truth`; "0.0000%" means below 5e-7. `fwd` / `adj` count forward solves and adjoint
+`(ours - truth) / truth`, in scientific notation below 5e-7 (round-off territory). `fwd` / `adj` count forward solves and adjoint
 sweeps (the cache makes one of each serve the cost and the gradient at an iterate); LM spends one
 forward-sensitivity solve per accepted iteration instead of the adjoint (`adj` = 1: the start's
 gradient, used to scale the problem). J in N^2. Stop: `grad` = projected gradient below

@@ -524,6 +524,16 @@ pub fn sig(v: f64, digits: usize) -> String {
     format!("{:.*}", decimals, v)
 }
 
+/// Relative error in percent: 4 decimals (`+0.0123%`); in the document (`exact`) an error
+/// below 5e-7 is shown in scientific notation (`+3.1e-8%`), in the snapshot as `0.0000%`
+/// (those digits are round-off and vary with the machine).
+fn pct_in(e: f64, exact: bool) -> String {
+    if exact && e != 0.0 && (100.0 * e).abs() < 5e-5 {
+        return format!("{:+.1e}%", 100.0 * e);
+    }
+    pct(e)
+}
+
 /// Relative error in percent with 4 decimals (`+0.0123%`).
 fn pct(e: f64) -> String {
     let s = format!("{:+.4}%", 100.0 * e);
@@ -645,7 +655,7 @@ pub fn render_tables(outcomes: &[Outcome], timing: bool) -> String {
             };
             let fin = r.free_values();
             let err = rel_errors(j.table, &fin);
-            let errs: Vec<String> = err.iter().map(|e| pct(*e)).collect();
+            let errs: Vec<String> = err.iter().map(|e| pct_in(*e, timing)).collect();
             let time = if timing {
                 format!(" {:.1} |", r.seconds)
             } else {
