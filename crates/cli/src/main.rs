@@ -5,6 +5,7 @@ mod commands;
 mod config;
 mod data;
 mod history;
+mod log;
 mod output;
 mod report;
 mod solve;
@@ -29,6 +30,15 @@ use clap::{Parser, Subcommand};
                   indentify check r0.ron --set punch.half_angle_deg=70.3"
 )]
 struct Cli {
+    /// Print nothing on standard error but errors (no progress, no summaries).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+
+    /// More detail on standard error: -v solver steps, cuts and line searches, -vv
+    /// everything (RUST_LOG, when set, overrides).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+
     #[command(subcommand)]
     command: Command,
 }
@@ -107,6 +117,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    log::init(cli.quiet, cli.verbose);
     let result = match &cli.command {
         Command::Simulate(args) => commands::simulate::run(args),
         Command::Init(args) => commands::init::run(args),

@@ -505,6 +505,15 @@ impl DirectSolver {
                         targets.pop();
                         rec.on_schedule = targets.is_empty();
                         rec.schedule_index = j;
+                        tracing::trace!(
+                            step = j,
+                            t = rec.t,
+                            depth_mm = rec.depth,
+                            force_n = rec.force,
+                            active = rec.active.len(),
+                            iterations = rec.iterations,
+                            "step converged"
+                        );
                         state = rec_state;
                         if record {
                             traj.fields.push(StepFields {
@@ -530,6 +539,14 @@ impl DirectSolver {
                             _ => 0.5,
                         };
                         let tm = state.t + factor * (t1 - state.t);
+                        tracing::debug!(
+                            step = j,
+                            from = state.t,
+                            to = t1,
+                            retry_to = tm,
+                            cut = level + 1,
+                            "step cut: {fail}"
+                        );
                         targets.push((tm, level + 1));
                         // the remaining part keeps its level so repeated failures keep cutting
                         let n = targets.len();

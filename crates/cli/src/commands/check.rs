@@ -40,7 +40,7 @@ pub fn run(args: &Args) -> Result<()> {
         .lock()
         .write_all(annotated(&cfg, &header).as_bytes())
         .context("cannot write to standard output")?;
-    eprintln!(
+    tracing::info!(
         "{name}: valid; law {}, punch {}, mesh {} x {} (smallest element {dr:.3e} x {dz:.3e} mm), \
          {} steps over {} s",
         cfg.law.name(),

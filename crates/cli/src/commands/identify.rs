@@ -78,10 +78,6 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
     pub seed: u64,
 
-    /// No progress lines on standard error.
-    #[arg(short, long)]
-    pub quiet: bool,
-
     /// Override a scalar of the configuration by its dotted path (repeatable), e.g.
     /// `--set specimen.nr=10 --set identify.params.E.start=5000`.
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
@@ -308,26 +304,24 @@ pub fn run(args: &Args) -> Result<()> {
         .filter(|p| !p.free)
         .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
         .collect();
-    if !args.quiet {
-        eprintln!(
-            "indentify identify {name}\n  law {}, identifying {} ({}), method {}{}\n  data: {}\n  \
+    tracing::info!(
+        "indentify identify {name}\n  law {}, identifying {} ({}), method {}{}\n  data: {}\n  \
              report directory `{}`",
-            law.name(),
-            free.join(", "),
-            if held.is_empty() {
-                "nothing held".to_string()
-            } else {
-                format!("held: {}", held.join(", "))
-            },
-            id_cfg.method.name(),
-            match &resume_from {
-                Some(r) => format!(", resumed at iteration {}", r.iteration),
-                None => String::new(),
-            },
-            data.describe,
-            out.display()
-        );
-    }
+        law.name(),
+        free.join(", "),
+        if held.is_empty() {
+            "nothing held".to_string()
+        } else {
+            format!("held: {}", held.join(", "))
+        },
+        id_cfg.method.name(),
+        match &resume_from {
+            Some(r) => format!(", resumed at iteration {}", r.iteration),
+            None => String::new(),
+        },
+        data.describe,
+        out.display()
+    );
     let free_idx: Vec<usize> = id_cfg
         .params
         .iter()
@@ -335,21 +329,29 @@ pub fn run(args: &Args) -> Result<()> {
         .filter(|(_, p)| p.free)
         .map(|(k, _)| k)
         .collect();
+    let progress =
+        crate::log::Progress::new("identify", id_cfg.stop.max_iterations as u64, "iterations");
     let mut header_done = false;
     let mut write_error: Option<anyhow::Error> = None;
-    let quiet = args.quiet;
     let mut observer = |r: &IterationRecord| {
         if write_error.is_some() {
             return;
         }
+        progress.set(
+            r.iteration as u64,
+            format!(
+                "J {:.4e} N^2, {} forward / {} adjoint solves",
+                r.cost, r.forward_solves, r.adjoint_solves
+            ),
+        );
         match history.record(r) {
-            Ok(true) if !quiet => {
+            Ok(true) => {
                 if !header_done {
                     let mut cols = vec![format!("{:>4}", "iter"), format!("{:<13}", "J (N^2)")];
                     cols.push(format!("{:<10}", "|grad|"));
                     cols.extend(free_idx.iter().map(|&k| format!("{:<14}", names[k])));
                     cols.push("fwd/adj  s".into());
-                    eprintln!("  {}", cols.join(" "));
+                    tracing::info!("  {}", cols.join(" "));
                     header_done = true;
                 }
                 let mut cols = vec![
@@ -366,7 +368,7 @@ pub fn run(args: &Args) -> Result<()> {
                     "{}/{}  {:.1}",
                     r.forward_solves, r.adjoint_solves, r.seconds
                 ));
-                eprintln!("  {}", cols.join(" "));
+                tracing::info!("  {}", cols.join(" "));
             }
             Ok(_) => {}
             Err(e) => write_error = Some(e),
@@ -376,6 +378,7 @@ pub fn run(args: &Args) -> Result<()> {
         Some(last) => resume(&problem, &id_cfg, last, &mut observer),
         None => identify(&problem, &id_cfg, &mut observer),
     };
+    drop(progress);
     if let Some(e) = write_error {
         return Err(e);
     }

@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> Result<()> {
         .collect();
     let (dr, dz) = mesher.smallest_sizes();
     let tm = &traj.timing;
-    eprintln!(
+    tracing::info!(
         "indentify simulate {name}\n  \
          law {} ({}), punch {}\n  \
          mesh {} x {} Q8 ({n_nodes} nodes, {n_elements} elements, smallest {dr:.3e} x {dz:.3e} mm)\n  \
@@ -168,14 +168,14 @@ pub fn run(args: &Args) -> Result<()> {
         });
     let plural = if rows.len() == 1 { "" } else { "s" };
     if let Some(a) = args.noise {
-        eprintln!(
+        tracing::info!(
             "  force perturbed: F (1 + {a} xi), xi uniform in [-1, 1) from SplitMix64 seed {}",
             args.seed
         );
     }
-    eprintln!("  curve ({} row{plural}) written to {curve_to}", rows.len());
+    tracing::info!("  curve ({} row{plural}) written to {curve_to}", rows.len());
     if let Some((dir, n)) = vtu_states {
-        eprintln!(
+        tracing::info!(
             "  {n} states written to `{}` (open steps.pvd in ParaView)",
             dir.display()
         );
