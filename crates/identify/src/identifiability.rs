@@ -11,6 +11,13 @@
 //!
 //! With exact synthetic data `J` is at round-off and so are the deviations; the
 //! correlations and the condition number still tell which combinations are weakly seen.
+//!
+//! A parameter whose relative sensitivity `|c_k| ||A e_k||` is below
+//! [`INSENSITIVE`] times the largest one does not act on the data at all (a yield stress
+//! driven to zero, a viscosity so large the material never flows): it is listed in
+//! [`Identifiability::unidentifiable`], its deviation is infinite, its correlations are
+//! left at zero, and the others are computed without it. A Fisher matrix that is still
+//! singular gives infinite deviations throughout, never NaN.
 
 use crate::linalg::{inverse, normal_matrix, symmetric_eigenvalues};
 
@@ -25,7 +32,7 @@ pub struct Identifiability {
     pub n_data: usize,
     /// `sigma^2 = 2 J / (n - p)` (N^2).
     pub sigma2: f64,
-    /// Standard deviations (parameter units); `NaN` if `A^T A` is singular.
+    /// Standard deviations (parameter units); infinite for an unidentifiable parameter.
     pub std_dev: Vec<f64>,
     /// Relative standard deviations `std / |value|`.
     pub rel_std_dev: Vec<f64>,
@@ -33,7 +40,14 @@ pub struct Identifiability {
     pub correlation: Vec<Vec<f64>>,
     /// Condition number of `D A^T A D` (ratio of extreme eigenvalues); `inf` if singular.
     pub condition_number: f64,
+    /// Free parameters that do not act on the data (relative sensitivity below
+    /// [`INSENSITIVE`] times the largest): not determined by these data at all.
+    pub unidentifiable: Vec<&'static str>,
 }
+
+/// Relative sensitivity, as a fraction of the largest, under which a parameter counts as
+/// not acting on the data.
+pub const INSENSITIVE: f64 = 1e-7;
 
 impl Identifiability {
     /// Computes the summary from the full Jacobian (`jac[i][k] = dF_i/dc_k`, all law
@@ -72,22 +86,34 @@ impl Identifiability {
             _ => f64::INFINITY,
         };
         // invert the relative matrix (better conditioned than A^T A across units)
-        let (std_dev, correlation) = match inverse(&rel) {
-            Some(inv) => {
-                let sd: Vec<f64> = (0..p)
-                    .map(|a| (sigma2 * inv[a][a]).max(0.0).sqrt() * values[a].abs())
-                    .collect();
-                let corr = (0..p)
-                    .map(|a| {
-                        (0..p)
-                            .map(|b| inv[a][b] / (inv[a][a] * inv[b][b]).sqrt())
-                            .collect()
-                    })
-                    .collect();
-                (sd, corr)
+        // parameters that act on the data, and the Fisher matrix restricted to them
+        let scale: Vec<f64> = (0..p).map(|a| rel[a][a].max(0.0).sqrt()).collect();
+        let largest = scale.iter().copied().fold(0.0, f64::max);
+        let kept: Vec<usize> = (0..p)
+            .filter(|&a| scale[a] > INSENSITIVE * largest && scale[a].is_finite())
+            .collect();
+        let unidentifiable = (0..p)
+            .filter(|a| !kept.contains(a))
+            .map(|a| names[a])
+            .collect();
+        let sub: Vec<Vec<f64>> = kept
+            .iter()
+            .map(|&a| kept.iter().map(|&b| rel[a][b]).collect())
+            .collect();
+        let mut std_dev = vec![f64::INFINITY; p];
+        let mut correlation: Vec<Vec<f64>> = (0..p)
+            .map(|a| (0..p).map(|b| if a == b { 1.0 } else { 0.0 }).collect())
+            .collect();
+        if let Some(inv) = inverse(&sub)
+            .filter(|inv| (0..kept.len()).all(|i| inv[i][i].is_finite() && inv[i][i] > 0.0))
+        {
+            for (i, &a) in kept.iter().enumerate() {
+                std_dev[a] = (sigma2 * inv[i][i]).max(0.0).sqrt() * values[a].abs();
+                for (j, &b) in kept.iter().enumerate() {
+                    correlation[a][b] = inv[i][j] / (inv[i][i] * inv[j][j]).sqrt();
+                }
             }
-            None => (vec![f64::NAN; p], vec![vec![f64::NAN; p]; p]),
-        };
+        }
         let rel_std_dev = std_dev
             .iter()
             .zip(&values)
@@ -102,6 +128,7 @@ impl Identifiability {
             rel_std_dev,
             correlation,
             condition_number,
+            unidentifiable,
         }
     }
 }
@@ -130,5 +157,39 @@ mod tests {
         let corr = -45.0 / 825.0 / (var_a * var_b).sqrt();
         assert!((s.correlation[0][1] - corr).abs() < 1e-12);
         assert!((s.correlation[0][0] - 1.0).abs() < 1e-14);
+        assert!(s.unidentifiable.is_empty());
+    }
+
+    #[test]
+    fn a_parameter_without_effect_is_unidentifiable_and_the_others_still_computed() {
+        // the regression of the test above plus a third parameter that acts on nothing
+        let x: Vec<f64> = (0..10).map(|i| i as f64).collect();
+        let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, 1.0, 1e-30]).collect();
+        let w = vec![1.0; 10];
+        let s = Identifiability::from_jacobian(
+            &jac,
+            &w,
+            4.0,
+            &[2.0, 3.0, 1.0],
+            &[0, 1, 2],
+            vec!["a", "b", "c"],
+        );
+        assert_eq!(s.unidentifiable, vec!["c"]);
+        assert!(s.std_dev[2].is_infinite());
+        // sigma^2 counts the three free parameters: 8 / 7
+        let var_a: f64 = 10.0 / 825.0 * 8.0 / 7.0;
+        assert!(
+            (s.std_dev[0] - var_a.sqrt()).abs() < 1e-12,
+            "{:?}",
+            s.std_dev
+        );
+        assert!(s.correlation.iter().flatten().all(|v| v.is_finite()));
+        assert_eq!(s.correlation[2][2], 1.0);
+        assert_eq!(s.correlation[0][2], 0.0);
+        // two parameters with the same effect: singular, infinite deviations, no NaN
+        let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, xi]).collect();
+        let s = Identifiability::from_jacobian(&jac, &w, 4.0, &[1.0, 1.0], &[0, 1], vec!["a", "b"]);
+        assert!(s.std_dev.iter().all(|v| v.is_infinite()), "{:?}", s.std_dev);
+        assert!(s.correlation.iter().flatten().all(|v| v.is_finite()));
     }
 }

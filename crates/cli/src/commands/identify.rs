@@ -111,6 +111,7 @@ struct IdentifiabilityJson {
     rel_std_dev: Named<f64>,
     correlation: Vec<Vec<f64>>,
     condition_number: f64,
+    unidentifiable: Vec<&'static str>,
 }
 
 impl From<&Identifiability> for IdentifiabilityJson {
@@ -123,6 +124,7 @@ impl From<&Identifiability> for IdentifiabilityJson {
             rel_std_dev: Named::new(i.names.iter().copied().zip(i.rel_std_dev.clone())),
             correlation: i.correlation.clone(),
             condition_number: i.condition_number,
+            unidentifiable: i.unidentifiable.clone(),
         }
     }
 }
@@ -513,11 +515,18 @@ fn identifiability_line(i: &Identifiability) -> String {
         .names
         .iter()
         .zip(&i.rel_std_dev)
+        .filter(|(n, _)| !i.unidentifiable.contains(n))
         .map(|(n, s)| format!("{n} {s:.1e}"))
         .collect();
     let mut corr = Vec::new();
     for a in 0..i.names.len() {
         for b in a + 1..i.names.len() {
+            if [a, b]
+                .iter()
+                .any(|&k| i.unidentifiable.contains(&i.names[k]))
+            {
+                continue;
+            }
             corr.push(format!(
                 "{}-{} {:.3}",
                 i.names[a], i.names[b], i.correlation[a][b]
@@ -527,6 +536,13 @@ fn identifiability_line(i: &Identifiability) -> String {
     let mut s = format!("identifiability: relative std. dev. {}", sd.join(", "));
     if !corr.is_empty() {
         s.push_str(&format!("; correlation {}", corr.join(", ")));
+    }
+    if !i.unidentifiable.is_empty() {
+        s.push_str(&format!(
+            "; NOT identifiable from these data (no effect on the force): {} (hold them, or \
+             narrow their bounds)",
+            i.unidentifiable.join(", ")
+        ));
     }
     s.push_str(&format!("; condition number {:.3e}", i.condition_number));
     s
