@@ -1,0 +1,266 @@
+//! Markdown rendering of a [`Report`].
+
+use std::fmt::Write;
+
+use crate::model::{BoundHit, Parameter, Report};
+use crate::units::{DisplayUnit, fmt_sig};
+
+/// Writing to a `String` cannot fail; this drops the `fmt::Result`.
+macro_rules! line {
+    ($out:expr) => {
+        $out.push('\n')
+    };
+    ($out:expr, $($arg:tt)*) => {{
+        let _ = writeln!($out, $($arg)*);
+    }};
+}
+
+/// Histories longer than this show their first and last `HISTORY_EDGE` rows only.
+const HISTORY_MAX_ROWS: usize = 24;
+const HISTORY_EDGE: usize = 10;
+
+impl Report {
+    /// The report as Markdown: source, parameter table, correlation, fit quality,
+    /// convergence (with the iteration history), preprocessing and figure links.
+    ///
+    /// Parameters are shown in their [`Parameter::unit`], forces and depths in the
+    /// curves' display units. Missing values print as empty cells.
+    pub fn to_markdown(&self) -> String {
+        let mut out = String::new();
+        line!(out, "# {}", escape(&self.title));
+        line!(out);
+        self.source_section(&mut out);
+        self.parameter_section(&mut out);
+        self.fit_section(&mut out);
+        self.convergence_section(&mut out);
+        self.preprocessing_section(&mut out);
+        self.figure_section(&mut out);
+        out
+    }
+
+    fn source_section(&self, out: &mut String) {
+        line!(out, "| | |");
+        line!(out, "|---|---|");
+        line!(
+            out,
+            "| data file | `{}` |",
+            self.source.file.replace('`', "'")
+        );
+        line!(out, "| test | {} |", escape(&self.source.test));
+        line!(out, "| law | {} |", escape(&self.law));
+        for m in &self.source.metadata {
+            line!(out, "| {} | {} |", escape(&m.name), escape(&m.value));
+        }
+        let c = &self.curves;
+        let max_abs = |v: &[f64]| {
+            v.iter()
+                .filter(|x| x.is_finite())
+                .fold(0.0_f64, |m, x| m.max(x.abs()))
+        };
+        let t_end =
+            c.t.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .fold(0.0, f64::max);
+        line!(
+            out,
+            "| curve | {} points, {} s, h_max {} {}, F_max {} {} |",
+            c.t.len(),
+            fmt_sig(t_end),
+            fmt_sig(c.depth_unit.show(max_abs(&c.h))),
+            escape(&c.depth_unit.label),
+            fmt_sig(c.force_unit.show(max_abs(&c.f_data))),
+            escape(&c.force_unit.label)
+        );
+        line!(out);
+    }
+
+    fn parameter_section(&self, out: &mut String) {
+        line!(out, "## Identified parameters");
+        line!(out);
+        line!(
+            out,
+            "| parameter | value | ± σ | unit | start | lower bound | upper bound | status |"
+        );
+        line!(out, "|---|--:|--:|---|--:|--:|--:|---|");
+        for p in &self.parameters {
+            let u = &p.unit;
+            line!(
+                out,
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                escape(&p.name),
+                shown(u, Some(p.value)),
+                shown(u, p.std_dev),
+                escape(&u.label),
+                shown(u, Some(p.start)),
+                shown(u, p.lower),
+                shown(u, p.upper),
+                status(p)
+            );
+        }
+        line!(out);
+        if let Some(c) = &self.correlation {
+            line!(out, "Correlation of the identified parameters:");
+            line!(out);
+            let mut head = String::from("| |");
+            let mut rule = String::from("|---|");
+            for n in &c.names {
+                let _ = write!(head, " {} |", escape(n));
+                rule.push_str("--:|");
+            }
+            line!(out, "{head}");
+            line!(out, "{rule}");
+            for (name, row) in c.names.iter().zip(&c.matrix) {
+                let mut l = format!("| {} |", escape(name));
+                for v in row {
+                    let _ = write!(l, " {v:.3} |");
+                }
+                line!(out, "{l}");
+            }
+            line!(out);
+        }
+    }
+
+    fn fit_section(&self, out: &mut String) {
+        let f = &self.fit;
+        let fu = &self.curves.force_unit;
+        line!(out, "## Fit quality");
+        line!(out);
+        line!(out, "| measure | value |");
+        line!(out, "|---|--:|");
+        line!(out, "| R² of the force | {:.6} |", f.r2);
+        line!(
+            out,
+            "| RMS force residual | {} {} |",
+            fmt_sig(fu.show(f.rms)),
+            escape(&fu.label)
+        );
+        line!(out, "| RMS / F_max | {} % |", fmt_sig(100.0 * f.rms_rel));
+        line!(
+            out,
+            "| max abs residual | {} {} |",
+            fmt_sig(fu.show(f.max_abs)),
+            escape(&fu.label)
+        );
+        line!(out, "| points | {} |", f.n);
+        line!(out);
+    }
+
+    fn convergence_section(&self, out: &mut String) {
+        let c = &self.convergence;
+        line!(out, "## Convergence");
+        line!(out);
+        line!(out, "- stop reason: {}", escape(&c.stop_reason));
+        line!(out, "- iterations: {}", c.iterations);
+        line!(
+            out,
+            "- solves: {} forward, {} adjoint",
+            c.forward_solves,
+            c.adjoint_solves
+        );
+        line!(out, "- wall time: {} s", fmt_sig(c.wall_time_s));
+        if let (Some(first), Some(last)) = (self.history.first(), self.history.last()) {
+            let ratio = if first.cost > 0.0 && last.cost.is_finite() {
+                format!(" (factor {})", fmt_sig(last.cost / first.cost))
+            } else {
+                String::new()
+            };
+            line!(
+                out,
+                "- cost J: {} → {}{ratio}",
+                fmt_sig(first.cost),
+                fmt_sig(last.cost)
+            );
+        }
+        line!(out);
+        if self.history.is_empty() {
+            return;
+        }
+        let mut head = String::from("| iteration | J | \\|grad\\| |");
+        let mut rule = String::from("|--:|--:|--:|");
+        for p in &self.parameters {
+            let _ = write!(head, " {} [{}] |", escape(&p.name), escape(&p.unit.label));
+            rule.push_str("--:|");
+        }
+        line!(out, "{head}");
+        line!(out, "{rule}");
+        let n = self.history.len();
+        for (i, r) in self.history.iter().enumerate() {
+            if n > HISTORY_MAX_ROWS && i == HISTORY_EDGE {
+                let mut l = String::from("| … | | |");
+                for _ in &self.parameters {
+                    l.push_str(" |");
+                }
+                line!(out, "{l}");
+            }
+            if n > HISTORY_MAX_ROWS && i >= HISTORY_EDGE && i < n - HISTORY_EDGE {
+                continue;
+            }
+            let mut l = format!(
+                "| {} | {} | {} |",
+                r.iteration,
+                fmt_sig(r.cost),
+                r.grad_norm.map(fmt_sig).unwrap_or_default()
+            );
+            for (k, p) in self.parameters.iter().enumerate() {
+                let _ = write!(l, " {} |", shown(&p.unit, r.params.get(k).copied()));
+            }
+            line!(out, "{l}");
+        }
+        line!(out);
+    }
+
+    fn preprocessing_section(&self, out: &mut String) {
+        line!(out, "## Preprocessing");
+        line!(out);
+        if self.preprocessing.is_empty() {
+            line!(out, "None: the curve was used as read.");
+        }
+        for (i, s) in self.preprocessing.iter().enumerate() {
+            line!(
+                out,
+                "{}. **{}**: {}",
+                i + 1,
+                escape(&s.name),
+                escape(&s.description)
+            );
+        }
+        line!(out);
+    }
+
+    fn figure_section(&self, out: &mut String) {
+        if self.figures.is_empty() {
+            return;
+        }
+        line!(out, "## Figures");
+        line!(out);
+        for f in &self.figures {
+            line!(
+                out,
+                "![{}]({})",
+                escape(&f.caption),
+                f.path.replace(' ', "%20")
+            );
+            line!(out);
+        }
+    }
+}
+
+/// A value in `unit`, 4 significant digits; empty for `None`.
+fn shown(unit: &DisplayUnit, v: Option<f64>) -> String {
+    v.map(|v| fmt_sig(unit.show(v))).unwrap_or_default()
+}
+
+fn status(p: &Parameter) -> &'static str {
+    match (p.fixed, p.at_bound) {
+        (true, _) => "fixed",
+        (false, None) => "free",
+        (false, Some(BoundHit::Lower)) => "free, **at lower bound**",
+        (false, Some(BoundHit::Upper)) => "free, **at upper bound**",
+    }
+}
+
+/// Keeps user text from breaking table cells or lines.
+fn escape(s: &str) -> String {
+    s.replace('|', "\\|").replace(['\n', '\r'], " ")
+}

@@ -1,0 +1,270 @@
+//! The report's data model: plain, serializable structs the CLI fills in.
+//!
+//! Every value is stored in internal units (mm, N, s, MPa); [`DisplayUnit`]s say how to
+//! show them.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ReportError;
+use crate::fit::FitQuality;
+use crate::units::DisplayUnit;
+
+/// One identification run, everything the Markdown, JSON and figures show.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Title, the Markdown's first heading.
+    pub title: String,
+    /// Where the measured curve came from.
+    pub source: Source,
+    /// Constitutive law name ("maxwell", "norton-hoff").
+    pub law: String,
+    /// All law parameters, fixed and free, in the law's order.
+    pub parameters: Vec<Parameter>,
+    /// Correlation matrix of the free parameters, from the identifiability analysis.
+    pub correlation: Option<Correlation>,
+    /// Optimizer outcome and cost of the run.
+    pub convergence: Convergence,
+    /// Quality of the final fit, see [`FitQuality::compute`].
+    pub fit: FitQuality,
+    /// Preprocessing applied to the measured curve, in order.
+    pub preprocessing: Vec<PreprocessingStep>,
+    /// Measured and simulated curves.
+    pub curves: Curves,
+    /// One record per optimizer iteration (iteration 0 = start point).
+    pub history: Vec<IterationRecord>,
+    /// Figure files to link from the Markdown (paths relative to the Markdown file).
+    pub figures: Vec<FigureLink>,
+}
+
+/// Origin of the measured curve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Source {
+    /// Data file name as given by the user.
+    pub file: String,
+    /// Test (indent) name or number within the file.
+    pub test: String,
+    /// Instrument, tip and other metadata as name/value pairs, shown in this order.
+    pub metadata: Vec<NameValue>,
+}
+
+/// A name/value pair of metadata ("tip", "Berkovich, 65.3°").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NameValue {
+    /// Name.
+    pub name: String,
+    /// Value, already formatted with its unit.
+    pub value: String,
+}
+
+impl NameValue {
+    /// A name/value pair.
+    pub fn new(name: impl Into<String>, value: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            value: value.into(),
+        }
+    }
+}
+
+/// Which bound an identified value sits on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundHit {
+    /// At (or within the optimizer's tolerance of) the lower bound.
+    Lower,
+    /// At (or within the optimizer's tolerance of) the upper bound.
+    Upper,
+}
+
+/// One law parameter: start, identified value, bounds, uncertainty.
+///
+/// `start`, `value`, `lower`, `upper` and `std_dev` are in internal units (MPa, MPa s,
+/// ...); `unit` says how the Markdown shows them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parameter {
+    /// Symbol in ASCII ("E", "nu", "eta", "K", "m", "sY").
+    pub name: String,
+    /// Display unit (e.g. GPa with factor 1e-3 for E).
+    pub unit: DisplayUnit,
+    /// Start value of the optimization.
+    pub start: f64,
+    /// Final (identified) value; equals `start` for a fixed parameter.
+    pub value: f64,
+    /// Lower bound, `None` if unbounded below.
+    pub lower: Option<f64>,
+    /// Upper bound, `None` if unbounded above.
+    pub upper: Option<f64>,
+    /// Whether the final value is at a bound (the caller decides with its tolerance).
+    pub at_bound: Option<BoundHit>,
+    /// `true` if the parameter was held fixed (not identified).
+    pub fixed: bool,
+    /// Standard deviation of the identified value (internal units), if known.
+    pub std_dev: Option<f64>,
+}
+
+/// Correlation matrix of (a subset of) the parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Correlation {
+    /// Parameter names labelling rows and columns.
+    pub names: Vec<String>,
+    /// Row-major square matrix, `matrix[i][j]` = corr(names\[i\], names\[j\]).
+    pub matrix: Vec<Vec<f64>>,
+}
+
+/// Optimizer outcome and work done.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Convergence {
+    /// Why the optimizer stopped, in words ("gradient norm below 1e-8").
+    pub stop_reason: String,
+    /// Number of optimizer iterations.
+    pub iterations: usize,
+    /// Number of direct (forward) solves.
+    pub forward_solves: usize,
+    /// Number of adjoint solves (gradient evaluations).
+    pub adjoint_solves: usize,
+    /// Wall-clock time of the identification, seconds.
+    pub wall_time_s: f64,
+}
+
+/// One preprocessing step applied to the measured curve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PreprocessingStep {
+    /// Short name ("zero-point", "thermal drift", "resample").
+    pub name: String,
+    /// What was done, with the numbers ("shifted h by -12.3 nm").
+    pub description: String,
+}
+
+impl PreprocessingStep {
+    /// A preprocessing step.
+    pub fn new(name: impl Into<String>, description: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            description: description.into(),
+        }
+    }
+}
+
+/// Measured and simulated curves on the same time grid (internal units: s, mm, N).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Curves {
+    /// How depths are shown (see [`DisplayUnit::auto_depth`]).
+    pub depth_unit: DisplayUnit,
+    /// How forces are shown (see [`DisplayUnit::auto_force`]).
+    pub force_unit: DisplayUnit,
+    /// Time, s.
+    pub t: Vec<f64>,
+    /// Prescribed / measured depth, mm.
+    pub h: Vec<f64>,
+    /// Measured force, N.
+    pub f_data: Vec<f64>,
+    /// Simulated force with the start parameters, N (`None` if not computed).
+    pub f_start: Option<Vec<f64>>,
+    /// Simulated force with the identified parameters, N.
+    pub f_final: Vec<f64>,
+}
+
+impl Curves {
+    /// Curves with depth and force units chosen from the data
+    /// ([`DisplayUnit::auto_depth`], [`DisplayUnit::auto_force`]).
+    pub fn with_auto_units(
+        t: Vec<f64>,
+        h: Vec<f64>,
+        f_data: Vec<f64>,
+        f_start: Option<Vec<f64>>,
+        f_final: Vec<f64>,
+    ) -> Self {
+        let max_abs = |v: &[f64]| {
+            v.iter()
+                .filter(|x| x.is_finite())
+                .fold(0.0_f64, |m, x| m.max(x.abs()))
+        };
+        Self {
+            depth_unit: DisplayUnit::auto_depth(max_abs(&h)),
+            force_unit: DisplayUnit::auto_force(max_abs(&f_data)),
+            t,
+            h,
+            f_data,
+            f_start,
+            f_final,
+        }
+    }
+
+    /// Checks that all series have the length of `t`.
+    ///
+    /// # Errors
+    /// [`ReportError::Length`] naming the first series that differs.
+    pub fn check_lengths(&self) -> Result<(), ReportError> {
+        let n = self.t.len();
+        let mut series: Vec<(&'static str, usize)> = vec![
+            ("curves.h", self.h.len()),
+            ("curves.f_data", self.f_data.len()),
+            ("curves.f_final", self.f_final.len()),
+        ];
+        if let Some(s) = &self.f_start {
+            series.push(("curves.f_start", s.len()));
+        }
+        for (what, got) in series {
+            if got != n {
+                return Err(ReportError::Length {
+                    what,
+                    expected: n,
+                    got,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One optimizer iteration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IterationRecord {
+    /// Iteration number (0 = start point).
+    pub iteration: usize,
+    /// Cost J (least-squares force misfit).
+    pub cost: f64,
+    /// Norm of the gradient of J (in the optimizer's scaled variables), if known.
+    pub grad_norm: Option<f64>,
+    /// Values of all parameters, same order as [`Report::parameters`], internal units.
+    pub params: Vec<f64>,
+}
+
+/// A figure file to link from the Markdown.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FigureLink {
+    /// Caption / alt text.
+    pub caption: String,
+    /// Path relative to the Markdown file.
+    pub path: String,
+}
+
+impl FigureLink {
+    /// A figure link.
+    pub fn new(caption: impl Into<String>, path: impl Into<String>) -> Self {
+        Self {
+            caption: caption.into(),
+            path: path.into(),
+        }
+    }
+}
+
+impl Report {
+    /// The report as one pretty-printed JSON object.
+    ///
+    /// Non-finite numbers become `null` (JSON has no NaN).
+    ///
+    /// # Errors
+    /// [`ReportError::Json`] if serialization fails.
+    pub fn to_json(&self) -> Result<String, ReportError> {
+        serde_json::to_string_pretty(self).map_err(|e| ReportError::Json(e.to_string()))
+    }
+
+    /// A report read back from [`Report::to_json`].
+    ///
+    /// # Errors
+    /// [`ReportError::Json`] if the text is not a report.
+    pub fn from_json(text: &str) -> Result<Self, ReportError> {
+        serde_json::from_str(text).map_err(|e| ReportError::Json(e.to_string()))
+    }
+}
