@@ -14,6 +14,7 @@ mod error;
 mod fit;
 mod markdown;
 mod model;
+mod plot;
 mod units;
 
 pub use error::ReportError;
@@ -22,4 +23,5 @@ pub use model::{
     BoundHit, Convergence, Correlation, Curves, FigureLink, IterationRecord, NameValue, Parameter,
     PreprocessingStep, Report, Source,
 };
-pub use units::{DisplayUnit, fmt_sig, fmt_tick};
+pub use plot::{Figure, FigureSize};
+pub use units::{DisplayUnit, fmt_axis_tick, fmt_sig, fmt_tick};

@@ -101,6 +101,26 @@ pub fn fmt_tick(x: f64) -> String {
     }
 }
 
+/// A tick label on a linear axis whose largest magnitude is `axis_max`: one notation for
+/// the whole axis (decimal if 1e-3 <= axis_max < 1e5, scientific otherwise), so that an
+/// axis does not mix `2e-4` and `0.001`; round-off below 1e-9 of `axis_max` prints as 0.
+pub fn fmt_axis_tick(x: f64, axis_max: f64) -> String {
+    if !x.is_finite() || !axis_max.is_finite() || !(axis_max > 0.0) {
+        return fmt_tick(x);
+    }
+    if x == 0.0 || x.abs() < 1e-9 * axis_max {
+        return "0".to_string();
+    }
+    let exp = axis_max.log10().floor() as i32;
+    if (-3..5).contains(&exp) {
+        // Six significant digits of the largest tick.
+        let decimals = (5 - exp).max(0) as usize;
+        trim_zeros(&format!("{x:.decimals$}"))
+    } else {
+        fmt_tick(x)
+    }
+}
+
 fn trim_zeros(s: &str) -> String {
     if s.contains('.') {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -131,6 +151,17 @@ mod tests {
         assert_eq!(fmt_sig(2.5e5), "2.500e5");
         assert_eq!(fmt_sig(0.0), "0");
         assert_eq!(fmt_sig(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn axis_ticks_share_one_notation() {
+        assert_eq!(fmt_axis_tick(2e-4, 0.002), "0.0002");
+        assert_eq!(fmt_axis_tick(0.0012, 0.002), "0.0012");
+        assert_eq!(fmt_axis_tick(5.5e-17, 0.002), "0");
+        assert_eq!(fmt_axis_tick(2e-5, 1e-4), "2e-5");
+        assert_eq!(fmt_axis_tick(1e5, 2e5), "1e5");
+        assert_eq!(fmt_axis_tick(0.30000000000000004, 1.0), "0.3");
+        assert_eq!(fmt_axis_tick(250.0, 300.0), "250");
     }
 
     #[test]

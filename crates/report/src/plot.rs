@@ -1,0 +1,569 @@
+//! Figures of a [`Report`] (force-depth, force-time, convergence) as SVG text or PNG bytes.
+//!
+//! Text is drawn with DejaVu Sans embedded in the binary (registered with plotters as
+//! "sans-serif"), so nothing depends on system fonts.
+
+use std::ops::Range;
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::{FontStyle, register_font};
+
+use crate::error::ReportError;
+use crate::model::Report;
+use crate::units::{fmt_axis_tick, fmt_tick};
+
+/// One of the report's figures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Figure {
+    /// Force vs depth: data, fit with the start parameters, fit with the identified ones.
+    ForceDepth,
+    /// Force vs time, the same three curves.
+    ForceTime,
+    /// Cost J (log scale) vs iteration, and each free parameter relative to its final
+    /// value vs iteration.
+    Convergence,
+}
+
+impl Figure {
+    /// All figures, in report order.
+    pub const ALL: [Figure; 3] = [Figure::ForceDepth, Figure::ForceTime, Figure::Convergence];
+
+    /// A file stem for the figure ("force_depth", "force_time", "convergence").
+    pub fn file_stem(self) -> &'static str {
+        match self {
+            Figure::ForceDepth => "force_depth",
+            Figure::ForceTime => "force_time",
+            Figure::Convergence => "convergence",
+        }
+    }
+
+    /// A caption for the figure ("force vs depth", ...).
+    pub fn caption(self) -> &'static str {
+        match self {
+            Figure::ForceDepth => "force vs depth",
+            Figure::ForceTime => "force vs time",
+            Figure::Convergence => "convergence",
+        }
+    }
+}
+
+/// Figure size in pixels (SVG user units). Each side must be in 100..=8000.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FigureSize {
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+}
+
+impl Default for FigureSize {
+    /// 900 x 600 px.
+    fn default() -> Self {
+        Self {
+            width: 900,
+            height: 600,
+        }
+    }
+}
+
+impl FigureSize {
+    fn check(self) -> Result<(), ReportError> {
+        let ok = |v: u32| (100..=8000).contains(&v);
+        if ok(self.width) && ok(self.height) {
+            Ok(())
+        } else {
+            Err(ReportError::Size {
+                width: self.width,
+                height: self.height,
+            })
+        }
+    }
+}
+
+/// Measured data.
+const DATA: RGBColor = RGBColor(40, 40, 40);
+/// Fit with the start parameters.
+const START: RGBColor = RGBColor(31, 119, 180);
+/// Fit with the identified parameters.
+const FINAL: RGBColor = RGBColor(214, 39, 40);
+/// Parameter histories (tab10 without the colors above).
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+];
+/// Data series longer than this are drawn as a thin line instead of markers.
+const MAX_MARKERS: usize = 400;
+
+impl Report {
+    /// `figure` as an SVG document.
+    ///
+    /// # Errors
+    /// - [`ReportError::Size`] for a side outside 100..=8000 px,
+    /// - [`ReportError::Length`] if the curves' series differ in length,
+    /// - [`ReportError::Empty`] if a series has no finite point (non-finite points are
+    ///   skipped; J <= 0 is skipped on the log axis),
+    /// - [`ReportError::Font`] / [`ReportError::Draw`] if plotters fails.
+    pub fn figure_svg(&self, figure: Figure, size: FigureSize) -> Result<String, ReportError> {
+        size.check()?;
+        ensure_font()?;
+        let mut svg = String::new();
+        {
+            let root =
+                SVGBackend::with_string(&mut svg, (size.width, size.height)).into_drawing_area();
+            draw(self, figure, &root)?;
+            root.present().map_err(|e| draw_err(figure, e))?;
+        }
+        Ok(svg)
+    }
+
+    /// `figure` as PNG bytes (8-bit RGB).
+    ///
+    /// # Errors
+    /// As [`Report::figure_svg`], and [`ReportError::Png`] if encoding fails.
+    pub fn figure_png(&self, figure: Figure, size: FigureSize) -> Result<Vec<u8>, ReportError> {
+        size.check()?;
+        ensure_font()?;
+        let (w, h) = (size.width, size.height);
+        let mut rgb = vec![0u8; w as usize * h as usize * 3];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+            draw(self, figure, &root)?;
+            root.present().map_err(|e| draw_err(figure, e))?;
+        }
+        encode_png(&rgb, w, h)
+    }
+}
+
+fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
+    let mut out = Vec::new();
+    let png_err = |e: png::EncodingError| ReportError::Png(e.to_string());
+    {
+        let mut enc = png::Encoder::new(&mut out, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(png_err)?;
+        writer.write_image_data(rgb).map_err(png_err)?;
+        writer.finish().map_err(png_err)?;
+    }
+    Ok(out)
+}
+
+/// Registers DejaVu Sans as "sans-serif" once per process.
+fn ensure_font() -> Result<(), ReportError> {
+    static FONT: OnceLock<bool> = OnceLock::new();
+    let ok = *FONT.get_or_init(|| {
+        register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular()).is_ok()
+    });
+    if ok { Ok(()) } else { Err(ReportError::Font) }
+}
+
+fn draw_err(figure: Figure, e: impl std::fmt::Display) -> ReportError {
+    ReportError::Draw {
+        figure: figure.file_stem(),
+        message: e.to_string(),
+    }
+}
+
+/// Points `(x[i], y[i])` with both coordinates finite.
+fn finite_pairs(
+    what: &'static str,
+    x: &[f64],
+    y: &[f64],
+    fx: f64,
+    fy: f64,
+) -> Result<Vec<(f64, f64)>, ReportError> {
+    let pts: Vec<(f64, f64)> = x
+        .iter()
+        .zip(y)
+        .map(|(&x, &y)| (x * fx, y * fy))
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    if pts.is_empty() {
+        return Err(ReportError::Empty { what });
+    }
+    Ok(pts)
+}
+
+/// Range covering `values` with 5 % margins (a unit-wide range around a single value).
+fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    let span = hi - lo;
+    if !(span > 0.0) {
+        let d = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
+        return (lo - d)..(hi + d);
+    }
+    (lo - 0.05 * span)..(hi + 0.05 * span)
+}
+
+/// Font sizes scaled with the figure.
+struct Fonts {
+    caption: f64,
+    label: f64,
+    tick: f64,
+}
+
+impl Fonts {
+    fn for_area<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>) -> Self {
+        let (w, h) = root.dim_in_pixel();
+        let s = (f64::from(w) / 900.0).min(f64::from(h) / 600.0).max(0.4);
+        Self {
+            caption: 22.0 * s,
+            label: 17.0 * s,
+            tick: 14.0 * s,
+        }
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    report: &Report,
+    figure: Figure,
+    root: &DrawingArea<DB, Shift>,
+) -> Result<(), ReportError> {
+    root.fill(&WHITE).map_err(|e| draw_err(figure, e))?;
+    match figure {
+        Figure::ForceDepth | Figure::ForceTime => draw_force(report, figure, root),
+        Figure::Convergence => draw_convergence(report, root),
+    }
+}
+
+fn draw_force<DB: DrawingBackend>(
+    report: &Report,
+    figure: Figure,
+    root: &DrawingArea<DB, Shift>,
+) -> Result<(), ReportError> {
+    let c = &report.curves;
+    c.check_lengths()?;
+    let err = |e| draw_err(figure, e);
+    let (x, fx, x_desc) = match figure {
+        Figure::ForceDepth => (
+            &c.h,
+            c.depth_unit.factor,
+            format!("depth h [{}]", c.depth_unit.label),
+        ),
+        _ => (&c.t, 1.0, "time t [s]".to_string()),
+    };
+    let ff = c.force_unit.factor;
+    let data = finite_pairs("curves.f_data", x, &c.f_data, fx, ff)?;
+    let fin = finite_pairs("curves.f_final", x, &c.f_final, fx, ff)?;
+    let start = match &c.f_start {
+        Some(s) => Some(finite_pairs("curves.f_start", x, s, fx, ff)?),
+        None => None,
+    };
+    let all = || {
+        data.iter()
+            .chain(&fin)
+            .chain(start.iter().flatten())
+            .copied()
+    };
+    let xr = padded(all().map(|p| p.0));
+    let yr = padded(all().map(|p| p.1));
+    let xm = xr.start.abs().max(xr.end.abs());
+    let ym = yr.start.abs().max(yr.end.abs());
+    let mut lines: Vec<&[(f64, f64)]> = vec![&data, &fin];
+    if let Some(s) = &start {
+        lines.push(s);
+    }
+    let corner = legend_corner(&lines, &xr, &yr);
+
+    let fonts = Fonts::for_area(root);
+    let caption = format!(
+        "{}: {}, test {}",
+        report.law,
+        figure.caption(),
+        report.source.test
+    );
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", fonts.caption))
+        .margin(fonts.label)
+        .x_label_area_size(fonts.label * 3.2)
+        .y_label_area_size(fonts.label * 5.0)
+        .build_cartesian_2d(xr, yr)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(format!("force F [{}]", c.force_unit.label))
+        .x_label_formatter(&|v| fmt_axis_tick(*v, xm))
+        .y_label_formatter(&|v| fmt_axis_tick(*v, ym))
+        .label_style(("sans-serif", fonts.tick))
+        .axis_desc_style(("sans-serif", fonts.label))
+        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(RGBColor(210, 210, 210))
+        .draw()
+        .map_err(err)?;
+
+    let marker = (fonts.tick / 4.0).max(2.0);
+    if data.len() <= MAX_MARKERS {
+        chart
+            .draw_series(
+                data.iter()
+                    .map(|&p| Circle::new(p, marker, DATA.stroke_width(1))),
+            )
+            .map_err(err)?
+            .label("data")
+            .legend(move |(x, y)| Circle::new((x + 10, y), marker, DATA.stroke_width(1)));
+    } else {
+        chart
+            .draw_series(LineSeries::new(data.iter().copied(), DATA.stroke_width(1)))
+            .map_err(err)?
+            .label("data")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], DATA.stroke_width(1)));
+    }
+    if let Some(start) = start {
+        let style = START.stroke_width(2);
+        let dash = (fonts.tick * 0.6) as u32;
+        chart
+            .draw_series(DashedLineSeries::new(start, dash, dash / 2 + 1, style))
+            .map_err(err)?
+            .label("fit, start parameters")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+    }
+    let style = FINAL.stroke_width(2);
+    chart
+        .draw_series(LineSeries::new(fin, style))
+        .map_err(err)?
+        .label("fit, identified parameters")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+    if data.len() <= MAX_MARKERS {
+        // Markers again, above the fits (the first pass only fixed the legend order).
+        chart
+            .draw_series(
+                data.iter()
+                    .map(|&p| Circle::new(p, marker, DATA.stroke_width(1))),
+            )
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(corner)
+        .label_font(("sans-serif", fonts.tick))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+fn draw_convergence<DB: DrawingBackend>(
+    report: &Report,
+    root: &DrawingArea<DB, Shift>,
+) -> Result<(), ReportError> {
+    let figure = Figure::Convergence;
+    let err = |e| draw_err(figure, e);
+    let cost: Vec<(f64, f64)> = report
+        .history
+        .iter()
+        .map(|r| (r.iteration as f64, r.cost))
+        .filter(|(_, j)| j.is_finite() && *j > 0.0)
+        .collect();
+    if cost.is_empty() {
+        return Err(ReportError::Empty {
+            what: "history.cost (finite, > 0)",
+        });
+    }
+    // Each free parameter relative to its final value.
+    let mut rel: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for (k, p) in report.parameters.iter().enumerate() {
+        if p.fixed || !p.value.is_finite() || p.value == 0.0 {
+            continue;
+        }
+        let pts: Vec<(f64, f64)> = report
+            .history
+            .iter()
+            .filter_map(|r| r.params.get(k).map(|v| (r.iteration as f64, v / p.value)))
+            .filter(|(_, v)| v.is_finite())
+            .collect();
+        if !pts.is_empty() {
+            rel.push((format!("{} / {}_final", p.name, p.name), pts));
+        }
+    }
+
+    let fonts = Fonts::for_area(root);
+    let title = format!(
+        "{}: {}, test {}",
+        report.law,
+        figure.caption(),
+        report.source.test
+    );
+    let titled = root
+        .titled(&title, ("sans-serif", fonts.caption))
+        .map_err(err)?;
+    let (top, bottom) = if rel.is_empty() {
+        (titled, None)
+    } else {
+        let (_, h) = titled.dim_in_pixel();
+        let (a, b) = titled.split_vertically(h / 2);
+        (a, Some(b))
+    };
+
+    let iters = padded(
+        cost.iter()
+            .map(|p| p.0)
+            .chain(rel.iter().flat_map(|r| r.1.iter().map(|p| p.0))),
+    );
+    let (jlo, jhi) = cost.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), p| {
+        (lo.min(p.1), hi.max(p.1))
+    });
+    // At least one decade, with a margin of a fifth of a decade at each end.
+    let (jlo, jhi) = if jhi / jlo < 10.0 {
+        let mid = (jlo * jhi).sqrt();
+        (mid / 10f64.sqrt(), mid * 10f64.sqrt())
+    } else {
+        (jlo / 10f64.powf(0.2), jhi * 10f64.powf(0.2))
+    };
+    let xs = iters.end - iters.start;
+    // About one label per iteration, at most 12.
+    let n_iter_labels = (xs.round() as usize + 1).clamp(2, 12);
+    {
+        let mut chart = ChartBuilder::on(&top)
+            .margin(fonts.label)
+            .x_label_area_size(fonts.label * 3.2)
+            .y_label_area_size(fonts.label * 5.0)
+            .build_cartesian_2d(iters.clone(), (jlo..jhi).log_scale())
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("iteration")
+            .y_desc("cost J")
+            .x_labels(n_iter_labels)
+            .x_label_formatter(&|v| iteration_tick(*v, xs))
+            .y_label_formatter(&|v| fmt_tick(*v))
+            .label_style(("sans-serif", fonts.tick))
+            .axis_desc_style(("sans-serif", fonts.label))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(210, 210, 210))
+            .draw()
+            .map_err(err)?;
+        let style = FINAL.stroke_width(2);
+        let marker = (fonts.tick / 4.0).max(2.0);
+        chart
+            .draw_series(LineSeries::new(cost.iter().copied(), style))
+            .map_err(err)?
+            .label("J")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        chart
+            .draw_series(cost.iter().map(|&p| Circle::new(p, marker, FINAL.filled())))
+            .map_err(err)?;
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", fonts.tick))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(160, 160, 160))
+            .draw()
+            .map_err(err)?;
+    }
+    let Some(bottom) = bottom else {
+        return Ok(());
+    };
+    let yr = padded(
+        rel.iter()
+            .flat_map(|r| r.1.iter().map(|p| p.1))
+            .chain([1.0]),
+    );
+    let ym = yr.start.abs().max(yr.end.abs());
+    let lines: Vec<&[(f64, f64)]> = rel.iter().map(|r| r.1.as_slice()).collect();
+    let corner = legend_corner(&lines, &iters, &yr);
+    let mut chart = ChartBuilder::on(&bottom)
+        .margin(fonts.label)
+        .x_label_area_size(fonts.label * 3.2)
+        .y_label_area_size(fonts.label * 5.0)
+        .build_cartesian_2d(iters.clone(), yr)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("iteration")
+        .y_desc("parameter / final value")
+        .x_labels(n_iter_labels)
+        .x_label_formatter(&|v| iteration_tick(*v, xs))
+        .y_label_formatter(&|v| fmt_axis_tick(*v, ym))
+        .label_style(("sans-serif", fonts.tick))
+        .axis_desc_style(("sans-serif", fonts.label))
+        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(RGBColor(210, 210, 210))
+        .draw()
+        .map_err(err)?;
+    for (i, (name, pts)) in rel.into_iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        let style = color.stroke_width(2);
+        chart
+            .draw_series(LineSeries::new(pts, style))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+    }
+    chart
+        .configure_series_labels()
+        .position(corner)
+        .label_font(("sans-serif", fonts.tick))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The legend corner whose box (40 % of the width, 35 % of the height) is crossed least
+/// by the polylines `series`; ties go to the earlier corner in upper-left, upper-right,
+/// lower-right, lower-left order.
+fn legend_corner(
+    series: &[&[(f64, f64)]],
+    xr: &Range<f64>,
+    yr: &Range<f64>,
+) -> SeriesLabelPosition {
+    // Segments are sampled so that a line crossing a corner counts, not only its vertices.
+    const SUB: usize = 8;
+    let mut counts = [0usize; 4];
+    let mut add = |x: f64, y: f64| {
+        let u = (x - xr.start) / (xr.end - xr.start);
+        let v = (y - yr.start) / (yr.end - yr.start);
+        let (left, right, low, up) = (u < 0.4, u > 0.6, v < 0.35, v > 0.65);
+        counts[0] += usize::from(left && up);
+        counts[1] += usize::from(right && up);
+        counts[2] += usize::from(right && low);
+        counts[3] += usize::from(left && low);
+    };
+    for s in series {
+        if let Some(&(x, y)) = s.first() {
+            add(x, y);
+        }
+        for w in s.windows(2) {
+            let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+            for k in 1..=SUB {
+                let a = k as f64 / SUB as f64;
+                add(x0 + a * (x1 - x0), y0 + a * (y1 - y0));
+            }
+        }
+    }
+    let corners = [
+        SeriesLabelPosition::UpperLeft,
+        SeriesLabelPosition::UpperRight,
+        SeriesLabelPosition::LowerRight,
+        SeriesLabelPosition::LowerLeft,
+    ];
+    let best = (0..4).min_by_key(|&i| counts[i]).unwrap_or(0);
+    corners[best].clone()
+}
+
+/// Iteration ticks: integers only.
+fn iteration_tick(v: f64, span: f64) -> String {
+    let v = snap_zero(v, span);
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{}", v.round() as i64)
+    } else {
+        String::new()
+    }
+}
+
+/// Tick values that are zero up to round-off (`1e-17` on a unit-wide axis) print as 0.
+fn snap_zero(v: f64, span: f64) -> f64 {
+    if v.abs() < 1e-9 * span { 0.0 } else { v }
+}
