@@ -12,7 +12,7 @@ mod table;
 mod text;
 
 pub use error::{PrepError, ReadError, ReadErrorKind};
-pub use prep::{Applied, Preprocessing, apply};
+pub use prep::{Applied, Correction, Control, Phase, Preprocessing, Resample, Segments, Span, ZeroPoint, apply};
 pub use record::{Format, LoadSegment, Meta, Protocol, Quantity, Record, ReadOptions};
 
 use error::ReadErrorKind as K;

@@ -30,3 +30,16 @@ fn print_all() {
     }
     let _ = (Format::Auto, read_one);
 }
+
+#[test]
+fn print_prep() {
+    use indentify_records::{Preprocessing, Resample, apply};
+    let p = Preprocessing { resample: Some(Resample::default()), drift: indentify_records::Correction::Auto, compliance: indentify_records::Correction::Auto, ..Preprocessing::default() };
+    for (b, n) in [(ANON, "anonNI.TXT"), (MULTI, "HT_V_100mN.TXT"), (ROBIN, "RobinSteel0000LC.txt"), (HLD, "Exp-50mN_0000.hld")] {
+        for r in read(b, n, &ReadOptions::default()).unwrap() {
+            let (x, done) = apply(&r, &p).unwrap();
+            println!("{}", summary(&x));
+            for a in done { println!("  {}: {}", a.step, a.description); }
+        }
+    }
+}
