@@ -37,8 +37,8 @@ pub enum ReportError {
         /// The constant value.
         value: f64,
     },
-    /// A figure size outside 100..=8000 pixels per side.
-    #[error("figure size {width}x{height} px: each side must be in 100..=8000")]
+    /// A figure size outside 100..=4000 pixels per side.
+    #[error("figure size {width}x{height} px: each side must be in 100..=4000")]
     Size {
         /// Width in pixels.
         width: u32,

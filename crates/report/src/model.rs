@@ -252,7 +252,8 @@ impl FigureLink {
 impl Report {
     /// The report as one pretty-printed JSON object.
     ///
-    /// Non-finite numbers become `null` (JSON has no NaN).
+    /// Non-finite numbers become `null` (JSON has no NaN); such a report does not read
+    /// back with [`Report::from_json`]. Finite numbers read back bit for bit.
     ///
     /// # Errors
     /// [`ReportError::Json`] if serialization fails.

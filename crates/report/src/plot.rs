@@ -11,7 +11,7 @@ use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
 use crate::error::ReportError;
-use crate::model::Report;
+use crate::model::{FigureLink, Report};
 use crate::units::{fmt_axis_tick, fmt_tick};
 
 /// One of the report's figures.
@@ -39,6 +39,11 @@ impl Figure {
         }
     }
 
+    /// A Markdown link to this figure stored at `path` (relative to the Markdown file).
+    pub fn link(self, path: impl Into<String>) -> FigureLink {
+        FigureLink::new(self.caption(), path)
+    }
+
     /// A caption for the figure ("force vs depth", ...).
     pub fn caption(self) -> &'static str {
         match self {
@@ -49,7 +54,7 @@ impl Figure {
     }
 }
 
-/// Figure size in pixels (SVG user units). Each side must be in 100..=8000.
+/// Figure size in pixels (SVG user units). Each side must be in 100..=4000.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FigureSize {
     /// Width, px.
@@ -70,7 +75,7 @@ impl Default for FigureSize {
 
 impl FigureSize {
     fn check(self) -> Result<(), ReportError> {
-        let ok = |v: u32| (100..=8000).contains(&v);
+        let ok = |v: u32| (100..=4000).contains(&v);
         if ok(self.width) && ok(self.height) {
             Ok(())
         } else {
@@ -104,7 +109,7 @@ impl Report {
     /// `figure` as an SVG document.
     ///
     /// # Errors
-    /// - [`ReportError::Size`] for a side outside 100..=8000 px,
+    /// - [`ReportError::Size`] for a side outside 100..=4000 px,
     /// - [`ReportError::Length`] if the curves' series differ in length,
     /// - [`ReportError::Empty`] if a series has no finite point (non-finite points are
     ///   skipped; J <= 0 is skipped on the log axis),
@@ -566,4 +571,35 @@ fn iteration_tick(v: f64, span: f64) -> String {
 /// Tick values that are zero up to round-off (`1e-17` on a unit-wide axis) print as 0.
 fn snap_zero(v: f64, span: f64) -> f64 {
     if v.abs() < 1e-9 * span { 0.0 } else { v }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn legend_avoids_occupied_corners() {
+        let r = 0.0..1.0;
+        // Loading curve from lower left to upper right: upper left is free.
+        let diag: Vec<(f64, f64)> = (0..=10)
+            .map(|i| (i as f64 / 10.0, i as f64 / 10.0))
+            .collect();
+        assert_eq!(
+            legend_corner(&[&diag], &r, &r),
+            SeriesLabelPosition::UpperLeft
+        );
+        // Fast rise then slow decay: the upper left is taken, the lower right too.
+        let peak: Vec<(f64, f64)> = vec![(0.0, 0.0), (0.1, 1.0), (1.0, 0.1)];
+        assert_eq!(
+            legend_corner(&[&peak], &r, &r),
+            SeriesLabelPosition::UpperRight
+        );
+    }
+
+    #[test]
+    fn iteration_ticks_are_integers() {
+        assert_eq!(iteration_tick(2.0, 10.0), "2");
+        assert_eq!(iteration_tick(2.5, 10.0), "");
+        assert_eq!(iteration_tick(-1e-17, 10.0), "0");
+    }
 }
