@@ -8,12 +8,16 @@
 
 mod identify;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
+use indentify_contact::punch::{AutoOptions, auto_specimen};
 use indentify_contact::{Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
-use indentify_mesh::CylinderMesher;
+use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
+use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
+
+use crate::report::sig;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -31,46 +35,305 @@ pub struct Config {
     pub punch: Punch,
     /// The constitutive law and its parameters.
     pub law: LawSpec,
-    /// The depth history of the punch.
-    pub history: History,
+    /// The depth history of the punch; omitted when `data` gives a measured record, whose
+    /// depth then drives the simulation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub history: Option<History>,
+    /// A measured record (instrument file) whose preprocessed depth drives the simulation
+    /// and whose force is the data to fit (the paper's formulation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data: Option<DataSection>,
     /// Numerical options of the direct solver (optional, defaults from [`SolverOptions`]).
     #[serde(default)]
     pub solver: SolverConfig,
     /// What `indentify identify` identifies and how (optional; see [`IdentifySection`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identify: Option<IdentifySection>,
+    /// The folder relative to which `data.file` is found (the configuration file's own);
+    /// not part of the file.
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
 }
 
-/// Cylinder `0 <= r <= radius`, `-height <= z <= 0` (mm), `nr x nz` Q8 elements graded
-/// towards the axis and the top surface; mirrors [`CylinderMesher`].
+/// A measured record: the file, its format and test, and its preprocessing (the records
+/// crate's own option types).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "data")]
+pub struct DataSection {
+    /// The instrument file, relative to the configuration file's folder.
+    pub file: String,
+    /// Its format (`Auto` detects it from the content).
+    #[serde(default)]
+    pub format: Format,
+    /// The test of a multi-test file, from 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub test: Option<usize>,
+    /// Drift, zero point, compliance, segments and resampling (defaults: zero point and
+    /// segments on, no resampling).
+    #[serde(default)]
+    pub preprocessing: Preprocessing,
+}
+
+/// A measured record read and preprocessed.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    /// The file as found.
+    pub path: PathBuf,
+    /// The record as read (internal units).
+    pub raw: Record,
+    /// The record after preprocessing: its depth drives the simulation, its force is fitted.
+    pub record: Record,
+    /// The preprocessing steps as applied, with their numbers.
+    pub applied: Vec<Applied>,
+}
+
+impl DataSection {
+    /// The file's path: absolute, or relative to `base`.
+    pub fn path(&self, base: Option<&Path>) -> PathBuf {
+        let p = PathBuf::from(&self.file);
+        match base {
+            Some(b) if p.is_relative() => b.join(p),
+            _ => p,
+        }
+    }
+
+    /// Reads and preprocesses the record.
+    ///
+    /// # Errors
+    /// An unreadable file, a reader's error (file, line, what was expected), a
+    /// preprocessing error, or a record that cannot drive a simulation.
+    pub fn load(&self, base: Option<&Path>) -> Result<Measured> {
+        let path = self.path(base);
+        let shown = path.display().to_string();
+        let bytes = std::fs::read(&path).with_context(|| {
+            format!("cannot read the data file `{shown}` (data.file, relative to the configuration's folder)")
+        })?;
+        let opts = ReadOptions {
+            format: self.format,
+            test: self.test,
+        };
+        let raw = indentify_records::read_one(&bytes, &shown, &opts)?;
+        let (record, applied) = indentify_records::apply(&raw, &self.preprocessing)
+            .with_context(|| format!("cannot preprocess `{shown}` (data.preprocessing)"))?;
+        if record.t.len() < 3 {
+            bail!(
+                "`{shown}` has {} points after preprocessing: expected at least 3 to drive a \
+                 simulation (data.preprocessing.resample.n)",
+                record.t.len()
+            );
+        }
+        if !(record.h_max() > 0.0) {
+            bail!(
+                "`{shown}`: the depth never becomes positive after preprocessing (max {} mm): \
+                 no indentation to simulate",
+                record.h_max()
+            );
+        }
+        Ok(Measured {
+            path,
+            raw,
+            record,
+            applied,
+        })
+    }
+}
+
+/// The specimen: a cylinder given by its sizes and its mesh, or sized and meshed
+/// automatically from the punch and the maximum depth of the history (instrument scale).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename = "specimen")]
-pub struct Specimen {
-    /// Radius (mm).
-    pub radius: f64,
-    /// Height (mm).
-    pub height: f64,
-    /// Elements along r.
-    pub nr: usize,
-    /// Elements along z.
-    pub nz: usize,
-    /// Size ratio of neighbouring elements along r (1 = uniform).
-    pub grading_r: f64,
-    /// Size ratio of neighbouring elements along z (1 = uniform).
-    pub grading_z: f64,
+pub enum Specimen {
+    /// Cylinder `0 <= r <= radius`, `-height <= z <= 0` (mm), `nr x nz` Q8 elements
+    /// graded towards the axis and the top surface; mirrors [`CylinderMesher`].
+    Cylinder {
+        /// Radius (mm).
+        radius: f64,
+        /// Height (mm).
+        height: f64,
+        /// Elements along r.
+        nr: usize,
+        /// Elements along z.
+        nz: usize,
+        /// Size ratio of neighbouring elements along r (1 = uniform).
+        grading_r: f64,
+        /// Size ratio of neighbouring elements along z (1 = uniform).
+        grading_z: f64,
+    },
+    /// Radius = height = `size_factor` contact-radius bounds at the maximum depth, a
+    /// uniform core of `elements_in_contact` squares per side under the punch, graded
+    /// beyond (the contact crate's [`indentify_contact::auto_specimen`]); every field
+    /// optional.
+    Auto {
+        /// Element edges across the contact-radius bound, in [2, 64] (default 8).
+        #[serde(default = "auto_elements_in_contact")]
+        elements_in_contact: usize,
+        /// Specimen size over the contact-radius bound, in [5, 10000] (default 40).
+        #[serde(default = "auto_size_factor")]
+        size_factor: f64,
+        /// Largest size ratio of neighbouring elements outside the core, in [1.05, 3]
+        /// (default 1.5).
+        #[serde(default = "auto_grading")]
+        grading: f64,
+    },
+}
+
+fn auto_elements_in_contact() -> usize {
+    AutoOptions::default().elements_in_contact
+}
+
+fn auto_size_factor() -> f64 {
+    AutoOptions::default().size_factor
+}
+
+fn auto_grading() -> f64 {
+    AutoOptions::default().grading
 }
 
 impl Specimen {
-    /// The mesher for this specimen.
-    pub fn mesher(&self) -> CylinderMesher {
-        CylinderMesher {
-            radius: self.radius,
-            height: self.height,
-            nr: self.nr,
-            nz: self.nz,
-            grading_r: self.grading_r,
-            grading_z: self.grading_z,
+    /// Checks what can be checked before the depth history is known.
+    ///
+    /// # Errors
+    /// The first field out of range, naming `specimen.<field>`.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Specimen::Cylinder {
+                radius,
+                height,
+                nr,
+                nz,
+                grading_r,
+                grading_z,
+            } => CylinderMesher {
+                radius,
+                height,
+                nr,
+                nz,
+                grading_r,
+                grading_z,
+            }
+            .validate()?,
+            Specimen::Auto {
+                elements_in_contact,
+                size_factor,
+                grading,
+            } => AutoOptions {
+                elements_in_contact,
+                size_factor,
+                grading,
+            }
+            .validate()?,
         }
+        Ok(())
+    }
+
+    /// The mesher for this specimen under `punch` pressed to at most `h_max` (mm).
+    ///
+    /// # Errors
+    /// Invalid sizes or options; for `Auto`, a maximum depth that is not positive.
+    pub fn mesher(&self, punch: &Punch, h_max: f64) -> Result<Mesher> {
+        Ok(match *self {
+            Specimen::Cylinder {
+                radius,
+                height,
+                nr,
+                nz,
+                grading_r,
+                grading_z,
+            } => {
+                let m = CylinderMesher {
+                    radius,
+                    height,
+                    nr,
+                    nz,
+                    grading_r,
+                    grading_z,
+                };
+                m.validate()?;
+                Mesher::Cylinder(m)
+            }
+            Specimen::Auto {
+                elements_in_contact,
+                size_factor,
+                grading,
+            } => {
+                let options = AutoOptions {
+                    elements_in_contact,
+                    size_factor,
+                    grading,
+                };
+                Mesher::Zoned(auto_specimen(punch, h_max, &options).with_context(|| {
+                    format!(
+                        "cannot size the automatic specimen for {} at the maximum depth \
+                         {h_max} mm of the history",
+                        punch.describe()
+                    )
+                })?)
+            }
+        })
+    }
+}
+
+/// `v` to 4 significant digits without trailing zeros (`0.3`, `2.812e-4`).
+fn short(v: f64) -> String {
+    sig(v, 4)
+        .parse::<f64>()
+        .map_or_else(|_| v.to_string(), |x| x.to_string())
+}
+
+/// The mesher a [`Specimen`] resolves to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mesher {
+    /// Geometric grading from the axis and the top.
+    Cylinder(CylinderMesher),
+    /// Uniform core under the punch, graded far field.
+    Zoned(ZonedCylinderMesher),
+}
+
+impl Mesher {
+    /// The mesh.
+    ///
+    /// # Errors
+    /// The mesher's own checks.
+    pub fn build(&self) -> Result<Mesh> {
+        Ok(match self {
+            Mesher::Cylinder(m) => m.build()?,
+            Mesher::Zoned(m) => m.build()?,
+        })
+    }
+
+    /// `20 x 20 Q8 (radius 10 mm, height 10 mm, smallest element 1.6e-2 x 1.6e-2 mm)`.
+    pub fn describe(&self) -> String {
+        let (nr, nz, radius, height, dr, dz) = match self {
+            Mesher::Cylinder(m) => {
+                let (dr, dz) = m.smallest_sizes();
+                (m.nr, m.nz, m.radius, m.height, dr, dz)
+            }
+            Mesher::Zoned(m) => {
+                let (nr, nz) = m.counts().unwrap_or((0, 0));
+                let h = m.core / m.core_elements as f64;
+                (nr, nz, m.radius, m.height, h, h)
+            }
+        };
+        let kind = match self {
+            Mesher::Cylinder(_) => "graded cylinder",
+            Mesher::Zoned(m) => {
+                return format!(
+                    "automatic cylinder {nr} x {nz} Q8 (radius = height = {} mm, uniform core \
+                     {} mm of {} x {} elements of {:.3e} mm, graded beyond)",
+                    short(radius),
+                    short(m.core),
+                    m.core_elements,
+                    m.core_elements,
+                    dr
+                );
+            }
+        };
+        format!(
+            "{kind} {nr} x {nz} Q8 (radius {} mm, height {} mm, smallest element {dr:.3e} x \
+             {dz:.3e} mm)",
+            short(radius),
+            short(height)
+        )
     }
 }
 
@@ -356,7 +619,7 @@ impl Reference {
             },
         };
         Config {
-            specimen: Specimen {
+            specimen: Specimen::Cylinder {
                 radius: 10.0,
                 height: 10.0,
                 nr: 20,
@@ -368,11 +631,13 @@ impl Reference {
                 half_angle_deg: 68.0,
             },
             law,
-            history: History {
+            history: Some(History {
                 segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
-            },
+            }),
+            data: None,
             solver: SolverConfig::default(),
             identify: Some(self.identify_section()),
+            base_dir: None,
         }
     }
 
@@ -427,10 +692,31 @@ impl Config {
     /// # Errors
     /// The first invalid input, naming its field, value and what is allowed.
     pub fn validate(&self) -> Result<()> {
-        self.specimen.mesher().validate()?;
+        self.specimen.validate()?;
         self.punch.validate()?;
         self.law.build()?;
-        self.schedule()?;
+        match (&self.history, &self.data) {
+            (Some(_), None) => {
+                self.schedule()?;
+            }
+            (None, Some(d)) => {
+                if d.file.trim().is_empty() {
+                    bail!("data.file is empty: expected the path of an instrument file");
+                }
+                if d.test == Some(0) {
+                    bail!("data.test = 0 is not allowed: tests are numbered from 1");
+                }
+            }
+            (None, None) => bail!(
+                "neither `history` nor `data` is given: expected a depth history \
+                 (history: (segments: [...])) or a measured record whose depth drives the \
+                 simulation (data: (file: \"...\"))"
+            ),
+            (Some(_), Some(_)) => bail!(
+                "both `history` and `data` are given: with a measured record its depth drives \
+                 the simulation; remove `history` (or `data`)"
+            ),
+        }
         self.solver.validate()?;
         if let Some(id) = &self.identify {
             id.validate(&self.law)?;
@@ -438,28 +724,67 @@ impl Config {
         Ok(())
     }
 
-    /// The discrete time schedule of the history.
+    /// The discrete time schedule of the prescribed history (`history`).
     ///
     /// # Errors
-    /// An empty history, a non-positive duration, zero steps or a non-finite depth.
+    /// No `history` (a configuration driven by `data`), an empty history, a non-positive
+    /// duration, zero steps or a non-finite depth.
     pub fn schedule(&self) -> Result<Schedule> {
-        Ok(Schedule::from_segments(&self.history.segments)?)
+        let h = self.history.as_ref().ok_or_else(|| {
+            anyhow!("the configuration has no `history`: its depth comes from `data`")
+        })?;
+        Ok(Schedule::from_segments(&h.segments)?)
     }
 
-    /// The direct problem's model (meshed specimen and punch); `name` is the configuration
-    /// file, for messages.
+    /// The schedule (from `history`, or from the preprocessed record of `data`), the
+    /// mesher and the model, ready to solve; `data_file` replaces `data.file`.
     ///
     /// # Errors
-    /// A mesh or model that the libraries reject (excluded by [`Config::validate`]).
-    pub fn model(&self, name: &str) -> Result<Model> {
-        let mesh = self
-            .specimen
-            .mesher()
+    /// An invalid history or record, an invalid specimen, a mesh or model that cannot be
+    /// built.
+    pub fn prepare(&self, name: &str) -> Result<Prepared> {
+        let (schedule, measured) = match &self.data {
+            Some(d) => {
+                let m = d
+                    .load(self.base_dir.as_deref())
+                    .with_context(|| format!("cannot use the data of `{name}`"))?;
+                let s = Schedule::from_record(&m.record.t, &m.record.h).with_context(|| {
+                    format!(
+                        "the record `{}` cannot drive a simulation",
+                        m.path.display()
+                    )
+                })?;
+                (s, Some(m))
+            }
+            None => (self.schedule()?, None),
+        };
+        let h_max = schedule.depth.iter().copied().fold(0.0, f64::max);
+        let mesher = self.specimen.mesher(&self.punch, h_max)?;
+        let mesh = mesher
             .build()
             .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
-        Model::new(mesh, self.punch.clone())
-            .with_context(|| format!("cannot build the model of `{name}`"))
+        let model = Model::new(mesh, self.punch.clone())
+            .with_context(|| format!("cannot build the model of `{name}`"))?;
+        Ok(Prepared {
+            schedule,
+            mesher,
+            model,
+            measured,
+        })
     }
+}
+
+/// What a configuration resolves to before solving.
+#[derive(Debug)]
+pub struct Prepared {
+    /// The depth history on the time grid.
+    pub schedule: Schedule,
+    /// The specimen's mesher.
+    pub mesher: Mesher,
+    /// The meshed specimen and the punch.
+    pub model: Model,
+    /// The measured record driving the schedule, if the configuration has `data`.
+    pub measured: Option<Measured>,
 }
 
 /// Reads, overrides and validates the configuration file `path`.
@@ -471,7 +796,12 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Config> {
     let name = path.display().to_string();
     let src = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read the configuration file `{name}`"))?;
-    load_str(&src, &name, sets)
+    let mut cfg = load_str(&src, &name, sets)?;
+    cfg.base_dir = Some(
+        path.parent()
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+    );
+    Ok(cfg)
 }
 
 /// [`load`] on the text `src` of a configuration called `name`.
@@ -811,7 +1141,7 @@ mod tests {
             }
         );
         let c = set(c, "specimen.nr=10").unwrap();
-        assert_eq!(c.specimen.nr, 10);
+        assert!(matches!(c.specimen, Specimen::Cylinder { nr: 10, .. }));
         let c = set(c, "punch.half_angle_deg=70.3").unwrap();
         assert_eq!(
             c.punch,
@@ -855,7 +1185,7 @@ mod tests {
 
     #[test]
     fn ron_errors_carry_position_and_field_path() {
-        let src = "(\n  specimen: (radius: 10.0, height: 10.0, nr: -1, nz: 20, grading_r: 1.3, grading_z: 1.3),\n)";
+        let src = "(\n  specimen: Cylinder(radius: 10.0, height: 10.0, nr: -1, nz: 20, grading_r: 1.3, grading_z: 1.3),\n)";
         let e = format!("{:#}", parse(src, "x.ron").unwrap_err());
         assert!(e.contains("x.ron:2:") && e.contains("specimen.nr"), "{e}");
         let src = std::fs::read_to_string(

@@ -29,9 +29,8 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let name = args.config.display().to_string();
     let cfg = config::load(&args.config, &args.sets)?;
-    let schedule = cfg.schedule()?;
-    let mesher = cfg.specimen.mesher();
-    let (dr, dz) = mesher.smallest_sizes();
+    let prepared = cfg.prepare(&name)?;
+    let schedule = &prepared.schedule;
     let mut header = vec![format!("Resolved from `{name}` by `indentify check`.")];
     if !args.sets.is_empty() {
         header.push(format!("Overrides: --set {}", args.sets.join(" --set ")));
@@ -41,12 +40,10 @@ pub fn run(args: &Args) -> Result<()> {
         .write_all(annotated(&cfg, &header).as_bytes())
         .context("cannot write to standard output")?;
     tracing::info!(
-        "{name}: valid; law {}, punch {}, mesh {} x {} (smallest element {dr:.3e} x {dz:.3e} mm), \
-         {} steps over {} s",
+        "{name}: valid; law {}, punch {}, mesh: {}, {} steps over {} s",
         cfg.law.name(),
         cfg.punch.describe(),
-        mesher.nr,
-        mesher.nz,
+        prepared.mesher.describe(),
         schedule.n_steps(),
         schedule.t.last().copied().unwrap_or(0.0)
     );

@@ -81,7 +81,8 @@ pub fn run(args: &Args) -> Result<()> {
     let (law, params) = cfg.law.build()?;
     ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))?;
     let curve = data::read_curve(&args.data)?;
-    let schedule = cfg.schedule()?;
+    let prepared = cfg.prepare(&name)?;
+    let schedule = prepared.schedule;
     let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
     curve.check_covers(t0, t1, &name)?;
     let mut opts = cfg.solver.options(true);
@@ -90,7 +91,7 @@ pub fn run(args: &Args) -> Result<()> {
         opts.checkpoint_every = n as usize;
     }
     let problem = Problem::new(
-        cfg.model(&name)?,
+        prepared.model,
         law,
         schedule,
         &curve.record()?,

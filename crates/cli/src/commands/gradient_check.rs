@@ -142,8 +142,8 @@ pub fn run(args: &Args) -> Result<()> {
     let (law, truth) = cfg.law.build()?;
     let names = param_names(law);
     let infos = law.params();
-    let schedule = cfg.schedule()?;
-    let model = cfg.model(&name)?;
+    let prepared = cfg.prepare(&name)?;
+    let (schedule, model) = (prepared.schedule, prepared.model);
     let opts = SolverOptions {
         residual_tol: cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL),
         ..cfg.solver.options(true)

@@ -243,11 +243,48 @@ pub fn run(args: &Args) -> Result<()> {
             .with_context(|| format!("cannot write `{}`", p.display()))?;
     }
 
-    let schedule = cfg.schedule()?;
-    let model = cfg.model(&name)?;
+    let mut cfg = cfg;
+    if cfg.data.is_some() && args.noise.is_some() {
+        bail!(
+            "--noise perturbs synthesized data only, and `{name}` fits a measured record \
+             (its `data` section)"
+        );
+    }
+    if let (Some(d), Some(path)) = (&mut cfg.data, &args.data) {
+        // --data replaces the configuration's record, read with its preprocessing
+        d.file = absolute(path);
+    }
+    let prepared = cfg.prepare(&name)?;
+    let (schedule, model) = (prepared.schedule, prepared.model);
     let opts = cfg.solver.options(false);
-    let data = match &args.data {
-        Some(path) => {
+    let data = match (&prepared.measured, &args.data) {
+        (Some(m), _) => Data {
+            record: ForceRecord::new(m.record.t.clone(), m.record.f.clone())
+                .with_context(|| format!("cannot use `{}` as data", m.path.display()))?,
+            describe: format!(
+                "`{}` ({}{}), {} samples, {} points after preprocessing ({})",
+                m.path.display(),
+                m.raw.meta.format.name(),
+                m.raw
+                    .meta
+                    .test_name
+                    .as_ref()
+                    .map_or(String::new(), |t| format!(", test {t}")),
+                m.raw.t.len(),
+                m.record.t.len(),
+                if m.applied.is_empty() {
+                    "none applied".to_string()
+                } else {
+                    m.applied
+                        .iter()
+                        .map(|a| a.step.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            ),
+            truth: None,
+        },
+        (None, Some(path)) => {
             let curve = data::read_curve(path)?;
             let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
             curve.check_covers(t0, t1, &name)?;
@@ -257,7 +294,7 @@ pub fn run(args: &Args) -> Result<()> {
                 truth: None,
             }
         }
-        None => {
+        (None, None) => {
             let mut solver = DirectSolver::new(&model)?;
             let traj = forward(
                 &mut solver,
@@ -507,6 +544,15 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `path` made absolute against the working directory (the configuration's folder does
+/// not apply to a path given on the command line).
+pub fn absolute(path: &Path) -> String {
+    std::env::current_dir()
+        .map_or_else(|_| path.to_path_buf(), |d| d.join(path))
+        .display()
+        .to_string()
 }
 
 /// `relative std. dev. E 1e-9, eta 2e-9; correlation E-eta -0.87; condition number 12`.

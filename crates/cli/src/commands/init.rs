@@ -7,7 +7,9 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use serde_json::Value;
 
-use crate::config::{Config, IdentifySection, LawSpec, ParamSetting, Reference, library_law};
+use crate::config::{
+    Config, DataSection, IdentifySection, LawSpec, ParamSetting, Reference, Specimen, library_law,
+};
 
 /// Arguments of `indentify init`.
 #[derive(Debug, clap::Args)]
@@ -90,37 +92,81 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
          (\n",
     );
 
-    let s = &cfg.specimen;
     out.push_str(
-        "    // Cylindrical specimen 0 <= r <= radius, -height <= z <= 0 (the punch presses on z = 0),\n\
-         \x20   // cut into nr x nz 8-node quadrilaterals whose sizes grow geometrically away from the\n\
-         \x20   // axis (ratio grading_r) and away from the top surface (ratio grading_z).\n\
-         \x20   specimen: (\n",
+        "    // The specimen, one of\n\
+         \x20   //   Cylinder(radius, height, nr, nz, grading_r, grading_z): the cylinder\n\
+         \x20   //     0 <= r <= radius, -height <= z <= 0 (the punch presses on z = 0) cut into nr x nz\n\
+         \x20   //     8-node quadrilaterals whose sizes grow geometrically away from the axis (ratio\n\
+         \x20   //     grading_r) and away from the top surface (ratio grading_z);\n\
+         \x20   //   Auto(elements_in_contact: 8, size_factor: 40.0, grading: 1.5): sized from the punch\n\
+         \x20   //     and the maximum depth a = contact-radius bound (geometric radius x 1.2): radius =\n\
+         \x20   //     height = size_factor x a, a uniform core of elements_in_contact squares per side\n\
+         \x20   //     over a, graded beyond (instrument scale: nm to mm indents alike).\n",
     );
-    block(
-        &mut out,
-        "        ",
-        &[
-            (format!("radius: {},", num(s.radius)), "mm, > 0".into()),
-            (format!("height: {},", num(s.height)), "mm, > 0".into()),
-            (
-                format!("nr: {},", s.nr),
-                "elements along r, an integer in [1, 2000]".into(),
-            ),
-            (
-                format!("nz: {},", s.nz),
-                "elements along z, an integer in [1, 2000]".into(),
-            ),
-            (
-                format!("grading_r: {},", num(s.grading_r)),
-                "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)".into(),
-            ),
-            (
-                format!("grading_z: {},", num(s.grading_z)),
-                "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)".into(),
-            ),
-        ],
-    );
+    match cfg.specimen {
+        Specimen::Cylinder {
+            radius,
+            height,
+            nr,
+            nz,
+            grading_r,
+            grading_z,
+        } => {
+            out.push_str("    specimen: Cylinder(\n");
+            block(
+                &mut out,
+                "        ",
+                &[
+                    (format!("radius: {},", num(radius)), "mm, > 0".into()),
+                    (format!("height: {},", num(height)), "mm, > 0".into()),
+                    (
+                        format!("nr: {nr},"),
+                        "elements along r, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("nz: {nz},"),
+                        "elements along z, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("grading_r: {},", num(grading_r)),
+                        "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                    (
+                        format!("grading_z: {},", num(grading_z)),
+                        "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+        Specimen::Auto {
+            elements_in_contact,
+            size_factor,
+            grading,
+        } => {
+            out.push_str("    specimen: Auto(\n");
+            block(
+                &mut out,
+                "        ",
+                &[
+                    (
+                        format!("elements_in_contact: {elements_in_contact},"),
+                        "element edges across the contact-radius bound, in [2, 64]".into(),
+                    ),
+                    (
+                        format!("size_factor: {},", num(size_factor)),
+                        "specimen radius and height in contact-radius bounds, in [5, 10000]".into(),
+                    ),
+                    (
+                        format!("grading: {},", num(grading)),
+                        "largest size ratio of neighbouring elements beyond the core, in [1.05, 3]"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+    }
     out.push_str("    ),\n");
 
     out.push_str(
@@ -129,7 +175,10 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
          \x20   //   Sphere(radius: 1.0)                            exact spherical profile, radius > 0\n\
          \x20   //   Flat(radius: 0.5)                              flat-ended cylinder, radius > 0\n\
          \x20   //   SpheroCone(radius: 1.0, half_angle_deg: 68.0)  spherical tip blended tangentially into a cone\n\
-         \x20   //   Tabulated(r: [0.0, 1.0], z: [0.0, 0.4])        heights z above the tip at increasing radii r\n",
+         \x20   //   Tabulated(r: [0.0, 1.0], z: [0.0, 0.4])        heights z above the tip at increasing radii r\n\
+         \x20   //   Berkovich(), Vickers()                         area-equivalent cone of 70.3 deg (A = 24.5 h^2)\n\
+         \x20   //   CubeCorner()                                   area-equivalent cone of 42.28 deg (A = 2.598 h^2)\n\
+         \x20   //   Berkovich(tip_radius: 2e-4)                    the same with a rounded tip (mm), also Vickers, CubeCorner\n",
     );
     let punch = serde_json::to_value(&cfg.punch).unwrap_or(Value::Null);
     out.push_str(&format!("    punch: {},\n", ron_inline(&punch)));
@@ -150,39 +199,43 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
     block(&mut out, "        ", &law_lines(&cfg.law));
     out.push_str("    ),\n");
 
-    out.push_str(
-        "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
-         \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
-         \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
-         \x20   history: (\n        segments: [\n",
-    );
-    let mut previous = 0.0;
-    let lines: Vec<(String, String)> = cfg
-        .history
-        .segments
-        .iter()
-        .map(|seg| {
-            let what = if seg.depth > previous {
-                "load"
-            } else if seg.depth < previous {
-                "unload"
-            } else {
-                "hold"
-            };
-            previous = seg.depth;
-            (
-                format!(
-                    "(duration: {}, depth: {}, steps: {}),",
-                    num(seg.duration),
-                    num(seg.depth),
-                    seg.steps
-                ),
-                what.into(),
-            )
-        })
-        .collect();
-    block(&mut out, "            ", &lines);
-    out.push_str("        ],\n    ),\n");
+    if let Some(history) = &cfg.history {
+        out.push_str(
+            "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
+             \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
+             \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
+             \x20   history: (\n        segments: [\n",
+        );
+        let mut previous = 0.0;
+        let lines: Vec<(String, String)> = history
+            .segments
+            .iter()
+            .map(|seg| {
+                let what = if seg.depth > previous {
+                    "load"
+                } else if seg.depth < previous {
+                    "unload"
+                } else {
+                    "hold"
+                };
+                previous = seg.depth;
+                (
+                    format!(
+                        "(duration: {}, depth: {}, steps: {}),",
+                        num(seg.duration),
+                        num(seg.depth),
+                        seg.steps
+                    ),
+                    what.into(),
+                )
+            })
+            .collect();
+        block(&mut out, "            ", &lines);
+        out.push_str("        ],\n    ),\n");
+    }
+    if let Some(d) = &cfg.data {
+        out.push_str(&data_block(d));
+    }
 
     let o = &cfg.solver;
     out.push_str(
@@ -358,6 +411,32 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
 }
 
 /// `name: value,` lines of the law with the library's description, unit and range.
+/// The `data` section: the record, its format and test, its preprocessing (written out in
+/// full, every default included).
+fn data_block(d: &DataSection) -> String {
+    let pretty = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .indentor("    ".to_string());
+    let pre =
+        ron::ser::to_string_pretty(&d.preprocessing, pretty).unwrap_or_else(|_| "()".to_string());
+    let pre = pre.replace('\n', "\n        ");
+    let mut out = String::from(
+        "    // Measured record: its preprocessed depth drives the simulation and its force is the\n\
+         \x20   // data to fit. `file` is relative to this file's folder; `format` one of Auto, Csv,\n\
+         \x20   // AntonPaar, AntonPaarMulti, HysitronTxt, Hld; `test` (from 1) picks one test of a\n\
+         \x20   // multi-test file. Preprocessing runs drift, zero_point, compliance, segments, resample\n\
+         \x20   // in that order (None skips a step; see docs/tutorial-real-data.md).\n\
+         \x20   data: (\n",
+    );
+    out.push_str(&format!("        file: {:?},\n", d.file));
+    out.push_str(&format!("        format: {:?},\n", d.format));
+    if let Some(t) = d.test {
+        out.push_str(&format!("        test: {t},\n"));
+    }
+    out.push_str(&format!("        preprocessing: {pre},\n    ),\n"));
+    out
+}
+
 fn law_lines(law: &LawSpec) -> Vec<(String, String)> {
     let infos = library_law(law.name()).map(|l| l.params()).unwrap_or(&[]);
     law.named_params()
@@ -448,7 +527,9 @@ mod tests {
             let mut cfg = Reference::R2NortonHoff.config();
             cfg.punch = punch;
             cfg.solver.residual_tol = 1.234_567_890_123e-11;
-            cfg.specimen.radius = 1.0 / 3.0;
+            if let Specimen::Cylinder { radius, .. } = &mut cfg.specimen {
+                *radius = 1.0 / 3.0;
+            }
             let text = annotated(&cfg, &[]);
             assert_eq!(parse(&text, "t").unwrap(), cfg, "{text}");
         }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_contact::{ContactError, DirectSolver, Model, Trajectory};
+use indentify_contact::{ContactError, DirectSolver, Trajectory};
 use indentify_identify::multiplicative_noise;
 
 use crate::config;
@@ -62,14 +62,9 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let cfg = config::load(&args.config, &args.sets)?;
     let (law, params) = cfg.law.build()?;
-    let mesher = cfg.specimen.mesher();
-    let mesh = mesher
-        .build()
-        .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
-    let (n_nodes, n_elements) = (mesh.nodes.len(), mesh.elements.len());
-    let model = Model::new(mesh, cfg.punch.clone())
-        .with_context(|| format!("cannot build the model of `{name}`"))?;
-    let schedule = cfg.schedule()?;
+    let prepared = cfg.prepare(&name)?;
+    let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
+    let (n_nodes, n_elements) = (model.mesh.nodes.len(), model.mesh.elements.len());
     let opts = cfg.solver.options(args.vtu.is_some());
     // fail on unwritable outputs before solving
     if let Some(p) = &args.out {
@@ -130,20 +125,18 @@ pub fn run(args: &Args) -> Result<()> {
         .zip(&params)
         .map(|(i, v)| format!("{} = {v}", i.name))
         .collect();
-    let (dr, dz) = mesher.smallest_sizes();
     let tm = &traj.timing;
     tracing::info!(
         "indentify simulate {name}\n  \
          law {} ({}), punch {}\n  \
-         mesh {} x {} Q8 ({n_nodes} nodes, {n_elements} elements, smallest {dr:.3e} x {dz:.3e} mm)\n  \
+         mesh: {} ({n_nodes} nodes, {n_elements} elements)\n  \
          {} of {} schedule steps ({} sub-steps from cuts), {} Newton iterations, {} factorizations\n  \
          max force {:.6} N at t = {} s, h = {} mm (contact radius {:.6} mm)\n  \
          wall time {:.3} s (solver {:.3} s: local {:.3}, assembly {:.3}, factorization {:.3}, solve {:.3})",
         law.name(),
         params_text.join(", "),
         cfg.punch.describe(),
-        mesher.nr,
-        mesher.nz,
+        mesher.describe(),
         rows.len() - 1,
         schedule.n_steps(),
         traj.steps.len() - (rows.len() - 1),
