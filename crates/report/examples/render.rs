@@ -36,7 +36,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c.depth_unit = indentify_report::DisplayUnit::internal("mm");
         c.force_unit = indentify_report::DisplayUnit::internal("N");
     }
+    // A long, non-monotone history (40 iterations, overshooting parameters).
+    let mut long = common::nano_report();
+    long.history = (0..40)
+        .map(|k| {
+            let w = (-(k as f64) / 6.0).exp();
+            indentify_report::IterationRecord {
+                iteration: k,
+                cost: 3e-3 * (-(k as f64) / 3.0).exp() * (1.0 + 0.5 * (k as f64).sin().abs()),
+                grad_norm: Some(w),
+                params: vec![
+                    201.3e3 * (1.0 - 0.3 * w * (k as f64 / 2.0).cos()),
+                    0.3,
+                    5e6 * (1.0 + 1.5 * w * (k as f64 / 3.0).cos()),
+                ],
+            }
+        })
+        .collect();
     for (name, report) in [
+        ("long", long),
         ("nano", common::nano_report()),
         ("macro", common::macro_report()),
         ("dense", dense),
@@ -52,6 +70,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             std::fs::write(
                 dir.join(format!("{stem}.png")),
                 report.figure_png(fig, FigureSize::default())?,
+            )?;
+            std::fs::write(
+                dir.join(format!("{stem}_small.png")),
+                report.figure_png(
+                    fig,
+                    FigureSize {
+                        width: 480,
+                        height: 320,
+                    },
+                )?,
             )?;
         }
     }

@@ -82,4 +82,4 @@ pub use model::{
     PreprocessingStep, Report, Source,
 };
 pub use plot::{Figure, FigureSize};
-pub use units::{DisplayUnit, fmt_axis_tick, fmt_sig, fmt_tick};
+pub use units::{DisplayUnit, fmt_axis_tick, fmt_log_tick, fmt_sig, fmt_tick};

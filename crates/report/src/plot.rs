@@ -12,7 +12,7 @@ use plotters::style::{FontStyle, register_font};
 
 use crate::error::ReportError;
 use crate::model::{FigureLink, Report};
-use crate::units::{fmt_axis_tick, fmt_tick};
+use crate::units::{fmt_axis_tick, fmt_log_tick};
 
 /// One of the report's figures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -219,10 +219,11 @@ impl Fonts {
     fn for_area<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>) -> Self {
         let (w, h) = root.dim_in_pixel();
         let s = (f64::from(w) / 900.0).min(f64::from(h) / 600.0).max(0.4);
+        // Shrink with the figure, but not below legible sizes.
         Self {
-            caption: 22.0 * s,
-            label: 17.0 * s,
-            tick: 14.0 * s,
+            caption: (22.0 * s).max(15.0),
+            label: (17.0 * s).max(13.0),
+            tick: (14.0 * s).max(11.0),
         }
     }
 }
@@ -296,6 +297,7 @@ fn draw_force<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(format!("force F [{}]", c.force_unit.label))
+        .y_labels(y_label_count(root, fonts.tick))
         .x_label_formatter(&|v| fmt_axis_tick(*v, xm))
         .y_label_formatter(&|v| fmt_axis_tick(*v, ym))
         .label_style(("sans-serif", fonts.tick))
@@ -430,17 +432,17 @@ fn draw_convergence<DB: DrawingBackend>(
     {
         let mut chart = ChartBuilder::on(&top)
             .margin(fonts.label)
-            .x_label_area_size(fonts.label * 3.2)
+            .x_label_area_size(fonts.tick * 2.2)
             .y_label_area_size(fonts.label * 5.0)
             .build_cartesian_2d(iters.clone(), (jlo..jhi).log_scale())
             .map_err(err)?;
         chart
             .configure_mesh()
-            .x_desc("iteration")
             .y_desc("cost J")
             .x_labels(n_iter_labels)
+            .y_labels(y_label_count(&top, fonts.tick))
             .x_label_formatter(&|v| iteration_tick(*v, xs))
-            .y_label_formatter(&|v| fmt_tick(*v))
+            .y_label_formatter(&|v| fmt_log_tick(*v, jlo, jhi))
             .label_style(("sans-serif", fonts.tick))
             .axis_desc_style(("sans-serif", fonts.label))
             .light_line_style(RGBColor(238, 238, 238))
@@ -488,6 +490,7 @@ fn draw_convergence<DB: DrawingBackend>(
         .x_desc("iteration")
         .y_desc("parameter / final value")
         .x_labels(n_iter_labels)
+        .y_labels(y_label_count(&bottom, fonts.tick))
         .x_label_formatter(&|v| iteration_tick(*v, xs))
         .y_label_formatter(&|v| fmt_axis_tick(*v, ym))
         .label_style(("sans-serif", fonts.tick))
@@ -556,6 +559,12 @@ fn legend_corner(
     ];
     let best = (0..4).min_by_key(|&i| counts[i]).unwrap_or(0);
     corners[best].clone()
+}
+
+/// About one y tick label per four text heights of the area, 3 to 10.
+fn y_label_count<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, tick: f64) -> usize {
+    let (_, h) = area.dim_in_pixel();
+    ((f64::from(h) / (4.0 * tick)) as usize).clamp(3, 10)
 }
 
 /// Iteration ticks: integers only.

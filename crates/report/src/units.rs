@@ -93,11 +93,28 @@ pub fn fmt_tick(x: f64) -> String {
         let decimals = (5 - exp).max(0) as usize;
         trim_zeros(&format!("{x:.decimals$}"))
     } else {
-        let s = format!("{x:.5e}");
-        match s.split_once('e') {
-            Some((m, e)) => format!("{}e{e}", trim_zeros(m)),
-            None => s,
-        }
+        fmt_sci(x)
+    }
+}
+
+/// A tick label on a log axis spanning `lo..hi`: decimal if the whole axis lies in
+/// 1e-3..1e5, scientific (`1e-4`, `2.5e6`) for every tick otherwise.
+pub fn fmt_log_tick(x: f64, lo: f64, hi: f64) -> String {
+    if lo >= 1e-3 && hi < 1e5 {
+        fmt_tick(x)
+    } else if x.is_finite() && x != 0.0 {
+        fmt_sci(x)
+    } else {
+        fmt_tick(x)
+    }
+}
+
+/// Scientific notation, 6 significant digits, trailing zeros trimmed (`2.5e6`, `1e-4`).
+fn fmt_sci(x: f64) -> String {
+    let s = format!("{x:.5e}");
+    match s.split_once('e') {
+        Some((m, e)) => format!("{}e{e}", trim_zeros(m)),
+        None => s,
     }
 }
 
@@ -162,6 +179,13 @@ mod tests {
         assert_eq!(fmt_axis_tick(1e5, 2e5), "1e5");
         assert_eq!(fmt_axis_tick(0.30000000000000004, 1.0), "0.3");
         assert_eq!(fmt_axis_tick(250.0, 300.0), "250");
+    }
+
+    #[test]
+    fn log_ticks_share_one_notation() {
+        assert_eq!(fmt_log_tick(1e-3, 1e-9, 1e-2), "1e-3");
+        assert_eq!(fmt_log_tick(0.01, 1e-3, 10.0), "0.01");
+        assert_eq!(fmt_log_tick(100.0, 1.0, 1e6), "1e2");
     }
 
     #[test]

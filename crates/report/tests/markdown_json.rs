@@ -41,3 +41,21 @@ fn json_round_trip_keeps_key_fields() {
     let back = Report::from_json(&json).unwrap();
     assert_eq!(back, r);
 }
+
+/// A long history shall show its first and last ten iterations and mark the gap.
+#[test]
+fn long_history_is_elided_in_the_middle() {
+    let mut r = common::nano_report();
+    let rec = r.history[0].clone();
+    r.history = (0..40)
+        .map(|k| indentify_report::IterationRecord {
+            iteration: k,
+            ..rec.clone()
+        })
+        .collect();
+    let md = r.to_markdown();
+    let row = |k: usize| format!("\n| {k} | ");
+    assert!(md.contains(&row(9)) && md.contains(&row(30)) && md.contains(&row(39)));
+    assert!(!md.contains(&row(10)) && !md.contains(&row(29)));
+    assert!(md.contains("\n| … |"));
+}
