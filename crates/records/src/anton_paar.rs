@@ -17,7 +17,11 @@ pub(crate) fn key_value(line: &str) -> Option<(String, Option<f64>, String)> {
     match text::number(first, true) {
         Some(v) => {
             let unit = it.collect::<Vec<_>>().join(" ");
-            let unit = unit.trim_start_matches('[').trim_end_matches(']').trim().to_owned();
+            let unit = unit
+                .trim_start_matches('[')
+                .trim_end_matches(']')
+                .trim()
+                .to_owned();
             Some((key, Some(v), unit))
         }
         None => Some((key, None, rest.to_owned())),
@@ -47,7 +51,9 @@ fn header(lines: &[(usize, &str)], meta: &mut Meta) {
             }
             continue;
         }
-        let Some((key, value, unit)) = key_value(l) else { continue };
+        let Some((key, value, unit)) = key_value(l) else {
+            continue;
+        };
         let k = key.to_ascii_lowercase();
         match (k.as_str(), value) {
             ("date", _) => meta.date = Some(after_colon(l)),
@@ -57,9 +63,15 @@ fn header(lines: &[(usize, &str)], meta: &mut Meta) {
             ("acquisition rate", Some(v)) => meta.acquisition_rate = Some(v),
             ("max depth", Some(v)) => meta.protocol.max_depth = scaled(v, &unit, Dim::Length),
             ("max load", Some(v)) => meta.protocol.max_load = scaled(v, &unit, Dim::Force),
-            ("pause", Some(v)) | ("hold", Some(v)) => meta.protocol.hold = scaled(v, &unit, Dim::Time),
-            ("loading rate", Some(v)) => meta.protocol.loading_rate = rate("loading rate", v, &unit),
-            ("unloading rate", Some(v)) => meta.protocol.unloading_rate = rate("unloading rate", v, &unit),
+            ("pause", Some(v)) | ("hold", Some(v)) => {
+                meta.protocol.hold = scaled(v, &unit, Dim::Time)
+            }
+            ("loading rate", Some(v)) => {
+                meta.protocol.loading_rate = rate("loading rate", v, &unit)
+            }
+            ("unloading rate", Some(v)) => {
+                meta.protocol.unloading_rate = rate("unloading rate", v, &unit)
+            }
             (_, Some(v)) if k.contains("radius") => meta.tip_radius = scaled(v, &unit, Dim::Length),
             (_, Some(v)) => meta.other.push(Quantity::new(key, v, unit)),
             _ => {}
@@ -92,7 +104,10 @@ pub(crate) fn rate(name: &str, v: f64, unit: &str) -> Option<Quantity> {
 /// Reads the single-test export.
 pub(crate) fn read_single(file: &str, text: &str) -> Result<Record, ReadError> {
     let ls = text::lines(text);
-    let Some(mv) = ls.iter().position(|(_, l)| l.trim().eq_ignore_ascii_case("measured values")) else {
+    let Some(mv) = ls
+        .iter()
+        .position(|(_, l)| l.trim().eq_ignore_ascii_case("measured values"))
+    else {
         return Err(ReadError::new(
             file,
             None,
@@ -166,7 +181,9 @@ fn multi_col(label: &str) -> Option<MultiCol> {
 /// Whether a header line looks like the multi-test export.
 pub(crate) fn is_multi_header(line: &str) -> bool {
     let fs = Sep::of(line).split(line);
-    fs.first().and_then(|f| multi_col(f)).is_some_and(|c| c.axis == 'X' && text::normalize(&c.quantity) == "time")
+    fs.first()
+        .and_then(|f| multi_col(f))
+        .is_some_and(|c| c.axis == 'X' && text::normalize(&c.quantity) == "time")
 }
 
 /// Where one test's numbers are: (time column, value column, factor) for force and depth.
@@ -179,10 +196,20 @@ struct MultiTest {
 }
 
 /// Reads the multi-test export; `test` is 1-based.
-pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<Vec<Record>, ReadError> {
+pub(crate) fn read_multi(
+    file: &str,
+    text: &str,
+    test: Option<usize>,
+) -> Result<Vec<Record>, ReadError> {
     let ls = text::lines(text);
     let Some(hi) = ls.iter().position(|(_, l)| !l.trim().is_empty()) else {
-        return Err(ReadError::new(file, None, K::Empty, "no lines", "a header line then rows"));
+        return Err(ReadError::new(
+            file,
+            None,
+            K::Empty,
+            "no lines",
+            "a header line then rows",
+        ));
     };
     let (hno, hline) = ls[hi];
     let sep = Sep::of(hline);
@@ -203,7 +230,10 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
                 file,
                 Some(hno),
                 K::Columns,
-                format!("column {} '{label}' is not of the form X_<test>_<quantity>_[unit]", j + 1),
+                format!(
+                    "column {} '{label}' is not of the form X_<test>_<quantity>_[unit]",
+                    j + 1
+                ),
                 "columns like 'X_test_Time_[s]' followed by 'Y_test_Fn_[mN]' or 'Y_test_Pd_[nm]'",
             ));
         };
@@ -216,7 +246,10 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
             Some(text::Quantity::Depth) => Dim::Length,
             _ => continue,
         };
-        let x = j.checked_sub(1).and_then(|i| labels.get(i)).and_then(|l| multi_col(l));
+        let x = j
+            .checked_sub(1)
+            .and_then(|i| labels.get(i))
+            .and_then(|l| multi_col(l));
         let Some(x) = x.filter(|x| x.axis == 'X' && x.test == c.test) else {
             return Err(ReadError::new(
                 file,
@@ -243,7 +276,9 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
                 tests.len() - 1
             }
         };
-        let Some(mt) = tests.get_mut(idx) else { continue };
+        let Some(mt) = tests.get_mut(idx) else {
+            continue;
+        };
         let entry = Some((j - 1, j, vf, c.label.clone()));
         if dim == Dim::Force {
             if mt.force.is_none() {
@@ -277,7 +312,12 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
                 file,
                 Some(hno),
                 K::Columns,
-                format!("test '{}' has {} but no {} column", mt.name, if mt.force.is_some() { "force" } else { "depth" }, if mt.force.is_some() { "depth" } else { "force" }),
+                format!(
+                    "test '{}' has {} but no {} column",
+                    mt.name,
+                    if mt.force.is_some() { "force" } else { "depth" },
+                    if mt.force.is_some() { "depth" } else { "force" }
+                ),
                 "a force (Fn) and a depth (Pd) column for each test",
             ));
         };
@@ -287,13 +327,14 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
             if line.trim().is_empty() {
                 continue;
             }
-            let fs: Vec<&str> = line.split(match sep {
-                Sep::Tab => '\t',
-                Sep::Semicolon => ';',
-                Sep::Comma => ',',
-                Sep::Whitespace => ' ',
-            })
-            .collect();
+            let fs: Vec<&str> = line
+                .split(match sep {
+                    Sep::Tab => '\t',
+                    Sep::Semicolon => ';',
+                    Sep::Comma => ',',
+                    Sep::Whitespace => ' ',
+                })
+                .collect();
             let cells = [fc.0, fc.1, hc.0, hc.1].map(|j| fs.get(j).map_or("", |s| s.trim()));
             if cells.iter().all(|s| s.is_empty()) {
                 ended.get_or_insert(no);
@@ -304,21 +345,41 @@ pub(crate) fn read_multi(file: &str, text: &str, test: Option<usize>) -> Result<
                     file,
                     Some(no),
                     K::FewFields,
-                    format!("test '{}' has values again after its end at line {e}", mt.name),
+                    format!(
+                        "test '{}' has values again after its end at line {e}",
+                        mt.name
+                    ),
                     "each test's columns to end once, with blank cells after",
                 ));
             }
             let dc = sep.decimal_comma();
-            let tf = table::field(file, no, cells[0], &labels.get(fc.0).copied().unwrap_or(""), mt.time_factor.0, dc)?;
+            let tf = table::field(
+                file,
+                no,
+                cells[0],
+                labels.get(fc.0).copied().unwrap_or(""),
+                mt.time_factor.0,
+                dc,
+            )?;
             let f = table::field(file, no, cells[1], &fc.3, fc.2, dc)?;
-            let th = table::field(file, no, cells[2], &labels.get(hc.0).copied().unwrap_or(""), mt.time_factor.1, dc)?;
+            let th = table::field(
+                file,
+                no,
+                cells[2],
+                labels.get(hc.0).copied().unwrap_or(""),
+                mt.time_factor.1,
+                dc,
+            )?;
             let h = table::field(file, no, cells[3], &hc.3, hc.2, dc)?;
             if (tf - th).abs() > 1e-9 * tf.abs().max(1.0) {
                 return Err(ReadError::new(
                     file,
                     Some(no),
                     K::Columns,
-                    format!("test '{}': the force's time {tf} s differs from the depth's time {th} s", mt.name),
+                    format!(
+                        "test '{}': the force's time {tf} s differs from the depth's time {th} s",
+                        mt.name
+                    ),
                     "the same time in both time columns of a test",
                 ));
             }

@@ -9,7 +9,10 @@ use crate::text;
 pub(crate) fn is_numeric_row(line: &str) -> bool {
     let sep = Sep::of(line);
     let fs = sep.split(line);
-    fs.len() >= 2 && fs.iter().all(|f| text::number(f, sep.decimal_comma()).is_some())
+    fs.len() >= 2
+        && fs
+            .iter()
+            .all(|f| text::number(f, sep.decimal_comma()).is_some())
 }
 
 fn skip(line: &str) -> bool {
@@ -29,7 +32,9 @@ pub(crate) fn read(file: &str, text: &str) -> Result<Record, ReadError> {
             format!(
                 "no row of numbers in {} lines{}",
                 ls.len(),
-                first.map(|(_, l)| format!(" (first line '{}')", clip(l))).unwrap_or_default()
+                first
+                    .map(|(_, l)| format!(" (first line '{}')", clip(l)))
+                    .unwrap_or_default()
             ),
             "a header line naming the columns, then rows of numbers",
         ));

@@ -11,7 +11,9 @@ use crate::text::{self, Dim};
 /// The declared point count of a `Number of Points = N` line.
 fn points_line(line: &str) -> Option<&str> {
     let (k, v) = line.split_once('=')?;
-    k.trim().eq_ignore_ascii_case("number of points").then_some(v.trim())
+    k.trim()
+        .eq_ignore_ascii_case("number of points")
+        .then_some(v.trim())
 }
 
 /// Whether the text looks like the Hysitron text export.
@@ -55,7 +57,10 @@ pub(crate) fn read_txt(file: &str, text: &str) -> Result<Record, ReadError> {
     };
     let (pno, pline) = ls[pi];
     let declared = count(file, pno, points_line(pline).unwrap_or(""), "points")?;
-    let date = ls[..pi].iter().find(|(_, l)| !l.trim().is_empty()).map(|(_, l)| l.trim().to_owned());
+    let date = ls[..pi]
+        .iter()
+        .find(|(_, l)| !l.trim().is_empty())
+        .map(|(_, l)| l.trim().to_owned());
     let after = &ls[pi + 1..];
     let Some(hi) = after.iter().position(|(_, l)| !l.trim().is_empty()) else {
         return Err(ReadError::new(
@@ -71,7 +76,13 @@ pub(crate) fn read_txt(file: &str, text: &str) -> Result<Record, ReadError> {
     let layout = table::resolve(file, hno, &sep.split_header(hline))?;
     let cols = table::rows(file, &layout, &after[hi + 1..], sep)?;
     if cols.t.len() != declared {
-        return Err(count_error(file, pno, "'Number of Points'", declared, cols.t.len()));
+        return Err(count_error(
+            file,
+            pno,
+            "'Number of Points'",
+            declared,
+            cols.t.len(),
+        ));
     }
     table::check(file, "data", &cols, Some(hno))?;
     Ok(Record {
@@ -99,7 +110,9 @@ fn section_line(line: &str) -> Option<(&str, &str)> {
 pub(crate) fn is_hld(lines: &[(usize, &str)]) -> bool {
     let first = lines.iter().find(|(_, l)| !l.trim().is_empty());
     first.is_some_and(|(_, l)| l.starts_with("File Version:") && l.contains("Hysitron"))
-        || lines.iter().any(|(_, l)| section_line(l).is_some_and(|(n, _)| n == "Test"))
+        || lines
+            .iter()
+            .any(|(_, l)| section_line(l).is_some_and(|(n, _)| n == "Test"))
 }
 
 /// `Key: value unit`: key, number, unit (or the whole value as text).
@@ -132,23 +145,39 @@ const OTHER_KEYS: &[&str] = &[
 fn header(lines: &[(usize, &str)], meta: &mut Meta) {
     let mut version: Option<String> = None;
     for &(_, l) in lines {
-        let Some((key, value, unit)) = key_value(l) else { continue };
+        let Some((key, value, unit)) = key_value(l) else {
+            continue;
+        };
         let text_value = || unit.to_owned();
         match (key, value) {
-            ("File Version", _) => version = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned()),
-            ("System", _) => meta.instrument = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned()),
-            ("Time Stamp", _) => meta.date = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned()),
-            ("Tip ID", _) => meta.tip = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned()),
+            ("File Version", _) => {
+                version = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned())
+            }
+            ("System", _) => {
+                meta.instrument = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned())
+            }
+            ("Time Stamp", _) => {
+                meta.date = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned())
+            }
+            ("Tip ID", _) => {
+                meta.tip = Some(l.split_once(':').map_or("", |(_, v)| v).trim().to_owned())
+            }
             ("FB Mode", None) => meta.protocol.control = Some(text_value()),
-            (k, Some(v)) if k.starts_with("Tip C") || k == "Tip B" => meta.tip_area.push(Quantity::new(k, v, unit)),
-            ("Machine Comp", Some(v)) => meta.frame_compliance = text::ratio_unit(unit).map(|(f, _)| v * f),
-            ("Drift Rate", Some(v)) => meta.drift_rate = rate("drift rate", v, unit).map(|q| q.value),
+            (k, Some(v)) if k.starts_with("Tip C") || k == "Tip B" => {
+                meta.tip_area.push(Quantity::new(k, v, unit))
+            }
+            ("Machine Comp", Some(v)) => {
+                meta.frame_compliance = text::ratio_unit(unit).map(|(f, _)| v * f)
+            }
+            ("Drift Rate", Some(v)) => {
+                meta.drift_rate = rate("drift rate", v, unit).map(|q| q.value)
+            }
             ("Maximum Demand", Some(v)) => {
                 meta.protocol.max_load = scaled(v, unit, Dim::Force);
                 meta.protocol.max_depth = scaled(v, unit, Dim::Length);
             }
             ("Segment Number", Some(v)) => meta.protocol.segments.push(LoadSegment {
-                number: if v >= 0.0 && v < 1e9 { v as u32 } else { 0 },
+                number: if (0.0..1e9).contains(&v) { v as u32 } else { 0 },
                 kind: String::new(),
                 t_begin: f64::NAN,
                 t_end: f64::NAN,
@@ -158,18 +187,28 @@ fn header(lines: &[(usize, &str)], meta: &mut Meta) {
                 points: None,
             }),
             (k, v) if k.starts_with("Segment ") => {
-                let Some(s) = meta.protocol.segments.last_mut() else { continue };
+                let Some(s) = meta.protocol.segments.last_mut() else {
+                    continue;
+                };
                 let demand = |x: f64| match text::unit(unit) {
                     Some((d, f)) if d != Dim::Time => (x * f, d.internal().to_owned()),
                     _ => (x, unit.to_owned()),
                 };
                 match (k, v) {
-                    ("Segment Type", _) => s.kind = l.split_once(':').map_or("", |(_, v)| v).trim().to_owned(),
-                    ("Segment Begin Time", Some(x)) => s.t_begin = scaled(x, unit, Dim::Time).unwrap_or(x),
-                    ("Segment End Time", Some(x)) => s.t_end = scaled(x, unit, Dim::Time).unwrap_or(x),
+                    ("Segment Type", _) => {
+                        s.kind = l.split_once(':').map_or("", |(_, v)| v).trim().to_owned()
+                    }
+                    ("Segment Begin Time", Some(x)) => {
+                        s.t_begin = scaled(x, unit, Dim::Time).unwrap_or(x)
+                    }
+                    ("Segment End Time", Some(x)) => {
+                        s.t_end = scaled(x, unit, Dim::Time).unwrap_or(x)
+                    }
                     ("Segment Begin Demand", Some(x)) => (s.begin, s.unit) = demand(x),
                     ("Segment End Demand", Some(x)) => (s.end, s.unit) = demand(x),
-                    ("Segment Points", Some(x)) if x >= 0.0 && x < 1e9 => s.points = Some(x as u32),
+                    ("Segment Points", Some(x)) if (0.0..1e9).contains(&x) => {
+                        s.points = Some(x as u32)
+                    }
                     _ => {}
                 }
             }
@@ -200,7 +239,10 @@ fn header(lines: &[(usize, &str)], meta: &mut Meta) {
 /// Reads an `.hld` file: the record is the `Test Data Points` block.
 pub(crate) fn read_hld(file: &str, text: &str) -> Result<Record, ReadError> {
     let ls = text::lines(text);
-    let first_section = ls.iter().position(|(_, l)| section_line(l).is_some()).unwrap_or(ls.len());
+    let first_section = ls
+        .iter()
+        .position(|(_, l)| section_line(l).is_some())
+        .unwrap_or(ls.len());
     let mut meta = Meta {
         format: Format::Hld,
         ..Meta::default()
@@ -224,7 +266,13 @@ pub(crate) fn read_hld(file: &str, text: &str) -> Result<Record, ReadError> {
         };
         let declared = count(file, no, n, "points")?;
         let Some(&(hno, hline)) = ls.get(i + 1) else {
-            return Err(count_error(file, no, &format!("'{name} Data Points'"), declared, 0));
+            return Err(count_error(
+                file,
+                no,
+                &format!("'{name} Data Points'"),
+                declared,
+                0,
+            ));
         };
         let start = i + 2;
         let mut end = start;
@@ -235,7 +283,13 @@ pub(crate) fn read_hld(file: &str, text: &str) -> Result<Record, ReadError> {
             end += 1;
         }
         if end - start != declared {
-            return Err(count_error(file, no, &format!("'{name} Data Points'"), declared, end - start));
+            return Err(count_error(
+                file,
+                no,
+                &format!("'{name} Data Points'"),
+                declared,
+                end - start,
+            ));
         }
         if name == "Test" {
             let sep = Sep::of(hline);
@@ -243,9 +297,12 @@ pub(crate) fn read_hld(file: &str, text: &str) -> Result<Record, ReadError> {
             let cols = table::rows(file, &layout, ls.get(start..end).unwrap_or(&[]), sep)?;
             table::check(file, "test data", &cols, Some(no))?;
             test = Some(cols);
-        } else {
-            meta.other.push(Quantity::new(format!("{name} Data Points"), declared as f64, ""));
         }
+        meta.other.push(Quantity::new(
+            format!("{name} Data Points"),
+            declared as f64,
+            "",
+        ));
         i = end;
     }
     let Some(cols) = test else {

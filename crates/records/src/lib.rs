@@ -12,8 +12,10 @@ mod table;
 mod text;
 
 pub use error::{PrepError, ReadError, ReadErrorKind};
-pub use prep::{Applied, Correction, Control, Phase, Preprocessing, Resample, Segments, Span, ZeroPoint, apply};
-pub use record::{Format, LoadSegment, Meta, Protocol, Quantity, Record, ReadOptions};
+pub use prep::{
+    Applied, Control, Correction, Phase, Preprocessing, Resample, Segments, Span, ZeroPoint, apply,
+};
+pub use record::{Format, LoadSegment, Meta, Protocol, Quantity, ReadOptions, Record};
 
 use error::ReadErrorKind as K;
 
@@ -41,7 +43,10 @@ fn detect_text(text: &str) -> Format {
         .is_some_and(|(_, l)| anton_paar::is_multi_header(l))
     {
         Format::AntonPaarMulti
-    } else if ls.iter().any(|(_, l)| l.trim().eq_ignore_ascii_case("measured values")) {
+    } else if ls
+        .iter()
+        .any(|(_, l)| l.trim().eq_ignore_ascii_case("measured values"))
+    {
         Format::AntonPaar
     } else {
         Format::Csv
@@ -107,14 +112,23 @@ pub fn read_one(bytes: &[u8], name: &str, opts: &ReadOptions) -> Result<Record, 
     let list = all
         .iter()
         .enumerate()
-        .map(|(i, r)| format!("{} = {}", i + 1, r.meta.test_name.as_deref().unwrap_or(&r.name)))
+        .map(|(i, r)| {
+            format!(
+                "{} = {}",
+                i + 1,
+                r.meta.test_name.as_deref().unwrap_or(&r.name)
+            )
+        })
         .collect::<Vec<_>>()
         .join(", ");
     Err(ReadError::new(
         name,
         None,
         K::TestIndex,
-        format!("the file holds {} tests ({list}) and none is selected", all.len()),
+        format!(
+            "the file holds {} tests ({list}) and none is selected",
+            all.len()
+        ),
         format!("a test index from 1 to {}", all.len()),
     ))
 }

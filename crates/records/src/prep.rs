@@ -202,7 +202,8 @@ pub struct Span {
 ///    taken out by the zero point);
 /// 2. zero point: contact detection, `h` and `F` offsets, approach trimmed, `t = 0` at
 ///    contact;
-/// 3. compliance: `h <- h - C F` on the offset force (zero at contact, so `h(0) = 0` stays);
+/// 3. compliance: `h <- h - C F` on the offset force (about zero at contact, so `h(0)`
+///    stays about 0: the baseline noise times `C`);
 /// 4. segments: load/hold/unload, detected or mapped from the file's ids;
 /// 5. resample: `n` points from `t = 0`, segment boundaries and peak depth kept.
 ///
@@ -278,13 +279,20 @@ pub fn validate(r: &Record) -> Result<(), PrepError> {
     for i in 0..n {
         if !(r.t[i].is_finite() && r.h[i].is_finite() && r.f[i].is_finite()) {
             return Err(bad(
-                format!("sample {i} is not finite (t {}, h {}, F {})", r.t[i], r.h[i], r.f[i]),
+                format!(
+                    "sample {i} is not finite (t {}, h {}, F {})",
+                    r.t[i], r.h[i], r.f[i]
+                ),
                 "finite values",
             ));
         }
         if i > 0 && r.t[i] < r.t[i - 1] {
             return Err(bad(
-                format!("time goes back at sample {i}: {} s then {} s", r.t[i - 1], r.t[i]),
+                format!(
+                    "time goes back at sample {i}: {} s then {} s",
+                    r.t[i - 1],
+                    r.t[i]
+                ),
                 "a time that never decreases",
             ));
         }
@@ -333,10 +341,16 @@ fn coefficient(
 /// non-finite value; [`PrepError::Record`] for an inconsistent record.
 pub fn drift(r: &Record, c: Correction) -> Result<(Record, Applied), PrepError> {
     validate(r)?;
-    let Some((rate, source)) = coefficient(r, c, r.meta.drift_rate, "drift", "drift rate", "drift")? else {
+    let Some((rate, source)) =
+        coefficient(r, c, r.meta.drift_rate, "drift", "drift rate", "drift")?
+    else {
         return Ok((
             r.clone(),
-            Applied::new("drift", "no drift correction: the file gives no drift rate".into(), vec![]),
+            Applied::new(
+                "drift",
+                "no drift correction: the file gives no drift rate".into(),
+                vec![],
+            ),
         ));
     };
     let mut x = r.clone();
@@ -453,20 +467,37 @@ fn argmax(v: &[f64]) -> usize {
 pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepError> {
     validate(r)?;
     if !(o.fraction > 0.0 && o.fraction < 1.0) {
-        return Err(option_error("zero_point.fraction", o.fraction, "0 < fraction < 1"));
+        return Err(option_error(
+            "zero_point.fraction",
+            o.fraction,
+            "0 < fraction < 1",
+        ));
     }
     if !(o.noise_band >= 0.0 && o.noise_band.is_finite()) {
-        return Err(option_error("zero_point.noise_band", o.noise_band, "a finite number >= 0"));
+        return Err(option_error(
+            "zero_point.noise_band",
+            o.noise_band,
+            "a finite number >= 0",
+        ));
     }
     if let Some(th) = o.threshold {
         if !(th > 0.0 && th.is_finite()) {
-            return Err(option_error("zero_point.threshold", th, "a finite force > 0 (N)"));
+            return Err(option_error(
+                "zero_point.threshold",
+                th,
+                "a finite force > 0 (N)",
+            ));
         }
     }
     let f = &r.f;
     let i_max = argmax(f);
     let f_max = f.get(i_max).copied().unwrap_or(0.0);
-    let f_min = f.get(..=i_max).unwrap_or(&[]).iter().copied().fold(f_max, f64::min);
+    let f_min = f
+        .get(..=i_max)
+        .unwrap_or(&[])
+        .iter()
+        .copied()
+        .fold(f_max, f64::min);
     let rise = o.threshold.unwrap_or(o.fraction * (f_max - f_min));
     let level = f_min + rise;
     let no_contact = || PrepError::NoContact {
@@ -479,7 +510,12 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
         return Err(no_contact());
     }
     // the sample after the last one below the level, before the maximum
-    let i_cross = f.get(..=i_max).unwrap_or(&[]).iter().rposition(|&x| x < level).map_or(0, |i| i + 1);
+    let i_cross = f
+        .get(..=i_max)
+        .unwrap_or(&[])
+        .iter()
+        .rposition(|&x| x < level)
+        .map_or(0, |i| i + 1);
     let (base, sigma) = if i_cross >= 1 {
         let m = i_cross.div_ceil(2);
         let mut w: Vec<f64> = f.get(..m).unwrap_or(&[]).to_vec();
@@ -498,13 +534,22 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
         .unwrap_or(0);
     let (t0, h0) = (r.t[contact], r.h[contact]);
     let keep = if o.trim { contact } else { 0 };
-    let take = |v: &[f64], off: f64| v.get(keep..).unwrap_or(&[]).iter().map(|x| x - off).collect::<Vec<_>>();
+    let take = |v: &[f64], off: f64| {
+        v.get(keep..)
+            .unwrap_or(&[])
+            .iter()
+            .map(|x| x - off)
+            .collect::<Vec<_>>()
+    };
     let x = Record {
         name: r.name.clone(),
         t: take(&r.t, t0),
         h: take(&r.h, h0),
         f: take(&r.f, base),
-        segment: r.segment.as_ref().map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
+        segment: r
+            .segment
+            .as_ref()
+            .map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
         meta: r.meta.clone(),
     };
     if x.len() < 2 {
@@ -533,7 +578,11 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
             Quantity::new("F offset", base * 1e3, "mN"),
             Quantity::new("baseline noise", sigma * 1e3, "mN"),
             Quantity::new("threshold", rise * 1e3, "mN"),
-            Quantity::new("samples dropped", if o.trim { contact as f64 } else { 0.0 }, ""),
+            Quantity::new(
+                "samples dropped",
+                if o.trim { contact as f64 } else { 0.0 },
+                "",
+            ),
         ],
     );
     Ok((x, a))
@@ -549,10 +598,16 @@ pub const MAP_THRESHOLD: f64 = 0.05;
 /// `threshold`, unload below `-threshold`, hold in between. Empty when the record has no
 /// ids.
 pub fn spans(r: &Record, depth_control: bool, threshold: f64) -> Vec<Span> {
-    let Some(seg) = &r.segment else { return Vec::new() };
+    let Some(seg) = &r.segment else {
+        return Vec::new();
+    };
     let x = if depth_control { &r.h } else { &r.f };
     let n = seg.len().min(x.len()).min(r.t.len());
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     let range = (hi - lo).max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
     let mut start = 0;
@@ -625,18 +680,36 @@ fn describe(spans: &[Span]) -> String {
 pub fn segments(r: &Record, o: &Segments) -> Result<(Record, Applied), PrepError> {
     validate(r)?;
     if !(o.tolerance > 0.0 && o.tolerance < 0.5) {
-        return Err(option_error("segments.tolerance", o.tolerance, "0 < tolerance < 0.5"));
+        return Err(option_error(
+            "segments.tolerance",
+            o.tolerance,
+            "0 < tolerance < 0.5",
+        ));
     }
     if !(o.min_hold >= 0.0 && o.min_hold.is_finite()) {
-        return Err(option_error("segments.min_hold", o.min_hold, "a finite time >= 0 (s)"));
+        return Err(option_error(
+            "segments.min_hold",
+            o.min_hold,
+            "a finite time >= 0 (s)",
+        ));
     }
     let depth = depth_control(r, o.control);
     if r.segment.is_some() {
         let sp = spans(r, depth, MAP_THRESHOLD);
-        let d = format!("{} segments from the file's ids: {}", sp.len(), describe(&sp));
+        let d = format!(
+            "{} segments from the file's ids: {}",
+            sp.len(),
+            describe(&sp)
+        );
         let values = sp
             .iter()
-            .map(|s| Quantity::new(format!("id {} {:?} duration", s.id, s.phase), s.t1 - s.t0, "s"))
+            .map(|s| {
+                Quantity::new(
+                    format!("id {} {:?} duration", s.id, s.phase),
+                    s.t1 - s.t0,
+                    "s",
+                )
+            })
             .collect();
         return Ok((r.clone(), Applied::new("segments", d, values)));
     }
@@ -689,7 +762,13 @@ pub fn segments(r: &Record, o: &Segments) -> Result<(Record, Applied), PrepError
     );
     let values = sp
         .iter()
-        .map(|s| Quantity::new(format!("id {} {:?} duration", s.id, s.phase), s.t1 - s.t0, "s"))
+        .map(|s| {
+            Quantity::new(
+                format!("id {} {:?} duration", s.id, s.phase),
+                s.t1 - s.t0,
+                "s",
+            )
+        })
         .collect();
     Ok((out, Applied::new("segments", d, values)))
 }
@@ -769,7 +848,11 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
         return Err(option_error(
             "resample.n",
             o.n,
-            &format!("at least {} points (the record has {} knots: ends, segment boundaries, peak)", m + 1, m + 1),
+            &format!(
+                "at least {} points (the record has {} knots: ends, segment boundaries, peak)",
+                m + 1,
+                m + 1
+            ),
         ));
     }
     let total = t[len - 1] - t[0];
@@ -783,7 +866,9 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
     let mut sum: usize = p.iter().sum();
     while sum < budget {
         // add to the interval with the longest step
-        let k = (0..m).max_by(|&i, &j| (dur[i] / p[i] as f64).total_cmp(&(dur[j] / p[j] as f64))).unwrap_or(0);
+        let k = (0..m)
+            .max_by(|&i, &j| (dur[i] / p[i] as f64).total_cmp(&(dur[j] / p[j] as f64)))
+            .unwrap_or(0);
         p[k] += 1;
         sum += 1;
     }
@@ -804,7 +889,11 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
     let mut seg_of: Vec<u32> = Vec::with_capacity(o.n);
     for k in 0..m {
         let (i0, i1) = (knots[k], knots[k + 1]);
-        let id = r.segment.as_ref().and_then(|v| v.get(i0).copied()).unwrap_or(0);
+        let id = r
+            .segment
+            .as_ref()
+            .and_then(|v| v.get(i0).copied())
+            .unwrap_or(0);
         for j in 0..p[k] {
             s.push(t[i0] + dur[k] * j as f64 / p[k] as f64);
             knot_of.push((j == 0).then_some(i0));
@@ -813,7 +902,12 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
         if k + 1 == m {
             s.push(t[i1]);
             knot_of.push(Some(i1));
-            seg_of.push(r.segment.as_ref().and_then(|v| v.get(i1).copied()).unwrap_or(0));
+            seg_of.push(
+                r.segment
+                    .as_ref()
+                    .and_then(|v| v.get(i1).copied())
+                    .unwrap_or(0),
+            );
         }
     }
     let ch = trapezoids(t, &r.h);
@@ -917,7 +1011,10 @@ mod tests {
             ..Preprocessing::default()
         };
         let (r, done) = apply(&raw(), &p).unwrap();
-        assert_eq!(done.iter().map(|a| a.step.as_str()).collect::<Vec<_>>(), ["drift", "zero_point", "compliance"]);
+        assert_eq!(
+            done.iter().map(|a| a.step.as_str()).collect::<Vec<_>>(),
+            ["drift", "zero_point", "compliance"]
+        );
         assert_eq!(r.len(), N - 20);
         for j in 0..r.len() {
             let (t, h, f) = truth(j + 20);
@@ -928,10 +1025,22 @@ mod tests {
         let z = &done[1];
         let get = |n: &str| z.values.iter().find(|q| q.name == n).unwrap().value;
         assert!((get("contact time") - 2.0).abs() < 1e-12);
-        assert!((get("h offset") - H0 * 1e6).abs() < 1e-9, "{}", z.description);
+        assert!(
+            (get("h offset") - H0 * 1e6).abs() < 1e-9,
+            "{}",
+            z.description
+        );
         assert!((get("F offset") - F0 * 1e3).abs() < 1e-12);
-        assert!(done[0].description.contains("1.000000 nm/s"), "{}", done[0].description);
-        assert!(done[2].description.contains("0.500000 nm/mN"), "{}", done[2].description);
+        assert!(
+            done[0].description.contains("1.000000 nm/s"),
+            "{}",
+            done[0].description
+        );
+        assert!(
+            done[2].description.contains("0.500000 nm/mN"),
+            "{}",
+            done[2].description
+        );
     }
 
     #[test]
@@ -958,7 +1067,10 @@ mod tests {
     #[test]
     fn drift_and_compliance_from_the_file_or_not() {
         let mut r = raw();
-        assert!(matches!(drift(&r, Correction::FromFile), Err(PrepError::NoHint { .. })));
+        assert!(matches!(
+            drift(&r, Correction::FromFile),
+            Err(PrepError::NoHint { .. })
+        ));
         let (same, a) = drift(&r, Correction::Auto).unwrap();
         assert_eq!(same, r);
         assert!(a.description.contains("no drift"));
@@ -968,7 +1080,10 @@ mod tests {
         assert!((d.h[100] - (r.h[100] - RATE * r.t[100])).abs() < 1e-18);
         let (c, _) = compliance(&r, Correction::Auto).unwrap();
         assert!((c.h[100] - (r.h[100] - C * r.f[100])).abs() < 1e-18);
-        assert!(matches!(compliance(&r, Correction::Value(f64::NAN)), Err(PrepError::Option { .. })));
+        assert!(matches!(
+            compliance(&r, Correction::Value(f64::NAN)),
+            Err(PrepError::Option { .. })
+        ));
     }
 
     #[test]
@@ -978,26 +1093,64 @@ mod tests {
         let sp = spans(&s, false, 0.0);
         assert_eq!(sp.len(), 3, "{}", a.description);
         // hold from 10 s (9.9 mN reached at 9.9 s, tolerance 1 %) to 15.1 s after contact
-        assert!((sp[1].t0 - 9.9).abs() < 0.11 && (sp[1].t1 - 15.1).abs() < 0.11, "{}", a.description);
-        assert_eq!(spans(&s, false, MAP_THRESHOLD).iter().map(|s| s.phase).collect::<Vec<_>>(), [Phase::Load, Phase::Hold, Phase::Unload]);
+        assert!(
+            (sp[1].t0 - 9.9).abs() < 0.11 && (sp[1].t1 - 15.1).abs() < 0.11,
+            "{}",
+            a.description
+        );
+        assert_eq!(
+            spans(&s, false, MAP_THRESHOLD)
+                .iter()
+                .map(|s| s.phase)
+                .collect::<Vec<_>>(),
+            [Phase::Load, Phase::Hold, Phase::Unload]
+        );
     }
 
     #[test]
     fn file_segment_ids_are_mapped_by_trend() {
         let mut r = raw();
-        r.segment = Some((0..N).map(|i| if i <= 120 { 1 } else if i <= 170 { 2 } else { 3 }).collect());
+        r.segment = Some(
+            (0..N)
+                .map(|i| {
+                    if i <= 120 {
+                        1
+                    } else if i <= 170 {
+                        2
+                    } else {
+                        3
+                    }
+                })
+                .collect(),
+        );
         let (_, a) = segments(&r, &Segments::default()).unwrap();
-        assert!(a.description.contains("id 1 Load") && a.description.contains("id 2 Hold") && a.description.contains("id 3 Unload"), "{}", a.description);
+        assert!(
+            a.description.contains("id 1 Load")
+                && a.description.contains("id 2 Hold")
+                && a.description.contains("id 3 Unload"),
+            "{}",
+            a.description
+        );
     }
 
     #[test]
     fn resampling_a_linear_record_is_exact_and_keeps_boundaries_and_peak() {
         let t: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.01).collect();
-        let h: Vec<f64> = t.iter().map(|&x| if x <= 6.0 { 2.0 * x } else { 24.0 - 2.0 * x }).collect();
+        let h: Vec<f64> = t
+            .iter()
+            .map(|&x| if x <= 6.0 { 2.0 * x } else { 24.0 - 2.0 * x })
+            .collect();
         let f: Vec<f64> = t.iter().map(|&x| 3.0 * x).collect();
         let mut r = rec(t.iter().map(|x| x + 5.0).collect(), h, f);
         r.segment = Some(t.iter().map(|&x| u32::from(x >= 4.0)).collect());
-        let (s, a) = resample(&r, &Resample { n: 11, min_per_segment: 2 }).unwrap();
+        let (s, a) = resample(
+            &r,
+            &Resample {
+                n: 11,
+                min_per_segment: 2,
+            },
+        )
+        .unwrap();
         assert_eq!(s.len(), 11, "{}", a.description);
         for (j, &x) in s.t.iter().enumerate() {
             assert!((x - j as f64).abs() < 1e-9, "t {x} at {j}");
@@ -1008,30 +1161,81 @@ mod tests {
         assert_eq!(s.segment.as_deref().unwrap()[4], 1);
         assert_eq!(s.segment.as_deref().unwrap()[3], 0);
         // uneven n: still monotone, boundary (4 s) and peak (6 s) kept
-        let (s, _) = resample(&r, &Resample { n: 17, min_per_segment: 3 }).unwrap();
+        let (s, _) = resample(
+            &r,
+            &Resample {
+                n: 17,
+                min_per_segment: 3,
+            },
+        )
+        .unwrap();
         assert!(s.t.windows(2).all(|w| w[1] > w[0]));
-        assert!(s.t.iter().any(|&x| (x - 4.0).abs() < 1e-12) && s.t.iter().any(|&x| (x - 6.0).abs() < 1e-12));
+        assert!(
+            s.t.iter().any(|&x| (x - 4.0).abs() < 1e-12)
+                && s.t.iter().any(|&x| (x - 6.0).abs() < 1e-12)
+        );
         assert!((s.h_max() - 12.0).abs() < 1e-12);
     }
 
     #[test]
     fn resampling_rejects_too_few_points() {
-        let r = rec(vec![0.0, 1.0, 2.0], vec![0.0, 2.0, 1.0], vec![0.0, 1.0, 0.5]);
+        let r = rec(
+            vec![0.0, 1.0, 2.0],
+            vec![0.0, 2.0, 1.0],
+            vec![0.0, 1.0, 0.5],
+        );
         for n in [0, 1, 2] {
-            let e = resample(&r, &Resample { n, min_per_segment: 1 }).unwrap_err();
-            assert!(matches!(e, PrepError::Option { field: "resample.n", .. }), "{e}");
+            let e = resample(
+                &r,
+                &Resample {
+                    n,
+                    min_per_segment: 1,
+                },
+            )
+            .unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    PrepError::Option {
+                        field: "resample.n",
+                        ..
+                    }
+                ),
+                "{e}"
+            );
         }
-        assert_eq!(resample(&r, &Resample { n: 3, min_per_segment: 1 }).unwrap().0.len(), 3);
+        assert_eq!(
+            resample(
+                &r,
+                &Resample {
+                    n: 3,
+                    min_per_segment: 1
+                }
+            )
+            .unwrap()
+            .0
+            .len(),
+            3
+        );
     }
 
     #[test]
     fn inconsistent_records_are_errors() {
         let r = rec(vec![0.0, 1.0], vec![0.0], vec![0.0, 1.0]);
-        assert!(matches!(apply(&r, &Preprocessing::default()), Err(PrepError::Record { .. })));
+        assert!(matches!(
+            apply(&r, &Preprocessing::default()),
+            Err(PrepError::Record { .. })
+        ));
         let r = rec(vec![0.0], vec![0.0], vec![0.0]);
-        assert!(matches!(apply(&r, &Preprocessing::default()), Err(PrepError::TooShort { .. })));
+        assert!(matches!(
+            apply(&r, &Preprocessing::default()),
+            Err(PrepError::TooShort { .. })
+        ));
         let r = rec(vec![1.0, 0.0], vec![0.0, 1.0], vec![0.0, 1.0]);
-        assert!(matches!(apply(&r, &Preprocessing::default()), Err(PrepError::Record { .. })));
+        assert!(matches!(
+            apply(&r, &Preprocessing::default()),
+            Err(PrepError::Record { .. })
+        ));
     }
 
     #[test]
@@ -1043,9 +1247,18 @@ mod tests {
         assert_eq!(p.drift, Correction::Auto);
         assert_eq!(p.zero_point.as_ref().unwrap().fraction, 0.05);
         assert!(p.zero_point.as_ref().unwrap().trim);
-        assert_eq!(p.resample, Some(Resample { n: 150, min_per_segment: 5 }));
+        assert_eq!(
+            p.resample,
+            Some(Resample {
+                n: 150,
+                min_per_segment: 5
+            })
+        );
         assert_eq!(p.segments, Some(Segments::default()));
-        assert_eq!(ron::from_str::<Preprocessing>("()").unwrap(), Preprocessing::default());
+        assert_eq!(
+            ron::from_str::<Preprocessing>("()").unwrap(),
+            Preprocessing::default()
+        );
         assert!(ron::from_str::<Preprocessing>("(drfit: Auto)").is_err());
         assert!(ron::from_str::<Preprocessing>("(resample: Some((n: -3)))").is_err());
     }

@@ -49,7 +49,8 @@ impl Sep {
         }
         let mut out: Vec<String> = Vec::new();
         for f in fields {
-            let is_unit = (f.starts_with('(') && f.ends_with(')')) || (f.starts_with('[') && f.ends_with(']'));
+            let is_unit = (f.starts_with('(') && f.ends_with(')'))
+                || (f.starts_with('[') && f.ends_with(']'));
             match out.last_mut() {
                 Some(prev) if is_unit => {
                     prev.push(' ');
@@ -96,10 +97,15 @@ pub(crate) struct Layout {
 
 impl Layout {
     fn width(&self) -> usize {
-        [self.t.index, self.h.index, self.f.index, self.segment.as_ref().map_or(0, |c| c.index)]
-            .into_iter()
-            .max()
-            .unwrap_or(0)
+        [
+            self.t.index,
+            self.h.index,
+            self.f.index,
+            self.segment.as_ref().map_or(0, |c| c.index),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
             + 1
     }
 }
@@ -122,10 +128,20 @@ pub(crate) fn resolve(file: &str, line: usize, labels: &[String]) -> Result<Layo
                 continue;
             }
             match &l.unit {
-                None => return Ok(Col { index, label: l.text.clone(), factor: 1.0 }),
+                None => {
+                    return Ok(Col {
+                        index,
+                        label: l.text.clone(),
+                        factor: 1.0,
+                    });
+                }
                 Some(u) => match text::unit(u) {
                     Some((d, factor)) if d == dim => {
-                        return Ok(Col { index, label: l.text.clone(), factor });
+                        return Ok(Col {
+                            index,
+                            label: l.text.clone(),
+                            factor,
+                        });
                     }
                     _ => {
                         bad_unit.get_or_insert(l);
@@ -144,7 +160,11 @@ pub(crate) fn resolve(file: &str, line: usize, labels: &[String]) -> Result<Layo
                     l.unit.as_deref().unwrap_or(""),
                     dim.internal()
                 ),
-                format!("one of {} (no unit means {})", dim.accepted(), dim.internal()),
+                format!(
+                    "one of {} (no unit means {})",
+                    dim.accepted(),
+                    dim.internal()
+                ),
             ),
             None => ReadError::new(
                 file,
@@ -165,7 +185,11 @@ pub(crate) fn resolve(file: &str, line: usize, labels: &[String]) -> Result<Layo
     let segment = parsed
         .iter()
         .position(|l| text::quantity(&l.name) == Some(Quantity::Segment))
-        .map(|index| Col { index, label: labels.get(index).cloned().unwrap_or_default(), factor: 1.0 });
+        .map(|index| Col {
+            index,
+            label: labels.get(index).cloned().unwrap_or_default(),
+            factor: 1.0,
+        });
     Ok(Layout { t, h, f, segment })
 }
 
@@ -179,7 +203,14 @@ fn quantity_name(q: Quantity) -> &'static str {
 }
 
 /// Parses one field of column `col` on `line` into internal units.
-pub(crate) fn field(file: &str, line: usize, raw: &str, label: &str, factor: f64, decimal_comma: bool) -> Result<f64, ReadError> {
+pub(crate) fn field(
+    file: &str,
+    line: usize,
+    raw: &str,
+    label: &str,
+    factor: f64,
+    decimal_comma: bool,
+) -> Result<f64, ReadError> {
     let v = text::number(raw, decimal_comma).ok_or_else(|| {
         ReadError::new(
             file,
@@ -199,7 +230,14 @@ pub(crate) fn field(file: &str, line: usize, raw: &str, label: &str, factor: f64
             file,
             Some(line),
             K::NotFinite,
-            format!("'{raw}' in column '{label}' is {}", if v.is_finite() { "too large" } else { "not finite" }),
+            format!(
+                "'{raw}' in column '{label}' is {}",
+                if v.is_finite() {
+                    "too large"
+                } else {
+                    "not finite"
+                }
+            ),
             "a finite number",
         ));
     }
@@ -207,7 +245,12 @@ pub(crate) fn field(file: &str, line: usize, raw: &str, label: &str, factor: f64
 }
 
 /// Parses data rows with a resolved layout. Blank lines and `#` comments are skipped.
-pub(crate) fn rows(file: &str, layout: &Layout, rows: &[(usize, &str)], sep: Sep) -> Result<Cols, ReadError> {
+pub(crate) fn rows(
+    file: &str,
+    layout: &Layout,
+    rows: &[(usize, &str)],
+    sep: Sep,
+) -> Result<Cols, ReadError> {
     let dc = sep.decimal_comma();
     let width = layout.width();
     let mut c = Cols {
@@ -236,7 +279,16 @@ pub(crate) fn rows(file: &str, layout: &Layout, rows: &[(usize, &str)], sep: Sep
                 ),
             ));
         }
-        let get = |col: &Col| field(file, no, fs.get(col.index).copied().unwrap_or(""), &col.label, col.factor, dc);
+        let get = |col: &Col| {
+            field(
+                file,
+                no,
+                fs.get(col.index).copied().unwrap_or(""),
+                &col.label,
+                col.factor,
+                dc,
+            )
+        };
         c.t.push(get(&layout.t)?);
         c.h.push(get(&layout.h)?);
         c.f.push(get(&layout.f)?);
@@ -259,12 +311,21 @@ pub(crate) fn rows(file: &str, layout: &Layout, rows: &[(usize, &str)], sep: Sep
 }
 
 /// The checks every record passes: at least two rows and a time that never decreases.
-pub(crate) fn check(file: &str, what: &str, c: &Cols, near: Option<usize>) -> Result<(), ReadError> {
+pub(crate) fn check(
+    file: &str,
+    what: &str,
+    c: &Cols,
+    near: Option<usize>,
+) -> Result<(), ReadError> {
     if c.t.len() < 2 {
         return Err(ReadError::new(
             file,
             c.lines.first().copied().or(near),
-            if c.t.is_empty() { K::NoRows } else { K::TooFewRows },
+            if c.t.is_empty() {
+                K::NoRows
+            } else {
+                K::TooFewRows
+            },
             format!("{what}: {} data rows", c.t.len()),
             "at least 2 rows of numbers",
         ));

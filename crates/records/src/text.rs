@@ -44,7 +44,11 @@ pub(crate) fn lines(text: &str) -> Vec<(usize, &str)> {
             .map(|l| l.strip_suffix('\r').unwrap_or(l))
             .collect()
     };
-    let mut out: Vec<(usize, &str)> = parts.into_iter().enumerate().map(|(i, l)| (i + 1, l)).collect();
+    let mut out: Vec<(usize, &str)> = parts
+        .into_iter()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l))
+        .collect();
     // a final newline makes no extra line
     if out.last().is_some_and(|(_, l)| l.is_empty()) {
         out.pop();
@@ -195,7 +199,15 @@ pub(crate) const DEPTH_NAMES: &[&str] = &[
     "penetration depth",
     "indentation depth",
 ];
-pub(crate) const FORCE_NAMES: &[&str] = &["f", "force", "load", "fn", "p", "normal force", "normal load"];
+pub(crate) const FORCE_NAMES: &[&str] = &[
+    "f",
+    "force",
+    "load",
+    "fn",
+    "p",
+    "normal force",
+    "normal load",
+];
 pub(crate) const SEGMENT_NAMES: &[&str] = &["segment", "segmentid", "segment id", "seg"];
 
 /// The quantity a normalized column name stands for.
