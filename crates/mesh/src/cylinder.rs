@@ -102,65 +102,76 @@ impl CylinderMesher {
     /// [`MeshError::Input`] for invalid inputs.
     pub fn build(&self) -> Result<Mesh, MeshError> {
         self.validate()?;
-        let (nr, nz) = (self.nr, self.nz);
-        let rc = graded_positions(self.radius, nr, self.grading_r);
-        // z measured downwards from the top, then mapped to z = -depth.
-        let dc = graded_positions(self.height, nz, self.grading_z);
-        // Fine grid (2nr+1) x (2nz+1) without element centres; J counts from the bottom.
-        let r_at = |i: usize| {
-            if i % 2 == 0 {
-                rc[i / 2]
-            } else {
-                0.5 * (rc[i / 2] + rc[i / 2 + 1])
-            }
-        };
-        let z_at = |j: usize| {
-            let k = 2 * nz - j; // fine index measured from the top
-            -(if k % 2 == 0 {
-                dc[k / 2]
-            } else {
-                0.5 * (dc[k / 2] + dc[k / 2 + 1])
-            })
-        };
-        let (ni, nj) = (2 * nr + 1, 2 * nz + 1);
-        let mut id = vec![usize::MAX; ni * nj];
-        let mut nodes = Vec::new();
-        for j in 0..nj {
-            for i in 0..ni {
-                if i % 2 == 1 && j % 2 == 1 {
-                    continue;
-                }
-                id[j * ni + i] = nodes.len();
-                nodes.push([r_at(i), z_at(j)]);
-            }
-        }
-        let at = |i: usize, j: usize| id[j * ni + i];
-        let mut elements = Vec::with_capacity(nr * nz);
-        for ej in 0..nz {
-            for ei in 0..nr {
-                let (i, j) = (2 * ei, 2 * ej);
-                elements.push([
-                    at(i, j),
-                    at(i + 2, j),
-                    at(i + 2, j + 2),
-                    at(i, j + 2),
-                    at(i + 1, j),
-                    at(i + 2, j + 1),
-                    at(i + 1, j + 2),
-                    at(i, j + 1),
-                ]);
-            }
-        }
-        let mut sets = BTreeMap::new();
-        sets.insert("axis".to_string(), (0..nj).map(|j| at(0, j)).collect());
-        sets.insert(
-            "outer".to_string(),
-            (0..nj).map(|j| at(ni - 1, j)).collect(),
-        );
-        sets.insert("bottom".to_string(), (0..ni).map(|i| at(i, 0)).collect());
-        sets.insert("top".to_string(), (0..ni).map(|i| at(i, nj - 1)).collect());
-        Mesh::new(nodes, elements, sets)
+        let rc = graded_positions(self.radius, self.nr, self.grading_r);
+        let dc = graded_positions(self.height, self.nz, self.grading_z);
+        tensor_mesh(&rc, &dc)
     }
+}
+
+/// Structured Q8 mesh of the rectangle `0 <= r <= rc[last]`, `-dc[last] <= z <= 0` on the
+/// element boundaries `rc` (radii from the axis) and `dc` (depths from the top surface),
+/// both increasing from 0; midside nodes at the middle of each edge. Node sets `axis`,
+/// `bottom`, `outer`, `top`, sorted by r, then z.
+///
+/// # Errors
+/// [`MeshError::Distorted`] if the positions are not increasing (zero or negative sizes).
+pub(crate) fn tensor_mesh(rc: &[f64], dc: &[f64]) -> Result<Mesh, MeshError> {
+    let (nr, nz) = (rc.len() - 1, dc.len() - 1);
+    // Fine grid (2nr+1) x (2nz+1) without element centres; J counts from the bottom.
+    let r_at = |i: usize| {
+        if i % 2 == 0 {
+            rc[i / 2]
+        } else {
+            0.5 * (rc[i / 2] + rc[i / 2 + 1])
+        }
+    };
+    // z measured downwards from the top, then mapped to z = -depth.
+    let z_at = |j: usize| {
+        let k = 2 * nz - j; // fine index measured from the top
+        -(if k % 2 == 0 {
+            dc[k / 2]
+        } else {
+            0.5 * (dc[k / 2] + dc[k / 2 + 1])
+        })
+    };
+    let (ni, nj) = (2 * nr + 1, 2 * nz + 1);
+    let mut id = vec![usize::MAX; ni * nj];
+    let mut nodes = Vec::new();
+    for j in 0..nj {
+        for i in 0..ni {
+            if i % 2 == 1 && j % 2 == 1 {
+                continue;
+            }
+            id[j * ni + i] = nodes.len();
+            nodes.push([r_at(i), z_at(j)]);
+        }
+    }
+    let at = |i: usize, j: usize| id[j * ni + i];
+    let mut elements = Vec::with_capacity(nr * nz);
+    for ej in 0..nz {
+        for ei in 0..nr {
+            let (i, j) = (2 * ei, 2 * ej);
+            elements.push([
+                at(i, j),
+                at(i + 2, j),
+                at(i + 2, j + 2),
+                at(i, j + 2),
+                at(i + 1, j),
+                at(i + 2, j + 1),
+                at(i + 1, j + 2),
+                at(i, j + 1),
+            ]);
+        }
+    }
+    let mut sets = BTreeMap::new();
+    sets.insert("axis".to_string(), (0..nj).map(|j| at(0, j)).collect());
+    sets.insert(
+        "outer".to_string(),
+        (0..nj).map(|j| at(ni - 1, j)).collect(),
+    );
+    sets.insert("bottom".to_string(), (0..ni).map(|i| at(i, 0)).collect());
+    sets.insert("top".to_string(), (0..ni).map(|i| at(i, nj - 1)).collect());
+    Mesh::new(nodes, elements, sets)
 }
 
 #[cfg(test)]

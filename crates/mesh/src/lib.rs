@@ -1,7 +1,8 @@
 //! Axisymmetric meshes of 8-node serendipity quadrilaterals in `(r, z)` for indentify.
 //!
 //! [`Mesh`] holds nodes, elements and named node sets; [`CylinderMesher`] builds the
-//! graded cylinder specimen; [`Mesh::check_quality`] verifies a positive Jacobian at
+//! graded cylinder specimen; [`ZonedCylinderMesher`] the one with a uniform core under the
+//! punch (the automatic specimen); [`Mesh::check_quality`] verifies a positive Jacobian at
 //! every Gauss point; [`vtu`] writes ParaView files. Lengths are in mm. The body lies
 //! below `z = 0` (the top surface, where the punch presses) and right of the axis `r = 0`.
 //! This crate knows nothing of materials, assembly or contact.
@@ -9,10 +10,12 @@
 pub mod cylinder;
 pub mod q8;
 pub mod vtu;
+pub mod zoned;
 
 use std::collections::BTreeMap;
 
 pub use cylinder::CylinderMesher;
+pub use zoned::ZonedCylinderMesher;
 
 /// Errors of mesh construction and checks.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
