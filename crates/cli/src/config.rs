@@ -1150,7 +1150,7 @@ mod tests {
             }
         );
         let c = set(c, "history.segments.0.depth=0.2").unwrap();
-        assert_eq!(c.history.segments[0].depth, 0.2);
+        assert_eq!(c.history.as_ref().unwrap().segments[0].depth, 0.2);
         let c = set(c, "solver.max_cuts=3").unwrap();
         assert_eq!(c.solver.max_cuts, 3);
         let c = set(c, "punch.Cone.half_angle_deg=60").unwrap();

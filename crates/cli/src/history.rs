@@ -46,6 +46,20 @@ pub fn line(r: &IterationRecord) -> String {
     cols.join(",")
 }
 
+/// Every complete line of the history file `path` for `n_params` parameters (an
+/// unreadable file or a cut line gives fewer records, never an error: the history is a
+/// report here, not a resume point).
+pub fn read_all(path: &Path, n_params: usize) -> Vec<IterationRecord> {
+    std::fs::read_to_string(path)
+        .map(|text| {
+            text.lines()
+                .skip(1)
+                .filter_map(|l| parse_line(l, n_params))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Parses a line written by [`line`] for `n_params` parameters.
 fn parse_line(text: &str, n_params: usize) -> Option<IterationRecord> {
     let f: Vec<&str> = text.split(',').map(str::trim).collect();

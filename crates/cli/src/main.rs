@@ -4,6 +4,7 @@
 mod commands;
 mod config;
 mod data;
+mod figures;
 mod history;
 mod log;
 mod output;

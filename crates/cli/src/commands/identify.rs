@@ -455,6 +455,34 @@ pub fn run(args: &Args) -> Result<()> {
     let f_start = curve_at(&start_params)?;
     let f_final = curve_at(&result.c)?;
     write_fit(&fit_path, &problem, &f_start, &f_final)?;
+    let history_records = crate::history::read_all(&history_path, names.len());
+    let (file, test) = match &prepared.measured {
+        Some(m) => (
+            m.path.display().to_string(),
+            m.raw
+                .meta
+                .test_name
+                .clone()
+                .unwrap_or_else(|| "single test".to_string()),
+        ),
+        None => (data.describe.clone(), String::new()),
+    };
+    let written = crate::figures::write(
+        out,
+        &result,
+        &crate::figures::Inputs {
+            title: format!("Identification of {} parameters: {name}", law.name()),
+            file,
+            test,
+            measured: prepared.measured.as_ref(),
+            t: &problem.schedule.t,
+            h: &problem.schedule.depth,
+            f_data: &problem.target,
+            f_start: &f_start,
+            f_final: &f_final,
+            history: &history_records,
+        },
+    )?;
     write_result(
         &result_path,
         &result,
@@ -520,14 +548,27 @@ pub fn run(args: &Args) -> Result<()> {
         result.adjoint_solves,
         result.seconds
     ));
+    text.push_str(&format!(
+        "  fit: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest residual \
+         {:.4e} N ({} points)\n",
+        written.fit.r2,
+        written.fit.rms,
+        100.0 * written.fit.rms_rel,
+        written.fit.max_abs,
+        written.fit.n
+    ));
     if let Some(i) = &result.identifiability {
         text.push_str(&format!("  {}\n", identifiability_line(i)));
     }
     text.push_str(&format!(
-        "  report: {} (history {}, fit {}), total wall time {:.1} s\n",
+        "  report: {} and {} (result {}, history {}, fit {}, {} figures as SVG and PNG), total \
+         wall time {:.1} s\n",
+        written.markdown.display(),
+        written.json.display(),
         result_path.display(),
         history_path.display(),
         fit_path.display(),
+        written.figures.len() / 2,
         wall.elapsed().as_secs_f64()
     ));
     report::print_text(&text)?;

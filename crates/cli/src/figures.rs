@@ -1,0 +1,232 @@
+//! The identification report of `indentify identify`: `report.md` and `report.json`
+//! (indentify_report's [`Report`]) and its figures as SVG and PNG (force-depth,
+//! force-time, convergence), written into the report directory.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use indentify_identify::{IdentifyResult, IterationRecord};
+use indentify_report::{
+    BoundHit, Convergence, Correlation, Curves, DisplayUnit, Figure, FigureSize, FitQuality,
+    NameValue, Parameter, PreprocessingStep, Report, Source,
+};
+
+use crate::config::Measured;
+
+/// What the report is made of, besides the result.
+pub struct Inputs<'a> {
+    /// Title line.
+    pub title: String,
+    /// The data's file (or description) and test.
+    pub file: String,
+    /// Test label ("" for single-test files).
+    pub test: String,
+    /// The measured record, if any (metadata and preprocessing).
+    pub measured: Option<&'a Measured>,
+    /// Schedule times (s) and depths (mm).
+    pub t: &'a [f64],
+    /// Depths (mm).
+    pub h: &'a [f64],
+    /// Data force at the schedule times (N).
+    pub f_data: &'a [f64],
+    /// Simulated force at the start (N).
+    pub f_start: &'a [f64],
+    /// Simulated force at the end (N).
+    pub f_final: &'a [f64],
+    /// The iteration history (history.csv).
+    pub history: &'a [IterationRecord],
+}
+
+/// The files written.
+pub struct Written {
+    /// report.md.
+    pub markdown: PathBuf,
+    /// report.json.
+    pub json: PathBuf,
+    /// Figures (SVG and PNG).
+    pub figures: Vec<PathBuf>,
+    /// Fit quality of the final curve.
+    pub fit: FitQuality,
+}
+
+/// How a parameter is shown: moduli and stresses of 1000 MPa and more in GPa, others in
+/// their own unit.
+fn display_unit(unit: &str, value: f64) -> DisplayUnit {
+    if unit == "MPa" && value.abs() >= 1e3 {
+        DisplayUnit::new("GPa", 1e-3)
+    } else {
+        DisplayUnit::internal(unit)
+    }
+}
+
+/// The file's metadata worth a line in the report.
+fn metadata(m: &Measured) -> Vec<NameValue> {
+    let meta = &m.raw.meta;
+    let mut out = vec![NameValue::new("format", meta.format.name())];
+    let mut opt = |name: &str, v: &Option<String>| {
+        if let Some(v) = v {
+            out.push(NameValue::new(name, v.clone()));
+        }
+    };
+    opt("instrument", &meta.instrument);
+    opt("tip", &meta.tip);
+    opt("date", &meta.date);
+    opt("control", &meta.protocol.control);
+    if let Some(r) = meta.tip_radius {
+        out.push(NameValue::new("tip radius", format!("{} um", r * 1e3)));
+    }
+    if let Some(r) = meta.acquisition_rate {
+        out.push(NameValue::new("acquisition rate", format!("{r} Hz")));
+    }
+    if let Some(c) = meta.frame_compliance {
+        out.push(NameValue::new(
+            "frame compliance (file)",
+            format!("{} nm/mN", c * 1e3),
+        ));
+    }
+    if let Some(d) = meta.drift_rate {
+        out.push(NameValue::new(
+            "drift rate (file)",
+            format!("{} nm/s", d * 1e6),
+        ));
+    }
+    for q in &meta.results {
+        out.push(NameValue::new(
+            format!("vendor: {}", q.name),
+            format!("{} {}", q.value, q.unit),
+        ));
+    }
+    out.push(NameValue::new(
+        "samples",
+        format!(
+            "{} read, {} after preprocessing",
+            m.raw.t.len(),
+            m.record.t.len()
+        ),
+    ));
+    out
+}
+
+/// Builds the report, renders it and its figures into `dir`.
+///
+/// # Errors
+/// A report that cannot be rendered (no finite point in a series), an unwritable file.
+pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result<Written> {
+    let fit = FitQuality::compute(inputs.f_data, inputs.f_final)
+        .context("cannot measure the quality of the fit")?;
+    let id = result.identifiability.as_ref();
+    let parameters = result
+        .params
+        .iter()
+        .map(|p| {
+            let std_dev = id.and_then(|i| {
+                i.names
+                    .iter()
+                    .position(|n| *n == p.name)
+                    .map(|k| i.std_dev[k])
+                    .filter(|s| s.is_finite())
+            });
+            Parameter {
+                name: p.name.to_string(),
+                unit: display_unit(p.unit, p.value),
+                start: p.start,
+                value: p.value,
+                lower: p.free.then_some(p.lower),
+                upper: p.free.then_some(p.upper),
+                at_bound: if p.at_lower {
+                    Some(BoundHit::Lower)
+                } else if p.at_upper {
+                    Some(BoundHit::Upper)
+                } else {
+                    None
+                },
+                fixed: !p.free,
+                std_dev,
+            }
+        })
+        .collect();
+    let correlation = id.map(|i| Correlation {
+        names: i.names.iter().map(|n| n.to_string()).collect(),
+        matrix: i.correlation.clone(),
+    });
+    let preprocessing = inputs.measured.map_or_else(Vec::new, |m| {
+        m.applied
+            .iter()
+            .map(|a| PreprocessingStep::new(a.step.clone(), a.description.clone()))
+            .collect()
+    });
+    let history = inputs
+        .history
+        .iter()
+        .map(|r| indentify_report::IterationRecord {
+            iteration: r.iteration,
+            cost: r.cost,
+            grad_norm: Some(r.grad_norm),
+            params: r.params.clone(),
+        })
+        .collect();
+    let mut report = Report {
+        title: inputs.title.clone(),
+        source: Source {
+            file: inputs.file.clone(),
+            test: inputs.test.clone(),
+            metadata: inputs.measured.map_or_else(Vec::new, metadata),
+        },
+        law: result.law.to_string(),
+        parameters,
+        correlation,
+        convergence: Convergence {
+            stop_reason: result.stop_reason.to_string(),
+            iterations: result.iterations,
+            forward_solves: result.forward_solves,
+            adjoint_solves: result.adjoint_solves,
+            wall_time_s: result.seconds,
+        },
+        fit,
+        preprocessing,
+        curves: Curves::with_auto_units(
+            inputs.t.to_vec(),
+            inputs.h.to_vec(),
+            inputs.f_data.to_vec(),
+            Some(inputs.f_start.to_vec()),
+            inputs.f_final.to_vec(),
+        ),
+        history,
+        figures: Vec::new(),
+    };
+    let mut figures = Vec::new();
+    let mut links = Vec::new();
+    for fig in [Figure::ForceDepth, Figure::ForceTime, Figure::Convergence] {
+        if fig == Figure::Convergence && report.history.len() < 2 {
+            continue;
+        }
+        let stem = fig.file_stem();
+        let svg = report
+            .figure_svg(fig, FigureSize::default())
+            .with_context(|| format!("cannot draw the {stem} figure"))?;
+        let png = report
+            .figure_png(fig, FigureSize::default())
+            .with_context(|| format!("cannot draw the {stem} figure"))?;
+        for (ext, bytes) in [("svg", svg.into_bytes()), ("png", png)] {
+            let path = dir.join(format!("{stem}.{ext}"));
+            std::fs::write(&path, bytes)
+                .with_context(|| format!("cannot write `{}`", path.display()))?;
+            figures.push(path);
+        }
+        links.push(fig.link(format!("{stem}.svg")));
+    }
+    report.figures = links;
+    let markdown = dir.join("report.md");
+    std::fs::write(&markdown, report.to_markdown())
+        .with_context(|| format!("cannot write `{}`", markdown.display()))?;
+    let json = dir.join("report.json");
+    let text = report.to_json().context("cannot represent the report")?;
+    std::fs::write(&json, text + "\n")
+        .with_context(|| format!("cannot write `{}`", json.display()))?;
+    Ok(Written {
+        markdown,
+        json,
+        figures,
+        fit,
+    })
+}
