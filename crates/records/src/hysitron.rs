@@ -1,5 +1,5 @@
 //! Hysitron (Bruker) records: the text export (`Number of Points = N`, then
-//! `Depth (nm)  Load (µN)  Time (s) ...`) and the native `.hld` (a `Key: value unit`
+//! `Depth (nm)  Load (µN)  Time (s) ...`, blank lines between load-function segments) and the native `.hld` (a `Key: value unit`
 //! header with the load function, then `<section> Data Points: N` blocks).
 
 use crate::anton_paar::{rate, scaled};
@@ -43,7 +43,7 @@ fn count_error(file: &str, no: usize, what: &str, declared: usize, found: usize)
     )
 }
 
-/// Reads the text export.
+/// Reads the text export; rows separated by blank lines get successive segment ids.
 pub(crate) fn read_txt(file: &str, text: &str) -> Result<Record, ReadError> {
     let ls = text::lines(text);
     let Some(pi) = ls.iter().position(|(_, l)| points_line(l).is_some()) else {
@@ -85,12 +85,21 @@ pub(crate) fn read_txt(file: &str, text: &str) -> Result<Record, ReadError> {
         ));
     }
     table::check(file, "data", &cols, Some(hno))?;
+    // blank lines separate the load function's segments
+    let mut id = 0u32;
+    let mut ids = Vec::with_capacity(cols.lines.len());
+    for (i, &no) in cols.lines.iter().enumerate() {
+        if i > 0 && cols.lines.get(i - 1).is_some_and(|&prev| no > prev + 1) {
+            id = id.saturating_add(1);
+        }
+        ids.push(id);
+    }
     Ok(Record {
         name: file.to_owned(),
         t: cols.t,
         h: cols.h,
         f: cols.f,
-        segment: None,
+        segment: (id > 0).then_some(ids),
         meta: Meta {
             format: Format::HysitronTxt,
             date,

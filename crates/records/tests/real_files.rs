@@ -181,7 +181,22 @@ fn hysitron_text_export() {
             2.138711e-6,
         ],
     );
-    assert_eq!(r.segment, None);
+    // blank lines separate the segments: 1 s and 0.5 s at the start, 10 s load, 5 s hold,
+    // 10 s unload at 200 Hz
+    let phases: Vec<(Phase, usize)> = spans(&r, false, MAP_THRESHOLD)
+        .iter()
+        .map(|s| (s.phase, s.end + 1 - s.start))
+        .collect();
+    assert_eq!(
+        phases,
+        [
+            (Phase::Hold, 201),
+            (Phase::Hold, 104),
+            (Phase::Load, 2000),
+            (Phase::Hold, 1000),
+            (Phase::Unload, 1999)
+        ]
+    );
     assert_eq!(r.meta.date.as_deref(), Some("Mon Apr 29 10:41:06 2019"));
     let e = read(
         ROBIN,
