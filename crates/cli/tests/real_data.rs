@@ -1,0 +1,154 @@
+//! End-to-end runs on real instrument records (examples/real, data in examples/data with
+//! their licences): identification from the measured depth and force, the report and its
+//! figures, and bad data sections rejected with messages that name the field and the file.
+
+mod common;
+
+use common::{assert_ok, assert_rejected, example, examples, indentify, stderr};
+
+#[test]
+fn maxwell_on_the_anton_paar_berkovich_record_identifies_and_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = indentify(&[
+        "identify",
+        &example("real/anon-maxwell.ron"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    let text = common::stdout(&o);
+    assert!(text.contains("fit: R^2 = "), "{text}");
+    for f in [
+        "report.md",
+        "report.json",
+        "result.json",
+        "history.csv",
+        "fit.csv",
+        "force_depth.svg",
+        "force_depth.png",
+        "force_time.svg",
+        "force_time.png",
+        "convergence.svg",
+        "convergence.png",
+    ] {
+        let p = out.join(f);
+        assert!(
+            p.metadata().map(|m| m.len() > 100).unwrap_or(false),
+            "{f} missing or empty"
+        );
+    }
+    let png = std::fs::read(out.join("force_depth.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    // a Maxwell fit of a polymer-like record: E of the order of the vendor's E_IT
+    // (2.5 GPa by Oliver-Pharr), a fair but imperfect fit (Maxwell has no plasticity)
+    let e = report["parameters"][0]["value"].as_f64().unwrap();
+    assert!((1000.0..4000.0).contains(&e), "E = {e} MPa");
+    let r2 = report["fit"]["r2"].as_f64().unwrap();
+    assert!(r2 > 0.95 && r2 < 1.0, "R^2 = {r2}");
+    let steps: Vec<&str> = report["preprocessing"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        steps.contains(&"zero point") || steps.contains(&"zero_point"),
+        "{steps:?}"
+    );
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.contains("anonNI.TXT") && md.contains("force_depth.svg"),
+        "{md}"
+    );
+    // the fit is at the record's resampled times: 60 points from the contact on
+    let fit = std::fs::read_to_string(out.join("fit.csv")).unwrap();
+    assert_eq!(fit.lines().count(), 1 + 60);
+}
+
+#[test]
+fn simulate_runs_the_measured_depth_history() {
+    let dir = tempfile::tempdir().unwrap();
+    let curve = dir.path().join("curve.csv");
+    let o = indentify(&[
+        "simulate",
+        &example("real/ht-nh.ron"),
+        "--out",
+        curve.to_str().unwrap(),
+        "--set",
+        "data.preprocessing.resample.n=12",
+    ]);
+    assert_ok(&o);
+    let rows = common::parse_curve(&std::fs::read_to_string(&curve).unwrap());
+    assert_eq!(rows.len(), 12);
+    // a 10 um sphere pressed about 0.55 um into a metal: tens of mN at the peak
+    let f_max = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
+    assert!((0.01..1.0).contains(&f_max), "F_max = {f_max} N");
+    assert!(stderr(&o).contains("automatic cylinder"), "{}", stderr(&o));
+}
+
+#[test]
+fn bad_data_sections_are_rejected_naming_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(examples().join("real/ht-nh.ron")).unwrap();
+    let data = examples().join("data").display().to_string();
+    let base = base.replace("../data", &data);
+    let cases: [(&str, &str, &str, &[&str]); 5] = [
+        (
+            "missing file",
+            "HT_V_100mN.TXT",
+            "nope.TXT",
+            &["cannot read the data file", "nope.TXT"],
+        ),
+        (
+            "test out of range",
+            "test: 1,",
+            "test: 7,",
+            &["HT_V_100mN.TXT", "4"],
+        ),
+        (
+            "test zero",
+            "test: 1,",
+            "test: 0,",
+            &["data.test", "from 1"],
+        ),
+        (
+            "history and data",
+            "    data: (",
+            "    history: (segments: [(duration: 1.0, depth: 0.001, steps: 2)]),\n    data: (",
+            &["both `history` and `data`"],
+        ),
+        (
+            "unknown preprocessing field",
+            "resample: (n: 60)",
+            "resampel: (n: 60)",
+            &["resampel", "data.preprocessing"],
+        ),
+    ];
+    for (k, (case, from, to, needles)) in cases.iter().enumerate() {
+        assert!(base.contains(from), "{case}: `{from}` not in the example");
+        let p = dir.path().join(format!("bad{k}.ron"));
+        std::fs::write(&p, base.replacen(from, to, 1)).unwrap();
+        let o = indentify(&["check", p.to_str().unwrap()]);
+        assert_rejected(&o, needles, case);
+    }
+    // a record without contact: a flat force
+    let flat = dir.path().join("flat.csv");
+    let mut text = String::from("Time (s),Depth (nm),Load (mN)\n");
+    for i in 0..50 {
+        text.push_str(&format!("{},{},0.0\n", i as f64 * 0.1, i as f64));
+    }
+    std::fs::write(&flat, text).unwrap();
+    let cfg = base
+        .replace(
+            &format!("{data}/anton-paar-sphere-creep/HT_V_100mN.TXT"),
+            flat.to_str().unwrap(),
+        )
+        .replace("test: 1,", "");
+    let p = dir.path().join("flat.ron");
+    std::fs::write(&p, cfg).unwrap();
+    let o = indentify(&["check", p.to_str().unwrap()]);
+    assert_rejected(&o, &["flat.csv"], "no contact");
+}
