@@ -87,6 +87,36 @@ pub struct Measured {
     pub applied: Vec<Applied>,
 }
 
+impl Measured {
+    /// `` `FILE` (anton-paar, test 1): 1000 samples -> 60 points (zero point: ...; ...)``.
+    pub fn summary(&self) -> String {
+        let steps: Vec<String> = self
+            .applied
+            .iter()
+            .map(|a| format!("{}: {}", a.step, a.description))
+            .collect();
+        format!(
+            "`{}` ({}{}): {} samples -> {} points, h_max {:.4e} mm, F_max {:.4e} N{}",
+            self.path.display(),
+            self.raw.meta.format.name(),
+            self.raw
+                .meta
+                .test_name
+                .as_ref()
+                .map_or(String::new(), |t| format!(", test {t}")),
+            self.raw.t.len(),
+            self.record.t.len(),
+            self.record.h_max(),
+            self.record.f_max(),
+            if steps.is_empty() {
+                String::new()
+            } else {
+                format!("\n    preprocessing: {}", steps.join("\n    "))
+            }
+        )
+    }
+}
+
 impl DataSection {
     /// The file's path: absolute, or relative to `base`.
     pub fn path(&self, base: Option<&Path>) -> PathBuf {

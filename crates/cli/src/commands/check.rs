@@ -47,5 +47,8 @@ pub fn run(args: &Args) -> Result<()> {
         schedule.n_steps(),
         schedule.t.last().copied().unwrap_or(0.0)
     );
+    if let Some(m) = &prepared.measured {
+        tracing::info!("  data: {}", m.summary());
+    }
     Ok(())
 }

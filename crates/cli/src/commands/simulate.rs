@@ -64,6 +64,7 @@ pub fn run(args: &Args) -> Result<()> {
     let (law, params) = cfg.law.build()?;
     let prepared = cfg.prepare(&name)?;
     let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
+    let measured = prepared.measured;
     let (n_nodes, n_elements) = (model.mesh.nodes.len(), model.mesh.elements.len());
     let opts = cfg.solver.options(args.vtu.is_some());
     // fail on unwritable outputs before solving
@@ -165,6 +166,9 @@ pub fn run(args: &Args) -> Result<()> {
             "  force perturbed: F (1 + {a} xi), xi uniform in [-1, 1) from SplitMix64 seed {}",
             args.seed
         );
+    }
+    if let Some(m) = &measured {
+        tracing::info!("  depth history from the data: {}", m.summary());
     }
     tracing::info!("  curve ({} row{plural}) written to {curve_to}", rows.len());
     if let Some((dir, n)) = vtu_states {
