@@ -197,7 +197,7 @@ pub enum Specimen {
         /// Element edges across the contact-radius bound, in [2, 64] (default 8).
         #[serde(default = "auto_elements_in_contact")]
         elements_in_contact: usize,
-        /// Specimen size over the contact-radius bound, in [5, 10000] (default 40).
+        /// Specimen size over the contact-radius bound, in [5, 10000] (default 48).
         #[serde(default = "auto_size_factor")]
         size_factor: f64,
         /// Largest size ratio of neighbouring elements outside the core, in [1.05, 3]
