@@ -5,14 +5,17 @@ use anyhow::{Result, bail};
 use indentify_identify::Method;
 use xtask::paper::{self, Data, Options, Setup, Stopwatch, Table};
 
+mod fuzz;
+
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("paper-tables") => paper_tables(&args[1..]),
         Some("compare-methods") => compare_methods(),
+        Some("fuzz-readers") => fuzz::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)"
             );
             bail!("unknown or missing command")
         }

@@ -1,6 +1,78 @@
 //! Readers of real instrumented-indentation records, from bytes, and their preprocessing.
 //!
-//! TODO doc
+//! The crate does no file IO: [`read`] and [`read_one`] take the file's bytes and a display
+//! name (used in messages and as the record's name); the CLI reads the file. It depends on
+//! no other indentify crate.
+//!
+//! # Formats
+//!
+//! | [`Format`] | what it reads | detected by |
+//! |---|---|---|
+//! | `Csv` | a header line then rows; comma, semicolon, tab or blank separated; decimal commas where the separator is not a comma; lines before the header are ignored, `#` lines skipped; an optional `segment` column | the fallback |
+//! | `AntonPaar` | single-test TXT: method header (rates, max depth, pause, O&P results), `Measured values`, `Time (s) Pd (nm) Fn (mN) ... SegmentID` | a `Measured values` line |
+//! | `AntonPaarMulti` | tests side by side: `X_<test>_Time_[s] Y_<test>_Fn_[mN] X_<test>_Time_[s] Y_<test>_Pd_[nm]`; a shorter test's trailing repeats of its last row are dropped | first header `X_..._Time_` |
+//! | `HysitronTxt` | date, `Number of Points = N`, `Depth (nm) Load (µN) Time (s) ...`; blank lines between rows give segment ids | `Number of Points =` |
+//! | `Hld` | `Key: value unit` header (machine compliance, drift rate, tip area coefficients, load-function segments), then `<section> Data Points: N` blocks; the record is `Test Data` (`Time_s Disp_nm Force_µN`), each sample tagged with its load-function segment | `File Version: Hysitron` or `Test Data Points:` |
+//!
+//! Bytes may be UTF-8 (BOM or not), UTF-16 with BOM, or Latin-1/cp1252 (the micro sign
+//! `0xB5`); lines may end in CRLF, LF or CR.
+//!
+//! # Columns and units
+//!
+//! Column names (case-insensitive, `_`/`-` as blanks): time `t`, `time`; depth `h`,
+//! `depth`, `displacement`, `disp`, `pd`; force `f`, `force`, `load`, `fn`, `p`; segment
+//! `segment`, `segmentid`. Units go in parentheses, brackets or after a last `_`:
+//! `t [s]`, `Time (s)`, `time_ms`, `Depth (nm)`, `h [µm]`, `Load (uN)`, `Force_µN`.
+//! Accepted: nm, µm/um, mm, m; nN, µN/uN, mN, N, kN; ms, s, min, h. A column without a unit
+//! is in internal units, so the `t,h,F,a` files of `indentify simulate` read as they are.
+//! Everything is converted to **mm, N, s**; a column with another unit (`Depth (V)`) is
+//! skipped when a usable one of the same quantity exists.
+//!
+//! # Errors
+//!
+//! A [`ReadError`] displays as `file:line: what is wrong; expected ...` and carries a
+//! [`ReadErrorKind`]; no input makes a reader panic (fuzzed, `cargo xtask fuzz-readers`).
+//!
+//! # Preprocessing
+//!
+//! [`apply`] runs the steps of a [`Preprocessing`] (a RON-friendly options struct) in this
+//! order, each optional, each returning an [`Applied`] account with numbers for the report:
+//!
+//! 1. [`prep::drift`]: `h <- h - rate t` (rate from the options or the file's hint);
+//! 2. [`prep::zero_point`]: contact where the force rises through a threshold, `h` and `F`
+//!    offsets subtracted, approach trimmed, `t = 0` at contact;
+//! 3. [`prep::compliance`]: `h <- h - C F` (C from the options or the file's hint);
+//! 4. [`prep::segments`]: load/hold/unload, mapped from the file's segment ids or detected;
+//! 5. [`prep::resample`]: `n` points from `t = 0`, keeping segment boundaries and the peak
+//!    depth, values averaged over each point's interval.
+//!
+//! ```
+//! use indentify_records::{Preprocessing, ReadOptions, Resample, apply, read_one};
+//!
+//! // 1 s of approach, 10 s of loading to 10 mN, 10 s of unloading, 10 Hz, in nm and mN
+//! let mut csv = String::from("Time (s);Depth (nm);Load (mN)\n");
+//! for i in 0..=210 {
+//!     let t = i as f64 * 0.1;
+//!     let f = if t <= 1.0 { 0.0 } else if t <= 11.0 { t - 1.0 } else { 21.0 - t };
+//!     let h = 50.0 * t.min(1.0) + 20.0 * f;
+//!     csv.push_str(&format!("{t};{h};{f}\n").replace('.', ","));
+//! }
+//! let record = read_one(csv.as_bytes(), "curve.csv", &ReadOptions::default())?;
+//! assert_eq!(record.len(), 211);
+//! let p = Preprocessing {
+//!     resample: Some(Resample { n: 41, min_per_segment: 5 }),
+//!     ..Preprocessing::default()
+//! };
+//! let (r, steps) = apply(&record, &p)?;
+//! assert_eq!(r.len(), 41);
+//! assert_eq!(r.t[0], 0.0);
+//! assert!((r.t[40] - 20.0).abs() < 1e-9); // contact at 1 s is t = 0
+//! assert!((r.f_max() - 10e-3).abs() < 1e-12); // the peak is kept
+//! for s in &steps {
+//!     println!("{}: {}", s.step, s.description);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod anton_paar;
 mod csv;
