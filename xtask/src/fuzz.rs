@@ -1,5 +1,5 @@
-//! `cargo xtask fuzz-readers [--cases N] [--seed S]`: feeds `indentify_records::read` and
-//! `apply` with random bytes and mutated real files (examples/data) in release and checks
+//! `cargo xtask fuzz-readers [--cases N] [--seed S]`: feeds `indentify_records::read`,
+//! `read_results` and `apply` with random bytes and mutated real files (examples/data) in release and checks
 //! that nothing panics; prints the count, the time and what the inputs read as.
 
 use std::collections::BTreeMap;
@@ -198,6 +198,7 @@ fn seeds(root: &Path) -> Result<Vec<(String, Vec<u8>, u32)>> {
         ("anonNI.TXT".into(), load("anton-paar-unht-berkovich/anonNI.TXT")?, 20),
         ("HT_V_100mN.TXT (600 lines)".into(), head(&multi, 600), 20),
         ("HT_V_100mN.TXT".into(), multi, 1),
+        ("HT_V_100mN_data.TXT".into(), load("anton-paar-sphere-creep/HT_V_100mN_data.TXT")?, 5),
         ("RobinSteel0000LC.txt".into(), load("hysitron/RobinSteel0000LC.txt")?, 15),
         ("Exp-50mN_0000.hld".into(), load("hysitron/Exp-50mN_0000.hld")?, 20),
         (
@@ -264,6 +265,7 @@ pub fn run(args: &[String]) -> Result<()> {
         let p = options(&mut rng);
         let result = std::panic::catch_unwind(|| {
             let mut n = (0, 0);
+            let _ = indentify_records::read_results(&input, "fuzz");
             let read = read(&input, "fuzz", &opts);
             let key = match &read {
                 Ok(_) => "read ok".to_owned(),

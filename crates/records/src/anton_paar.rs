@@ -441,3 +441,74 @@ pub(crate) fn test_index_error(file: &str, k: usize, names: &[String]) -> ReadEr
         format!("a test index from 1 to {}", names.len()),
     )
 }
+
+/// The vendor's results of one test, from an Anton Paar results table (`_data.TXT`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TestResults {
+    /// Test name as in the curve file: `<group>_<measurement>` (e.g. `HT_V_100mN_1`).
+    pub test: String,
+    /// Group as written.
+    pub group: String,
+    /// Measurement number as written.
+    pub measurement: String,
+    /// The results (`HIT (O&P)`, `EIT (O&P)`, `hm (O&P)`, `Fm (O&P)`, ...), as written.
+    pub values: Vec<Quantity>,
+}
+
+/// Reads an Anton Paar results table: `Group  Measurement  Parameter  Unit  Value` rows.
+pub(crate) fn read_results(file: &str, text: &str) -> Result<Vec<TestResults>, ReadError> {
+    let ls = text::lines(text);
+    let Some(hi) = ls.iter().position(|(_, l)| !l.trim().is_empty()) else {
+        return Err(ReadError::new(
+            file,
+            None,
+            K::Empty,
+            "the file is empty",
+            "a results table",
+        ));
+    };
+    let (hno, hline) = ls[hi];
+    let sep = Sep::of(hline);
+    let header: Vec<String> = sep
+        .split(hline)
+        .iter()
+        .map(|s| s.to_ascii_lowercase())
+        .collect();
+    if header != ["group", "measurement", "parameter", "unit", "value"] {
+        return Err(ReadError::new(
+            file,
+            Some(hno),
+            K::Format,
+            format!("header '{}'", crate::csv::clip(hline)),
+            "an Anton Paar results table with the header 'Group Measurement Parameter Unit Value'",
+        ));
+    }
+    let mut out: Vec<TestResults> = Vec::new();
+    for &(no, line) in &ls[hi + 1..] {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let fs: Vec<&str> = line.split('\t').map(str::trim).collect();
+        let [group, measurement, parameter, unit, value, ..] = fs[..] else {
+            return Err(ReadError::new(
+                file,
+                Some(no),
+                K::FewFields,
+                format!("{} fields", fs.len()),
+                "5 tab-separated fields: group, measurement, parameter, unit, value",
+            ));
+        };
+        let v = table::field(file, no, value, "Value", 1.0, true)?;
+        let q = Quantity::new(parameter, v, unit);
+        match out.last_mut() {
+            Some(r) if r.group == group && r.measurement == measurement => r.values.push(q),
+            _ => out.push(TestResults {
+                test: format!("{group}_{measurement}"),
+                group: group.to_owned(),
+                measurement: measurement.to_owned(),
+                values: vec![q],
+            }),
+        }
+    }
+    Ok(out)
+}

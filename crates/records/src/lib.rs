@@ -14,6 +14,10 @@
 //! | `HysitronTxt` | date, `Number of Points = N`, `Depth (nm) Load (µN) Time (s) ...`; blank lines between rows give segment ids | `Number of Points =` |
 //! | `Hld` | `Key: value unit` header (machine compliance, drift rate, tip area coefficients, load-function segments), then `<section> Data Points: N` blocks; the record is `Test Data` (`Time_s Disp_nm Force_µN`), each sample tagged with its load-function segment | `File Version: Hysitron` or `Test Data Points:` |
 //!
+//! The results table beside a multi-test file (`HT_V_100mN_data.TXT`: `Group Measurement
+//! Parameter Unit Value`) reads with [`read_results`]; [`attach_results`] puts each test's
+//! results into its record's `meta.results`.
+//!
 //! Bytes may be UTF-8 (BOM or not), UTF-16 with BOM, or Latin-1/cp1252 (the micro sign
 //! `0xB5`); lines may end in CRLF, LF or CR.
 //!
@@ -83,6 +87,7 @@ mod record;
 mod table;
 mod text;
 
+pub use anton_paar::TestResults;
 pub use error::{PrepError, ReadError, ReadErrorKind};
 pub use prep::{
     Applied, Control, Correction, Phase, Preprocessing, Resample, Segments, Span, ZeroPoint, apply,
@@ -203,4 +208,32 @@ pub fn read_one(bytes: &[u8], name: &str, opts: &ReadOptions) -> Result<Record, 
         ),
         format!("a test index from 1 to {}", all.len()),
     ))
+}
+
+/// Reads an Anton Paar results table (the `_data.TXT` beside a multi-test curve file:
+/// `Group  Measurement  Parameter  Unit  Value`), one [`TestResults`] per group and
+/// measurement, in file order.
+///
+/// # Errors
+///
+/// A [`ReadError`]: empty file, another header, a row with fewer than 5 fields, a value
+/// that is not a finite number.
+pub fn read_results(bytes: &[u8], name: &str) -> Result<Vec<TestResults>, ReadError> {
+    anton_paar::read_results(name, &text::decode(bytes))
+}
+
+/// Appends to each record's `meta.results` the results whose test name equals the record's
+/// `meta.test_name`; returns how many records got results.
+pub fn attach_results(records: &mut [Record], results: &[TestResults]) -> usize {
+    let mut n = 0;
+    for r in records.iter_mut() {
+        let Some(name) = r.meta.test_name.as_deref() else {
+            continue;
+        };
+        if let Some(tr) = results.iter().find(|x| x.test == name) {
+            r.meta.results.extend(tr.values.iter().cloned());
+            n += 1;
+        }
+    }
+    n
 }

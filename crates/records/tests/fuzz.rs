@@ -195,6 +195,7 @@ const FORMATS: [Format; 6] = [
 /// what comes out is consistent.
 fn exercise(bytes: &[u8], format: Format, test: Option<usize>, p: &Preprocessing) {
     let opts = ReadOptions { format, test };
+    let _ = indentify_records::read_results(bytes, "fuzz");
     if let Ok(records) = read(bytes, "fuzz", &opts) {
         for r in records {
             check_record(&r);

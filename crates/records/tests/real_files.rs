@@ -324,3 +324,32 @@ fn preprocessing_of_each_real_record() {
     }
     insta::assert_snapshot!("preprocessing_accounts", lines.join("\n"));
 }
+
+#[test]
+fn anton_paar_results_table() {
+    const DATA: &[u8] =
+        include_bytes!("../../../examples/data/anton-paar-sphere-creep/HT_V_100mN_data.TXT");
+    let res = indentify_records::read_results(DATA, "HT_V_100mN_data.TXT").unwrap();
+    assert_eq!(res.len(), 30);
+    assert_eq!(res.iter().map(|r| r.values.len()).sum::<usize>(), 792);
+    let mut all = read(MULTI, "HT_V_100mN.TXT", &ReadOptions::default()).unwrap();
+    assert_eq!(indentify_records::attach_results(&mut all, &res), 4);
+    let last = &all[3].meta.results;
+    assert_eq!(last.len(), 27);
+    assert_eq!(quantity(last, "F/S²(O&P)"), (293.762, "nm²/mN".into()));
+    assert_eq!(
+        quantity(&all[0].meta.results, "Poisson's ratio"),
+        (0.3, String::new())
+    );
+    let e = indentify_records::read_results(b"a\tb\n", "x.TXT").unwrap_err();
+    assert_eq!(e.kind, ReadErrorKind::Format);
+    let e = indentify_records::read_results(
+        b"Group\tMeasurement\tParameter\tUnit\tValue\ng\t1\tHIT\tGPa\n",
+        "x.TXT",
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "x.TXT:2: 4 fields; expected 5 tab-separated fields: group, measurement, parameter, unit, value"
+    );
+}
