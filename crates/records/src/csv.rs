@@ -20,7 +20,8 @@ fn skip(line: &str) -> bool {
 }
 
 /// Reads a generic table. Lines before the header are ignored; the header is the last
-/// non-blank line before the first row of numbers.
+/// non-blank line before the first row of numbers, or the two last when the last holds only
+/// units (names above, units below).
 pub(crate) fn read(file: &str, text: &str) -> Result<Record, ReadError> {
     let ls = text::lines(text);
     let Some(k) = ls.iter().position(|&(_, l)| !skip(l) && is_numeric_row(l)) else {
@@ -55,6 +56,28 @@ pub(crate) fn read(file: &str, text: &str) -> Result<Record, ReadError> {
         if data_sep != sep {
             sep = data_sep;
             labels = sep.split_header(header);
+        }
+    }
+    // a line of units under the line of names: `Time;Depth;Load` then `s;nm;mN`
+    let mut hno = hno;
+    if labels.iter().all(|l| text::is_unit_only(l)) {
+        let before = ls[..k].iter().rev().filter(|(_, l)| !skip(l)).nth(1);
+        if let Some(&(nno, names)) = before {
+            let names = sep.split_header(names);
+            if names.len() == labels.len() {
+                labels = names
+                    .iter()
+                    .zip(&labels)
+                    .map(|(n, u)| {
+                        let u = u
+                            .trim()
+                            .trim_start_matches(['(', '['])
+                            .trim_end_matches([')', ']']);
+                        format!("{n} ({u})")
+                    })
+                    .collect();
+                hno = nno;
+            }
         }
     }
     let layout = table::resolve(file, hno, &labels)?;

@@ -23,10 +23,12 @@
 //!
 //! # Columns and units
 //!
-//! Column names (case-insensitive, `_`/`-` as blanks): time `t`, `time`; depth `h`,
-//! `depth`, `displacement`, `disp`, `pd`; force `f`, `force`, `load`, `fn`, `p`; segment
-//! `segment`, `segmentid`. Units go in parentheses, brackets or after a last `_`:
-//! `t [s]`, `Time (s)`, `time_ms`, `Depth (nm)`, `h [µm]`, `Load (uN)`, `Force_µN`.
+//! Column names (case-insensitive, `_`/`-` as blanks): time `t`, `time`, `time on sample`;
+//! depth `h`, `depth`, `displacement`, `disp`, `pd`, `displacement into surface`; force
+//! `f`, `force`, `load`, `fn`, `p`, `load on sample`; segment `segment`, `segmentid`.
+//! Units go in parentheses, brackets or after a last `_` (`t [s]`, `Time (s)`,
+//! `time_ms`, `Depth (nm)`, `h [µm]`, `Load (uN)`, `Force_µN`), or on a line of their own
+//! under the names (`Time;Depth;Load` then `s;nm;mN`).
 //! Accepted: nm, µm/um, mm, m; nN, µN/uN, mN, N, kN; ms, s, min, h. A column without a unit
 //! is in internal units, so the `t,h,F,a` files of `indentify simulate` read as they are.
 //! Everything is converted to **mm, N, s**; a column with another unit (`Depth (V)`) is

@@ -130,6 +130,18 @@ pub(crate) fn ratio_unit(u: &str) -> Option<(f64, String)> {
     Some((fa / fb, format!("{}/{}", da.internal(), db.internal())))
 }
 
+/// Whether a header field is only a unit (`nm`, `(mN)`, `[s]`): a line of units under the
+/// names.
+pub(crate) fn is_unit_only(field: &str) -> bool {
+    let f = field.trim();
+    let inner = f
+        .strip_prefix('(')
+        .and_then(|x| x.strip_suffix(')'))
+        .or_else(|| f.strip_prefix('[').and_then(|x| x.strip_suffix(']')))
+        .unwrap_or(f);
+    unit(inner).is_some() || other_unit(inner)
+}
+
 /// Units that are recognisably units but of no use here (volts, percent, ...): a label
 /// ending in `_V` is a column `Disp` in volts, not a column named `Disp_V`.
 fn other_unit(u: &str) -> bool {
@@ -188,7 +200,7 @@ pub(crate) enum Quantity {
     Segment,
 }
 
-pub(crate) const TIME_NAMES: &[&str] = &["t", "time", "zeit"];
+pub(crate) const TIME_NAMES: &[&str] = &["t", "time", "zeit", "time on sample"];
 pub(crate) const DEPTH_NAMES: &[&str] = &[
     "h",
     "depth",
@@ -198,6 +210,7 @@ pub(crate) const DEPTH_NAMES: &[&str] = &[
     "penetration",
     "penetration depth",
     "indentation depth",
+    "displacement into surface",
 ];
 pub(crate) const FORCE_NAMES: &[&str] = &[
     "f",
@@ -207,6 +220,7 @@ pub(crate) const FORCE_NAMES: &[&str] = &[
     "p",
     "normal force",
     "normal load",
+    "load on sample",
 ];
 pub(crate) const SEGMENT_NAMES: &[&str] = &["segment", "segmentid", "segment id", "seg"];
 

@@ -40,6 +40,9 @@ fn unit_bearing_headers_in_every_spelling() {
         b"# simulated\nTime (s)\tDepth (nm)\tLoad (\xB5N)\n0\t0\t0\n1\t1000\t1000\n",
         b"\xEF\xBB\xBFt [s];h [\xC2\xB5m];F [mN]\r\n0;0;0\r\n1;1;1\r\n",
         b"t,disp,force\n0,0,0\n1,1e-3,1e-3\n",
+        b"Time;Depth;Load\ns;nm;mN\n0;0;0\n1;1000;1\n",
+        b"Time\tDepth\tForce\n(s)\t(um)\t(uN)\n0\t0\t0\n1\t1\t1000\n",
+        b"Segment,Time On Sample (s),Displacement Into Surface (nm),Load On Sample (mN)\n1,0,0,0\n1,1,1000,1\n",
     ];
     for c in cases {
         let r = ok(c);
