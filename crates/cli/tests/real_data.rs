@@ -98,8 +98,8 @@ fn bad_data_sections_are_rejected_naming_what_is_wrong() {
     let cases: [(&str, &str, &str, &[&str]); 5] = [
         (
             "missing file",
-            "HT_V_100mN.TXT",
-            "nope.TXT",
+            "HT_V_100mN.TXT\"",
+            "nope.TXT\"",
             &["cannot read the data file", "nope.TXT"],
         ),
         (

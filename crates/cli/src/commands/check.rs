@@ -45,7 +45,9 @@ pub fn run(args: &Args) -> Result<()> {
         cfg.punch.describe(),
         prepared.mesher.describe(),
         schedule.n_steps(),
-        schedule.t.last().copied().unwrap_or(0.0)
+        crate::report::sig(schedule.t.last().copied().unwrap_or(0.0), 6)
+            .parse::<f64>()
+            .unwrap_or(0.0)
     );
     if let Some(m) = &prepared.measured {
         tracing::info!("  data: {}", m.summary());
