@@ -219,12 +219,14 @@ fn auto_grading() -> f64 {
     AutoOptions::default().grading
 }
 
+/// A [`Specimen`] as the library types it stands for.
+enum SpecimenKind {
+    Cylinder(CylinderMesher),
+    Auto(AutoOptions),
+}
+
 impl Specimen {
-    /// Checks what can be checked before the depth history is known.
-    ///
-    /// # Errors
-    /// The first field out of range, naming `specimen.<field>`.
-    pub fn validate(&self) -> Result<()> {
+    fn kind(&self) -> SpecimenKind {
         match *self {
             Specimen::Cylinder {
                 radius,
@@ -233,25 +235,34 @@ impl Specimen {
                 nz,
                 grading_r,
                 grading_z,
-            } => CylinderMesher {
+            } => SpecimenKind::Cylinder(CylinderMesher {
                 radius,
                 height,
                 nr,
                 nz,
                 grading_r,
                 grading_z,
-            }
-            .validate()?,
+            }),
             Specimen::Auto {
                 elements_in_contact,
                 size_factor,
                 grading,
-            } => AutoOptions {
+            } => SpecimenKind::Auto(AutoOptions {
                 elements_in_contact,
                 size_factor,
                 grading,
-            }
-            .validate()?,
+            }),
+        }
+    }
+
+    /// Checks what can be checked before the depth history is known.
+    ///
+    /// # Errors
+    /// The first field out of range, naming `specimen.<field>`.
+    pub fn validate(&self) -> Result<()> {
+        match self.kind() {
+            SpecimenKind::Cylinder(m) => m.validate()?,
+            SpecimenKind::Auto(o) => o.validate()?,
         }
         Ok(())
     }
@@ -261,36 +272,12 @@ impl Specimen {
     /// # Errors
     /// Invalid sizes or options; for `Auto`, a maximum depth that is not positive.
     pub fn mesher(&self, punch: &Punch, h_max: f64) -> Result<Mesher> {
-        Ok(match *self {
-            Specimen::Cylinder {
-                radius,
-                height,
-                nr,
-                nz,
-                grading_r,
-                grading_z,
-            } => {
-                let m = CylinderMesher {
-                    radius,
-                    height,
-                    nr,
-                    nz,
-                    grading_r,
-                    grading_z,
-                };
+        Ok(match self.kind() {
+            SpecimenKind::Cylinder(m) => {
                 m.validate()?;
                 Mesher::Cylinder(m)
             }
-            Specimen::Auto {
-                elements_in_contact,
-                size_factor,
-                grading,
-            } => {
-                let options = AutoOptions {
-                    elements_in_contact,
-                    size_factor,
-                    grading,
-                };
+            SpecimenKind::Auto(options) => {
                 Mesher::Zoned(auto_specimen(punch, h_max, &options).with_context(|| {
                     format!(
                         "cannot size the automatic specimen for {} at the maximum depth \
