@@ -152,3 +152,31 @@ fn bad_data_sections_are_rejected_naming_what_is_wrong() {
     let o = indentify(&["check", p.to_str().unwrap()]);
     assert_rejected(&o, &["flat.csv"], "no contact");
 }
+
+#[test]
+fn gradients_on_a_measured_history_match_finite_differences() {
+    // the measured depth of the Berkovich record (20 points), the automatic mesh, contact
+    // on and off: adjoint vs central differences and vs forward sensitivities
+    let o = indentify(&[
+        "gradient-check",
+        &example("real/anon-nh.ron"),
+        "--set",
+        "data.preprocessing.resample.n=20",
+        "--json",
+    ]);
+    assert_ok(&o);
+    let v: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    assert_eq!(v["passed"], true, "{v}");
+    // and `gradient` takes the data from the configuration's data section
+    let o = indentify(&[
+        "gradient",
+        &example("real/anon-maxwell.ron"),
+        "--set",
+        "data.preprocessing.resample.n=20",
+        "--json",
+    ]);
+    assert_ok(&o);
+    let v: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    assert!(v["J"].as_f64().unwrap() > 0.0, "{v}");
+    assert!(v["data"].as_str().unwrap().contains("anonNI.TXT"), "{v}");
+}

@@ -29,8 +29,10 @@ pub struct Args {
 
     /// The measured curve: CSV with a header naming at least the columns `t` (s) and `F` (N),
     /// e.g. the `t,h,F,a` file of `indentify simulate`; it must cover the simulated history.
+    /// Optional for a configuration with a `data` section (then it replaces `data.file`,
+    /// read with the section's format and preprocessing).
     #[arg(long, value_name = "CURVE.csv")]
-    pub data: PathBuf,
+    pub data: Option<PathBuf>,
 
     /// Print one JSON object instead of the text report.
     #[arg(long)]
@@ -80,8 +82,25 @@ pub fn run(args: &Args) -> Result<()> {
     let cfg = config::load(&args.config, &args.sets)?;
     let (law, params) = cfg.law.build()?;
     ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))?;
-    let curve = data::read_curve(&args.data)?;
+    let mut cfg = cfg;
+    if let (Some(d), Some(path)) = (&mut cfg.data, &args.data) {
+        d.file = crate::commands::identify::absolute(path);
+    }
     let prepared = cfg.prepare(&name)?;
+    let curve = match (&prepared.measured, &args.data) {
+        // the measured record: its preprocessed force at its own times (the schedule's)
+        (Some(m), _) => data::Curve {
+            name: m.path.display().to_string(),
+            t: m.record.t.clone(),
+            h: Some(m.record.h.clone()),
+            f: m.record.f.clone(),
+        },
+        (None, Some(path)) => data::read_curve(path)?,
+        (None, None) => bail!(
+            "no data for `{name}`: give --data CURVE.csv, or a `data` section in the \
+             configuration"
+        ),
+    };
     let schedule = prepared.schedule;
     let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
     curve.check_covers(t0, t1, &name)?;
