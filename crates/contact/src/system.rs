@@ -3,6 +3,19 @@
 //! contact dofs prescribed, and a cache that skips re-assembly and re-factorization when
 //! neither the tangent (linear laws: same parameters and step length) nor the active set
 //! changed.
+//!
+//! Two ways to solve with prescribed dofs `C`:
+//!
+//! - **direct**: factorize `K` with the rows and columns of `C` replaced by their diagonal
+//!   (one factorization per tangent and active set);
+//! - **capacitance** (reusable tangents only: linear laws at a fixed step length): factorize
+//!   the unconstrained `K` once, keep the columns `z_c = K^-1 e_c` of every dof that has been
+//!   prescribed, and impose `x_C = xbar_C` by a multiplier: with `y = K^-1 b` (`b_C = 0`),
+//!   `S mu = y_C - xbar_C`, `S = [z_c]_C` (small, dense, SPD), `x = y - sum_c mu_c z_c`. The
+//!   contact zone growing by one node then costs one solve instead of one factorization,
+//!   and the result is the direct one to round-off.
+
+use std::collections::HashMap;
 
 use indentify_fe::{FeError, SparseCholesky};
 use indentify_laws::Mat4;
@@ -21,6 +34,16 @@ pub struct ConstrainedSystem {
     k_key: Option<(Vec<u64>, f64)>,
     /// Constrained equations of the current factorization, when it may be reused.
     factor_for: Option<Vec<bool>>,
+    /// Capacitance mode: `chol` holds the unconstrained `K` of `k_key`.
+    base: bool,
+    /// `K^-1 e_c` for the equations `c` prescribed so far (capacitance mode).
+    columns: HashMap<usize, Vec<f64>>,
+    /// The prescribed equations of `schur` (capacitance mode), increasing.
+    schur_set: Vec<usize>,
+    /// Dense Cholesky factor (row-major, lower) of `S = [K^-1]_CC` for `schur_set`.
+    schur: Vec<f64>,
+    /// Whether the last `factorize` chose the capacitance mode.
+    capacitance: bool,
     /// Seconds spent assembling, factorizing and solving.
     pub seconds: [f64; 3],
 }
@@ -39,6 +62,11 @@ impl ConstrainedSystem {
             scratch: vec![0.0; model.dofs.n_eq],
             k_key: None,
             factor_for: None,
+            base: false,
+            columns: HashMap::new(),
+            schur_set: Vec::new(),
+            schur: Vec::new(),
+            capacitance: false,
             seconds: [0.0; 3],
         })
     }
@@ -75,6 +103,9 @@ impl ConstrainedSystem {
                 .assemble_b_c_b(&model.disc, tangents, &mut self.k_values);
             self.k_key = key;
             self.factor_for = None;
+            self.base = false;
+            self.columns.clear();
+            self.schur_set.clear();
         }
         self.seconds[0] += t0.elapsed().as_secs_f64();
         !same
@@ -95,11 +126,21 @@ impl ConstrainedSystem {
         self.constrained[e]
     }
 
-    /// Factorizes the constrained tangent unless the cached factorization already is it.
+    /// Factorizes the constrained tangent unless the cached factorization already is it
+    /// (capacitance mode for reusable tangents with a moderate number of prescribed dofs,
+    /// direct mode otherwise; see the module's documentation).
     ///
     /// # Errors
     /// [`FeError::NotPositiveDefinite`] if the constrained tangent is not SPD.
     pub fn factorize(&mut self, model: &Model) -> Result<(), FeError> {
+        let n = self.constrained.len();
+        let m = self.constrained.iter().filter(|&&c| c).count();
+        // capacitance: reusable tangent, and the columns stay a small multiple of K's factor
+        let capacitance = self.k_key.is_some() && m <= MAX_CAPACITANCE && m * n <= 20_000_000;
+        if capacitance {
+            return self.factorize_capacitance();
+        }
+        self.capacitance = false;
         if self.k_key.is_some() && self.factor_for.as_ref() == Some(&self.constrained) {
             return Ok(());
         }
@@ -108,9 +149,60 @@ impl ConstrainedSystem {
             .pattern
             .constrain(&self.k_values, &self.constrained, &mut self.k_constrained);
         self.factor_for = None;
+        self.base = false;
+        self.columns.clear();
+        self.schur_set.clear();
         self.chol.factorize(&self.k_constrained)?;
         if self.k_key.is_some() {
             self.factor_for = Some(self.constrained.clone());
+        }
+        self.seconds[1] += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The capacitance mode: the unconstrained factorization (once per tangent), the
+    /// columns of newly prescribed dofs, and the small dense factor of `S`.
+    fn factorize_capacitance(&mut self) -> Result<(), FeError> {
+        let t0 = std::time::Instant::now();
+        self.capacitance = true;
+        if !self.base {
+            self.factor_for = None;
+            self.columns.clear();
+            self.schur_set.clear();
+            self.chol.factorize(&self.k_values)?;
+            self.base = true;
+        }
+        let set: Vec<usize> = (0..self.constrained.len())
+            .filter(|&e| self.constrained[e])
+            .collect();
+        if set != self.schur_set {
+            let n = self.constrained.len();
+            for &c in &set {
+                if !self.columns.contains_key(&c) {
+                    let mut z = vec![0.0; n];
+                    z[c] = 1.0;
+                    self.chol.solve_in_place(&mut z);
+                    self.columns.insert(c, z);
+                }
+            }
+            let m = set.len();
+            let mut l = vec![0.0; m * m];
+            for (i, &ci) in set.iter().enumerate() {
+                for (j, &cj) in set.iter().enumerate().take(i + 1) {
+                    // symmetric up to round-off: average the two halves
+                    let a = self.columns.get(&cj).map_or(0.0, |z| z[ci]);
+                    let b = self.columns.get(&ci).map_or(0.0, |z| z[cj]);
+                    l[i * m + j] = 0.5 * (a + b);
+                }
+            }
+            dense_cholesky(&mut l, m).map_err(|k| {
+                FeError::NotPositiveDefinite(format!(
+                    "the contact capacitance matrix at prescribed equation {}",
+                    set[k]
+                ))
+            })?;
+            self.schur = l;
+            self.schur_set = set;
         }
         self.seconds[1] += t0.elapsed().as_secs_f64();
         Ok(())
@@ -124,6 +216,11 @@ impl ConstrainedSystem {
     /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
     pub fn solve_dirichlet(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         let t0 = std::time::Instant::now();
+        if self.capacitance {
+            self.solve_capacitance(b, xbar);
+            self.seconds[2] += t0.elapsed().as_secs_f64();
+            return;
+        }
         let n = b.len();
         let any = self.constrained.iter().any(|&c| c);
         if any {
@@ -145,5 +242,145 @@ impl ConstrainedSystem {
         }
         self.chol.solve_in_place(b);
         self.seconds[2] += t0.elapsed().as_secs_f64();
+    }
+
+    /// `x = K^-1 b - sum_c mu_c z_c` with `S mu = (K^-1 b)_C - xbar_C`, `b_C = 0`.
+    fn solve_capacitance(&mut self, b: &mut [f64], xbar: &[f64]) {
+        let set = &self.schur_set;
+        for &c in set {
+            b[c] = 0.0;
+        }
+        self.chol.solve_in_place(b);
+        if set.is_empty() {
+            return;
+        }
+        let m = set.len();
+        let mut mu: Vec<f64> = set.iter().map(|&c| b[c] - xbar[c]).collect();
+        dense_cholesky_solve(&self.schur, m, &mut mu);
+        for (k, &c) in set.iter().enumerate() {
+            if let Some(z) = self.columns.get(&c) {
+                let f = mu[k];
+                for (x, zi) in b.iter_mut().zip(z) {
+                    *x -= f * zi;
+                }
+            }
+        }
+        for &c in set {
+            b[c] = xbar[c];
+        }
+    }
+}
+
+/// Largest number of prescribed dofs handled by the capacitance mode.
+const MAX_CAPACITANCE: usize = 256;
+
+/// In-place Cholesky `A = L L^T` of the row-major `m x m` matrix whose lower triangle is
+/// given; `Err(k)` at the first non-positive pivot.
+fn dense_cholesky(a: &mut [f64], m: usize) -> Result<(), usize> {
+    for j in 0..m {
+        let mut d = a[j * m + j];
+        for k in 0..j {
+            d -= a[j * m + k] * a[j * m + k];
+        }
+        if !(d > 0.0) {
+            return Err(j);
+        }
+        let d = d.sqrt();
+        a[j * m + j] = d;
+        for i in j + 1..m {
+            let mut v = a[i * m + j];
+            for k in 0..j {
+                v -= a[i * m + k] * a[j * m + k];
+            }
+            a[i * m + j] = v / d;
+        }
+    }
+    Ok(())
+}
+
+/// Solves `L L^T x = b` in place with the factor of [`dense_cholesky`].
+fn dense_cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
+    for i in 0..m {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= l[i * m + k] * b[k];
+        }
+        b[i] = v / l[i * m + i];
+    }
+    for i in (0..m).rev() {
+        let mut v = b[i];
+        for k in i + 1..m {
+            v -= l[k * m + i] * b[k];
+        }
+        b[i] = v / l[i * m + i];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Punch;
+    use indentify_laws::{Elastic, Law, Vec4};
+    use indentify_mesh::CylinderMesher;
+
+    /// The capacitance solve equals the direct one to round-off, for growing and shrinking
+    /// sets of prescribed dofs, and needs one factorization for all of them.
+    #[test]
+    fn capacitance_and_direct_solves_agree() {
+        let mesh = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 6,
+            nz: 5,
+            grading_r: 1.2,
+            grading_z: 1.2,
+        }
+        .build()
+        .unwrap();
+        let model = Model::new(
+            mesh,
+            Punch::Cone {
+                half_angle_deg: 68.0,
+            },
+        )
+        .unwrap();
+        let c = [20000.0, 0.3];
+        let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
+        let tangents = vec![t; model.disc.qp.len()];
+        let n = model.dofs.n_eq;
+        let b0: Vec<f64> = (0..n)
+            .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        let xbar: Vec<f64> = (0..n).map(|i| 1e-3 * ((i * 31) % 17) as f64).collect();
+        let nc = model.candidates.len();
+        let mut reusable = ConstrainedSystem::new(&model).unwrap();
+        let mut direct = ConstrainedSystem::new(&model).unwrap();
+        for k_active in [0, 1, 3, 4, 2, nc] {
+            let active: Vec<bool> = (0..nc).map(|k| k < k_active).collect();
+            reusable.set_tangent(&model, &tangents, Some((&c, 1.0)));
+            reusable.set_active(&model, &active);
+            reusable.factorize(&model).unwrap();
+            direct.set_tangent(&model, &tangents, None);
+            direct.set_active(&model, &active);
+            direct.factorize(&model).unwrap();
+            let (mut x1, mut x2) = (b0.clone(), b0.clone());
+            reusable.solve_dirichlet(&model, &mut x1, &xbar);
+            direct.solve_dirichlet(&model, &mut x2, &xbar);
+            let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for e in 0..n {
+                assert!(
+                    (x1[e] - x2[e]).abs() <= 1e-10 * scale,
+                    "{k_active} active: x[{e}] {} vs {}",
+                    x1[e],
+                    x2[e]
+                );
+                if direct.is_constrained(e) {
+                    assert_eq!(x1[e], xbar[e]);
+                }
+            }
+        }
+        assert!(reusable.capacitance);
+        assert_eq!(reusable.factorizations(), 1);
+        assert_eq!(direct.factorizations(), 6);
     }
 }
