@@ -456,7 +456,12 @@ fn argmax(v: &[f64]) -> usize {
 /// before its maximum; `i_cross` is the sample after the last one below it. The baseline is
 /// the first half of the samples before `i_cross`: `F_0` = their median, `s` = 1.4826 times
 /// their median absolute deviation. Contact is the last sample before `i_cross` with
-/// `F <= F_0 + noise_band s` (sample 0 if none). Then `h <- h - h[contact]`,
+/// `F <= F_0 + noise_band s` (sample 0 if none). A record that starts in contact (no flat
+/// stretch: a least-squares line through the baseline window rises over it by more than
+/// `2 noise_band` times the scatter about the line)
+/// has its contact at sample 0 and `F_0 = F[0]`: instruments that zero themselves at contact
+/// (Anton Paar) write such records, and a baseline taken from the start of the loading
+/// curve would cut a slice off the depth. Then `h <- h - h[contact]`,
 /// `F <- F - F_0`, `t <- t - t[contact]`, and with `trim` the samples before contact go.
 ///
 /// # Errors
@@ -525,13 +530,45 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
     } else {
         (f.first().copied().unwrap_or(0.0), 0.0)
     };
+    // A record that starts at contact (the instrument zeroed itself there) has no flat
+    // stretch before the crossing: its "baseline" window rises. Least-squares line through
+    // the window: rising when its rise over the window exceeds 2 noise_band times the
+    // scatter about the line (a flat, noisy or falling baseline does not).
+    let rising = i_cross >= 8 && {
+        let m = i_cross.div_ceil(2);
+        let (tw, fw) = (r.t.get(..m).unwrap_or(&[]), f.get(..m).unwrap_or(&[]));
+        let n = tw.len() as f64;
+        let tm = tw.iter().sum::<f64>() / n;
+        let fm = fw.iter().sum::<f64>() / n;
+        let stt: f64 = tw.iter().map(|t| (t - tm) * (t - tm)).sum();
+        let stf: f64 = tw.iter().zip(fw).map(|(t, x)| (t - tm) * (x - fm)).sum();
+        let slope = if stt > 0.0 { stf / stt } else { 0.0 };
+        let scatter = (tw
+            .iter()
+            .zip(fw)
+            .map(|(t, x)| (x - fm - slope * (t - tm)).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        let span = tw.last().copied().unwrap_or(0.0) - tw.first().copied().unwrap_or(0.0);
+        slope > 0.0
+            && slope * span > 2.0 * o.noise_band.max(1.0) * scatter + 1e-12 * (f_max - f_min).abs()
+    };
+    let (base, sigma) = if rising {
+        (f.first().copied().unwrap_or(0.0), 0.0)
+    } else {
+        (base, sigma)
+    };
     let band = o.noise_band * sigma + 1e-12 * (f_max - f_min).abs();
-    let contact = f
-        .get(..i_cross)
-        .unwrap_or(&[])
-        .iter()
-        .rposition(|&x| x <= base + band)
-        .unwrap_or(0);
+    let contact = if rising {
+        0
+    } else {
+        f.get(..i_cross)
+            .unwrap_or(&[])
+            .iter()
+            .rposition(|&x| x <= base + band)
+            .unwrap_or(0)
+    };
     let (t0, h0) = (r.t[contact], r.h[contact]);
     let keep = if o.trim { contact } else { 0 };
     let take = |v: &[f64], off: f64| {
@@ -563,7 +600,12 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
     let a = Applied::new(
         "zero_point",
         format!(
-            "contact at t = {t0:.4} s (sample {contact}, force rising through {:.4} mN above {:.4} mN): h offset {:.3} nm, F offset {:.5} mN (baseline noise {:.5} mN), {} approach samples {}; t = 0 at contact",
+            "contact at t = {t0:.4} s (sample {contact}{}, force rising through {:.4} mN above {:.4} mN): h offset {:.3} nm, F offset {:.5} mN (baseline noise {:.5} mN), {} approach samples {}; t = 0 at contact",
+            if rising {
+                ": the record starts in contact, its force rising from the first sample"
+            } else {
+                ""
+            },
             rise * 1e3,
             f_min * 1e3,
             h0 * 1e6,
@@ -1054,6 +1096,47 @@ mod tests {
         let t_c = a.values[0].value;
         assert!((t_c - 2.0).abs() <= 0.15, "{}", a.description);
         assert!(z.t[0] == 0.0);
+    }
+
+    #[test]
+    fn a_record_that_starts_in_contact_keeps_its_first_sample() {
+        // an instrument that zeroed itself at contact: h = 10 nm/s t, F = 2 mN/s^2 t^2 with a
+        // little noise, from the first sample on (the baseline window rises)
+        let n = 200;
+        let t: Vec<f64> = (0..n).map(|i| 0.1 * i as f64).collect();
+        let h: Vec<f64> = t.iter().map(|t| 1e-5 * t).collect();
+        let f: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, t)| 2e-3 * t * t + if i % 2 == 0 { 1e-8 } else { -1e-8 })
+            .collect();
+        let r = rec(t, h.clone(), f.clone());
+        let (z, a) = zero_point(&r, &ZeroPoint::default()).unwrap();
+        assert_eq!(z.len(), n, "{}", a.description);
+        assert!(
+            a.description.contains("starts in contact"),
+            "{}",
+            a.description
+        );
+        assert_eq!(z.h[10], h[10] - h[0]);
+        assert_eq!(z.f[10], f[10] - f[0]);
+        // the same record after a flat, noisy approach: contact found after it
+        let mut t2: Vec<f64> = (0..50).map(|i| -5.0 + 0.1 * i as f64).collect();
+        let mut h2: Vec<f64> = t2.iter().map(|t| 1e-5 * t).collect();
+        let mut f2: Vec<f64> = (0..50)
+            .map(|i| if i % 2 == 0 { 1e-7 } else { -1e-7 })
+            .collect();
+        t2.extend(r.t.iter());
+        h2.extend(h.iter());
+        f2.extend(f.iter());
+        let (z2, a2) = zero_point(&rec(t2, h2, f2), &ZeroPoint::default()).unwrap();
+        assert!(
+            !a2.description.contains("starts in contact"),
+            "{}",
+            a2.description
+        );
+        assert!((a2.values[0].value).abs() <= 0.5, "{}", a2.description);
+        assert!(z2.len() >= n - 5 && z2.len() <= n + 5, "{}", a2.description);
     }
 
     #[test]
