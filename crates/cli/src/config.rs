@@ -145,6 +145,25 @@ impl DataSection {
         let raw = indentify_records::read_one(&bytes, &shown, &opts)?;
         let (record, applied) = indentify_records::apply(&raw, &self.preprocessing)
             .with_context(|| format!("cannot preprocess `{shown}` (data.preprocessing)"))?;
+        if raw.meta.format == Format::Csv && (raw.h_max() > 1.0 || raw.f_max() > 100.0) {
+            tracing::warn!(
+                "warning: `{shown}` reaches a depth of {} mm and a force of {} N: if its columns \
+                 are in nm, um, mN or uN, say so in the header (`Depth (nm)`, `Load (mN)`); a \
+                 column without a unit is read in mm, N and s",
+                short(raw.h_max()),
+                short(raw.f_max())
+            );
+        }
+        if let Some(i) = (1..record.t.len()).find(|&i| !(record.t[i] > record.t[i - 1])) {
+            bail!(
+                "`{shown}`: points {} and {i} (after preprocessing) have the times {} s and {} s: \
+                 the simulation needs increasing times; resampling averages repeated times \
+                 (data.preprocessing.resample: (n: 60))",
+                i - 1,
+                record.t[i - 1],
+                record.t[i]
+            );
+        }
         if record.t.len() < 3 {
             bail!(
                 "`{shown}` has {} points after preprocessing: expected at least 3 to drive a \
@@ -839,6 +858,16 @@ pub fn load_str(src: &str, name: &str, sets: &[String]) -> Result<Config> {
     Ok(config)
 }
 
+/// Whether `src` writes the specimen in the form before `Cylinder`/`Auto` existed.
+fn old_specimen_syntax(src: &str) -> bool {
+    src.lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .any(|l| {
+            l.split_once("specimen:")
+                .is_some_and(|(_, rest)| rest.trim_start().starts_with('('))
+        })
+}
+
 /// Parses a RON configuration; `name` (the file name) prefixes error positions.
 ///
 /// # Errors
@@ -848,7 +877,17 @@ pub fn parse(src: &str, name: &str) -> Result<Config> {
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
         .from_str::<Config>(src)
-        .map_err(|e| anyhow!(describe_ron_error(src, name, &e)))
+        .map_err(|e| {
+            let mut msg = describe_ron_error(src, name, &e);
+            if old_specimen_syntax(src) {
+                msg.push_str(
+                    "\nhint: `specimen` is now `Cylinder(radius: .., height: .., nr: .., nz: .., \
+                     grading_r: .., grading_z: ..)` or `Auto()`: write `specimen: Cylinder(` \
+                     where the file has `specimen: (`",
+                );
+            }
+            anyhow!(msg)
+        })
         .with_context(|| format!("cannot parse the configuration `{name}`"))
 }
 

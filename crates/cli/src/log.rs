@@ -1,5 +1,6 @@
 //! Messages on standard error through `tracing` (`--quiet`: errors only; default: progress
-//! and summaries; `-v`: solver detail; `-vv`: everything; `RUST_LOG` overrides), and the
+//! and summaries; `-v`: solver detail; `-vv`: everything; `RUST_LOG` overrides all but
+//! `--quiet`), and the
 //! progress bar of long runs, drawn only when standard error is a terminal and kept out of
 //! the way of the messages (a message suspends the bar while it is written).
 
@@ -29,8 +30,10 @@ pub fn init(quiet: bool, verbose: u8) {
     if let Ok(mut q) = QUIET.lock() {
         *q = quiet;
     }
+    // --quiet wins over RUST_LOG
     let filter = std::env::var("RUST_LOG")
         .ok()
+        .filter(|_| !quiet)
         .and_then(|s| EnvFilter::try_new(s).ok())
         .unwrap_or_else(|| EnvFilter::new(level));
     // a second call (tests) keeps the first subscriber

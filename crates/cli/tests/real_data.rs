@@ -180,3 +180,53 @@ fn gradients_on_a_measured_history_match_finite_differences() {
     assert!(v["J"].as_f64().unwrap() > 0.0, "{v}");
     assert!(v["data"].as_str().unwrap().contains("anonNI.TXT"), "{v}");
 }
+
+#[test]
+fn old_configs_repeated_times_and_unitless_columns_get_precise_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    // the specimen as written before Cylinder/Auto existed
+    let old = std::fs::read_to_string(examples().join("r0-elastic.ron"))
+        .unwrap()
+        .replace("specimen: Cylinder(", "specimen: (");
+    let p = dir.path().join("old.ron");
+    std::fs::write(&p, old).unwrap();
+    let o = indentify(&["check", p.to_str().unwrap()]);
+    assert_rejected(&o, &["hint", "specimen: Cylinder("], "old specimen");
+    // repeated times without resampling: the points and what to do
+    let csv = dir.path().join("dup.csv");
+    std::fs::write(
+        &csv,
+        "Time (s),Depth (nm),Load (mN)\n0,0,0\n1,100,1\n1,110,1.2\n2,200,4\n3,200,3.9\n4,100,0.5\n",
+    )
+    .unwrap();
+    let cfg = |file: &str, pre: &str| {
+        format!(
+            "(specimen: Auto(), punch: Berkovich(), law: Maxwell(E: 2000.0, nu: 0.3, eta: 1e5), \
+             data: (file: {file:?}, preprocessing: ({pre})))"
+        )
+    };
+    let p = dir.path().join("dup.ron");
+    std::fs::write(&p, cfg(csv.to_str().unwrap(), "zero_point: None")).unwrap();
+    let o = indentify(&["check", p.to_str().unwrap()]);
+    assert_rejected(
+        &o,
+        &["dup.csv", "points 1 and 2", "resample"],
+        "repeated times",
+    );
+    // a table without units whose numbers are nm and mN: accepted, with a warning
+    let csv = dir.path().join("nounits.csv");
+    std::fs::write(
+        &csv,
+        "t,h,F\n0,0,0\n1,100,1\n2,200,4\n3,200,3.9\n4,100,0.5\n",
+    )
+    .unwrap();
+    let p = dir.path().join("nounits.ron");
+    std::fs::write(&p, cfg(csv.to_str().unwrap(), "zero_point: None")).unwrap();
+    let o = indentify(&["check", p.to_str().unwrap()]);
+    assert_ok(&o);
+    assert!(
+        stderr(&o).contains("warning") && stderr(&o).contains("Depth (nm)"),
+        "{}",
+        stderr(&o)
+    );
+}

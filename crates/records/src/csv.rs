@@ -98,7 +98,19 @@ pub(crate) fn read(file: &str, text: &str) -> Result<Record, ReadError> {
 
 /// The start of a line for messages (at most 40 chars).
 pub(crate) fn clip(line: &str) -> String {
-    let s: String = line.trim().chars().take(40).collect();
+    // control characters escaped: a binary file must not send escape sequences to a terminal
+    let s: String = line
+        .trim()
+        .chars()
+        .take(40)
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<char>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect();
     if line.trim().chars().count() > 40 {
         format!("{s}...")
     } else {

@@ -866,6 +866,16 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
         });
     }
     let t = &r.t;
+    if !(t[len - 1] > t[0]) {
+        return Err(PrepError::Record {
+            record: r.name.clone(),
+            what: format!(
+                "all {len} samples are at t = {} s: the record spans no time",
+                t[0]
+            ),
+            expected: "a time column that increases over the test".to_owned(),
+        });
+    }
     let peak = argmax(&r.h);
     // knots as sample indices: first, segment starts, peak, last
     let mut knots = vec![0, peak, len - 1];

@@ -280,12 +280,7 @@ fn draw_force<DB: DrawingBackend>(
     let corner = legend_corner(&lines, &xr, &yr);
 
     let fonts = Fonts::for_area(root);
-    let caption = format!(
-        "{}: {}, test {}",
-        report.law,
-        figure.caption(),
-        report.source.test
-    );
+    let caption = title(report, figure);
     let mut chart = ChartBuilder::on(root)
         .caption(caption, ("sans-serif", fonts.caption))
         .margin(fonts.label)
@@ -394,12 +389,7 @@ fn draw_convergence<DB: DrawingBackend>(
     }
 
     let fonts = Fonts::for_area(root);
-    let title = format!(
-        "{}: {}, test {}",
-        report.law,
-        figure.caption(),
-        report.source.test
-    );
+    let title = title(report, figure);
     let titled = root
         .titled(&title, ("sans-serif", fonts.caption))
         .map_err(err)?;
@@ -580,6 +570,16 @@ fn iteration_tick(v: f64, span: f64) -> String {
 /// Tick values that are zero up to round-off (`1e-17` on a unit-wide axis) print as 0.
 fn snap_zero(v: f64, span: f64) -> f64 {
     if v.abs() < 1e-9 * span { 0.0 } else { v }
+}
+
+/// `law: caption, test T` (without the test when the source names none).
+fn title(report: &Report, figure: Figure) -> String {
+    let test = report.source.test.trim();
+    if test.is_empty() {
+        format!("{}: {}", report.law, figure.caption())
+    } else {
+        format!("{}: {}, test {test}", report.law, figure.caption())
+    }
 }
 
 #[cfg(test)]

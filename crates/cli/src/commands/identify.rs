@@ -459,14 +459,21 @@ pub fn run(args: &Args) -> Result<()> {
     let (file, test) = match &prepared.measured {
         Some(m) => (
             m.path.display().to_string(),
-            m.raw
-                .meta
-                .test_name
-                .clone()
-                .unwrap_or_else(|| "single test".to_string()),
+            m.raw.meta.test_name.clone().unwrap_or_default(),
         ),
         None => (data.describe.clone(), String::new()),
     };
+    // result.json first: a report or figure that cannot be made must not lose the result
+    write_result(
+        &result_path,
+        &result,
+        &name,
+        &data,
+        args,
+        resume_from.is_some(),
+        &history_path,
+        &fit_path,
+    )?;
     let written = crate::figures::write(
         out,
         &result,
@@ -482,17 +489,14 @@ pub fn run(args: &Args) -> Result<()> {
             f_final: &f_final,
             history: &history_records,
         },
-    )?;
-    write_result(
-        &result_path,
-        &result,
-        &name,
-        &data,
-        args,
-        resume_from.is_some(),
-        &history_path,
-        &fit_path,
-    )?;
+    )
+    .map_err(|e| {
+        tracing::warn!(
+            "warning: no report.md, report.json or figures: {e:#} (result.json, history.csv \
+             and fit.csv are written)"
+        );
+    })
+    .ok();
 
     // the table
     let mut rows = vec![
@@ -548,27 +552,33 @@ pub fn run(args: &Args) -> Result<()> {
         result.adjoint_solves,
         result.seconds
     ));
-    text.push_str(&format!(
-        "  fit: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest residual \
-         {:.4e} N ({} points)\n",
-        written.fit.r2,
-        written.fit.rms,
-        100.0 * written.fit.rms_rel,
-        written.fit.max_abs,
-        written.fit.n
-    ));
+    if let Some(w) = &written {
+        text.push_str(&format!(
+            "  fit: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest \
+             residual {:.4e} N ({} points)\n",
+            w.fit.r2,
+            w.fit.rms,
+            100.0 * w.fit.rms_rel,
+            w.fit.max_abs,
+            w.fit.n
+        ));
+    }
     if let Some(i) = &result.identifiability {
         text.push_str(&format!("  {}\n", identifiability_line(i)));
     }
+    let reports = written.as_ref().map_or(String::new(), |w| {
+        format!(
+            "{} and {}, {} figures as SVG and PNG; ",
+            w.markdown.display(),
+            w.json.display(),
+            w.figures.len() / 2
+        )
+    });
     text.push_str(&format!(
-        "  report: {} and {} (result {}, history {}, fit {}, {} figures as SVG and PNG), total \
-         wall time {:.1} s\n",
-        written.markdown.display(),
-        written.json.display(),
+        "  report: {reports}result {}, history {}, fit {}; total wall time {:.1} s\n",
         result_path.display(),
         history_path.display(),
         fit_path.display(),
-        written.figures.len() / 2,
         wall.elapsed().as_secs_f64()
     ));
     report::print_text(&text)?;
