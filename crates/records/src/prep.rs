@@ -840,9 +840,11 @@ fn trapezoids(t: &[f64], y: &[f64]) -> Vec<f64> {
 }
 
 /// Resamples to `n` points with `t` from 0: the knots (first and last sample, segment
-/// boundaries, the peak depth) are kept with their raw values, the other points spread over
-/// the intervals between knots in proportion to their duration (at least `min_per_segment`
-/// intervals each when `n` allows), each the time average of the linearly interpolated raw
+/// boundaries, the peak depth; a boundary within 1% of the duration of the peak or of an end
+/// merges into it) are kept with their raw values, the other points spread over the intervals between
+/// knots in proportion to a share that is half their duration and half the change of depth
+/// and force over them, each relative to its total (at least `min_per_segment` intervals
+/// each when `n` allows), each the time average of the linearly interpolated raw
 /// signal over its own interval (from the midpoint to its left neighbour to the midpoint to
 /// its right one): the depth to drive a simulation, the force as the data to fit.
 ///
@@ -884,6 +886,17 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
     }
     knots.sort_unstable();
     knots.dedup_by(|a, b| t[*a] == t[*b]);
+    // a segment boundary within 1% of the duration of the peak or of an end merges into
+    // it: a sliver between them would take min_per_segment steps from the real segments
+    let total_t = t[len - 1] - t[0];
+    knots.retain(|&k| {
+        k == 0
+            || k == len - 1
+            || k == peak
+            || [0, peak, len - 1]
+                .iter()
+                .all(|&a| (t[k] - t[a]).abs() > 0.01 * total_t)
+    });
     if knots.len() < 2 || !(t[len - 1] > t[0]) {
         return Err(PrepError::TooShort {
             record: r.name.clone(),
@@ -907,28 +920,56 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
             ),
         ));
     }
-    let total = t[len - 1] - t[0];
+    let total = total_t;
     let dur: Vec<f64> = knots.windows(2).map(|w| t[w[1]] - t[w[0]]).collect();
+    // share of each interval: half by duration, half by how much depth and force change
+    // over it (relative to their ranges), so that a long creep hold does not starve the
+    // loading and unloading branches
+    let range = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        if hi > lo { hi - lo } else { 1.0 }
+    };
+    let (hr, fr) = (range(&r.h), range(&r.f));
+    let change: Vec<f64> = knots
+        .windows(2)
+        .map(|w| (r.h[w[1]] - r.h[w[0]]).abs() / hr + (r.f[w[1]] - r.f[w[0]]).abs() / fr)
+        .collect();
+    let change_total: f64 = change.iter().sum();
+    let share: Vec<f64> = dur
+        .iter()
+        .zip(&change)
+        .map(|(d, c)| {
+            if change_total > 0.0 {
+                0.5 * d / total + 0.5 * c / change_total
+            } else {
+                d / total
+            }
+        })
+        .collect();
     let budget = o.n - 1;
     let min_p = o.min_per_segment.max(1).min(budget / m).max(1);
-    let mut p: Vec<usize> = dur
+    let mut p: Vec<usize> = share
         .iter()
-        .map(|d| (((budget as f64) * d / total).floor() as usize).max(min_p))
+        .map(|w| (((budget as f64) * w).floor() as usize).max(min_p))
         .collect();
     let mut sum: usize = p.iter().sum();
     while sum < budget {
-        // add to the interval with the longest step
+        // add to the interval furthest below its share
         let k = (0..m)
-            .max_by(|&i, &j| (dur[i] / p[i] as f64).total_cmp(&(dur[j] / p[j] as f64)))
+            .max_by(|&i, &j| (share[i] / p[i] as f64).total_cmp(&(share[j] / p[j] as f64)))
             .unwrap_or(0);
         p[k] += 1;
         sum += 1;
     }
     while sum > budget {
-        // take from the interval with the shortest step that can spare one
+        // take from the interval furthest above its share that can spare one
         let Some(k) = (0..m)
             .filter(|&i| p[i] > min_p)
-            .min_by(|&i, &j| (dur[i] / p[i] as f64).total_cmp(&(dur[j] / p[j] as f64)))
+            .min_by(|&i, &j| (share[i] / p[i] as f64).total_cmp(&(share[j] / p[j] as f64)))
         else {
             break;
         };
