@@ -327,14 +327,14 @@ pub(crate) fn read_multi(
             if line.trim().is_empty() {
                 continue;
             }
-            let fs: Vec<&str> = line
-                .split(match sep {
-                    Sep::Tab => '\t',
-                    Sep::Semicolon => ';',
-                    Sep::Comma => ',',
-                    Sep::Whitespace => ' ',
-                })
-                .collect();
+            // blank-separated rows: runs of blanks are one separator (space-aligned columns);
+            // empty trailing cells cannot be told apart there, tabs or semicolons can
+            let fs: Vec<&str> = match sep {
+                Sep::Tab => line.split('\t').collect(),
+                Sep::Semicolon => line.split(';').collect(),
+                Sep::Comma => line.split(',').collect(),
+                Sep::Whitespace => line.split_whitespace().collect(),
+            };
             let cells = [fc.0, fc.1, hc.0, hc.1].map(|j| fs.get(j).map_or("", |s| s.trim()));
             if cells.iter().all(|s| s.is_empty()) {
                 ended.get_or_insert(no);

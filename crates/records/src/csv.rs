@@ -7,12 +7,27 @@ use crate::text;
 
 /// Whether a line is a row of numbers (at least two fields).
 pub(crate) fn is_numeric_row(line: &str) -> bool {
-    let sep = Sep::of(line);
+    numeric_with(line, row_sep(line))
+}
+
+/// Whether `line` splits by `sep` into at least two numbers.
+fn numeric_with(line: &str, sep: Sep) -> bool {
     let fs = sep.split(line);
     fs.len() >= 2
         && fs
             .iter()
             .all(|f| text::number(f, sep.decimal_comma()).is_some())
+}
+
+/// The separator of a data row: [`Sep::of`], except that blank-separated numbers with
+/// decimal commas (`1,5 10,2 0,3`) are blank-separated.
+pub(crate) fn row_sep(line: &str) -> Sep {
+    let sep = Sep::of(line);
+    if sep == Sep::Comma && !numeric_with(line, Sep::Comma) && numeric_with(line, Sep::Whitespace) {
+        Sep::Whitespace
+    } else {
+        sep
+    }
 }
 
 fn skip(line: &str) -> bool {
@@ -52,7 +67,7 @@ pub(crate) fn read(file: &str, text: &str) -> Result<Record, ReadError> {
     let mut sep = Sep::of(header);
     let mut labels = sep.split_header(header);
     if labels.len() < 3 {
-        let data_sep = ls.get(k).map_or(sep, |&(_, l)| Sep::of(l));
+        let data_sep = ls.get(k).map_or(sep, |&(_, l)| row_sep(l));
         if data_sep != sep {
             sep = data_sep;
             labels = sep.split_header(header);

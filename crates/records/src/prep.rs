@@ -840,8 +840,8 @@ fn trapezoids(t: &[f64], y: &[f64]) -> Vec<f64> {
 }
 
 /// Resamples to `n` points with `t` from 0: the knots (first and last sample, segment
-/// boundaries, the peak depth; a boundary within 1% of the duration of the peak or of an end
-/// merges into it) are kept with their raw values, the other points spread over the intervals between
+/// boundaries, the peak depth; a boundary within 1% of the duration, or 3 samples, of the
+/// peak or of an end merges into it) are kept with their raw values, the other points spread over the intervals between
 /// knots in proportion to a share that is half their duration and half the change of depth
 /// and force over them, each relative to its total (at least `min_per_segment` intervals
 /// each when `n` allows), each the time average of the linearly interpolated raw
@@ -886,8 +886,8 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
     }
     knots.sort_unstable();
     knots.dedup_by(|a, b| t[*a] == t[*b]);
-    // a segment boundary within 1% of the duration of the peak or of an end merges into
-    // it: a sliver between them would take min_per_segment steps from the real segments
+    // a segment boundary within 1% of the duration, or 3 samples, of the peak or of an end
+    // merges into it: a sliver between them would take min_per_segment steps from the real segments
     let total_t = t[len - 1] - t[0];
     knots.retain(|&k| {
         k == 0
@@ -895,7 +895,7 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
             || k == peak
             || [0, peak, len - 1]
                 .iter()
-                .all(|&a| (t[k] - t[a]).abs() > 0.01 * total_t)
+                .all(|&a| (t[k] - t[a]).abs() > 0.01 * total_t && k.abs_diff(a) > 3)
     });
     if knots.len() < 2 || !(t[len - 1] > t[0]) {
         return Err(PrepError::TooShort {

@@ -303,3 +303,19 @@ fn wrong_forced_format_is_an_error() {
         K::Format
     );
 }
+
+/// Blank-separated tables with decimal commas, and multi-test files aligned with runs of
+/// blanks, read like their tab-separated twins.
+#[test]
+fn blank_separated_decimal_commas_and_space_aligned_columns_read() {
+    let ws = "Time (s) Depth (nm) Load (mN)\n0,0 0,0 0,0\n1,5 10,2 1,1\n3,0 20,0 2,0\n";
+    let r = indentify_records::read_one(ws.as_bytes(), "ws.txt", &ReadOptions::default()).unwrap();
+    assert_eq!(r.t, vec![0.0, 1.5, 3.0]);
+    assert!((r.h[1] - 10.2e-6).abs() < 1e-15 && (r.f[1] - 1.1e-3).abs() < 1e-15);
+    let tab = "X_A_Time_[s]\tY_A_Fn_[mN]\tX_A_Time_[s]\tY_A_Pd_[nm]\n0\t0\t0\t0\n0.1\t0.5\t0.1\t10\n0.2\t1.0\t0.2\t20\n";
+    let sp = tab.replace('\t', "   ");
+    let a =
+        indentify_records::read_one(tab.as_bytes(), "tab.txt", &ReadOptions::default()).unwrap();
+    let b = indentify_records::read_one(sp.as_bytes(), "sp.txt", &ReadOptions::default()).unwrap();
+    assert_eq!((a.t, a.h, a.f), (b.t, b.h, b.f));
+}
