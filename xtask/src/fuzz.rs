@@ -7,6 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use indentify_records::fuzzing::{FORMATS, Mutation, mutate};
 use indentify_records::{
     Control, Correction, Format, Preprocessing, ReadOptions, Resample, Segments, ZeroPoint, apply,
     read,
@@ -38,105 +39,29 @@ impl Rng {
     }
 }
 
-const TOKENS: &[&[u8]] = &[
-    b"NaN",
-    b"inf",
-    b"-inf",
-    b"1e308",
-    b"-1e308",
-    b"9e999",
-    b"-0",
-    b"",
-    b"\t",
-    b",",
-    b";",
-    b"\r",
-    b"\n",
-    b"\r\n",
-    b"\xB5",
-    b"\xC2\xB5",
-    b"\xEF\xBB\xBF",
-    b"0,5",
-    b"x",
-    b"(nm)",
-    b"[s]",
-    b"_ms",
-    b"Number of Points = 7",
-    b"Test Data Points: 3",
-    b"Drift Measurement Data Points: 2",
-    b"Measured values",
-    b"X_a_Time_[s]",
-    b"Segment Number: 9",
-    b"18446744073709551616",
-];
-
-fn lines(b: &[u8]) -> Vec<(usize, usize)> {
-    let mut v = Vec::new();
-    let mut s = 0;
-    for (i, &c) in b.iter().enumerate() {
-        if c == b'\n' {
-            v.push((s, i + 1));
-            s = i + 1;
-        }
-    }
-    if s < b.len() {
-        v.push((s, b.len()));
-    }
-    v
-}
-
-/// One random mutation: byte flip, truncation, line duplication or deletion, token
-/// insertion (NaN, inf, huge numbers, separators, micro signs, section headers), swapped
-/// columns on one of the first lines, or a number replaced by a huge one.
-fn mutate(rng: &mut Rng, mut b: Vec<u8>) -> Vec<u8> {
-    let ls = lines(&b);
+/// One random mutation of the shared set (`indentify_records::fuzzing`).
+fn mutation(rng: &mut Rng) -> Mutation {
+    let (x, y, z) = (
+        rng.next() as usize,
+        rng.next() as usize,
+        rng.next() as usize,
+    );
     match rng.below(7) {
-        0 if !b.is_empty() => {
-            let k = rng.below(b.len());
-            b[k] = rng.next() as u8;
-        }
-        1 => {
-            let k = rng.below(b.len() + 1);
-            b.truncate(k);
-        }
-        2 if !ls.is_empty() => {
-            let (s, e) = ls[rng.below(ls.len())];
-            let l = b[s..e].to_vec();
-            b.splice(e..e, l);
-        }
-        3 if !ls.is_empty() => {
-            let (s, e) = ls[rng.below(ls.len())];
-            b.drain(s..e);
-        }
-        4 => {
-            let k = rng.below(b.len() + 1);
-            let t = TOKENS[rng.below(TOKENS.len())];
-            b.splice(k..k, t.iter().copied());
-        }
-        5 if !ls.is_empty() => {
-            let (s, e) = ls[rng.below(ls.len().min(200))];
-            let line = b[s..e].to_vec();
-            let sep = [b'\t', b';', b',']
-                .into_iter()
-                .find(|c| line.contains(c))
-                .unwrap_or(b' ');
-            let mut fields: Vec<&[u8]> = line.split(|&c| c == sep).collect();
-            let n = fields.len();
-            fields.swap(rng.below(n), rng.below(n));
-            let joined = fields.join(&[sep][..]);
-            b.splice(s..e, joined);
-        }
-        _ if !b.is_empty() => {
-            // a digit somewhere becomes a huge or non-finite number
-            let k = rng.below(b.len());
-            if let Some(d) = b[k..].iter().position(u8::is_ascii_digit) {
-                let t = [&b"1e300"[..], b"NaN", b"inf", b"-1e300"][rng.below(4)];
-                b.splice(k + d..k + d + 1, t.iter().copied());
-            }
-        }
-        _ => {}
+        0 => Mutation::Flip {
+            at: x,
+            byte: y as u8,
+        },
+        1 => Mutation::Truncate { at: x },
+        2 => Mutation::DuplicateLine { line: x },
+        3 => Mutation::DeleteLine { line: x },
+        4 => Mutation::Insert { at: x, token: y },
+        5 => Mutation::SwapColumns {
+            line: x,
+            a: y,
+            b: z,
+        },
+        _ => Mutation::Hugify { at: x, which: y },
     }
-    b
 }
 
 fn options(rng: &mut Rng) -> Preprocessing {
@@ -169,15 +94,6 @@ fn options(rng: &mut Rng) -> Preprocessing {
         }),
     }
 }
-
-const FORMATS: [Format; 6] = [
-    Format::Auto,
-    Format::Csv,
-    Format::AntonPaar,
-    Format::AntonPaarMulti,
-    Format::HysitronTxt,
-    Format::Hld,
-];
 
 fn head(b: &[u8], n: usize) -> Vec<u8> {
     b.split_inclusive(|&c| c == b'\n')
@@ -249,7 +165,8 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             let k = rng.below(4);
             for _ in 0..k {
-                b = mutate(&mut rng, b);
+                let m = mutation(&mut rng);
+                b = mutate(b, &m);
             }
             b
         };

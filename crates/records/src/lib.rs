@@ -83,6 +83,7 @@
 mod anton_paar;
 mod csv;
 mod error;
+pub mod fuzzing;
 mod hysitron;
 pub mod prep;
 mod record;

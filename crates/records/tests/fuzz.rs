@@ -3,12 +3,12 @@
 //! swapped columns) and random records must give a value or an error, never a panic.
 //! A few thousand cases here; `cargo xtask fuzz-readers` runs 100 000+ in release.
 
+use indentify_records::fuzzing::{FORMATS, Mutation, mutate};
 use indentify_records::{
     Control, Correction, Format, Preprocessing, ReadOptions, Record, Resample, Segments, ZeroPoint,
     apply, read,
 };
 use proptest::prelude::*;
-use proptest::sample::Index;
 
 const ANON: &[u8] = include_bytes!("../../../examples/data/anton-paar-unht-berkovich/anonNI.TXT");
 const MULTI: &[u8] =
@@ -42,106 +42,17 @@ fn seeds() -> Vec<Vec<u8>> {
     ]
 }
 
-const TOKENS: &[&[u8]] = &[
-    b"NaN",
-    b"inf",
-    b"-inf",
-    b"1e308",
-    b"-1e308",
-    b"9e999",
-    b"",
-    b"\t",
-    b",",
-    b";",
-    b"\r",
-    b"\n",
-    b"\xB5",
-    b"\xC2\xB5",
-    b"0,5",
-    b"x",
-    b"(nm)",
-    b"[s]",
-    b"Number of Points = 7",
-    b"Test Data Points: 3",
-    b"Measured values",
-    b"X_a_Time_[s]",
-];
-
-#[derive(Debug, Clone)]
-enum Mutation {
-    Flip(Index, u8),
-    Truncate(Index),
-    DuplicateLine(Index),
-    DeleteLine(Index),
-    Insert(Index, usize),
-    SwapColumns(Index, Index, Index),
-}
-
 fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
-        (any::<Index>(), any::<u8>()).prop_map(|(i, b)| Mutation::Flip(i, b)),
-        any::<Index>().prop_map(Mutation::Truncate),
-        any::<Index>().prop_map(Mutation::DuplicateLine),
-        any::<Index>().prop_map(Mutation::DeleteLine),
-        (any::<Index>(), 0..TOKENS.len()).prop_map(|(i, t)| Mutation::Insert(i, t)),
-        (any::<Index>(), any::<Index>(), any::<Index>())
-            .prop_map(|(l, a, b)| Mutation::SwapColumns(l, a, b)),
+        (any::<usize>(), any::<u8>()).prop_map(|(at, byte)| Mutation::Flip { at, byte }),
+        any::<usize>().prop_map(|at| Mutation::Truncate { at }),
+        any::<usize>().prop_map(|line| Mutation::DuplicateLine { line }),
+        any::<usize>().prop_map(|line| Mutation::DeleteLine { line }),
+        (any::<usize>(), any::<usize>()).prop_map(|(at, token)| Mutation::Insert { at, token }),
+        (0..80usize, any::<usize>(), any::<usize>())
+            .prop_map(|(line, a, b)| Mutation::SwapColumns { line, a, b }),
+        (any::<usize>(), any::<usize>()).prop_map(|(at, which)| Mutation::Hugify { at, which }),
     ]
-}
-
-fn line_spans(b: &[u8]) -> Vec<(usize, usize)> {
-    let mut v = Vec::new();
-    let mut s = 0;
-    for (i, &c) in b.iter().enumerate() {
-        if c == b'\n' {
-            v.push((s, i + 1));
-            s = i + 1;
-        }
-    }
-    if s < b.len() {
-        v.push((s, b.len()));
-    }
-    v
-}
-
-fn mutate(mut b: Vec<u8>, m: &Mutation) -> Vec<u8> {
-    let lines = line_spans(&b);
-    match m {
-        Mutation::Flip(i, x) if !b.is_empty() => {
-            let k = i.index(b.len());
-            b[k] = *x;
-        }
-        Mutation::Truncate(i) => b.truncate(i.index(b.len() + 1)),
-        Mutation::DuplicateLine(i) if !lines.is_empty() => {
-            let (s, e) = lines[i.index(lines.len())];
-            let l = b[s..e].to_vec();
-            b.splice(e..e, l);
-        }
-        Mutation::DeleteLine(i) if !lines.is_empty() => {
-            let (s, e) = lines[i.index(lines.len())];
-            b.drain(s..e);
-        }
-        Mutation::Insert(i, t) => {
-            let k = i.index(b.len() + 1);
-            b.splice(k..k, TOKENS[*t].iter().copied());
-        }
-        Mutation::SwapColumns(l, x, y) if !lines.is_empty() => {
-            // header lines are the interesting ones: pick among the first 80 lines
-            let (s, e) = lines[l.index(lines.len().min(80))];
-            let line = b[s..e].to_vec();
-            let sep = [b'\t', b';', b',']
-                .into_iter()
-                .find(|c| line.contains(c))
-                .unwrap_or(b' ');
-            let mut fields: Vec<&[u8]> = line.split(|&c| c == sep).collect();
-            let n = fields.len();
-            fields.swap(x.index(n), y.index(n));
-            let joined = fields.join(&[sep][..]);
-            b.splice(s..e, joined);
-        }
-        _ => {}
-    }
-    b
 }
 
 fn options() -> impl Strategy<Value = Preprocessing> {
@@ -181,15 +92,6 @@ fn options() -> impl Strategy<Value = Preprocessing> {
             resample: r.map(|(n, min_per_segment)| Resample { n, min_per_segment }),
         })
 }
-
-const FORMATS: [Format; 6] = [
-    Format::Auto,
-    Format::Csv,
-    Format::AntonPaar,
-    Format::AntonPaarMulti,
-    Format::HysitronTxt,
-    Format::Hld,
-];
 
 /// Reads with the format and, on success, preprocesses every record: never a panic, and
 /// what comes out is consistent.
