@@ -409,10 +409,11 @@ fn draw_convergence<DB: DrawingBackend>(
     let (jlo, jhi) = cost.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), p| {
         (lo.min(p.1), hi.max(p.1))
     });
-    // At least one decade, with a margin of a fifth of a decade at each end.
-    let (jlo, jhi) = if jhi / jlo < 10.0 {
+    // At least two decades (so that at least two decade ticks carry labels), with a
+    // margin of a fifth of a decade at each end.
+    let (jlo, jhi) = if jhi / jlo < 100.0 {
         let mid = (jlo * jhi).sqrt();
-        (mid / 10f64.sqrt(), mid * 10f64.sqrt())
+        (mid / 10.0, mid * 10.0)
     } else {
         (jlo / 10f64.powf(0.2), jhi * 10f64.powf(0.2))
     };
@@ -428,7 +429,7 @@ fn draw_convergence<DB: DrawingBackend>(
             .map_err(err)?;
         chart
             .configure_mesh()
-            .y_desc("cost J")
+            .y_desc("cost J (N²)")
             .x_labels(n_iter_labels)
             .y_labels(y_label_count(&top, fonts.tick))
             .x_label_formatter(&|v| iteration_tick(*v, xs))
