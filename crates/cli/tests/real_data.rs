@@ -230,3 +230,31 @@ fn old_configs_repeated_times_and_unitless_columns_get_precise_messages() {
         stderr(&o)
     );
 }
+
+#[test]
+fn init_with_data_writes_a_valid_template_for_the_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = examples()
+        .join("data/anton-paar-unht-berkovich/anonNI.TXT")
+        .display()
+        .to_string();
+    for law in ["maxwell", "norton-hoff"] {
+        let o = indentify(&["init", law, "--data", &file]);
+        assert_ok(&o);
+        let text = common::stdout(&o);
+        assert!(
+            text.contains("data: (") && !text.contains("history:"),
+            "{text}"
+        );
+        assert!(text.contains("specimen: Auto(") && text.contains("punch: Berkovich"));
+        let p = dir.path().join(format!("{law}.ron"));
+        std::fs::write(&p, text).unwrap();
+        let o = indentify(&["check", p.to_str().unwrap()]);
+        assert_ok(&o);
+        assert!(
+            stderr(&o).contains("1000 samples -> 60 points"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

@@ -7,6 +7,8 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use serde_json::Value;
 
+use indentify_contact::punch::AutoOptions;
+
 use crate::config::{
     Config, DataSection, IdentifySection, LawSpec, ParamSetting, Reference, Specimen, library_law,
 };
@@ -17,6 +19,13 @@ pub struct Args {
     /// The law of the template: its values are those of reference problem R0, R1 or R2.
     #[arg(value_enum)]
     pub law: LawKind,
+
+    /// A template for a measured record instead: its depth drives the simulation (no
+    /// `history`), a Berkovich tip, the automatic specimen, 60 resampled points, every
+    /// parameter but nu free within the law's ranges. The path is written as given: make it
+    /// relative to the folder where the configuration will live, or absolute.
+    #[arg(long, value_name = "FILE")]
+    pub data: Option<String>,
 }
 
 /// The laws `init` has a template for.
@@ -47,7 +56,10 @@ impl LawKind {
 /// A closed standard output.
 pub fn run(args: &Args) -> Result<()> {
     let reference = args.law.reference();
-    let text = template(reference);
+    let text = match &args.data {
+        Some(file) => data_template(reference, file),
+        None => template(reference),
+    };
     std::io::stdout()
         .lock()
         .write_all(text.as_bytes())
@@ -72,6 +84,57 @@ pub fn template(reference: Reference) -> String {
             format!(
                 "indentify configuration written by `indentify init {law}`; \
                  run it with `indentify simulate FILE.ron` or `indentify identify FILE.ron`."
+            ),
+        ],
+    )
+}
+
+/// The annotated template for the measured record `file` with the law of `reference`.
+pub fn data_template(reference: Reference, file: &str) -> String {
+    let mut cfg = reference.config();
+    cfg.specimen = Specimen::Auto {
+        elements_in_contact: AutoOptions::default().elements_in_contact,
+        size_factor: AutoOptions::default().size_factor,
+        grading: AutoOptions::default().grading,
+    };
+    cfg.punch = indentify_contact::Punch::Berkovich { tip_radius: None };
+    cfg.history = None;
+    cfg.data = Some(DataSection {
+        file: file.to_string(),
+        format: indentify_records::Format::Auto,
+        test: None,
+        preprocessing: indentify_records::Preprocessing {
+            resample: Some(indentify_records::Resample {
+                n: 60,
+                ..indentify_records::Resample::default()
+            }),
+            ..indentify_records::Preprocessing::default()
+        },
+    });
+    let mut id = reference.identify_section();
+    for (name, setting) in id.params.iter_mut() {
+        *setting = if name == "nu" {
+            ParamSetting::Fixed { value: Some(0.3) }
+        } else {
+            ParamSetting::Free {
+                start: None,
+                lower: None,
+                upper: None,
+                scaling: None,
+            }
+        };
+    }
+    cfg.identify = Some(id);
+    let law = cfg.law.name();
+    annotated(
+        &cfg,
+        &[
+            format!("Identification of {law} parameters from the measured record `{file}`."),
+            format!(
+                "indentify configuration written by `indentify init {law} --data {file}`: set \
+                 the punch, the law's start values (the vendor's E_IT is a fair start for E) \
+                 and nu, check it with `indentify check FILE.ron`, run it with `indentify \
+                 identify FILE.ron` (docs/tutorial-real-data.md)."
             ),
         ],
     )
