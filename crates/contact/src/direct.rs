@@ -577,12 +577,16 @@ impl DirectSolver {
         sigma_out: &mut [Vec4],
     ) -> Result<(), StepFailure> {
         let disc = &model.disc;
+        // one pass: strains, local updates and the internal force while the stresses are hot
+        self.f_int.fill(0.0);
         for e in 0..disc.elements.len() {
             let dofs = disc.element_dofs(e);
             let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
+            let mut fe = [0.0; 16];
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
-                self.eps[q] = disc.qp[q].strain(&due);
+                let qp = &disc.qp[q];
+                self.eps[q] = qp.strain(&due);
                 let up = law
                     .update(c, &state.sigma[q], &Vec4(self.eps[q]), dt)
                     .map_err(|f| StepFailure::Local {
@@ -590,11 +594,14 @@ impl DirectSolver {
                         reason: f.reason,
                         factor: f.suggested_dt_factor,
                     })?;
+                qp.add_bt(&up.sigma.0, qp.w, &mut fe);
                 sigma_out[q] = up.sigma;
                 self.tangents[q] = up.tangent;
             }
+            for (d, v) in dofs.iter().zip(fe) {
+                self.f_int[*d] += v;
+            }
         }
-        disc.internal_force(sigma_out, &mut self.f_int);
         Ok(())
     }
 
