@@ -138,7 +138,7 @@ impl ConstrainedSystem {
         // capacitance: reusable tangent, and the columns stay a small multiple of K's factor
         let capacitance = self.k_key.is_some() && m <= MAX_CAPACITANCE && m * n <= 20_000_000;
         if capacitance {
-            return self.factorize_capacitance();
+            return self.factorize_capacitance(m);
         }
         self.capacitance = false;
         if self.k_key.is_some() && self.factor_for.as_ref() == Some(&self.constrained) {
@@ -162,7 +162,7 @@ impl ConstrainedSystem {
 
     /// The capacitance mode: the unconstrained factorization (once per tangent), the
     /// columns of newly prescribed dofs, and the small dense factor of `S`.
-    fn factorize_capacitance(&mut self) -> Result<(), FeError> {
+    fn factorize_capacitance(&mut self, m: usize) -> Result<(), FeError> {
         let t0 = std::time::Instant::now();
         self.capacitance = true;
         if !self.base {
@@ -172,10 +172,12 @@ impl ConstrainedSystem {
             self.chol.factorize(&self.k_values)?;
             self.base = true;
         }
-        let set: Vec<usize> = (0..self.constrained.len())
-            .filter(|&e| self.constrained[e])
-            .collect();
-        if set != self.schur_set {
+        // the same prescribed set as the current factor (no allocation in that common case)
+        let same = self.schur_set.len() == m && self.schur_set.iter().all(|&e| self.constrained[e]);
+        if !same {
+            let set: Vec<usize> = (0..self.constrained.len())
+                .filter(|&e| self.constrained[e])
+                .collect();
             let n = self.constrained.len();
             for &c in &set {
                 if !self.columns.contains_key(&c) {
@@ -185,7 +187,6 @@ impl ConstrainedSystem {
                     self.columns.insert(c, z);
                 }
             }
-            let m = set.len();
             let mut l = vec![0.0; m * m];
             for (i, &ci) in set.iter().enumerate() {
                 for (j, &cj) in set.iter().enumerate().take(i + 1) {

@@ -46,25 +46,27 @@ pub fn graded_positions(length: f64, n: usize, q: f64) -> Vec<f64> {
     x
 }
 
+/// `Ok` for a finite length > 0, else the input error naming `field`.
+pub(crate) fn positive_length(field: &'static str, v: f64) -> Result<(), MeshError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(MeshError::Input {
+            field,
+            value: v.to_string(),
+            allowed: "a finite value > 0 (mm)",
+        })
+    }
+}
+
 impl CylinderMesher {
     /// Validates the inputs.
     ///
     /// # Errors
     /// [`MeshError::Input`] naming the field (as `specimen.<field>`), value and range.
     pub fn validate(&self) -> Result<(), MeshError> {
-        let positive = |field, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(MeshError::Input {
-                    field,
-                    value: v.to_string(),
-                    allowed: "a finite value > 0 (mm)",
-                })
-            }
-        };
-        positive("specimen.radius", self.radius)?;
-        positive("specimen.height", self.height)?;
+        positive_length("specimen.radius", self.radius)?;
+        positive_length("specimen.height", self.height)?;
         for (field, n) in [("specimen.nr", self.nr), ("specimen.nz", self.nz)] {
             if !(1..=2000).contains(&n) {
                 return Err(MeshError::Input {

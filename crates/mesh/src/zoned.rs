@@ -1,7 +1,7 @@
 //! Cylinder specimen with a uniform core under the punch and a geometrically graded far
 //! field: the mesher of the automatic (instrument-scale) specimen.
 
-use crate::cylinder::tensor_mesh;
+use crate::cylinder::{positive_length, tensor_mesh};
 use crate::{Mesh, MeshError};
 
 /// A cylinder of radius `radius` and height `height` (mm), occupying `0 <= r <= radius`,
@@ -72,20 +72,9 @@ impl ZonedCylinderMesher {
     /// [`MeshError::Input`] naming the field (as `specimen.<field>`), value and range,
     /// including a mesh of more than 2000 elements along r or z.
     pub fn validate(&self) -> Result<(), MeshError> {
-        let positive = |field, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(MeshError::Input {
-                    field,
-                    value: v.to_string(),
-                    allowed: "a finite value > 0 (mm)",
-                })
-            }
-        };
-        positive("specimen.core", self.core)?;
-        positive("specimen.radius", self.radius)?;
-        positive("specimen.height", self.height)?;
+        positive_length("specimen.core", self.core)?;
+        positive_length("specimen.radius", self.radius)?;
+        positive_length("specimen.height", self.height)?;
         for (field, v) in [
             ("specimen.radius", self.radius),
             ("specimen.height", self.height),
