@@ -11,7 +11,7 @@ mod identify;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
-use indentify_contact::punch::{AutoOptions, auto_specimen};
+use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
 use indentify_contact::{Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
@@ -193,7 +193,9 @@ impl DataSection {
 #[serde(deny_unknown_fields, rename = "specimen")]
 pub enum Specimen {
     /// Cylinder `0 <= r <= radius`, `-height <= z <= 0` (mm), `nr x nz` Q8 elements
-    /// graded towards the axis and the top surface; mirrors [`CylinderMesher`].
+    /// graded towards the axis and the top surface; mirrors [`CylinderMesher`]. Under a
+    /// flat punch, the element boundary nearest to its radius is moved onto it and the
+    /// rim gets quarter-point elements ([`Mesher::build_for`]).
     Cylinder {
         /// Radius (mm).
         radius: f64,
@@ -335,6 +337,29 @@ impl Mesher {
             Mesher::Cylinder(m) => m.build()?,
             Mesher::Zoned(m) => m.build()?,
         })
+    }
+
+    /// The mesh for `punch`. A flat punch's rim is a singular point of the solution: for a
+    /// [`Punch::Flat`] of radius `a` inside a `Cylinder` specimen, the element boundary
+    /// nearest to `a` is moved onto it (by at most half an element, so that the contact
+    /// zone, a set of nodes, ends at the nominal radius; the automatic specimen's core is
+    /// `a` already), then quarter-point singular elements are put around the rim node
+    /// ([`treat_rim`]). Other punches get the mesher's mesh unchanged.
+    ///
+    /// Returns the mesh, the radius of the moved element boundary before the move (if
+    /// any) and what was done at the rim.
+    ///
+    /// # Errors
+    /// The mesher's own checks; a rim element that the treatment would invert.
+    pub fn build_for(&self, punch: &Punch) -> Result<(Mesh, Option<f64>, Rim)> {
+        let (mesh, moved) = match (self, punch) {
+            (Mesher::Cylinder(m), Punch::Flat { radius }) if *radius < m.radius && m.nr >= 2 => {
+                m.build_through(*radius)?
+            }
+            _ => (self.build()?, None),
+        };
+        let (mesh, rim) = treat_rim(mesh, punch)?;
+        Ok((mesh, moved, rim))
     }
 
     /// `20 x 20 Q8 (radius 10 mm, height 10 mm, smallest element 1.6e-2 x 1.6e-2 mm)`.
@@ -796,15 +821,29 @@ impl Config {
         };
         let h_max = schedule.depth.iter().copied().fold(0.0, f64::max);
         let mesher = self.specimen.mesher(&self.punch, h_max)?;
-        let mesh = mesher
-            .build()
+        let (mesh, moved, rim) = mesher
+            .build_for(&self.punch)
             .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
+        if let (Some(from), Punch::Flat { radius }) = (moved, &self.punch) {
+            tracing::info!(
+                "{name}: the element boundary at r = {} mm moved to the flat punch's radius {} mm \
+                 (a corner node at its rim)",
+                short(from),
+                short(*radius)
+            );
+        }
+        match &rim {
+            Rim::Smooth => {}
+            Rim::QuarterPoint { .. } => tracing::debug!("{name}: {}", rim.describe()),
+            Rim::OffCorner { .. } => tracing::warn!("warning: {name}: {}", rim.describe()),
+        }
         let model = Model::new(mesh, self.punch.clone())
             .with_context(|| format!("cannot build the model of `{name}`"))?;
         Ok(Prepared {
             schedule,
             mesher,
             model,
+            rim,
             measured,
         })
     }
@@ -819,6 +858,8 @@ pub struct Prepared {
     pub mesher: Mesher,
     /// The meshed specimen and the punch.
     pub model: Model,
+    /// What was done at a flat punch's rim ([`Mesher::build_for`]).
+    pub rim: Rim,
     /// The measured record driving the schedule, if the configuration has `data`.
     pub measured: Option<Measured>,
 }
@@ -1237,6 +1278,52 @@ mod tests {
         assert!(e.contains("segments"), "{e}");
         let e = format!("{:#}", set(r0(), "law.E").unwrap_err());
         assert!(e.contains("key.path=value"), "{e}");
+    }
+
+    #[test]
+    fn flat_punch_gets_a_corner_and_quarter_points_at_its_rim() {
+        let rc = indentify_mesh::cylinder::graded_positions(10.0, 20, 1.3);
+        let mut cfg = r0();
+        // between two element boundaries of R0's graded grid (0.2024 and 0.2790 mm), nearer
+        // to the outer one
+        cfg.punch = Punch::Flat { radius: 0.25 };
+        let p = cfg.prepare("flat").unwrap();
+        let Rim::QuarterPoint { node, moved } = &p.rim else {
+            panic!("{:?}", p.rim);
+        };
+        let mesh = &p.model.mesh;
+        assert_eq!(mesh.nodes[*node], [0.25, 0.0]);
+        assert_eq!(mesh.node_set("top")[14], *node);
+        assert_eq!(moved.len(), 3);
+        mesh.check_quality().unwrap();
+        let (_, from, _) = p.mesher.build_for(&cfg.punch).unwrap();
+        assert_eq!(from, Some(rc[7]));
+        // on a boundary already: nothing moved
+        let (m, from, rim) = p.mesher.build_for(&Punch::Flat { radius: rc[6] }).unwrap();
+        assert!(from.is_none() && matches!(rim, Rim::QuarterPoint { .. }));
+        assert_eq!(m.nodes[m.node_set("top")[12]], [rc[6], 0.0]);
+        // the automatic specimen's core is the radius; cones are left alone
+        cfg.specimen = Specimen::Auto {
+            elements_in_contact: 8,
+            size_factor: 48.0,
+            grading: 1.5,
+        };
+        assert!(matches!(
+            cfg.prepare("auto").unwrap().rim,
+            Rim::QuarterPoint { .. }
+        ));
+        let p = r0().prepare("r0").unwrap();
+        assert_eq!(p.rim, Rim::Smooth);
+        assert_eq!(p.model.mesh, p.mesher.build().unwrap());
+        // a punch wider than the specimen: reported, untreated
+        let mut wide = r0();
+        wide.punch = Punch::Flat { radius: 12.0 };
+        let p = wide.prepare("wide").unwrap();
+        assert!(
+            matches!(p.rim, Rim::OffCorner { inner: 10.0, .. }),
+            "{:?}",
+            p.rim
+        );
     }
 
     #[test]

@@ -18,13 +18,18 @@
 //!
 //! A worn tip is a sphere of radius `tip_radius` blended tangentially into that cone
 //! (a [`Punch::SpheroCone`]).
+//!
+//! A flat punch's rim is a singular point of the solution: [`rim::treat_rim`] puts
+//! quarter-point elements around it.
 
+pub mod rim;
 pub mod specimen;
 
 use serde::{Deserialize, Serialize};
 
 use crate::ContactError;
 
+pub use rim::{Rim, treat_rim};
 pub use specimen::{AutoOptions, auto_specimen};
 
 /// Half-angle (deg, from the axis) of the cone area-equivalent to a Berkovich pyramid:
@@ -59,7 +64,8 @@ pub enum Punch {
         /// Radius (mm), > 0.
         radius: f64,
     },
-    /// Flat-ended cylinder of radius `radius`: `phi = 0` for `r <= R`, infinite beyond.
+    /// Flat-ended cylinder of radius `radius`: `phi = 0` for `r <= R` (to a relative 1e-9),
+    /// infinite beyond.
     Flat {
         /// Radius (mm), > 0.
         radius: f64,
@@ -208,7 +214,9 @@ impl Punch {
                 }
             }
             Punch::Flat { radius } => {
-                if r <= *radius * (1.0 + 1e-12) {
+                // a node at the radius to a relative 1e-9 is on the face (and is the rim
+                // node of `rim::treat_rim`)
+                if r <= *radius * (1.0 + rim::RIM_TOLERANCE) {
                     0.0
                 } else {
                     f64::INFINITY

@@ -108,6 +108,67 @@ impl CylinderMesher {
         let dc = graded_positions(self.height, self.nz, self.grading_z);
         tensor_mesh(&rc, &dc)
     }
+
+    /// The element boundaries along r (`0 = r_0 < ... < r_nr = radius`) with a boundary at
+    /// `r`: the graded positions unchanged if one of them is `r` to a relative 1e-9,
+    /// otherwise with the movable boundary (`r_1 .. r_nr-1`) nearest to `r` among the two
+    /// that bracket it moved onto `r`, which keeps the positions increasing.
+    ///
+    /// # Errors
+    /// [`MeshError::Input`] for invalid mesher inputs, an `r` outside `(0, radius)`
+    /// (field `line radius`), or `nr = 1` (no inner boundary to move).
+    pub fn radial_positions_through(&self, r: f64) -> Result<Vec<f64>, MeshError> {
+        self.validate()?;
+        let mut rc = graded_positions(self.radius, self.nr, self.grading_r);
+        if rc.iter().any(|&x| (x / r - 1.0).abs() <= 1e-9) {
+            return Ok(rc);
+        }
+        if !(r.is_finite() && r > 0.0 && r < self.radius) {
+            return Err(MeshError::Input {
+                field: "line radius",
+                value: r.to_string(),
+                allowed: "a radius inside the cylinder, in (0, specimen.radius) (mm)",
+            });
+        }
+        if self.nr < 2 {
+            return Err(MeshError::Input {
+                field: "specimen.nr",
+                value: self.nr.to_string(),
+                allowed: "at least 2 elements along r to move an inner element boundary",
+            });
+        }
+        // rc[j] < r < rc[j + 1]
+        let j = rc.partition_point(|&x| x < r) - 1;
+        let k = if j == 0 {
+            1
+        } else if j + 1 == self.nr || r - rc[j] <= rc[j + 1] - r {
+            j
+        } else {
+            j + 1
+        };
+        rc[k] = r;
+        Ok(rc)
+    }
+
+    /// The mesh of [`build`](Self::build) with a vertical line of element corners at
+    /// radius `r` (see [`radial_positions_through`](Self::radial_positions_through)): the
+    /// same mesh if a boundary is already there, else one boundary moved by at most half
+    /// an element. Returns the mesh and the radius of the moved boundary before the move
+    /// (`None` if none moved).
+    ///
+    /// # Errors
+    /// As [`radial_positions_through`](Self::radial_positions_through).
+    pub fn build_through(&self, r: f64) -> Result<(Mesh, Option<f64>), MeshError> {
+        let graded = graded_positions(self.radius, self.nr, self.grading_r);
+        let rc = self.radial_positions_through(r)?;
+        let dc = graded_positions(self.height, self.nz, self.grading_z);
+        let moved = graded
+            .iter()
+            .zip(&rc)
+            .find(|(a, b)| a != b)
+            .map(|(a, _)| *a);
+        Ok((tensor_mesh(&rc, &dc)?, moved))
+    }
 }
 
 /// Structured Q8 mesh of the rectangle `0 <= r <= rc[last]`, `-dc[last] <= z <= 0` on the
@@ -249,6 +310,45 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("specimen.radius") && e.contains("-1"), "{e}");
+    }
+
+    #[test]
+    fn a_line_of_corners_is_put_through_a_given_radius() {
+        let m = default_mesher();
+        let rc = graded_positions(10.0, 20, 1.3);
+        // already a boundary: the same mesh
+        let (same, moved) = m.build_through(rc[6] * (1.0 + 1e-12)).unwrap();
+        assert_eq!((same, moved), (m.build().unwrap(), None));
+        // the nearest movable boundary of the bracket moves, the others stay
+        for (r, k) in [
+            (rc[6] + 0.3 * (rc[7] - rc[6]), 6),
+            (rc[6] + 0.7 * (rc[7] - rc[6]), 7),
+            (0.1 * rc[1], 1),
+            (rc[19] + 0.9 * (rc[20] - rc[19]), 19),
+        ] {
+            let p = m.radial_positions_through(r).unwrap();
+            assert_eq!(p[k], r);
+            assert!(p.windows(2).all(|w| w[0] < w[1]));
+            assert_eq!((0..=20).filter(|&i| p[i] != rc[i]).count(), 1);
+            let (mesh, moved) = m.build_through(r).unwrap();
+            assert_eq!(moved, Some(rc[k]));
+            let top = mesh.node_set("top");
+            assert_eq!(mesh.nodes[top[2 * k]][0], r);
+            mesh.check_quality().unwrap();
+        }
+        assert_eq!(m.build_through(10.0).unwrap().1, None);
+        for r in [0.0, -1.0, 12.0, f64::NAN] {
+            let e = m.build_through(r).unwrap_err().to_string();
+            assert!(e.contains("line radius"), "{e}");
+        }
+        let e = CylinderMesher {
+            nr: 1,
+            ..default_mesher()
+        }
+        .build_through(3.0)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("specimen.nr"), "{e}");
     }
 
     #[test]

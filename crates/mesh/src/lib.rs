@@ -3,18 +3,21 @@
 //! [`Mesh`] holds nodes, elements and named node sets; [`CylinderMesher`] builds the
 //! graded cylinder specimen; [`ZonedCylinderMesher`] the one with a uniform core under the
 //! punch (the automatic specimen); [`Mesh::check_quality`] verifies a positive Jacobian at
-//! every Gauss point; [`vtu`] writes ParaView files. Lengths are in mm. The body lies
-//! below `z = 0` (the top surface, where the punch presses) and right of the axis `r = 0`.
-//! This crate knows nothing of materials, assembly or contact.
+//! every Gauss point; [`Mesh::with_quarter_points`] makes quarter-point singular elements
+//! around a corner node ([`singular`]); [`vtu`] writes ParaView files. Lengths are in mm.
+//! The body lies below `z = 0` (the top surface, where the punch presses) and right of the
+//! axis `r = 0`. This crate knows nothing of materials, assembly or contact.
 
 pub mod cylinder;
 pub mod q8;
+pub mod singular;
 pub mod vtu;
 pub mod zoned;
 
 use std::collections::BTreeMap;
 
 pub use cylinder::CylinderMesher;
+pub use singular::QuarterPoint;
 pub use zoned::ZonedCylinderMesher;
 
 /// Errors of mesh construction and checks.
@@ -51,6 +54,30 @@ pub enum MeshError {
         node: usize,
         /// Number of nodes.
         nodes: usize,
+    },
+    /// A node index beyond the mesh's nodes.
+    #[error("mesh: there is no node {node}: the mesh has {nodes} nodes")]
+    UnknownNode {
+        /// Node index.
+        node: usize,
+        /// Number of nodes.
+        nodes: usize,
+    },
+    /// A node that should be an element corner and is not.
+    #[error("mesh: node {node} is not an element corner node: {reason}")]
+    NotACornerNode {
+        /// Node index.
+        node: usize,
+        /// What the node is instead.
+        reason: String,
+    },
+    /// A node that should lie on the boundary of the mesh and is inside it.
+    #[error(
+        "mesh: node {node} is inside the mesh (every edge from it is shared by two elements), not on its boundary"
+    )]
+    InteriorNode {
+        /// Node index.
+        node: usize,
     },
 }
 

@@ -52,5 +52,8 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(m) = &prepared.measured {
         tracing::info!("  data: {}", m.summary());
     }
+    if prepared.rim != indentify_contact::punch::Rim::Smooth {
+        tracing::info!("  rim: {}", prepared.rim.describe());
+    }
     Ok(())
 }
