@@ -153,18 +153,15 @@ impl Adjoint {
                 .tangent(c, &Vec4::ZERO, rec.dt)
                 .map_err(|f| fail(f.reason))?;
             self.tangents.fill(ct);
+            self.system.set_tangent_uniform(model, &ct, (c, rec.dt));
         } else {
             for (t, s) in self.tangents.iter_mut().zip(sigma1) {
                 *t = law
                     .tangent(c, s, rec.dt)
                     .map_err(|f| fail(f.reason.clone()))?;
             }
+            self.system.set_tangent(model, &self.tangents, None);
         }
-        self.system.set_tangent(
-            model,
-            &self.tangents,
-            law.is_linear().then_some((c, rec.dt)),
-        );
         let mut active = vec![false; model.candidates.len()];
         for &k in &rec.active {
             active[k as usize] = true;

@@ -102,45 +102,51 @@ impl Pattern {
     ) {
         values.fill(0.0);
         for e in 0..disc.elements.len() {
-            let mut ke = [[0.0; 16]; 16];
-            for g in 0..QP_PER_ELEMENT {
-                let q = QP_PER_ELEMENT * e + g;
-                let qp = &disc.qp[q];
-                let cm = &(c(q).0);
-                let h = std::f64::consts::FRAC_1_SQRT_2;
-                // cb = w C B (4 x 16), using the sparsity of B's columns:
-                // u_r of node b -> [dr, 0, nr, dz/sqrt2], u_z -> [0, dz, 0, dr/sqrt2]
-                let mut cb = [[0.0; 16]; 4];
-                for (b, [dr, dz, nr]) in qp.dn.iter().enumerate() {
-                    let (br0, br2, br3) = (dr * qp.w, nr * qp.w, dz * h * qp.w);
-                    let (bz1, bz3) = (dz * qp.w, dr * h * qp.w);
-                    for i in 0..4 {
-                        let row = &cm[i];
-                        cb[i][2 * b] = row[0] * br0 + row[2] * br2 + row[3] * br3;
-                        cb[i][2 * b + 1] = row[1] * bz1 + row[3] * bz3;
-                    }
-                }
-                // ke += B^T cb, lower triangle only
-                for (a, [dr, dz, nr]) in qp.dn.iter().enumerate() {
-                    let (ar0, ar2, ar3) = (*dr, *nr, dz * h);
-                    let (az1, az3) = (*dz, dr * h);
-                    let ra = 2 * a;
-                    for k in 0..=ra {
-                        ke[ra][k] += ar0 * cb[0][k] + ar2 * cb[2][k] + ar3 * cb[3][k];
-                    }
-                    for k in 0..=ra + 1 {
-                        ke[ra + 1][k] += az1 * cb[1][k] + az3 * cb[3][k];
-                    }
-                }
+            let ke = element_matrix(disc, e, &c);
+            self.scatter_add(e, &ke, values);
+        }
+    }
+
+    /// As [`Pattern::assemble_b_c_b`], recomputing only the element matrices whose nine
+    /// Gauss-point tangents differ from those `cache` formed them with (in a viscoplastic
+    /// step most of the body stays elastic and keeps its tangent). The result is the
+    /// same, bit for bit, as a fresh assembly: every element matrix is formed by the same
+    /// code from the same tangents and summed in the same order.
+    pub fn assemble_b_c_b_cached(
+        &self,
+        disc: &Discretization,
+        c: &[Mat4],
+        cache: &mut ElementCache,
+        values: &mut [f64],
+    ) {
+        let ne = disc.elements.len();
+        if cache.ke.len() != ne || cache.tangents.len() != c.len() {
+            cache.ke = vec![[[0.0; 16]; 16]; ne];
+            cache.tangents = vec![Mat4([[f64::NAN; 4]; 4]); c.len()];
+        }
+        values.fill(0.0);
+        cache.recomputed = 0;
+        for e in 0..ne {
+            let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
+            if c[qs.clone()] != cache.tangents[qs.clone()] {
+                cache.ke[e] = element_matrix(disc, e, |q| &c[q]);
+                cache.tangents[qs.clone()].copy_from_slice(&c[qs]);
+                cache.recomputed += 1;
             }
-            let map = &self.scatter[256 * e..256 * (e + 1)];
-            for a in 0..16 {
-                for b in 0..16 {
-                    let pos = map[16 * a + b];
-                    if pos != NONE {
-                        // ke holds the lower triangle a >= b; use symmetry otherwise.
-                        values[pos as usize] += if a >= b { ke[a][b] } else { ke[b][a] };
-                    }
+            self.scatter_add(e, &cache.ke[e], values);
+        }
+    }
+
+    /// Adds the lower triangle (`a >= b`) of element `e`'s matrix at its pattern positions.
+    #[inline]
+    fn scatter_add(&self, e: usize, ke: &[[f64; 16]; 16], values: &mut [f64]) {
+        let map = &self.scatter[256 * e..256 * (e + 1)];
+        for a in 0..16 {
+            for b in 0..16 {
+                let pos = map[16 * a + b];
+                if pos != NONE {
+                    // ke holds the lower triangle a >= b; use symmetry otherwise.
+                    values[pos as usize] += if a >= b { ke[a][b] } else { ke[b][a] };
                 }
             }
         }
@@ -181,6 +187,57 @@ impl Pattern {
     }
 }
 
+/// Element matrices of the last cached assembly and the Gauss-point tangents they were
+/// formed with ([`Pattern::assemble_b_c_b_cached`]).
+#[derive(Clone, Debug, Default)]
+pub struct ElementCache {
+    tangents: Vec<Mat4>,
+    ke: Vec<[[f64; 16]; 16]>,
+    /// Element matrices recomputed by the last assembly.
+    pub recomputed: usize,
+}
+
+/// `k_e = sum_g w_g B_g^T C_g B_g` of element `e`, lower triangle (`a >= b`) filled.
+#[inline]
+fn element_matrix<'a>(
+    disc: &Discretization,
+    e: usize,
+    c: impl Fn(usize) -> &'a Mat4,
+) -> [[f64; 16]; 16] {
+    let mut ke = [[0.0; 16]; 16];
+    for g in 0..QP_PER_ELEMENT {
+        let q = QP_PER_ELEMENT * e + g;
+        let qp = &disc.qp[q];
+        let cm = &(c(q).0);
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        // cb = w C B (4 x 16), using the sparsity of B's columns:
+        // u_r of node b -> [dr, 0, nr, dz/sqrt2], u_z -> [0, dz, 0, dr/sqrt2]
+        let mut cb = [[0.0; 16]; 4];
+        for (b, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+            let (br0, br2, br3) = (dr * qp.w, nr * qp.w, dz * h * qp.w);
+            let (bz1, bz3) = (dz * qp.w, dr * h * qp.w);
+            for i in 0..4 {
+                let row = &cm[i];
+                cb[i][2 * b] = row[0] * br0 + row[2] * br2 + row[3] * br3;
+                cb[i][2 * b + 1] = row[1] * bz1 + row[3] * bz3;
+            }
+        }
+        // ke += B^T cb, lower triangle only
+        for (a, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+            let (ar0, ar2, ar3) = (*dr, *nr, dz * h);
+            let (az1, az3) = (*dz, dr * h);
+            let ra = 2 * a;
+            for k in 0..=ra {
+                ke[ra][k] += ar0 * cb[0][k] + ar2 * cb[2][k] + ar3 * cb[3][k];
+            }
+            for k in 0..=ra + 1 {
+                ke[ra + 1][k] += az1 * cb[1][k] + az3 * cb[3][k];
+            }
+        }
+    }
+    ke
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,5 +276,40 @@ mod tests {
         let mut y = vec![0.0; dofs.n_eq];
         pat.sym_mul_add(&k, &x, &mut y);
         assert!(x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>() > 0.0);
+    }
+
+    /// The cached assembly equals a fresh one bit for bit and recomputes exactly the
+    /// elements whose tangents changed.
+    #[test]
+    fn cached_assembly_recomputes_only_changed_elements() {
+        let m = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 4,
+            nz: 3,
+            grading_r: 1.2,
+            grading_z: 1.1,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&m);
+        let dofs = DofMap::cylinder(&m);
+        let pat = Pattern::new(&disc, &dofs);
+        let mut tangents = vec![isotropic_stiffness(100.0, 0.3); disc.n_qp()];
+        let mut cache = ElementCache::default();
+        let (mut fresh, mut cached) = (vec![0.0; pat.nnz()], vec![0.0; pat.nnz()]);
+        pat.assemble_b_c_b_cached(&disc, &tangents, &mut cache, &mut cached);
+        assert_eq!(cache.recomputed, 12);
+        pat.assemble_b_c_b_cached(&disc, &tangents, &mut cache, &mut cached);
+        assert_eq!(cache.recomputed, 0);
+        // soften one Gauss point of element 5 and every point of element 9
+        tangents[9 * 5 + 4] = isotropic_stiffness(50.0, 0.3);
+        for t in &mut tangents[81..90] {
+            *t = isotropic_stiffness(70.0, 0.25);
+        }
+        pat.assemble_b_c_b_cached(&disc, &tangents, &mut cache, &mut cached);
+        assert_eq!(cache.recomputed, 2);
+        pat.assemble_b_c_b(&disc, &tangents, &mut fresh);
+        assert_eq!(fresh, cached);
     }
 }

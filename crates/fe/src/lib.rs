@@ -13,7 +13,7 @@ pub mod dofs;
 pub mod geometry;
 pub mod solver;
 
-pub use assembly::Pattern;
+pub use assembly::{ElementCache, Pattern};
 pub use dofs::DofMap;
 pub use geometry::{Discretization, QP_PER_ELEMENT, QuadPoint};
 pub use solver::SparseCholesky;

@@ -87,6 +87,10 @@ impl Law for Elastic {
     fn tangent(&self, c: &[f64], _sigma: &Vec4, _dt: f64) -> Result<Mat4, LocalFailure> {
         Ok(isotropic_stiffness(c[0], c[1]))
     }
+    /// `A = I`, `C` the isotropic stiffness.
+    fn affine_update(&self, c: &[f64], _dt: f64) -> Option<(Mat4, Mat4)> {
+        Some((Mat4::IDENTITY, isotropic_stiffness(c[0], c[1])))
+    }
     fn update(
         &self,
         c: &[f64],

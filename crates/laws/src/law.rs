@@ -117,6 +117,17 @@ pub trait Law: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// The update in affine form, `sigma_1 = A sigma_0 + C deps` with `(A, C)` depending
+    /// only on `c` and `dt`, for laws where [`Law::update`] is exactly that (elasticity:
+    /// `A = I`; Maxwell); `None` (the default) otherwise. `C` is the consistent tangent.
+    /// Must agree with `update` to round-off (checked for every law by the shared tests);
+    /// the solvers use it to update every Gauss point with two 4x4 products and to
+    /// assemble one uniform tangent. Laws returning `Some` must also be
+    /// [`Law::is_linear`].
+    fn affine_update(&self, _c: &[f64], _dt: f64) -> Option<(Mat4, Mat4)> {
+        None
+    }
+
     /// Checks every parameter against its admissible range.
     ///
     /// # Errors

@@ -83,6 +83,19 @@ impl Law for Maxwell {
         let (a_dev, a_sph) = jacobian_parts(c, dt);
         Ok(isotropic_operator(1.0 / a_dev, 1.0 / a_sph))
     }
+    /// `A = P (1+nu)/(E a_dev) + J`, `C` the tangent, with `a_dev = (1+nu)/E + dt/eta`:
+    /// the closed form of [`Maxwell::update`] as two operators (`None` for an invalid `dt`).
+    fn affine_update(&self, c: &[f64], dt: f64) -> Option<(Mat4, Mat4)> {
+        if !dt.is_finite() || dt < 0.0 {
+            return None;
+        }
+        let (a_dev, a_sph) = jacobian_parts(c, dt);
+        let inv_2g = (1.0 + c[1]) / c[0];
+        Some((
+            isotropic_operator(inv_2g / a_dev, 1.0),
+            isotropic_operator(1.0 / a_dev, 1.0 / a_sph),
+        ))
+    }
     /// Closed-form backward Euler: `s1 = (s0/(2G) + deps_dev) / ((1+nu)/E + dt/eta)` for
     /// the deviators and `tr sigma1 = tr sigma0 + E/(1-2nu) tr deps`.
     ///

@@ -330,11 +330,39 @@ pub(crate) fn check_residual(p: &Profile, k: &Case) -> Result<(), TestCaseError>
     Ok(())
 }
 
+/// (g) The affine form, where a law has one, is its update: `A s0 + C deps` equals
+/// `update` to round-off and `C` is the update's tangent; laws with an affine form are
+/// linear.
+pub(crate) fn check_affine_update(p: &Profile, k: &Case) -> Result<(), TestCaseError> {
+    let law = p.law;
+    let Some((a, c)) = law.affine_update(&k.c, k.dt) else {
+        return Ok(());
+    };
+    prop_assert!(
+        law.is_linear(),
+        "{} has an affine update but is not linear",
+        law.name()
+    );
+    let up = law.update(&k.c, &k.s0, &k.deps, k.dt).map_err(fail)?;
+    let s1 = a.mul_vec(&k.s0) + c.mul_vec(&k.deps);
+    let scale = up.sigma.max_abs().max(k.s0.max_abs()).max(1e-300);
+    let err = (s1 - up.sigma).max_abs() / scale;
+    report(law, "affine update", err, &s1.0, &up.sigma.0);
+    prop_assert!(
+        err < 1e-13,
+        "affine update off by {err:e}: {s1:?} vs {:?}",
+        up.sigma
+    );
+    let terr = (c - up.tangent).max_abs() / up.tangent.max_abs();
+    prop_assert!(terr < 1e-14, "affine tangent off by {terr:e}");
+    Ok(())
+}
+
 fn fail(f: crate::law::LocalFailure) -> TestCaseError {
     TestCaseError::fail(f.to_string())
 }
 
-/// Generates the six finite-difference consistency tests (a)-(f) of this module for one
+/// Generates the seven consistency tests (a)-(g) of this module for one
 /// law: `law_consistency_tests!(module_name, PROFILE, params_strategy)` where `PROFILE`
 /// is a [`Profile`] and `params_strategy` a `Strategy<Value = Vec<f64>>` of admissible
 /// parameters. 256 random cases each ([`proptest_cases`]).
@@ -385,6 +413,12 @@ macro_rules! law_consistency_tests {
                 #[test]
                 fn update_solves_the_local_residual(k in cases($profile, $params)) {
                     check_residual(&$profile, &k)?;
+                }
+
+                /// The system shall give an affine form equal to the update, if any.
+                #[test]
+                fn affine_update_is_the_update(k in cases($profile, $params)) {
+                    check_affine_update(&$profile, &k)?;
                 }
             }
         }

@@ -1,0 +1,95 @@
+//! Profiling driver: one forward solve of R0, R1 or R2 (DESIGN.md §5) with its time split
+//! and the global iterations per segment, e.g. under `valgrind --tool=callgrind`:
+//! `cargo run --release -p indentify-contact --example forward_once -- r2 [REPEAT]`
+//! (with REPEAT > 1 it reports the fastest of REPEAT runs; `--steps` lists every step's
+//! iterations and active-set changes).
+use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
+use indentify_mesh::CylinderMesher;
+
+fn main() {
+    let case = std::env::args().nth(1).unwrap_or_else(|| "r1".into());
+    let (law, params): (&dyn Law, Vec<f64>) = match case.as_str() {
+        "r0" => (&Elastic, vec![2e4, 0.3]),
+        "r1" => (&Maxwell, vec![2e4, 0.3, 3e4]),
+        "r2" => (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 500.0]),
+        other => {
+            eprintln!("unknown case {other}: expected r0, r1 or r2");
+            std::process::exit(2);
+        }
+    };
+    let mesh = CylinderMesher {
+        radius: 10.0,
+        height: 10.0,
+        nr: 20,
+        nz: 20,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    }
+    .build()
+    .expect("reference mesh");
+    let model = Model::new(
+        mesh,
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+    )
+    .expect("reference model");
+    let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
+    let mut solver = DirectSolver::new(&model).expect("solver");
+    let opts = SolverOptions::default();
+    let t = solver
+        .run(&model, law, &params, &sched, &opts)
+        .expect("forward run");
+    let repeat: usize = std::env::args()
+        .nth(2)
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(1);
+    let mut t = t;
+    if repeat > 1 {
+        for _ in 1..repeat {
+            let again = solver
+                .run(&model, law, &params, &sched, &opts)
+                .expect("forward run");
+            if again.timing.total < t.timing.total {
+                t = again;
+            }
+        }
+        println!("{case}: the fastest of {repeat} runs:");
+    }
+    if std::env::args().any(|a| a == "--steps") {
+        for r in &t.steps {
+            eprintln!(
+                "t {:.4} it {} changes {} active {}",
+                r.t,
+                r.iterations,
+                r.active_set_changes,
+                r.active.len()
+            );
+        }
+    }
+    let per_segment: Vec<u32> = (0..3)
+        .map(|s| {
+            t.steps
+                .iter()
+                .filter(|r| (r.schedule_index - 1) / 30 == s)
+                .map(|r| r.iterations)
+                .sum()
+        })
+        .collect();
+    println!(
+        "{case}: {} steps, {} iterations (load/hold/unload {:?}), {} factorizations, {} CG iterations; \
+         local {:.1} ms, assembly {:.1} ms, factorization {:.1} ms, solve {:.1} ms, total {:.1} ms; F_max {:.6} N",
+        t.steps.len(),
+        t.total_iterations(),
+        per_segment,
+        t.timing.factorizations,
+        t.timing.cg_iterations,
+        1e3 * t.timing.local,
+        1e3 * t.timing.assembly,
+        1e3 * t.timing.factorization,
+        1e3 * t.timing.solve,
+        1e3 * t.timing.total,
+        t.forces().iter().cloned().fold(0.0, f64::max)
+    );
+}
