@@ -35,6 +35,15 @@ fn main() {
         },
     )
     .expect("reference model");
+    let l_nnz = indentify_fe::SparseCholesky::analyse(&model.pattern)
+        .expect("analysis")
+        .factor_nnz();
+    println!(
+        "{} equations, {} stored entries of K, {} of its Cholesky factor",
+        model.dofs.n_eq,
+        model.pattern.nnz(),
+        l_nnz
+    );
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
     let mut solver = DirectSolver::new(&model).expect("solver");
     let opts = SolverOptions::default();

@@ -862,8 +862,11 @@ impl DirectSolver {
             }
             if inexact {
                 // forcing term eta = |R| (relative): inexact Newton stays quadratic
-                // (Dembo, Eisenstat & Steihaug 1982)
-                let eta = rel.clamp(1e-12, 0.1);
+                // (Dembo, Eisenstat & Steihaug 1982); near convergence no tighter than
+                // what brings the residual a decade below the tolerance (no oversolving)
+                let eta = rel
+                    .max(0.1 * opts.residual_tol / rel.max(1e-300))
+                    .clamp(1e-12, 0.1);
                 self.system
                     .solve_inexact(model, &mut self.rhs, &self.aux, eta)
                     .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;

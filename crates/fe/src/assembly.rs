@@ -156,16 +156,12 @@ impl Pattern {
     pub fn sym_mul_add(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         for j in 0..self.n {
             let xj = x[j];
-            let mut acc = 0.0;
-            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                let i = self.row_idx[p];
-                let v = values[p];
-                if i == j {
-                    acc += v * xj;
-                } else {
-                    y[i] += v * xj;
-                    acc += v * x[i];
-                }
+            // the diagonal is each column's first entry (rows sorted, all >= the column)
+            let (d, end) = (self.diag[j], self.col_ptr[j + 1]);
+            let mut acc = values[d] * xj;
+            for (&i, &v) in self.row_idx[d + 1..end].iter().zip(&values[d + 1..end]) {
+                y[i] += v * xj;
+                acc += v * x[i];
             }
             y[j] += acc;
         }

@@ -180,6 +180,53 @@ mod tests {
         }
     }
 
+    /// The lumped top areas follow the isoparametric edges: they still add up to the top
+    /// face, and a quarter-point edge gives its far corner 1/3 of the edge's length-weight
+    /// and the rim node almost nothing (`int N_k 2 pi r dr` with `r(xi)` quadratic).
+    #[test]
+    fn lumped_areas_follow_quarter_point_edges() {
+        let a = graded_positions(10.0, 20, 1.3)[6];
+        let punch = Punch::Flat { radius: a };
+        let (treated, _) = treat_rim(r0_mesh(), &punch).unwrap();
+        let plain = crate::Model::new(r0_mesh(), punch.clone()).unwrap();
+        let model = crate::Model::new(treated, punch).unwrap();
+        let face = std::f64::consts::PI * 100.0;
+        for m in [&plain, &model] {
+            let total: f64 = m.candidate_area.iter().sum();
+            assert!((total - face).abs() < 1e-12 * face, "{total} vs {face}");
+        }
+        // the rim node (candidate 12) loses area to its neighbours' far corners
+        assert!(model.candidate_area[12] < 0.2 * plain.candidate_area[12]);
+        // an edge with its quarter point at the rim end: int N_k 2 pi r dr by a fine sum
+        let (r0, r1) = (model.candidate_r(12), model.candidate_r(14));
+        let rm = model.candidate_r(13);
+        let mut far = 0.0;
+        let steps = 200_000;
+        for i in 0..steps {
+            let xi = -1.0 + (i as f64 + 0.5) * 2.0 / steps as f64;
+            let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+            let r = n[0] * r0 + n[1] * rm + n[2] * r1;
+            let dr = (xi - 0.5) * r0 - 2.0 * xi * rm + (xi + 0.5) * r1;
+            far += n[2] * 2.0 * std::f64::consts::PI * r * dr * (2.0 / steps as f64);
+        }
+        let (r2, r3) = (model.candidate_r(14), model.candidate_r(16));
+        let rm2 = model.candidate_r(15);
+        let mut near = 0.0;
+        for i in 0..steps {
+            let xi = -1.0 + (i as f64 + 0.5) * 2.0 / steps as f64;
+            let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+            let r = n[0] * r2 + n[1] * rm2 + n[2] * r3;
+            let dr = (xi - 0.5) * r2 - 2.0 * xi * rm2 + (xi + 0.5) * r3;
+            near += n[0] * 2.0 * std::f64::consts::PI * r * dr * (2.0 / steps as f64);
+        }
+        let expected = far + near;
+        assert!(
+            (model.candidate_area[14] - expected).abs() < 1e-8 * expected,
+            "{} vs {expected}",
+            model.candidate_area[14]
+        );
+    }
+
     #[test]
     fn smooth_punches_leave_the_mesh_alone() {
         let mesh = r0_mesh();
