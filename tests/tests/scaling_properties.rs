@@ -1,6 +1,7 @@
 //! Exact properties of the discrete direct problem (P) with viscous laws: time scaling,
 //! stress scaling (checked by finite differences on the solver), the Norton-Hoff law at
-//! m = 1 without yield being Maxwell's, and withdrawal past the loss of contact.
+//! m = 1 without yield being Maxwell's, withdrawal past the loss of contact, and a run
+//! repeated bit for bit by the same or a fresh solver.
 //!
 //! References: the paper's discrete scheme (§2.2, eqs. 41-46; DESIGN.md §1). With
 //! backward Euler, step i solves `S (sigma_i - sigma_i-1) + dt_i g(sigma_i, c) = B (u_i -
@@ -109,6 +110,42 @@ fn force_difference(a: &Trajectory, b: &Trajectory) -> f64 {
 /// Active sets at the schedule times.
 fn active_sets(t: &Trajectory) -> Vec<Vec<u32>> {
     t.schedule_steps().map(|s| s.active.clone()).collect()
+}
+
+/// The solver shall repeat a run bit for bit: the same solver run twice (its cached
+/// element matrices and factorizations from the first run notwithstanding) and a fresh
+/// solver give identical forces, active sets and fields, for a law solved by exact
+/// (Maxwell: affine updates, capacitance solves) and by inexact Newton (Norton-Hoff:
+/// CG preconditioned with earlier factorizations). The adjoint's replays rely on it.
+#[test]
+fn runs_repeat_bit_for_bit() {
+    let model = model();
+    let schedule = trapezoid_scaled(1.0, 10);
+    let opts = SolverOptions {
+        record_fields: true,
+        ..options()
+    };
+    for (law, c) in [
+        (&Maxwell as &dyn Law, &MAXWELL[..]),
+        (&NortonHoff, &NORTON_HOFF[..]),
+    ] {
+        let mut solver = DirectSolver::new(&model).expect("symbolic analysis");
+        let first = solver.run(&model, law, c, &schedule, &opts).expect("run");
+        let again = solver.run(&model, law, c, &schedule, &opts).expect("run");
+        let fresh = DirectSolver::new(&model)
+            .expect("symbolic analysis")
+            .run(&model, law, c, &schedule, &opts)
+            .expect("run");
+        for other in [&again, &fresh] {
+            assert_eq!(first.forces(), other.forces(), "{}", law.name());
+            assert_eq!(active_sets(&first), active_sets(other), "{}", law.name());
+            assert_eq!(first.fields, other.fields, "{}", law.name());
+        }
+        if law.name() == "norton-hoff" {
+            assert!(first.timing.cg_iterations > 0, "inexact solves were used");
+            assert!(first.timing.factorizations < first.total_iterations() as usize);
+        }
+    }
 }
 
 /// The solver shall give the same forces and active sets when all durations and eta are

@@ -556,25 +556,30 @@ mod tests {
 
     /// The capacitance solve equals the direct one to round-off, for growing and shrinking
     /// sets of prescribed dofs, and needs one factorization for all of them.
-    #[test]
-    fn capacitance_and_direct_solves_agree() {
+    /// A graded unit cylinder under R0's cone.
+    fn small_model(nr: usize, nz: usize) -> Model {
         let mesh = CylinderMesher {
             radius: 1.0,
             height: 1.0,
-            nr: 6,
-            nz: 5,
+            nr,
+            nz,
             grading_r: 1.2,
             grading_z: 1.2,
         }
         .build()
         .unwrap();
-        let model = Model::new(
+        Model::new(
             mesh,
             Punch::Cone {
                 half_angle_deg: 68.0,
             },
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn capacitance_and_direct_solves_agree() {
+        let model = small_model(6, 5);
         let c = [20000.0, 0.3];
         let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
         let tangents = vec![t; model.disc.qp.len()];
@@ -620,23 +625,7 @@ mod tests {
     /// in time; the result is the direct solve's to the tolerance.
     #[test]
     fn inexact_solves_match_direct_ones() {
-        let mesh = CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 8,
-            nz: 6,
-            grading_r: 1.2,
-            grading_z: 1.2,
-        }
-        .build()
-        .unwrap();
-        let model = Model::new(
-            mesh,
-            Punch::Cone {
-                half_angle_deg: 68.0,
-            },
-        )
-        .unwrap();
+        let model = small_model(8, 6);
         let c = [20000.0, 0.3];
         let stiff = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
         let nq = model.disc.qp.len();
