@@ -9,16 +9,7 @@ use indentify_laws::{Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
 fn bench_adjoint(c: &mut Criterion) {
-    let mesh = CylinderMesher {
-        radius: 10.0,
-        height: 10.0,
-        nr: 20,
-        nz: 20,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .expect("reference mesh");
+    let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
     let model = Model::new(
         mesh,
         Punch::Cone {

@@ -7,15 +7,7 @@ use indentify_laws::{Law, Maxwell};
 use indentify_mesh::CylinderMesher;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mesh = CylinderMesher {
-        radius: 10.0,
-        height: 10.0,
-        nr: 20,
-        nz: 20,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()?;
+    let mesh = CylinderMesher::REFERENCE.build()?;
     let model = Model::new(
         mesh,
         Punch::Cone {

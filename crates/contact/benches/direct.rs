@@ -8,16 +8,7 @@ use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
 fn reference_model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 10.0,
-        height: 10.0,
-        nr: 20,
-        nz: 20,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .expect("reference mesh");
+    let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
     Model::new(
         mesh,
         Punch::Cone {

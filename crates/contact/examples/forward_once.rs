@@ -18,16 +18,7 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let mesh = CylinderMesher {
-        radius: 10.0,
-        height: 10.0,
-        nr: 20,
-        nz: 20,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .expect("reference mesh");
+    let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
     let model = Model::new(
         mesh,
         Punch::Cone {

@@ -27,8 +27,7 @@
 //! use indentify_identify::{ForceRecord, IdentifyConfig, Method, ParamSpec, Problem, identify};
 //! use indentify_mesh::CylinderMesher;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! let mesh = CylinderMesher { radius: 10.0, height: 10.0, nr: 20, nz: 20,
-//!     grading_r: 1.3, grading_z: 1.3 }.build()?;
+//! let mesh = CylinderMesher::REFERENCE.build()?;
 //! let model = Model::new(mesh, Punch::Cone { half_angle_deg: 68.0 })?;
 //! let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30))?;
 //! let record = ForceRecord::new(vec![0.0, 1.0, 2.0, 3.0], vec![0.0, 250.0, 200.0, 0.0])?;

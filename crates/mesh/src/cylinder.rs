@@ -28,6 +28,19 @@ pub struct CylinderMesher {
     pub grading_z: f64,
 }
 
+impl CylinderMesher {
+    /// The mesh of DESIGN.md §5's reference problems R0-R2: a 10 x 10 mm cylinder, 20 x 20
+    /// elements graded 1.3 towards the axis and the top.
+    pub const REFERENCE: CylinderMesher = CylinderMesher {
+        radius: 10.0,
+        height: 10.0,
+        nr: 20,
+        nz: 20,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    };
+}
+
 /// Cumulative positions `0 = x_0 < ... < x_n = length` of a geometric grading with ratio `q`.
 pub fn graded_positions(length: f64, n: usize, q: f64) -> Vec<f64> {
     let h0 = if (q - 1.0).abs() < 1e-12 {
@@ -242,14 +255,7 @@ mod tests {
     use super::*;
 
     fn default_mesher() -> CylinderMesher {
-        CylinderMesher {
-            radius: 10.0,
-            height: 10.0,
-            nr: 20,
-            nz: 20,
-            grading_r: 1.3,
-            grading_z: 1.3,
-        }
+        CylinderMesher::REFERENCE
     }
 
     #[test]

@@ -137,16 +137,7 @@ mod tests {
     use crate::{CylinderMesher, q8};
 
     fn graded() -> Mesh {
-        CylinderMesher {
-            radius: 10.0,
-            height: 10.0,
-            nr: 20,
-            nz: 20,
-            grading_r: 1.3,
-            grading_z: 1.3,
-        }
-        .build()
-        .unwrap()
+        CylinderMesher::REFERENCE.build().unwrap()
     }
 
     /// The top node at radius index `k` (even: a corner).

@@ -142,16 +142,7 @@ mod tests {
     use indentify_mesh::cylinder::graded_positions;
 
     fn r0_mesh() -> Mesh {
-        CylinderMesher {
-            radius: 10.0,
-            height: 10.0,
-            nr: 20,
-            nz: 20,
-            grading_r: 1.3,
-            grading_z: 1.3,
-        }
-        .build()
-        .unwrap()
+        CylinderMesher::REFERENCE.build().unwrap()
     }
 
     #[test]
@@ -197,28 +188,24 @@ mod tests {
         }
         // the rim node (candidate 12) loses area to its neighbours' far corners
         assert!(model.candidate_area[12] < 0.2 * plain.candidate_area[12]);
-        // an edge with its quarter point at the rim end: int N_k 2 pi r dr by a fine sum
-        let (r0, r1) = (model.candidate_r(12), model.candidate_r(14));
-        let rm = model.candidate_r(13);
-        let mut far = 0.0;
-        let steps = 200_000;
-        for i in 0..steps {
-            let xi = -1.0 + (i as f64 + 0.5) * 2.0 / steps as f64;
-            let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
-            let r = n[0] * r0 + n[1] * rm + n[2] * r1;
-            let dr = (xi - 0.5) * r0 - 2.0 * xi * rm + (xi + 0.5) * r1;
-            far += n[2] * 2.0 * std::f64::consts::PI * r * dr * (2.0 / steps as f64);
-        }
-        let (r2, r3) = (model.candidate_r(14), model.candidate_r(16));
-        let rm2 = model.candidate_r(15);
-        let mut near = 0.0;
-        for i in 0..steps {
-            let xi = -1.0 + (i as f64 + 0.5) * 2.0 / steps as f64;
-            let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
-            let r = n[0] * r2 + n[1] * rm2 + n[2] * r3;
-            let dr = (xi - 0.5) * r2 - 2.0 * xi * rm2 + (xi + 0.5) * r3;
-            near += n[0] * 2.0 * std::f64::consts::PI * r * dr * (2.0 / steps as f64);
-        }
+        // int N_k 2 pi r dr over the edge (r0, rm, r1) by a fine midpoint sum
+        let edge_integral = |r0: f64, rm: f64, r1: f64, k: usize| -> f64 {
+            let steps = 200_000;
+            let h = 2.0 / steps as f64;
+            (0..steps)
+                .map(|i| {
+                    let xi = -1.0 + (i as f64 + 0.5) * h;
+                    let n = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+                    let r = n[0] * r0 + n[1] * rm + n[2] * r1;
+                    let dr = (xi - 0.5) * r0 - 2.0 * xi * rm + (xi + 0.5) * r1;
+                    n[k] * 2.0 * std::f64::consts::PI * r * dr * h
+                })
+                .sum()
+        };
+        let r = |k: usize| model.candidate_r(k);
+        // node 14 is the far corner of the quarter-point edge and the near corner of the next
+        let far = edge_integral(r(12), r(13), r(14), 2);
+        let near = edge_integral(r(14), r(15), r(16), 0);
         let expected = far + near;
         assert!(
             (model.candidate_area[14] - expected).abs() < 1e-8 * expected,
