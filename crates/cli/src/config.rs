@@ -679,14 +679,15 @@ impl Reference {
                 s_y: 500.0,
             },
         };
+        let mesh = CylinderMesher::REFERENCE;
         Config {
             specimen: Specimen::Cylinder {
-                radius: 10.0,
-                height: 10.0,
-                nr: 20,
-                nz: 20,
-                grading_r: 1.3,
-                grading_z: 1.3,
+                radius: mesh.radius,
+                height: mesh.height,
+                nr: mesh.nr,
+                nz: mesh.nz,
+                grading_r: mesh.grading_r,
+                grading_z: mesh.grading_z,
             },
             punch: Punch::Cone {
                 half_angle_deg: 68.0,

@@ -354,7 +354,8 @@ pub struct Checkpoint {
 impl Checkpoint {
     /// Bytes held by the saved state.
     pub fn bytes(&self) -> usize {
-        16 * self.state.u.len() + 32 * self.state.sigma.len() + 17 * self.state.active.len()
+        // u, f_int and du_last per dof; stress per Gauss point; active flag and more per candidate
+        24 * self.state.u.len() + 32 * self.state.sigma.len() + 17 * self.state.active.len()
     }
 }
 
@@ -592,7 +593,6 @@ impl DirectSolver {
         Ok(())
     }
 
-    #[inline(never)]
     /// Local updates at every Gauss point for displacement `u` from `state`; fills
     /// `sigma_out` and `self.f_int`, and `self.tangents` unless the law is `affine`
     /// (`sigma_1 = A sigma_0 + C deps` everywhere: its one tangent is `C`). With an affine
@@ -624,25 +624,14 @@ impl DirectSolver {
             let dofs = disc.element_dofs(e);
             let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
             let mut fe = [0.0; 16];
-            if let Some((a, _)) = affine.filter(|_| at_start) {
-                for g in 0..QP_PER_ELEMENT {
-                    let q = QP_PER_ELEMENT * e + g;
-                    let qp = &disc.qp[q];
-                    let s = a.mul_vec(&state.sigma[q]);
-                    qp.add_bt(&s.0, qp.w, &mut fe);
-                    sigma_out[q] = s;
-                }
-                for (d, v) in dofs.iter().zip(fe) {
-                    self.f_int[*d] += v;
-                }
-                continue;
-            }
             if let Some((a, cm)) = affine {
                 for g in 0..QP_PER_ELEMENT {
                     let q = QP_PER_ELEMENT * e + g;
                     let qp = &disc.qp[q];
-                    let deps = Vec4(qp.strain(&due));
-                    let s = a.mul_vec(&state.sigma[q]) + cm.mul_vec(&deps);
+                    let mut s = a.mul_vec(&state.sigma[q]);
+                    if !at_start {
+                        s += cm.mul_vec(&Vec4(qp.strain(&due)));
+                    }
                     qp.add_bt(&s.0, qp.w, &mut fe);
                     sigma_out[q] = s;
                 }
@@ -839,13 +828,10 @@ impl DirectSolver {
                 }
             };
             self.system.set_active(model, &active);
-            let inexact = affine.is_none();
-            if inexact {
-                self.system.prepare_inexact(model)
-            } else {
-                self.system.factorize(model)
-            }
-            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+            // reusable tangents factorize (or reuse) exactly; others prepare inexact solves
+            self.system
+                .prepare_inexact(model)
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
             // right-hand side: -R on free equations, prescribed increments on active ones
             self.aux.fill(0.0);
             for k in 0..nc {
@@ -860,19 +846,15 @@ impl DirectSolver {
                     self.rhs[e as usize] = -self.f_int[d];
                 }
             }
-            if inexact {
-                // forcing term eta = |R| (relative): inexact Newton stays quadratic
-                // (Dembo, Eisenstat & Steihaug 1982); near convergence no tighter than
-                // what brings the residual a decade below the tolerance (no oversolving)
-                let eta = rel
-                    .max(0.1 * opts.residual_tol / rel.max(1e-300))
-                    .clamp(1e-12, 0.1);
-                self.system
-                    .solve_inexact(model, &mut self.rhs, &self.aux, eta)
-                    .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
-            } else {
-                self.system.solve_dirichlet(model, &mut self.rhs, &self.aux);
-            }
+            // forcing term eta = |R| (relative): inexact Newton stays quadratic
+            // (Dembo, Eisenstat & Steihaug 1982); near convergence no tighter than
+            // what brings the residual a decade below the tolerance (no oversolving)
+            let eta = rel
+                .max(0.1 * opts.residual_tol / rel.max(1e-300))
+                .clamp(1e-12, 0.1);
+            self.system
+                .solve_inexact(model, &mut self.rhs, &self.aux, eta)
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
             for (d, &e) in model.dofs.eq.iter().enumerate() {
                 if e != NO_EQ {
                     u[d] += self.rhs[e as usize];

@@ -223,11 +223,12 @@ impl ConstrainedSystem {
         self.last_pcg = 0;
     }
 
-    /// As [`ConstrainedSystem::factorize`], but for a tangent that cannot be reused (a
-    /// nonlinear law) and with a factorization at hand, only forms the constrained matrix:
-    /// the next [`ConstrainedSystem::solve_inexact`] then runs CG preconditioned by that
-    /// earlier factor (Newton iterates change the tangent little), factorizing only if CG
-    /// does not converge in a few iterations.
+    /// Prepares the next [`ConstrainedSystem::solve_inexact`]. A reusable tangent (linear
+    /// law) is factorized as by [`ConstrainedSystem::factorize`] and solved exactly; for
+    /// another tangent (a nonlinear law), with a factorization at hand, this only forms the
+    /// constrained matrix: the solve then runs CG preconditioned by that earlier factor
+    /// (Newton iterates change the tangent little), factorizing only if CG does not
+    /// converge in a few iterations, or if the previous solve needed many.
     ///
     /// # Errors
     /// As [`ConstrainedSystem::factorize`].
@@ -284,11 +285,7 @@ impl ConstrainedSystem {
         // x0 = M^-1 rhs on the free equations, exact on the constrained ones
         let bnorm = free_dot(rhs, rhs).sqrt();
         self.chol.solve_in_place(b);
-        for (e, x) in b.iter_mut().enumerate() {
-            if constrained[e] {
-                *x = xbar[e];
-            }
-        }
+        impose(b, constrained, |e| xbar[e]);
         // r = rhs - A x (zero on constrained rows: A is diagonal there and x exact)
         q.fill(0.0);
         model.pattern.sym_mul_add(&self.k_constrained, b, q);
@@ -298,49 +295,37 @@ impl ConstrainedSystem {
         let tol = eta * bnorm;
         let mut iterations = 0;
         let mut converged = free_dot(r, r).sqrt() <= tol;
-        if !converged {
+        let mut rz = 0.0;
+        while !converged && iterations < MAX_PCG {
+            // z = M^-1 r restricted to the free equations; p = z + beta p
             z.copy_from_slice(r);
             self.chol.solve_in_place(z);
-            for (zi, &c) in z.iter_mut().zip(constrained) {
-                if c {
-                    *zi = 0.0;
-                }
-            }
-            p.copy_from_slice(z);
-            let mut rz = free_dot(r, z);
-            while iterations < MAX_PCG {
-                iterations += 1;
-                q.fill(0.0);
-                model.pattern.sym_mul_add(&self.k_constrained, p, q);
-                let pq = free_dot(p, q);
-                if !(pq > 0.0) {
-                    break;
-                }
-                let alpha = rz / pq;
-                for e in 0..b.len() {
-                    if !constrained[e] {
-                        b[e] += alpha * p[e];
-                        r[e] -= alpha * q[e];
-                    }
-                }
-                if free_dot(r, r).sqrt() <= tol {
-                    converged = true;
-                    break;
-                }
-                z.copy_from_slice(r);
-                self.chol.solve_in_place(z);
-                for (zi, &c) in z.iter_mut().zip(constrained) {
-                    if c {
-                        *zi = 0.0;
-                    }
-                }
-                let rz_new = free_dot(r, z);
+            impose(z, constrained, |_| 0.0);
+            let rz_new = free_dot(r, z);
+            if iterations == 0 {
+                p.copy_from_slice(z);
+            } else {
                 let beta = rz_new / rz;
-                rz = rz_new;
                 for (pi, zi) in p.iter_mut().zip(z.iter()) {
                     *pi = zi + beta * *pi;
                 }
             }
+            rz = rz_new;
+            iterations += 1;
+            q.fill(0.0);
+            model.pattern.sym_mul_add(&self.k_constrained, p, q);
+            let pq = free_dot(p, q);
+            if !(pq > 0.0) {
+                break;
+            }
+            let alpha = rz / pq;
+            for e in 0..b.len() {
+                if !constrained[e] {
+                    b[e] += alpha * p[e];
+                    r[e] -= alpha * q[e];
+                }
+            }
+            converged = free_dot(r, r).sqrt() <= tol;
         }
         self.pcg_iterations += iterations;
         self.last_pcg = if converged {
@@ -363,11 +348,7 @@ impl ConstrainedSystem {
         let t2 = std::time::Instant::now();
         b.copy_from_slice(&self.work[4]);
         self.chol.solve_in_place(b);
-        for (e, x) in b.iter_mut().enumerate() {
-            if self.constrained[e] {
-                *x = xbar[e];
-            }
-        }
+        impose(b, &self.constrained, |e| xbar[e]);
         self.seconds[2] += t2.elapsed().as_secs_f64();
         Ok(iterations)
     }
@@ -488,6 +469,15 @@ impl ConstrainedSystem {
         }
         for &c in set {
             b[c] = xbar[c];
+        }
+    }
+}
+
+/// `x_c = v(c)` on the constrained equations `c`.
+fn impose(x: &mut [f64], constrained: &[bool], v: impl Fn(usize) -> f64) {
+    for (e, (xi, &c)) in x.iter_mut().zip(constrained).enumerate() {
+        if c {
+            *xi = v(e);
         }
     }
 }
