@@ -7,8 +7,6 @@ use indentify_laws::Mat4;
 use crate::dofs::{DofMap, NO_EQ};
 use crate::geometry::{Discretization, QP_PER_ELEMENT};
 
-const NONE: u32 = u32::MAX;
-
 /// Lower-triangular CSC structure of the global stiffness over equations, and the
 /// scatter map from element entries to value positions.
 #[derive(Clone, Debug)]
@@ -21,9 +19,17 @@ pub struct Pattern {
     pub row_idx: Vec<usize>,
     /// Position of the diagonal entry of each column.
     pub diag: Vec<usize>,
-    /// For element `e`, entry `(a, b)` of its 16x16 matrix goes to `scatter[256 e + 16 a + b]`
-    /// (or nowhere, `u32::MAX`: an eliminated dof or the upper triangle).
-    scatter: Vec<u32>,
+    /// Element `e`'s lower-triangle entries `(a >= b)` kept by the pattern are
+    /// `scatter[scatter_ptr[e]..scatter_ptr[e + 1]]`: (value position, `16 a + b`).
+    scatter: Vec<(u32, u32)>,
+    scatter_ptr: Vec<usize>,
+    /// Positions of row `i`'s entries left of the diagonal (the lower triangle by rows):
+    /// `row_pos[row_ptr[i]..row_ptr[i + 1]]`.
+    row_ptr: Vec<usize>,
+    row_pos: Vec<usize>,
+    /// `paired[j]`: columns `j` and `j + 1` hold the same rows below `j + 1` (both dofs of a
+    /// node), and column `j` holds row `j + 1` (see [`Pattern::sym_mul_add`]).
+    paired: Vec<bool>,
 }
 
 impl Pattern {
@@ -54,7 +60,12 @@ impl Pattern {
             row_idx.extend_from_slice(c);
             col_ptr.push(row_idx.len());
         }
-        let mut scatter = vec![NONE; 256 * ne];
+        // the element's entry (a, b) lands at (eq a, eq b) when that is in the lower
+        // triangle, else at its mirror (eq b, eq a) with the entry (b, a): each pair of
+        // distinct dofs once, read from the lower triangle a >= b of the element matrix
+        let mut scatter = Vec::with_capacity(136 * ne);
+        let mut scatter_ptr = Vec::with_capacity(ne + 1);
+        scatter_ptr.push(0);
         for e in 0..ne {
             let eqs = disc.element_dofs(e).map(|d| dofs.eq[d]);
             for a in 0..16 {
@@ -64,17 +75,54 @@ impl Pattern {
                         let (i, j) = (i as usize, j as usize);
                         let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
                         let pos = col_ptr[j] + col.binary_search(&i).expect("entry in pattern");
-                        scatter[256 * e + 16 * a + b] = pos as u32;
+                        let (ea, eb) = if a >= b { (a, b) } else { (b, a) };
+                        scatter.push((pos as u32, (16 * ea + eb) as u32));
                     }
                 }
             }
+            scatter_ptr.push(scatter.len());
         }
+        let mut row_ptr = vec![0usize; n + 1];
+        for &i in &row_idx {
+            row_ptr[i + 1] += 1;
+        }
+        for j in 0..n {
+            // the diagonal is not left of itself
+            row_ptr[j + 1] -= 1;
+            row_ptr[j + 1] += row_ptr[j];
+        }
+        let mut fill = row_ptr.clone();
+        let mut row_pos = vec![0usize; row_ptr[n]];
+        for j in 0..n {
+            for (p, &i) in row_idx
+                .iter()
+                .enumerate()
+                .take(col_ptr[j + 1])
+                .skip(diag[j] + 1)
+            {
+                row_pos[fill[i]] = p;
+                fill[i] += 1;
+            }
+        }
+        let paired = (0..n)
+            .map(|j| {
+                j + 1 < n && {
+                    let c0 = &row_idx[diag[j]..col_ptr[j + 1]];
+                    let c1 = &row_idx[diag[j + 1]..col_ptr[j + 2]];
+                    c0.len() == c1.len() + 1 && c0[1] == j + 1 && c0[2..] == c1[1..]
+                }
+            })
+            .collect();
         Pattern {
             n,
             col_ptr,
             row_idx,
             diag,
             scatter,
+            scatter_ptr,
+            row_ptr,
+            row_pos,
+            paired,
         }
     }
 
@@ -140,30 +188,50 @@ impl Pattern {
     /// Adds the lower triangle (`a >= b`) of element `e`'s matrix at its pattern positions.
     #[inline]
     fn scatter_add(&self, e: usize, ke: &[[f64; 16]; 16], values: &mut [f64]) {
-        let map = &self.scatter[256 * e..256 * (e + 1)];
-        for a in 0..16 {
-            for b in 0..16 {
-                let pos = map[16 * a + b];
-                if pos != NONE {
-                    // ke holds the lower triangle a >= b; use symmetry otherwise.
-                    values[pos as usize] += if a >= b { ke[a][b] } else { ke[b][a] };
-                }
-            }
+        let ke = ke.as_flattened();
+        for &(pos, ab) in &self.scatter[self.scatter_ptr[e]..self.scatter_ptr[e + 1]] {
+            values[pos as usize] += ke[ab as usize];
         }
     }
 
     /// `y += K x` for the symmetric matrix stored as its lower triangle in `values`.
+    /// Paired columns (the two dofs of a node share their rows) go through their rows
+    /// together: one index, one `x` and one `y` access for two entries.
     pub fn sym_mul_add(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
-        for j in 0..self.n {
-            let xj = x[j];
+        let mut j = 0;
+        while j < self.n {
             // the diagonal is each column's first entry (rows sorted, all >= the column)
             let (d, end) = (self.diag[j], self.col_ptr[j + 1]);
+            if self.paired[j] {
+                let (d1, end1) = (self.diag[j + 1], self.col_ptr[j + 2]);
+                let (x0, x1) = (x[j], x[j + 1]);
+                let v01 = values[d + 1];
+                let mut acc0 = values[d] * x0 + v01 * x1;
+                let mut acc1 = v01 * x0 + values[d1] * x1;
+                let rows = &self.row_idx[d + 2..end];
+                for ((&i, &v0), &v1) in rows
+                    .iter()
+                    .zip(&values[d + 2..end])
+                    .zip(&values[d1 + 1..end1])
+                {
+                    let xi = x[i];
+                    y[i] += v0 * x0 + v1 * x1;
+                    acc0 += v0 * xi;
+                    acc1 += v1 * xi;
+                }
+                y[j] += acc0;
+                y[j + 1] += acc1;
+                j += 2;
+                continue;
+            }
+            let xj = x[j];
             let mut acc = values[d] * xj;
             for (&i, &v) in self.row_idx[d + 1..end].iter().zip(&values[d + 1..end]) {
                 y[i] += v * xj;
                 acc += v * x[i];
             }
             y[j] += acc;
+            j += 1;
         }
     }
 
@@ -172,12 +240,11 @@ impl Pattern {
     /// Returns nothing; the constrained equation `k` then reads `K_kk x_k = K_kk xbar_k`.
     pub fn constrain(&self, src: &[f64], constrained: &[bool], dst: &mut [f64]) {
         dst.copy_from_slice(src);
-        for j in 0..self.n {
-            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                let i = self.row_idx[p];
-                if (constrained[i] || constrained[j]) && i != j {
-                    dst[p] = 0.0;
-                }
+        for (k, _) in constrained.iter().enumerate().filter(|(_, c)| **c) {
+            // column k below the diagonal, then row k left of it
+            dst[self.diag[k] + 1..self.col_ptr[k + 1]].fill(0.0);
+            for &p in &self.row_pos[self.row_ptr[k]..self.row_ptr[k + 1]] {
+                dst[p] = 0.0;
             }
         }
     }
@@ -272,6 +339,81 @@ mod tests {
         let mut y = vec![0.0; dofs.n_eq];
         pat.sym_mul_add(&k, &x, &mut y);
         assert!(x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>() > 0.0);
+    }
+
+    /// `sym_mul_add` and `constrain` against the dense matrix, on a mesh with eliminated
+    /// dofs (axis and bottom) and non-uniform tangents, so that paired and unpaired
+    /// columns both occur.
+    #[test]
+    fn products_and_constraints_match_the_dense_matrix() {
+        let m = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 4,
+            nz: 3,
+            grading_r: 1.2,
+            grading_z: 1.1,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&m);
+        let dofs = DofMap::cylinder(&m);
+        let pat = Pattern::new(&disc, &dofs);
+        let n = pat.n;
+        let tangents: Vec<Mat4> = (0..disc.n_qp())
+            .map(|q| isotropic_stiffness(100.0 + q as f64, 0.2 + 1e-3 * q as f64))
+            .collect();
+        let mut k = vec![0.0; pat.nnz()];
+        pat.assemble_b_c_b(&disc, &tangents, &mut k);
+        let dense = |values: &[f64]| {
+            let mut a = vec![vec![0.0; n]; n];
+            for j in 0..n {
+                for p in pat.col_ptr[j]..pat.col_ptr[j + 1] {
+                    a[pat.row_idx[p]][j] = values[p];
+                    a[j][pat.row_idx[p]] = values[p];
+                }
+            }
+            a
+        };
+        let a = dense(&k);
+        let x: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
+        let mut y: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        pat.sym_mul_add(&k, &x, &mut y);
+        let scale = a.iter().flatten().fold(0.0f64, |s, v| s.max(v.abs()));
+        for i in 0..n {
+            let yi = i as f64 + (0..n).map(|j| a[i][j] * x[j]).sum::<f64>();
+            assert!((y[i] - yi).abs() <= 1e-12 * scale * n as f64, "row {i}");
+        }
+        // columns as sym_mul_add walks them: a pair, or a single column
+        let (mut paired, mut single, mut j) = (0, 0, 0);
+        while j < n {
+            if pat.paired[j] {
+                paired += 1;
+                j += 2;
+            } else {
+                single += 1;
+                j += 1;
+            }
+        }
+        assert!(
+            paired > 0 && single > 0,
+            "{paired} pairs, {single} single columns"
+        );
+        // constrain: rows and columns of the constrained equations are zero but for the diagonal
+        let constrained: Vec<bool> = (0..n).map(|i| i % 5 == 1 || i == n - 1).collect();
+        let mut kc = vec![f64::NAN; pat.nnz()];
+        pat.constrain(&k, &constrained, &mut kc);
+        let c = dense(&kc);
+        for i in 0..n {
+            for j in 0..n {
+                let want = if i != j && (constrained[i] || constrained[j]) {
+                    0.0
+                } else {
+                    a[i][j]
+                };
+                assert_eq!(c[i][j], want, "({i}, {j})");
+            }
+        }
     }
 
     /// The cached assembly equals a fresh one bit for bit and recomputes exactly the
