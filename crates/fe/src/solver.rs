@@ -3,7 +3,10 @@
 //! over the supernodes' dense column blocks directly, as products of the off-diagonal
 //! block with the diagonal block's unknowns (contiguous, vectorizable) and one gather or
 //! scatter per supernode: at FE sizes (a few thousand equations, supernodes of a few
-//! columns) faer's general kernels spend more on dispatch than on arithmetic.
+//! columns) faer's general kernels spend more on dispatch than on arithmetic. The block
+//! products take four columns per pass in the widest SIMD the CPU offers (pulp's runtime
+//! dispatch: AVX2 with FMA on x86-64-v3, SSE2 otherwise), so results may differ in the
+//! last bits between CPUs, as faer's factorization itself does.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SparseColMatRef;
@@ -14,6 +17,7 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky,
 };
 use faer::{Par, Side, Spec};
+use pulp::{Arch, Simd, WithSimd};
 
 use crate::FeError;
 use crate::assembly::Pattern;
@@ -72,7 +76,7 @@ impl SparseCholesky {
             col_ptr: pattern.col_ptr.clone(),
             row_idx: pattern.row_idx.clone(),
             l_values,
-            work: vec![0.0; n + layout.max_pattern],
+            work: vec![0.0; n + layout.max_pattern + layout.max_ncols],
             layout,
             mem: MemBuffer::new(req),
             factorized: false,
@@ -122,7 +126,8 @@ impl SparseCholesky {
         let n = self.col_ptr.len() - 1;
         assert_eq!(rhs.len(), n, "right-hand side length");
         let (x, tmp) = self.work.split_at_mut(n);
-        self.layout.solve(&self.l_values, rhs, x, tmp);
+        let (tmp, dots) = tmp.split_at_mut(self.layout.max_pattern);
+        self.layout.solve(&self.l_values, rhs, x, tmp, dots);
         self.n_solves += 1;
     }
 }
@@ -149,6 +154,9 @@ struct Layout {
     supernodes: Vec<Supernode>,
     pattern: Vec<usize>,
     max_pattern: usize,
+    max_ncols: usize,
+    /// The SIMD instruction set detected at analysis.
+    arch: Arch,
 }
 
 impl Layout {
@@ -169,6 +177,7 @@ impl Layout {
         let mut layout = Layout {
             fwd,
             inv,
+            arch: Arch::new(),
             ..Default::default()
         };
         let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
@@ -178,6 +187,7 @@ impl Layout {
             let p0 = layout.pattern.len();
             layout.pattern.extend_from_slice(pat);
             layout.max_pattern = layout.max_pattern.max(pat.len());
+            layout.max_ncols = layout.max_ncols.max(end[s] - begin[s]);
             layout.supernodes.push(Supernode {
                 start: begin[s],
                 ncols: end[s] - begin[s],
@@ -189,9 +199,9 @@ impl Layout {
         Ok(layout)
     }
 
-    /// `b = P^T L^-T L^-1 P b` with the factor values `l`; `x` (length n) and `tmp` (the
-    /// longest pattern) are scratch.
-    fn solve(&self, l: &[f64], b: &mut [f64], x: &mut [f64], tmp: &mut [f64]) {
+    /// `b = P^T L^-T L^-1 P b` with the factor values `l`; `x` (length n), `tmp` (the
+    /// longest pattern) and `dots` (the widest supernode) are scratch.
+    fn solve(&self, l: &[f64], b: &mut [f64], x: &mut [f64], tmp: &mut [f64], dots: &mut [f64]) {
         for (xi, &f) in x.iter_mut().zip(&self.fwd) {
             *xi = b[f];
         }
@@ -211,12 +221,12 @@ impl Layout {
             }
             let t = &mut tmp[..pat.len()];
             t.fill(0.0);
-            for j in 0..nc {
-                let xj = xs[j];
-                for (ti, lij) in t.iter_mut().zip(&block[j * nr + nc..(j + 1) * nr]) {
-                    *ti += lij * xj;
-                }
-            }
+            self.arch.dispatch(BlockProduct {
+                block: &block[nc..],
+                ld: nr,
+                x: xs,
+                t,
+            });
             for (&r, ti) in pat.iter().zip(t.iter()) {
                 x[r] -= ti;
             }
@@ -230,10 +240,17 @@ impl Layout {
             for (ti, &r) in t.iter_mut().zip(pat) {
                 *ti = x[r];
             }
+            let d = &mut dots[..nc];
+            self.arch.dispatch(BlockTransposeProduct {
+                block: &block[nc..],
+                ld: nr,
+                t,
+                d,
+            });
             let xs = &mut x[sn.start..sn.start + nc];
             for j in (0..nc).rev() {
                 let col = &block[j * nr..(j + 1) * nr];
-                let mut v = xs[j] - dot(&col[nc..], t);
+                let mut v = xs[j] - d[j];
                 for (xi, lij) in xs[j + 1..].iter().zip(&col[j + 1..nc]) {
                     v -= lij * xi;
                 }
@@ -246,19 +263,108 @@ impl Layout {
     }
 }
 
-/// `sum a_i b_i` with four partial sums (vectorizable).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (a4.remainder(), b4.remainder());
-    let mut acc = [0.0; 4];
-    for (x, y) in a4.zip(b4) {
-        for k in 0..4 {
-            acc[k] += x[k] * y[k];
+/// `t += A x` for the column-major block `A` of `t.len()` rows and `x.len()` columns, with
+/// leading dimension `ld` (`block[j * ld + i] = A_ij`): four columns per pass over `t`.
+struct BlockProduct<'a> {
+    block: &'a [f64],
+    ld: usize,
+    x: &'a [f64],
+    t: &'a mut [f64],
+}
+
+impl WithSimd for BlockProduct<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let BlockProduct { block, ld, x, t } = self;
+        let m = t.len();
+        let col = |j: usize| &block[j * ld..j * ld + m];
+        let mut quads = x.chunks_exact(4);
+        let mut j = 0;
+        for xq in quads.by_ref() {
+            let (c0, c0t) = S::as_simd_f64s(col(j));
+            let (c1, c1t) = S::as_simd_f64s(col(j + 1));
+            let (c2, c2t) = S::as_simd_f64s(col(j + 2));
+            let (c3, c3t) = S::as_simd_f64s(col(j + 3));
+            let [x0, x1, x2, x3] = [xq[0], xq[1], xq[2], xq[3]].map(|v| simd.splat_f64s(v));
+            let (th, tt) = S::as_mut_simd_f64s(t);
+            for ((((ti, a0), a1), a2), a3) in th.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+                let v = simd.mul_add_e_f64s(*a0, x0, *ti);
+                let v = simd.mul_add_e_f64s(*a1, x1, v);
+                let v = simd.mul_add_e_f64s(*a2, x2, v);
+                *ti = simd.mul_add_e_f64s(*a3, x3, v);
+            }
+            for (i, ti) in tt.iter_mut().enumerate() {
+                *ti += c0t[i] * xq[0] + c1t[i] * xq[1] + c2t[i] * xq[2] + c3t[i] * xq[3];
+            }
+            j += 4;
+        }
+        for &xj in quads.remainder() {
+            let (c, ct) = S::as_simd_f64s(col(j));
+            let xs = simd.splat_f64s(xj);
+            let (th, tt) = S::as_mut_simd_f64s(t);
+            for (ti, a) in th.iter_mut().zip(c) {
+                *ti = simd.mul_add_e_f64s(*a, xs, *ti);
+            }
+            for (ti, a) in tt.iter_mut().zip(ct) {
+                *ti += a * xj;
+            }
+            j += 1;
         }
     }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// `d = A^T t` for the block of [`BlockProduct`] (`d.len()` columns): four columns per
+/// pass over `t`.
+struct BlockTransposeProduct<'a> {
+    block: &'a [f64],
+    ld: usize,
+    t: &'a [f64],
+    d: &'a mut [f64],
+}
+
+impl WithSimd for BlockTransposeProduct<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let BlockTransposeProduct { block, ld, t, d } = self;
+        let m = t.len();
+        let col = |j: usize| &block[j * ld..j * ld + m];
+        let (th, tt) = S::as_simd_f64s(t);
+        let zero = simd.splat_f64s(0.0);
+        let mut quads = d.chunks_exact_mut(4);
+        let mut j = 0;
+        for dq in quads.by_ref() {
+            let (c0, c0t) = S::as_simd_f64s(col(j));
+            let (c1, c1t) = S::as_simd_f64s(col(j + 1));
+            let (c2, c2t) = S::as_simd_f64s(col(j + 2));
+            let (c3, c3t) = S::as_simd_f64s(col(j + 3));
+            let mut acc = [zero; 4];
+            for ((((tv, a0), a1), a2), a3) in th.iter().zip(c0).zip(c1).zip(c2).zip(c3) {
+                acc[0] = simd.mul_add_e_f64s(*a0, *tv, acc[0]);
+                acc[1] = simd.mul_add_e_f64s(*a1, *tv, acc[1]);
+                acc[2] = simd.mul_add_e_f64s(*a2, *tv, acc[2]);
+                acc[3] = simd.mul_add_e_f64s(*a3, *tv, acc[3]);
+            }
+            for (k, (dk, ct)) in dq.iter_mut().zip([c0t, c1t, c2t, c3t]).enumerate() {
+                let tail: f64 = ct.iter().zip(tt).map(|(a, b)| a * b).sum();
+                *dk = simd.reduce_sum_f64s(acc[k]) + tail;
+            }
+            j += 4;
+        }
+        for dj in quads.into_remainder() {
+            let (c, ct) = S::as_simd_f64s(col(j));
+            let mut acc = zero;
+            for (tv, a) in th.iter().zip(c) {
+                acc = simd.mul_add_e_f64s(*a, *tv, acc);
+            }
+            let tail: f64 = ct.iter().zip(tt).map(|(a, b)| a * b).sum();
+            *dj = simd.reduce_sum_f64s(acc) + tail;
+            j += 1;
+        }
+    }
 }
 
 #[cfg(test)]
