@@ -106,7 +106,10 @@ impl ConstrainedSystem {
     /// Sets the tangent from per-Gauss-point `tangents`. With `reuse = Some((c, dt))` (a
     /// linear law whose tangent depends only on the parameters and the step length) an
     /// identical key (dt equal to 1e-12 relative: schedule times carry round-off) keeps the
-    /// assembled matrix and its factorizations. Returns `true` if it assembled.
+    /// assembled matrix and its factorizations. Otherwise only the elements whose tangents
+    /// changed are re-formed and their differences added (`fe::Pattern::assemble_b_c_b_delta`;
+    /// [`ConstrainedSystem::forget_preconditioner`] restarts from a full sum). Returns `true`
+    /// if it assembled.
     pub fn set_tangent(
         &mut self,
         model: &Model,
@@ -116,7 +119,7 @@ impl ConstrainedSystem {
         let t0 = std::time::Instant::now();
         let fresh = self.new_key(reuse);
         if fresh {
-            model.pattern.assemble_b_c_b_cached(
+            model.pattern.assemble_b_c_b_delta(
                 &model.disc,
                 tangents,
                 &mut self.elements,
@@ -136,6 +139,7 @@ impl ConstrainedSystem {
             model
                 .pattern
                 .assemble_b_c_b_uniform(&model.disc, c_mat, &mut self.k_values);
+            self.elements.forget_sum();
         }
         self.seconds[0] += t0.elapsed().as_secs_f64();
         fresh
@@ -215,10 +219,12 @@ impl ConstrainedSystem {
         Ok(())
     }
 
-    /// Makes the next [`ConstrainedSystem::prepare_inexact`] factorize: a time step that
-    /// starts with this depends on its initial state alone, not on the factor an earlier
-    /// step left behind, so that replaying it from a checkpoint repeats it bit for bit.
+    /// Makes the next [`ConstrainedSystem::prepare_inexact`] factorize and the next
+    /// assembly sum every element afresh: a time step that starts with this depends on its
+    /// initial state alone, not on the factor or the assembly updates an earlier step left
+    /// behind, so that replaying it from a checkpoint repeats it bit for bit.
     pub fn forget_preconditioner(&mut self) {
+        self.elements.forget_sum();
         self.factor_ok = self.factor_ok && self.k_key.is_some();
         self.last_pcg = 0;
     }

@@ -174,6 +174,7 @@ impl Pattern {
         }
         values.fill(0.0);
         cache.recomputed = 0;
+        cache.summed = false;
         for e in 0..ne {
             let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
             if c[qs.clone()] != cache.tangents[qs.clone()] {
@@ -182,6 +183,40 @@ impl Pattern {
                 cache.recomputed += 1;
             }
             self.scatter_add(e, &cache.ke[e], values);
+        }
+    }
+
+    /// As [`Pattern::assemble_b_c_b_cached`], but when `values` still hold the previous
+    /// assembly with this `cache` (the caller's promise; see [`ElementCache::forget_sum`])
+    /// only the changed elements are touched: `values += k_e,new - k_e,old`, with neither a
+    /// zero fill nor a scatter of the unchanged elements. The result equals a fresh assembly
+    /// to round-off (the first assembly after `forget_sum` bit for bit).
+    pub fn assemble_b_c_b_delta(
+        &self,
+        disc: &Discretization,
+        c: &[Mat4],
+        cache: &mut ElementCache,
+        values: &mut [f64],
+    ) {
+        let ne = disc.elements.len();
+        if !cache.summed || cache.ke.len() != ne || cache.tangents.len() != c.len() {
+            self.assemble_b_c_b_cached(disc, c, cache, values);
+            cache.summed = true;
+            return;
+        }
+        cache.recomputed = 0;
+        for e in 0..ne {
+            let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
+            if c[qs.clone()] != cache.tangents[qs.clone()] {
+                let ke = element_matrix(disc, e, |q| &c[q]);
+                let (new, old) = (ke.as_flattened(), cache.ke[e].as_flattened());
+                for &(pos, ab) in &self.scatter[self.scatter_ptr[e]..self.scatter_ptr[e + 1]] {
+                    values[pos as usize] += new[ab as usize] - old[ab as usize];
+                }
+                cache.ke[e] = ke;
+                cache.tangents[qs.clone()].copy_from_slice(&c[qs]);
+                cache.recomputed += 1;
+            }
         }
     }
 
@@ -251,13 +286,25 @@ impl Pattern {
 }
 
 /// Element matrices of the last cached assembly and the Gauss-point tangents they were
-/// formed with ([`Pattern::assemble_b_c_b_cached`]).
+/// formed with ([`Pattern::assemble_b_c_b_cached`], [`Pattern::assemble_b_c_b_delta`]).
 #[derive(Clone, Debug, Default)]
 pub struct ElementCache {
     tangents: Vec<Mat4>,
     ke: Vec<[[f64; 16]; 16]>,
     /// Element matrices recomputed by the last assembly.
     pub recomputed: usize,
+    /// The values of the last assembly are the sum of `ke` (a delta assembly may update them).
+    summed: bool,
+}
+
+impl ElementCache {
+    /// Makes the next [`Pattern::assemble_b_c_b_delta`] sum every element afresh: its result
+    /// then depends on the tangents alone, not on the assemblies before (call it where a
+    /// computation must repeat bit for bit from a saved state, or when the values were
+    /// written by anything else).
+    pub fn forget_sum(&mut self) {
+        self.summed = false;
+    }
 }
 
 /// `k_e = sum_g w_g B_g^T C_g B_g` of element `e`, lower triangle (`a >= b`) filled.
@@ -449,5 +496,56 @@ mod tests {
         assert_eq!(cache.recomputed, 2);
         pat.assemble_b_c_b(&disc, &tangents, &mut fresh);
         assert_eq!(fresh, cached);
+    }
+
+    /// The delta assembly follows a sequence of tangent changes to round-off of a fresh
+    /// assembly, touches only the changed elements, and is bit-identical to a fresh one
+    /// right after `forget_sum`.
+    #[test]
+    fn delta_assembly_tracks_fresh_assemblies() {
+        let m = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 4,
+            nz: 3,
+            grading_r: 1.2,
+            grading_z: 1.1,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&m);
+        let dofs = DofMap::cylinder(&m);
+        let pat = Pattern::new(&disc, &dofs);
+        let mut tangents = vec![isotropic_stiffness(100.0, 0.3); disc.n_qp()];
+        let mut cache = ElementCache::default();
+        let (mut fresh, mut delta) = (vec![0.0; pat.nnz()], vec![f64::NAN; pat.nnz()]);
+        pat.assemble_b_c_b_delta(&disc, &tangents, &mut cache, &mut delta);
+        pat.assemble_b_c_b(&disc, &tangents, &mut fresh);
+        assert_eq!(fresh, delta);
+        let scale = fresh.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for round in 0..20 {
+            // a moving "plastic zone": three elements soften, then recover
+            let e0 = round % 10;
+            for (q, t) in tangents.iter_mut().enumerate() {
+                let e = q / QP_PER_ELEMENT;
+                *t = if (e0..e0 + 3).contains(&e) {
+                    isotropic_stiffness(100.0 / (2.0 + (q + round) as f64 * 0.1), 0.3)
+                } else {
+                    isotropic_stiffness(100.0, 0.3)
+                };
+            }
+            pat.assemble_b_c_b_delta(&disc, &tangents, &mut cache, &mut delta);
+            assert!(cache.recomputed <= 6, "round {round}: {}", cache.recomputed);
+            pat.assemble_b_c_b(&disc, &tangents, &mut fresh);
+            for (p, (a, b)) in fresh.iter().zip(&delta).enumerate() {
+                assert!(
+                    (a - b).abs() <= 1e-13 * scale,
+                    "round {round}, entry {p}: {a} vs {b}"
+                );
+            }
+        }
+        cache.forget_sum();
+        pat.assemble_b_c_b_delta(&disc, &tangents, &mut cache, &mut delta);
+        assert_eq!(fresh, delta);
     }
 }
