@@ -51,7 +51,7 @@ pub struct ConstrainedSystem {
     /// The next inexact solve runs preconditioned CG on `k_constrained` with `chol` (an
     /// earlier tangent's factor) instead of factorizing it.
     pcg: bool,
-    /// CG iterations of the last inexact solve (a fallback counts as `MAX_PCG + 1`).
+    /// CG iterations of the last inexact solve (0 after a fallback: its factor is fresh).
     last_pcg: usize,
     /// PCG work vectors: r, z, p, q and a copy of the right-hand side.
     work: [Vec<f64>; 5],
@@ -300,14 +300,16 @@ impl ConstrainedSystem {
         }
         let tol = eta * bnorm;
         let mut iterations = 0;
-        let mut converged = free_dot(r, r).sqrt() <= tol;
+        // r, z, p and q = A p vanish on the constrained equations (A is diagonal there):
+        // plain dot products and updates over all equations are the free ones
+        let mut converged = dot(r, r).sqrt() <= tol;
         let mut rz = 0.0;
         while !converged && iterations < MAX_PCG {
             // z = M^-1 r restricted to the free equations; p = z + beta p
             z.copy_from_slice(r);
             self.chol.solve_in_place(z);
             impose(z, constrained, |_| 0.0);
-            let rz_new = free_dot(r, z);
+            let rz_new = dot(r, z);
             if iterations == 0 {
                 p.copy_from_slice(z);
             } else {
@@ -320,25 +322,21 @@ impl ConstrainedSystem {
             iterations += 1;
             q.fill(0.0);
             model.pattern.sym_mul_add(&self.k_constrained, p, q);
-            let pq = free_dot(p, q);
+            let pq = dot(p, q);
             if !(pq > 0.0) {
                 break;
             }
             let alpha = rz / pq;
-            for e in 0..b.len() {
-                if !constrained[e] {
-                    b[e] += alpha * p[e];
-                    r[e] -= alpha * q[e];
-                }
+            for (bi, pi) in b.iter_mut().zip(p.iter()) {
+                *bi += alpha * pi;
             }
-            converged = free_dot(r, r).sqrt() <= tol;
+            for (ri, qi) in r.iter_mut().zip(q.iter()) {
+                *ri -= alpha * qi;
+            }
+            converged = dot(r, r).sqrt() <= tol;
         }
         self.pcg_iterations += iterations;
-        self.last_pcg = if converged {
-            iterations
-        } else {
-            iterations + 1
-        };
+        self.last_pcg = iterations;
         self.seconds[2] += t0.elapsed().as_secs_f64();
         if converged {
             return Ok(iterations);
@@ -350,6 +348,8 @@ impl ConstrainedSystem {
         self.factor_ok = false;
         self.chol.factorize(&self.k_constrained)?;
         self.factor_ok = true;
+        // the new factor is this Newton iterate's own: the next solves precondition with it
+        self.last_pcg = 0;
         self.seconds[1] += t1.elapsed().as_secs_f64();
         let t2 = std::time::Instant::now();
         b.copy_from_slice(&self.work[4]);
@@ -486,6 +486,24 @@ fn impose(x: &mut [f64], constrained: &[bool], v: impl Fn(usize) -> f64) {
             *xi = v(e);
         }
     }
+}
+
+/// `sum a_i b_i` with four partial sums (vectorizable).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// Largest number of CG iterations of an inexact solve before it factorizes instead (one
