@@ -31,7 +31,6 @@ pub struct ConstrainedSystem {
     /// Element matrices of the last per-point assembly, reused where tangents are unchanged.
     elements: ElementCache,
     constrained: Vec<bool>,
-    scratch: Vec<f64>,
     /// Key of the tangent in `k_values` when it may be reused: (parameter bits, dt).
     k_key: Option<(Vec<u64>, f64)>,
     /// Constrained equations of the current factorization, when it may be reused.
@@ -75,7 +74,6 @@ impl ConstrainedSystem {
             k_constrained: vec![0.0; model.pattern.nnz()],
             elements: ElementCache::default(),
             constrained: vec![false; model.dofs.n_eq],
-            scratch: vec![0.0; model.dofs.n_eq],
             k_key: None,
             factor_for: None,
             base: false,
@@ -431,24 +429,20 @@ impl ConstrainedSystem {
     /// `b - K xbar` on the unconstrained equations, `K_cc xbar_c` on the constrained ones:
     /// the right-hand side of the constrained matrix for the prescribed values `xbar`.
     fn dirichlet_rhs(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
-        let n = b.len();
-        let any = self.constrained.iter().any(|&c| c);
-        if any {
-            for e in 0..n {
-                self.scratch[e] = if self.constrained[e] { xbar[e] } else { 0.0 };
+        // K xbar has the columns of the few constrained equations only
+        let (k, constrained) = (&self.k_values, &self.constrained);
+        for (c, _) in constrained.iter().enumerate().filter(|(_, c)| **c) {
+            let xc = xbar[c];
+            if xc != 0.0 {
+                model.pattern.for_each_off_diagonal(c, |i, p| {
+                    if !constrained[i] {
+                        b[i] -= k[p] * xc;
+                    }
+                });
             }
-            let mut kx = std::mem::take(&mut self.scratch);
-            let mut y = vec![0.0; n];
-            model.pattern.sym_mul_add(&self.k_values, &kx, &mut y);
-            for e in 0..n {
-                b[e] = if self.constrained[e] {
-                    self.k_constrained[model.pattern.diag[e]] * kx[e]
-                } else {
-                    b[e] - y[e]
-                };
-            }
-            kx.iter_mut().for_each(|v| *v = 0.0);
-            self.scratch = kx;
+        }
+        for (c, _) in constrained.iter().enumerate().filter(|(_, c)| **c) {
+            b[c] = self.k_constrained[model.pattern.diag[c]] * xbar[c];
         }
     }
 

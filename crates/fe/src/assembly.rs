@@ -24,9 +24,10 @@ pub struct Pattern {
     scatter: Vec<(u32, u32)>,
     scatter_ptr: Vec<usize>,
     /// Positions of row `i`'s entries left of the diagonal (the lower triangle by rows):
-    /// `row_pos[row_ptr[i]..row_ptr[i + 1]]`.
+    /// `row_pos[row_ptr[i]..row_ptr[i + 1]]`, in the columns `row_col[..]` alike.
     row_ptr: Vec<usize>,
     row_pos: Vec<usize>,
+    row_col: Vec<usize>,
     /// `paired[j]`: columns `j` and `j + 1` hold the same rows below `j + 1` (both dofs of a
     /// node), and column `j` holds row `j + 1` (see [`Pattern::sym_mul_add`]).
     paired: Vec<bool>,
@@ -93,6 +94,7 @@ impl Pattern {
         }
         let mut fill = row_ptr.clone();
         let mut row_pos = vec![0usize; row_ptr[n]];
+        let mut row_col = vec![0usize; row_ptr[n]];
         for j in 0..n {
             for (p, &i) in row_idx
                 .iter()
@@ -101,6 +103,7 @@ impl Pattern {
                 .skip(diag[j] + 1)
             {
                 row_pos[fill[i]] = p;
+                row_col[fill[i]] = j;
                 fill[i] += 1;
             }
         }
@@ -122,6 +125,7 @@ impl Pattern {
             scatter_ptr,
             row_ptr,
             row_pos,
+            row_col,
             paired,
         }
     }
@@ -226,6 +230,20 @@ impl Pattern {
         let ke = ke.as_flattened();
         for &(pos, ab) in &self.scatter[self.scatter_ptr[e]..self.scatter_ptr[e + 1]] {
             values[pos as usize] += ke[ab as usize];
+        }
+    }
+
+    /// Calls `f(i, p)` for every stored entry of row and column `k` off the diagonal: `i`
+    /// the other index, `p` the value position (column `k` below the diagonal, then row `k`
+    /// left of it). With `x` zero but at a few equations, `K x` is the sum of these
+    /// columns: a handful of entries instead of a product over the whole matrix.
+    pub fn for_each_off_diagonal(&self, k: usize, mut f: impl FnMut(usize, usize)) {
+        for p in self.diag[k] + 1..self.col_ptr[k + 1] {
+            f(self.row_idx[p], p);
+        }
+        let range = self.row_ptr[k]..self.row_ptr[k + 1];
+        for (&p, &j) in self.row_pos[range.clone()].iter().zip(&self.row_col[range]) {
+            f(j, p);
         }
     }
 
@@ -446,6 +464,13 @@ mod tests {
             paired > 0 && single > 0,
             "{paired} pairs, {single} single columns"
         );
+        // row k of the matrix from its diagonal and off-diagonal entries
+        for r in 0..n {
+            let mut row = vec![0.0; n];
+            row[r] = k[pat.diag[r]];
+            pat.for_each_off_diagonal(r, |i, p| row[i] += k[p]);
+            assert_eq!(row, a[r], "row {r}");
+        }
         // constrain: rows and columns of the constrained equations are zero but for the diagonal
         let constrained: Vec<bool> = (0..n).map(|i| i % 5 == 1 || i == n - 1).collect();
         let mut kc = vec![f64::NAN; pat.nnz()];
