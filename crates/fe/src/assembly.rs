@@ -160,8 +160,8 @@ impl Pattern {
     }
 
     /// As [`Pattern::assemble_b_c_b`], recomputing only the element matrices whose nine
-    /// Gauss-point tangents differ from those `cache` formed them with (in a viscoplastic
-    /// step most of the body stays elastic and keeps its tangent). The result is the
+    /// Gauss-point tangents differ (bit for bit) from those `cache` formed them with (in a
+    /// viscoplastic step most of the body stays elastic and keeps its tangent). The result is the
     /// same, bit for bit, as a fresh assembly: every element matrix is formed by the same
     /// code from the same tangents and summed in the same order.
     pub fn assemble_b_c_b_cached(
@@ -181,7 +181,7 @@ impl Pattern {
         cache.summed = false;
         for e in 0..ne {
             let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
-            if c[qs.clone()] != cache.tangents[qs.clone()] {
+            if !same_bits(&c[qs.clone()], &cache.tangents[qs.clone()]) {
                 cache.ke[e] = element_matrix(disc, e, |q| &c[q]);
                 cache.tangents[qs.clone()].copy_from_slice(&c[qs]);
                 cache.recomputed += 1;
@@ -211,7 +211,7 @@ impl Pattern {
         cache.recomputed = 0;
         for e in 0..ne {
             let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
-            if c[qs.clone()] != cache.tangents[qs.clone()] {
+            if !same_bits(&c[qs.clone()], &cache.tangents[qs.clone()]) {
                 let ke = element_matrix(disc, e, |q| &c[q]);
                 let (new, old) = (ke.as_flattened(), cache.ke[e].as_flattened());
                 for &(pos, ab) in &self.scatter[self.scatter_ptr[e]..self.scatter_ptr[e + 1]] {
@@ -323,6 +323,18 @@ impl ElementCache {
     pub fn forget_sum(&mut self) {
         self.summed = false;
     }
+}
+
+/// Whether two runs of tangents are equal bit for bit (no early exit: vectorizable).
+#[inline]
+fn same_bits(a: &[Mat4], b: &[Mat4]) -> bool {
+    let mut diff = 0u64;
+    for (x, y) in a.iter().zip(b) {
+        for (u, v) in x.0.as_flattened().iter().zip(y.0.as_flattened()) {
+            diff |= u.to_bits() ^ v.to_bits();
+        }
+    }
+    diff == 0 && a.len() == b.len()
 }
 
 /// `k_e = sum_g w_g B_g^T C_g B_g` of element `e`, lower triangle (`a >= b`) filled.

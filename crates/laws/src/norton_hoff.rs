@@ -327,9 +327,14 @@ impl Law for NortonHoff {
                 "norton-hoff: non-finite stress from s0 = {s0:?}, deps = {deps:?}, dt = {dt}"
             )));
         }
+        let tangent = match over {
+            // below yield (most of the body): the elastic stiffness, from the moduli at hand
+            None if !(m == 1.0 && sy == 0.0) => isotropic_operator(g2, kappa3),
+            _ => closed_tangent(c, over.as_ref(), dt),
+        };
         Ok(LocalUpdate {
             sigma,
-            tangent: closed_tangent(c, over.as_ref(), dt),
+            tangent,
             iterations,
         })
     }
