@@ -634,7 +634,9 @@ impl DirectSolver {
             sigma_out.copy_from_slice(&state.sigma);
             return Ok(());
         }
-        // one pass: strains, local updates and the internal force while the stresses are hot
+        // one pass: strains, local updates and the internal force while the stresses are hot;
+        // points whose elastic trial stays below yield skip the law's update
+        let domain = law.elastic_domain(c, dt);
         self.f_int.fill(0.0);
         for e in 0..disc.elements.len() {
             let dofs = disc.element_dofs(e);
@@ -660,6 +662,14 @@ impl DirectSolver {
                 let q = QP_PER_ELEMENT * e + g;
                 let qp = &disc.qp[q];
                 let deps = Vec4(qp.strain(&due));
+                if let Some(dom) = &domain {
+                    if let Some(s1) = dom.update(&state.sigma[q], &deps) {
+                        qp.add_bt(&s1.0, qp.w, &mut fe);
+                        sigma_out[q] = s1;
+                        self.tangents[q] = dom.stiffness;
+                        continue;
+                    }
+                }
                 let up =
                     law.update(c, &state.sigma[q], &deps, dt)
                         .map_err(|f| StepFailure::Local {

@@ -60,6 +60,27 @@ pub struct LocalUpdate {
     pub iterations: u32,
 }
 
+/// The elastic domain of a law with a yield stress: wherever the trial stress
+/// `sigma_0 + C deps` has a von Mises stress of at most `yield_stress`, the update is that
+/// trial stress with the tangent `C` ([`Law::elastic_domain`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ElasticDomain {
+    /// The elastic stiffness `C` (MPa).
+    pub stiffness: Mat4,
+    /// The von Mises stress up to which a step stays elastic (MPa).
+    pub yield_stress: f64,
+}
+
+impl ElasticDomain {
+    /// The update of `s0` by `deps` when the step stays in the domain, `None` otherwise
+    /// (or when the trial stress is not finite).
+    #[inline]
+    pub fn update(&self, s0: &Vec4, deps: &Vec4) -> Option<Vec4> {
+        let trial = *s0 + self.stiffness.mul_vec(deps);
+        (trial.von_mises() <= self.yield_stress).then_some(trial)
+    }
+}
+
 /// Why a local update failed, with a suggested factor for the time step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LocalFailure {
@@ -125,6 +146,16 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     /// assemble one uniform tangent. Laws returning `Some` must also be
     /// [`Law::is_linear`].
     fn affine_update(&self, _c: &[f64], _dt: f64) -> Option<(Mat4, Mat4)> {
+        None
+    }
+
+    /// The elastic domain of laws with a yield stress (Norton-Hoff with `sY > 0`): inside
+    /// it [`Law::update`] is the elastic trial stress, so a solver can update most Gauss
+    /// points of an indentation with one 4x4 product and a von Mises check, calling
+    /// `update` only where the trial stress yields. `None` (the default) otherwise. Must
+    /// agree with `update` to round-off inside the domain (checked for every law by the
+    /// shared tests).
+    fn elastic_domain(&self, _c: &[f64], _dt: f64) -> Option<ElasticDomain> {
         None
     }
 

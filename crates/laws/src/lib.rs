@@ -14,7 +14,7 @@ pub mod norton_hoff;
 mod testing;
 
 pub use elastic::Elastic;
-pub use law::{Law, LocalFailure, LocalUpdate, ParamInfo};
+pub use law::{ElasticDomain, Law, LocalFailure, LocalUpdate, ParamInfo};
 pub use mandel::{Mat4, Vec4};
 pub use maxwell::Maxwell;
 pub use norton_hoff::NortonHoff;

@@ -5,7 +5,7 @@ use crate::LawError;
 use crate::elastic::{
     E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative, isotropic_operator,
 };
-use crate::law::{Law, LocalFailure, LocalUpdate, ParamInfo};
+use crate::law::{ElasticDomain, Law, LocalFailure, LocalUpdate, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 
 /// Norton-Hoff law, parameters `c = [E (MPa), nu (-), K (MPa s^(1/m)), m (-), sY (MPa)]`.
@@ -104,9 +104,9 @@ fn closed_tangent(c: &[f64], over: Option<&Overstress>, dt: f64) -> Mat4 {
     let kappa3 = e / (1.0 - 2.0 * nu);
     match over {
         Some(o) => {
-            let xm = o.x.powf(m);
-            let alpha = inv_2g + dt * 1.5 * xm / o.s_eq;
-            let beta = inv_2g + dt * 1.5 * (m / k) * o.x.powf(m - 1.0);
+            let xm1 = o.x.powf(m - 1.0);
+            let alpha = inv_2g + dt * 1.5 * (xm1 * o.x) / o.s_eq;
+            let beta = inv_2g + dt * 1.5 * (m / k) * xm1;
             let unit = o.n * (2.0f64 / 3.0).sqrt();
             let nn = unit.outer(&unit);
             isotropic_operator(1.0 / alpha, kappa3) + nn * (1.0 / beta - 1.0 / alpha)
@@ -205,6 +205,13 @@ fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalF
 impl Law for NortonHoff {
     fn name(&self) -> &'static str {
         "norton-hoff"
+    }
+    fn elastic_domain(&self, c: &[f64], _dt: f64) -> Option<ElasticDomain> {
+        let (e, nu, sy) = (c[0], c[1], c[SY]);
+        (sy > 0.0).then(|| ElasticDomain {
+            stiffness: isotropic_operator(e / (1.0 + nu), e / (1.0 - 2.0 * nu)),
+            yield_stress: sy,
+        })
     }
     fn params(&self) -> &'static [ParamInfo] {
         &PARAMS
@@ -403,6 +410,28 @@ mod tests {
             NortonHoff.flow(&C, &Vec4([0.0, 499.0, 0.0, 0.0])),
             Vec4::ZERO
         );
+    }
+
+    /// Inside the elastic domain the update is the elastic trial stress with the elastic
+    /// tangent; a step that crosses the yield surface leaves the domain; without a yield
+    /// stress there is no domain.
+    #[test]
+    fn elastic_domain_is_the_update_below_yield() {
+        let domain = NortonHoff.elastic_domain(&C, 0.1).unwrap();
+        assert_eq!(domain.yield_stress, 500.0);
+        let s0 = Vec4([100.0, -200.0, 50.0, 30.0]);
+        let small = Vec4([1e-4, -2e-4, 0.5e-4, 1e-4]);
+        let up = NortonHoff.update(&C, &s0, &small, 0.1).unwrap();
+        let trial = domain.update(&s0, &small).expect("an elastic step");
+        assert!((trial - up.sigma).max_abs() < 1e-12 * up.sigma.max_abs());
+        assert!((domain.stiffness - up.tangent).max_abs() < 1e-14 * up.tangent.max_abs());
+        assert_eq!(up.iterations, 0);
+        let large = small * 50.0;
+        assert!(domain.update(&s0, &large).is_none());
+        assert!(NortonHoff.update(&C, &s0, &large, 0.1).unwrap().iterations > 0);
+        let mut no_yield = C;
+        no_yield[SY] = 0.0;
+        assert!(NortonHoff.elastic_domain(&no_yield, 0.1).is_none());
     }
 
     /// The closed-form tangent is the inverse of `S + dt H` built from the Hessian.

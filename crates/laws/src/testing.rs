@@ -358,11 +358,39 @@ pub(crate) fn check_affine_update(p: &Profile, k: &Case) -> Result<(), TestCaseE
     Ok(())
 }
 
+/// (h) The elastic domain, where a law has one, is its update: inside it the trial stress
+/// `s0 + C deps` equals `update` to round-off and `C` is the update's tangent.
+pub(crate) fn check_elastic_domain(p: &Profile, k: &Case) -> Result<(), TestCaseError> {
+    let law = p.law;
+    let Some(domain) = law.elastic_domain(&k.c, k.dt) else {
+        return Ok(());
+    };
+    let up = law.update(&k.c, &k.s0, &k.deps, k.dt).map_err(fail)?;
+    let Some(s1) = domain.update(&k.s0, &k.deps) else {
+        // outside: the update leaves the elastic trial (it flows)
+        prop_assert!(
+            up.iterations > 0 || up.sigma.von_mises() > domain.yield_stress * (1.0 - 1e-12)
+        );
+        return Ok(());
+    };
+    let scale = up.sigma.max_abs().max(k.s0.max_abs()).max(1e-300);
+    let err = (s1 - up.sigma).max_abs() / scale;
+    report(law, "elastic domain", err, &s1.0, &up.sigma.0);
+    prop_assert!(
+        err < 1e-13,
+        "elastic trial off by {err:e}: {s1:?} vs {:?}",
+        up.sigma
+    );
+    let terr = (domain.stiffness - up.tangent).max_abs() / up.tangent.max_abs();
+    prop_assert!(terr < 1e-14, "elastic tangent off by {terr:e}");
+    Ok(())
+}
+
 fn fail(f: crate::law::LocalFailure) -> TestCaseError {
     TestCaseError::fail(f.to_string())
 }
 
-/// Generates the seven consistency tests (a)-(g) of this module for one
+/// Generates the eight consistency tests (a)-(h) of this module for one
 /// law: `law_consistency_tests!(module_name, PROFILE, params_strategy)` where `PROFILE`
 /// is a [`Profile`] and `params_strategy` a `Strategy<Value = Vec<f64>>` of admissible
 /// parameters. 256 random cases each ([`proptest_cases`]).
@@ -419,6 +447,12 @@ macro_rules! law_consistency_tests {
                 #[test]
                 fn affine_update_is_the_update(k in cases($profile, $params)) {
                     check_affine_update(&$profile, &k)?;
+                }
+
+                /// The system shall give an elastic domain where the update is elastic, if any.
+                #[test]
+                fn elastic_domain_is_the_update(k in cases($profile, $params)) {
+                    check_elastic_domain(&$profile, &k)?;
                 }
             }
         }
