@@ -11,7 +11,7 @@
 //! Cost (see `ConstrainedSystem`): affine laws (elasticity, Maxwell) converge in one solve
 //! per active set and start each step from the stored internal force; nonlinear laws start
 //! Newton from the displacement extrapolated in time while the depth keeps its rate
-//! (linearly, or quadratically when that predicted the last step better), and solve
+//! (by the polynomial of degree 1 to 3 that predicted the last step best), and solve
 //! the Newton systems by CG preconditioned with an earlier factorization, to a relative
 //! residual equal to Newton's own (Dembo, Eisenstat & Steihaug 1982), so that Newton stays
 //! quadratic with a fraction of the factorizations.
@@ -318,19 +318,21 @@ struct State {
     /// Internal force `sum_g w_g B^T sigma_g` of the converged state, all dofs (N).
     f_int: Vec<f64>,
     active: Vec<bool>,
-    /// Last step's displacement increment (all dofs), its length and its depth rate.
-    du_last: Vec<f64>,
-    dt_last: f64,
-    rate_last: f64,
-    /// The same for the step before (a zero `dt_prev`: none).
-    du_prev: Vec<f64>,
-    dt_prev: f64,
-    rate_prev: f64,
-    /// Whether the quadratic extrapolation predicted the last step better than the linear
-    /// one (false when only one of them was available).
-    quadratic: bool,
+    /// The last three steps' displacement increments (all dofs), lengths and depth rates,
+    /// the latest first (a zero length: no such step).
+    past: [Increment; 3],
+    /// The degree (1 to 3) of the time extrapolation that predicted the last step best.
+    order: usize,
     /// Punch depth of the state (mm).
     depth: f64,
+}
+
+/// One past step of a [`State`] (`du` empty where it is never read).
+#[derive(Clone, Debug, PartialEq)]
+struct Increment {
+    du: Vec<f64>,
+    dt: f64,
+    rate: f64,
 }
 
 impl State {
@@ -343,13 +345,17 @@ impl State {
             sigma: vec![Vec4::ZERO; model.disc.n_qp()],
             f_int: vec![0.0; model.disc.n_dofs()],
             active: vec![false; nc],
-            du_last: vec![0.0; model.disc.n_dofs()],
-            dt_last: 0.0,
-            rate_last: 0.0,
-            du_prev: vec![0.0; model.disc.n_dofs()],
-            dt_prev: 0.0,
-            rate_prev: 0.0,
-            quadratic: false,
+            // steps of zero length: only the latest increment is ever read (times 0)
+            past: std::array::from_fn(|k| Increment {
+                du: if k == 0 {
+                    vec![0.0; model.disc.n_dofs()]
+                } else {
+                    Vec::new()
+                },
+                dt: 0.0,
+                rate: 0.0,
+            }),
+            order: 1,
             depth: depth0,
         }
     }
@@ -369,9 +375,12 @@ pub struct Checkpoint {
 impl Checkpoint {
     /// Bytes held by the saved state.
     pub fn bytes(&self) -> usize {
-        // u, f_int, du_last and du_prev per dof; stress per Gauss point; active flag and more
-        // per candidate
-        32 * self.state.u.len() + 32 * self.state.sigma.len() + 17 * self.state.active.len()
+        // u and f_int per dof, the past increments kept; stress per Gauss point; active flag
+        // and more per candidate
+        16 * self.state.u.len()
+            + 8 * self.state.past.iter().map(|p| p.du.len()).sum::<usize>()
+            + 32 * self.state.sigma.len()
+            + 17 * self.state.active.len()
     }
 }
 
@@ -708,43 +717,48 @@ impl DirectSolver {
         let mut active = state.active.clone();
         // predictor: activate nodes that the new depth makes penetrate, with the surface
         // displacement extrapolated from the last increment
-        let ratio = if state.dt_last > 0.0 {
-            dt / state.dt_last
-        } else {
-            0.0
-        };
+        let last = &state.past[0];
+        let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         let zdof = |k: usize| 2 * model.candidates[k] + 1;
         for k in 0..nc {
-            if !active[k] && gap(model, k, depth, &u) - ratio * state.du_last[zdof(k)] < 0.0 {
+            if !active[k] && gap(model, k, depth, &u) - ratio * last.du[zdof(k)] < 0.0 {
                 active[k] = true;
             }
         }
         let affine = law.affine_update(c, dt);
         // a nonlinear law starts Newton from the displacement extrapolated in time, while
-        // the depth keeps its rate (within a segment): linearly from the last increment, or
-        // quadratically from the last two when that predicted the last step better (in
-        // R2's settled creep and relaxation this predicts 5-15 times closer, one Newton
-        // iteration fewer per step late in the hold). Affine laws converge in one solve
-        // from anywhere and keep their cheap first pass.
+        // the depth keeps its rate (within a segment): by the polynomial of degree 1 to 3
+        // through the last states that predicted the last step best (in R2's settled creep
+        // and relaxation the higher degrees predict 5-15 times closer: a Newton iteration
+        // fewer per step). Affine laws converge in one solve from anywhere and keep their
+        // cheap first pass.
         let rate = if dt > 0.0 {
             (depth - state.depth) / dt
         } else {
             0.0
         };
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
-        let linear = affine.is_none() && ratio > 0.0 && same(rate, state.rate_last);
-        let parabola = linear && state.dt_prev > 0.0 && same(rate, state.rate_prev);
-        let extrapolate = |du_last: f64, du_prev: f64, quadratic: bool| {
-            extrapolated_increment(
-                [du_last, du_prev],
-                [dt, state.dt_last, state.dt_prev],
-                quadratic,
-            )
+        // the highest degree the segment's past steps allow (0: no extrapolation)
+        let degrees = if affine.is_some() {
+            0
+        } else {
+            state
+                .past
+                .iter()
+                .take_while(|p| p.dt > 0.0 && same(rate, p.rate))
+                .count()
         };
-        if linear {
-            let quadratic = state.quadratic && parabola;
-            for ((x, &a), &b) in u.iter_mut().zip(&state.du_last).zip(&state.du_prev) {
-                *x += extrapolate(a, b, quadratic);
+        let h = state.past.each_ref().map(|p| p.dt);
+        let weights: [[f64; 3]; 3] = std::array::from_fn(|k| extrapolation_weights(dt, h, k + 1));
+        // the increment predicted by degree `d` at dof `i` (reads the `d` latest steps only)
+        let predict = |d: usize, i: usize| -> f64 {
+            let w = &weights[d - 1];
+            (0..d).map(|k| w[k] * state.past[k].du[i]).sum()
+        };
+        if degrees > 0 {
+            let d = state.order.min(degrees);
+            for (i, x) in u.iter_mut().enumerate() {
+                *x += predict(d, i);
             }
         }
         let mut seen: Vec<Vec<bool>> = vec![active.clone()];
@@ -820,17 +834,29 @@ impl DirectSolver {
                 if violations.is_empty() && converged {
                     let rec = self.record(model, &active, &u, t1, dt, depth, iterations, changes);
                     let f_scale = state.f_scale.max(fmax);
-                    let du_last: Vec<f64> = u.iter().zip(&state.u).map(|(a, b)| a - b).collect();
-                    // hindsight: which extrapolation would have predicted this step better
-                    let quadratic = parabola && {
-                        let (mut e_lin, mut e_quad) = (0.0, 0.0);
-                        for ((&d, &a), &b) in du_last.iter().zip(&state.du_last).zip(&state.du_prev)
-                        {
-                            e_lin += (d - extrapolate(a, b, false)).powi(2);
-                            e_quad += (d - extrapolate(a, b, true)).powi(2);
+                    let du: Vec<f64> = u.iter().zip(&state.u).map(|(a, b)| a - b).collect();
+                    // hindsight: the degree that would have predicted this step best
+                    let mut err = [0.0f64; 3];
+                    if degrees > 1 {
+                        for (i, &d) in du.iter().enumerate() {
+                            for (k, e) in err.iter_mut().enumerate().take(degrees) {
+                                *e += (d - predict(k + 1, i)).powi(2);
+                            }
                         }
-                        e_quad < e_lin
+                    }
+                    let order = (1..=degrees.max(1))
+                        .min_by(|&a, &b| err[a - 1].total_cmp(&err[b - 1]))
+                        .unwrap_or(1);
+                    // the older increments serve the extrapolation of nonlinear laws only
+                    let older = |p: &Increment| Increment {
+                        du: if affine.is_none() {
+                            p.du.clone()
+                        } else {
+                            Vec::new()
+                        },
+                        ..*p
                     };
+                    let (p0, p1) = (older(&state.past[0]), older(&state.past[1]));
                     let next = State {
                         t: t1,
                         f_scale,
@@ -838,13 +864,8 @@ impl DirectSolver {
                         sigma,
                         f_int: self.f_int.clone(),
                         active,
-                        du_last,
-                        dt_last: dt,
-                        rate_last: rate,
-                        du_prev: state.du_last.clone(),
-                        dt_prev: state.dt_last,
-                        rate_prev: state.rate_last,
-                        quadratic,
+                        past: [Increment { du, dt, rate }, p0, p1],
+                        order,
                         depth,
                     };
                     return Ok((next, rec));
@@ -955,20 +976,29 @@ impl DirectSolver {
 }
 
 /// Gap `phi(r_k) - U - u_z,k` of candidate k (mm).
-/// The increment over the next step `dt[0]` predicted from the last two increments
-/// `du = [du_last, du_prev]` over `dt[1]` and `dt[2]`: linear (`ratio du_last`), or with
-/// `quadratic` the Newton form of the parabola through the last three states,
-/// `ratio du_last + curve (du_last / dt_last - du_prev / dt_prev)` with
-/// `curve = dt (dt + dt_last) / (dt_last + dt_prev)`: exact for a displacement quadratic
-/// in time, whatever the three step lengths.
-fn extrapolated_increment(du: [f64; 2], dt: [f64; 3], quadratic: bool) -> f64 {
-    let linear = dt[0] / dt[1] * du[0];
-    if quadratic {
-        let curve = dt[0] * (dt[0] + dt[1]) / (dt[1] + dt[2]);
-        linear + curve * (du[0] / dt[1] - du[1] / dt[2])
-    } else {
-        linear
-    }
+/// Weights `w` of the increment `w_1 du_1 + w_2 du_2 + w_3 du_3` predicted over the next
+/// step `dt` from the last increments `du_1` (latest), `du_2`, `du_3` of lengths
+/// `h = [h_1, h_2, h_3]`: the polynomial of degree `order` (1 to 3) in time through the
+/// last `order + 1` states, in Lagrange form with nodes `0, -h_1, -h_1 - h_2, ...` (the
+/// current time at 0). Exact for a displacement polynomial of that degree, whatever the
+/// step lengths; unused steps get weight 0.
+fn extrapolation_weights(dt: f64, h: [f64; 3], order: usize) -> [f64; 3] {
+    let tau = [0.0, -h[0], -h[0] - h[1], -h[0] - h[1] - h[2]];
+    let lagrange: [f64; 4] = std::array::from_fn(|k| {
+        if k > order {
+            return 0.0;
+        }
+        (0..=order)
+            .filter(|&j| j != k)
+            .map(|j| (dt - tau[j]) / (tau[k] - tau[j]))
+            .product()
+    });
+    // u_(n-k) = u_n - du_1 - ... - du_k, and the weights sum to 1
+    [
+        -(lagrange[1] + lagrange[2] + lagrange[3]),
+        -(lagrange[2] + lagrange[3]),
+        -lagrange[3],
+    ]
 }
 
 fn gap(model: &Model, k: usize, depth: f64, u: &[f64]) -> f64 {
@@ -992,28 +1022,35 @@ pub fn nodal_pressures(model: &Model, rec: &StepRecord) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::extrapolated_increment;
+    use super::extrapolation_weights;
 
-    /// Linear extrapolation is exact for a displacement linear in time, the quadratic one
-    /// for a parabola, with unequal steps (a cut step between two full ones).
+    /// The extrapolation of degree p is exact for polynomials of degree p and misses
+    /// degree p + 1, with unequal steps (a cut step among full ones).
     #[test]
-    fn extrapolation_is_exact_for_polynomials_of_its_order() {
-        let (t0, t1, t2, t3) = (0.3, 0.55, 0.675, 0.925);
-        let (dt, dt_last, dt_prev) = (t3 - t2, t2 - t1, t1 - t0);
-        let line = |t: f64| 2.0 - 0.7 * t;
-        let lin = extrapolated_increment(
-            [line(t2) - line(t1), line(t1) - line(t0)],
-            [dt, dt_last, dt_prev],
-            false,
-        );
-        assert!((lin - (line(t3) - line(t2))).abs() < 1e-15);
-        let parabola = |t: f64| 2.0 - 0.7 * t + 3.1 * t * t;
-        let du = [parabola(t2) - parabola(t1), parabola(t1) - parabola(t0)];
-        let want = parabola(t3) - parabola(t2);
-        let quad = extrapolated_increment(du, [dt, dt_last, dt_prev], true);
-        assert!((quad - want).abs() < 1e-14, "{quad} vs {want}");
-        // the linear prediction misses the curvature: dt (dt + dt_last) c ≈ 0.29
-        let miss = extrapolated_increment(du, [dt, dt_last, dt_prev], false) - want;
-        assert!(miss.abs() > 0.1, "{miss}");
+    fn extrapolation_is_exact_for_polynomials_of_its_degree() {
+        let times = [0.1, 0.3, 0.55, 0.675, 0.925];
+        let (t_next, t) = (times[4], &times[..4]);
+        let h = [t[3] - t[2], t[2] - t[1], t[1] - t[0]];
+        let dt = t_next - t[3];
+        for order in 1..=3 {
+            let w = extrapolation_weights(dt, h, order);
+            for degree in 0..=order + 1 {
+                let u = |x: f64| {
+                    (0..=degree)
+                        .map(|k| (1.0 + k as f64) * x.powi(k as i32))
+                        .sum::<f64>()
+                };
+                let du = [u(t[3]) - u(t[2]), u(t[2]) - u(t[1]), u(t[1]) - u(t[0])];
+                let got = w[0] * du[0] + w[1] * du[1] + w[2] * du[2];
+                let err = (got - (u(t_next) - u(t[3]))).abs();
+                if degree <= order {
+                    assert!(err < 1e-13, "order {order}, degree {degree}: {err:e}");
+                } else {
+                    assert!(err > 1e-3, "order {order} fits degree {degree}: {err:e}");
+                }
+            }
+            // only the steps the degree uses carry weight
+            assert!(w[order..].iter().all(|&x| x == 0.0), "{w:?}");
+        }
     }
 }
