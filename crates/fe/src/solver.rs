@@ -202,12 +202,47 @@ impl Layout {
     /// `b = P^T L^-T L^-1 P b` with the factor values `l`; `x` (length n), `tmp` (the
     /// longest pattern) and `dots` (the widest supernode) are scratch.
     fn solve(&self, l: &[f64], b: &mut [f64], x: &mut [f64], tmp: &mut [f64], dots: &mut [f64]) {
-        for (xi, &f) in x.iter_mut().zip(&self.fwd) {
+        // one dispatch per solve: the whole sweep is compiled for the detected instruction set
+        self.arch.dispatch(Solve {
+            layout: self,
+            l,
+            b,
+            x,
+            tmp,
+            dots,
+        });
+    }
+}
+
+/// [`Layout::solve`] as one SIMD-dispatched operation.
+struct Solve<'a> {
+    layout: &'a Layout,
+    l: &'a [f64],
+    b: &'a mut [f64],
+    x: &'a mut [f64],
+    tmp: &'a mut [f64],
+    dots: &'a mut [f64],
+}
+
+impl WithSimd for Solve<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let Solve {
+            layout: this,
+            l,
+            b,
+            x,
+            tmp,
+            dots,
+        } = self;
+        for (xi, &f) in x.iter_mut().zip(&this.fwd) {
             *xi = b[f];
         }
         // forward, L y = P b: the diagonal block, then its column block times its unknowns
-        for sn in &self.supernodes {
-            let (nc, pat) = (sn.ncols, &self.pattern[sn.p0..sn.p1]);
+        for sn in &this.supernodes {
+            let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
             let nr = nc + pat.len();
             let block = &l[sn.offset..sn.offset + nr * nc];
             let xs = &mut x[sn.start..sn.start + nc];
@@ -221,19 +256,14 @@ impl Layout {
             }
             let t = &mut tmp[..pat.len()];
             t.fill(0.0);
-            self.arch.dispatch(BlockProduct {
-                block: &block[nc..],
-                ld: nr,
-                x: xs,
-                t,
-            });
+            block_product(simd, &block[nc..], nr, xs, t);
             for (&r, ti) in pat.iter().zip(t.iter()) {
                 x[r] -= ti;
             }
         }
         // backward, L^T z = y: gather the pattern's unknowns, then dot products
-        for sn in self.supernodes.iter().rev() {
-            let (nc, pat) = (sn.ncols, &self.pattern[sn.p0..sn.p1]);
+        for sn in this.supernodes.iter().rev() {
+            let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
             let nr = nc + pat.len();
             let block = &l[sn.offset..sn.offset + nr * nc];
             let t = &mut tmp[..pat.len()];
@@ -241,12 +271,7 @@ impl Layout {
                 *ti = x[r];
             }
             let d = &mut dots[..nc];
-            self.arch.dispatch(BlockTransposeProduct {
-                block: &block[nc..],
-                ld: nr,
-                t,
-                d,
-            });
+            block_transpose_product(simd, &block[nc..], nr, t, d);
             let xs = &mut x[sn.start..sn.start + nc];
             for j in (0..nc).rev() {
                 let col = &block[j * nr..(j + 1) * nr];
@@ -257,7 +282,7 @@ impl Layout {
                 xs[j] = v / col[j];
             }
         }
-        for (bi, &i) in b.iter_mut().zip(&self.inv) {
+        for (bi, &i) in b.iter_mut().zip(&this.inv) {
             *bi = x[i];
         }
     }
@@ -265,105 +290,81 @@ impl Layout {
 
 /// `t += A x` for the column-major block `A` of `t.len()` rows and `x.len()` columns, with
 /// leading dimension `ld` (`block[j * ld + i] = A_ij`): four columns per pass over `t`.
-struct BlockProduct<'a> {
-    block: &'a [f64],
-    ld: usize,
-    x: &'a [f64],
-    t: &'a mut [f64],
-}
-
-impl WithSimd for BlockProduct<'_> {
-    type Output = ();
-
-    #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) {
-        let BlockProduct { block, ld, x, t } = self;
-        let m = t.len();
-        let col = |j: usize| &block[j * ld..j * ld + m];
-        let mut quads = x.chunks_exact(4);
-        let mut j = 0;
-        for xq in quads.by_ref() {
-            let (c0, c0t) = S::as_simd_f64s(col(j));
-            let (c1, c1t) = S::as_simd_f64s(col(j + 1));
-            let (c2, c2t) = S::as_simd_f64s(col(j + 2));
-            let (c3, c3t) = S::as_simd_f64s(col(j + 3));
-            let [x0, x1, x2, x3] = [xq[0], xq[1], xq[2], xq[3]].map(|v| simd.splat_f64s(v));
-            let (th, tt) = S::as_mut_simd_f64s(t);
-            for ((((ti, a0), a1), a2), a3) in th.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
-                let v = simd.mul_add_e_f64s(*a0, x0, *ti);
-                let v = simd.mul_add_e_f64s(*a1, x1, v);
-                let v = simd.mul_add_e_f64s(*a2, x2, v);
-                *ti = simd.mul_add_e_f64s(*a3, x3, v);
-            }
-            for (i, ti) in tt.iter_mut().enumerate() {
-                *ti += c0t[i] * xq[0] + c1t[i] * xq[1] + c2t[i] * xq[2] + c3t[i] * xq[3];
-            }
-            j += 4;
+#[inline(always)]
+fn block_product<S: Simd>(simd: S, block: &[f64], ld: usize, x: &[f64], t: &mut [f64]) {
+    let m = t.len();
+    let col = |j: usize| &block[j * ld..j * ld + m];
+    let mut quads = x.chunks_exact(4);
+    let mut j = 0;
+    for xq in quads.by_ref() {
+        let (c0, c0t) = S::as_simd_f64s(col(j));
+        let (c1, c1t) = S::as_simd_f64s(col(j + 1));
+        let (c2, c2t) = S::as_simd_f64s(col(j + 2));
+        let (c3, c3t) = S::as_simd_f64s(col(j + 3));
+        let [x0, x1, x2, x3] = [xq[0], xq[1], xq[2], xq[3]].map(|v| simd.splat_f64s(v));
+        let (th, tt) = S::as_mut_simd_f64s(t);
+        for ((((ti, a0), a1), a2), a3) in th.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+            let v = simd.mul_add_e_f64s(*a0, x0, *ti);
+            let v = simd.mul_add_e_f64s(*a1, x1, v);
+            let v = simd.mul_add_e_f64s(*a2, x2, v);
+            *ti = simd.mul_add_e_f64s(*a3, x3, v);
         }
-        for &xj in quads.remainder() {
-            let (c, ct) = S::as_simd_f64s(col(j));
-            let xs = simd.splat_f64s(xj);
-            let (th, tt) = S::as_mut_simd_f64s(t);
-            for (ti, a) in th.iter_mut().zip(c) {
-                *ti = simd.mul_add_e_f64s(*a, xs, *ti);
-            }
-            for (ti, a) in tt.iter_mut().zip(ct) {
-                *ti += a * xj;
-            }
-            j += 1;
+        for (i, ti) in tt.iter_mut().enumerate() {
+            *ti += c0t[i] * xq[0] + c1t[i] * xq[1] + c2t[i] * xq[2] + c3t[i] * xq[3];
         }
+        j += 4;
+    }
+    for &xj in quads.remainder() {
+        let (c, ct) = S::as_simd_f64s(col(j));
+        let xs = simd.splat_f64s(xj);
+        let (th, tt) = S::as_mut_simd_f64s(t);
+        for (ti, a) in th.iter_mut().zip(c) {
+            *ti = simd.mul_add_e_f64s(*a, xs, *ti);
+        }
+        for (ti, a) in tt.iter_mut().zip(ct) {
+            *ti += a * xj;
+        }
+        j += 1;
     }
 }
 
-/// `d = A^T t` for the block of [`BlockProduct`] (`d.len()` columns): four columns per
+/// `d = A^T t` for the block of [`block_product`] (`d.len()` columns): four columns per
 /// pass over `t`.
-struct BlockTransposeProduct<'a> {
-    block: &'a [f64],
-    ld: usize,
-    t: &'a [f64],
-    d: &'a mut [f64],
-}
-
-impl WithSimd for BlockTransposeProduct<'_> {
-    type Output = ();
-
-    #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) {
-        let BlockTransposeProduct { block, ld, t, d } = self;
-        let m = t.len();
-        let col = |j: usize| &block[j * ld..j * ld + m];
-        let (th, tt) = S::as_simd_f64s(t);
-        let zero = simd.splat_f64s(0.0);
-        let mut quads = d.chunks_exact_mut(4);
-        let mut j = 0;
-        for dq in quads.by_ref() {
-            let (c0, c0t) = S::as_simd_f64s(col(j));
-            let (c1, c1t) = S::as_simd_f64s(col(j + 1));
-            let (c2, c2t) = S::as_simd_f64s(col(j + 2));
-            let (c3, c3t) = S::as_simd_f64s(col(j + 3));
-            let mut acc = [zero; 4];
-            for ((((tv, a0), a1), a2), a3) in th.iter().zip(c0).zip(c1).zip(c2).zip(c3) {
-                acc[0] = simd.mul_add_e_f64s(*a0, *tv, acc[0]);
-                acc[1] = simd.mul_add_e_f64s(*a1, *tv, acc[1]);
-                acc[2] = simd.mul_add_e_f64s(*a2, *tv, acc[2]);
-                acc[3] = simd.mul_add_e_f64s(*a3, *tv, acc[3]);
-            }
-            for (k, (dk, ct)) in dq.iter_mut().zip([c0t, c1t, c2t, c3t]).enumerate() {
-                let tail: f64 = ct.iter().zip(tt).map(|(a, b)| a * b).sum();
-                *dk = simd.reduce_sum_f64s(acc[k]) + tail;
-            }
-            j += 4;
+#[inline(always)]
+fn block_transpose_product<S: Simd>(simd: S, block: &[f64], ld: usize, t: &[f64], d: &mut [f64]) {
+    let m = t.len();
+    let col = |j: usize| &block[j * ld..j * ld + m];
+    let (th, tt) = S::as_simd_f64s(t);
+    let zero = simd.splat_f64s(0.0);
+    let mut quads = d.chunks_exact_mut(4);
+    let mut j = 0;
+    for dq in quads.by_ref() {
+        let (c0, c0t) = S::as_simd_f64s(col(j));
+        let (c1, c1t) = S::as_simd_f64s(col(j + 1));
+        let (c2, c2t) = S::as_simd_f64s(col(j + 2));
+        let (c3, c3t) = S::as_simd_f64s(col(j + 3));
+        let mut acc = [zero; 4];
+        for ((((tv, a0), a1), a2), a3) in th.iter().zip(c0).zip(c1).zip(c2).zip(c3) {
+            acc[0] = simd.mul_add_e_f64s(*a0, *tv, acc[0]);
+            acc[1] = simd.mul_add_e_f64s(*a1, *tv, acc[1]);
+            acc[2] = simd.mul_add_e_f64s(*a2, *tv, acc[2]);
+            acc[3] = simd.mul_add_e_f64s(*a3, *tv, acc[3]);
         }
-        for dj in quads.into_remainder() {
-            let (c, ct) = S::as_simd_f64s(col(j));
-            let mut acc = zero;
-            for (tv, a) in th.iter().zip(c) {
-                acc = simd.mul_add_e_f64s(*a, *tv, acc);
-            }
+        for (k, (dk, ct)) in dq.iter_mut().zip([c0t, c1t, c2t, c3t]).enumerate() {
             let tail: f64 = ct.iter().zip(tt).map(|(a, b)| a * b).sum();
-            *dj = simd.reduce_sum_f64s(acc) + tail;
-            j += 1;
+            *dk = simd.reduce_sum_f64s(acc[k]) + tail;
         }
+        j += 4;
+    }
+    for dj in quads.into_remainder() {
+        let (c, ct) = S::as_simd_f64s(col(j));
+        let mut acc = zero;
+        for (tv, a) in th.iter().zip(c) {
+            acc = simd.mul_add_e_f64s(*a, *tv, acc);
+        }
+        let tail: f64 = ct.iter().zip(tt).map(|(a, b)| a * b).sum();
+        *dj = simd.reduce_sum_f64s(acc) + tail;
+        j += 1;
     }
 }
 
