@@ -267,6 +267,25 @@ pub struct Timing {
     pub cg_iterations: usize,
 }
 
+impl std::fmt::Display for Timing {
+    /// `F factorizations, C CG iterations; local .. ms, assembly .. ms, factorization .. ms,
+    /// solve .. ms, total .. ms`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} factorizations, {} CG iterations; local {:.1} ms, assembly {:.1} ms, \
+             factorization {:.1} ms, solve {:.1} ms, total {:.1} ms",
+            self.factorizations,
+            self.cg_iterations,
+            1e3 * self.local,
+            1e3 * self.assembly,
+            1e3 * self.factorization,
+            1e3 * self.solve,
+            1e3 * self.total
+        )
+    }
+}
+
 /// A step failure the driver reacts to by cutting the step.
 #[derive(Clone, Debug, PartialEq)]
 enum StepFailure {

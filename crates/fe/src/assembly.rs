@@ -384,6 +384,23 @@ mod tests {
     use indentify_laws::elastic::isotropic_stiffness;
     use indentify_mesh::CylinderMesher;
 
+    /// A graded 4 x 3 cylinder with its supports: the discretization and the pattern.
+    fn small_problem() -> (Discretization, Pattern) {
+        let m = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 4,
+            nz: 3,
+            grading_r: 1.2,
+            grading_z: 1.1,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&m);
+        let pat = Pattern::new(&disc, &DofMap::cylinder(&m));
+        (disc, pat)
+    }
+
     #[test]
     fn rigid_translation_along_z_is_in_the_kernel() {
         let m = CylinderMesher {
@@ -423,19 +440,7 @@ mod tests {
     /// columns both occur.
     #[test]
     fn products_and_constraints_match_the_dense_matrix() {
-        let m = CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 4,
-            nz: 3,
-            grading_r: 1.2,
-            grading_z: 1.1,
-        }
-        .build()
-        .unwrap();
-        let disc = Discretization::new(&m);
-        let dofs = DofMap::cylinder(&m);
-        let pat = Pattern::new(&disc, &dofs);
+        let (disc, pat) = small_problem();
         let n = pat.n;
         let tangents: Vec<Mat4> = (0..disc.n_qp())
             .map(|q| isotropic_stiffness(100.0 + q as f64, 0.2 + 1e-3 * q as f64))
@@ -504,19 +509,7 @@ mod tests {
     /// elements whose tangents changed.
     #[test]
     fn cached_assembly_recomputes_only_changed_elements() {
-        let m = CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 4,
-            nz: 3,
-            grading_r: 1.2,
-            grading_z: 1.1,
-        }
-        .build()
-        .unwrap();
-        let disc = Discretization::new(&m);
-        let dofs = DofMap::cylinder(&m);
-        let pat = Pattern::new(&disc, &dofs);
+        let (disc, pat) = small_problem();
         let mut tangents = vec![isotropic_stiffness(100.0, 0.3); disc.n_qp()];
         let mut cache = ElementCache::default();
         let (mut fresh, mut cached) = (vec![0.0; pat.nnz()], vec![0.0; pat.nnz()]);
@@ -540,19 +533,7 @@ mod tests {
     /// right after `forget_sum`.
     #[test]
     fn delta_assembly_tracks_fresh_assemblies() {
-        let m = CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 4,
-            nz: 3,
-            grading_r: 1.2,
-            grading_z: 1.1,
-        }
-        .build()
-        .unwrap();
-        let disc = Discretization::new(&m);
-        let dofs = DofMap::cylinder(&m);
-        let pat = Pattern::new(&disc, &dofs);
+        let (disc, pat) = small_problem();
         let mut tangents = vec![isotropic_stiffness(100.0, 0.3); disc.n_qp()];
         let mut cache = ElementCache::default();
         let (mut fresh, mut delta) = (vec![0.0; pat.nnz()], vec![f64::NAN; pat.nnz()]);
