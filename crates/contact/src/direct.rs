@@ -38,9 +38,9 @@ pub struct SolverOptions {
     pub max_cuts: u32,
     /// Relative residual below which the active set is checked (and corrected) before full
     /// convergence: semi-smooth Newton on equilibrium and complementarity together. The
-    /// default 1e-2 corrects a wrong set early (R2: 298 Newton iterations with 1e-6, 284
-    /// with 1e-2, same solution); a step converges only with its set verified at
-    /// `residual_tol`.
+    /// default 1e-2 corrects a wrong set early (R2 with the degree-2 predictor: 298 Newton
+    /// iterations with 1e-6, 284 with 1e-2, same solution); a step converges only with its
+    /// set verified at `residual_tol`.
     pub active_set_check_tol: f64,
     /// Relative tolerance on penetration (times the current depth) before a node is activated.
     pub gap_tol: f64,
@@ -597,6 +597,8 @@ impl DirectSolver {
                         traj.steps.push(rec);
                     }
                     Err(fail) => {
+                        // a failed step may have assembled non-finite tangents
+                        self.system.forget_assembly();
                         if level >= opts.max_cuts {
                             traj.timing.total += start.elapsed().as_secs_f64();
                             return Err(ContactError::StepFailed {
@@ -757,15 +759,22 @@ impl DirectSolver {
             0.0
         };
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
-        // the highest degree the segment's past steps allow (0: no extrapolation)
+        // the highest degree the segment's past steps allow (0: no extrapolation; 1 for a
+        // step more than twice the last one, after a cut, where the higher degrees' weights
+        // grow like (dt / h_1)^degree)
         let degrees = if affine.is_some() {
             0
         } else {
-            state
+            let kept = state
                 .past
                 .iter()
-                .take_while(|p| p.dt > 0.0 && same(rate, p.rate))
-                .count()
+                .take_while(|p| p.dt > 0.0 && p.du.len() == u.len() && same(rate, p.rate))
+                .count();
+            if dt > 2.0 * last.dt {
+                kept.min(1)
+            } else {
+                kept
+            }
         };
         let h = state.past.each_ref().map(|p| p.dt);
         let weights: [[f64; 3]; 3] = std::array::from_fn(|k| extrapolation_weights(dt, h, k + 1));
@@ -994,7 +1003,6 @@ impl DirectSolver {
     }
 }
 
-/// Gap `phi(r_k) - U - u_z,k` of candidate k (mm).
 /// Weights `w` of the increment `w_1 du_1 + w_2 du_2 + w_3 du_3` predicted over the next
 /// step `dt` from the last increments `du_1` (latest), `du_2`, `du_3` of lengths
 /// `h = [h_1, h_2, h_3]`: the polynomial of degree `order` (1 to 3) in time through the
@@ -1020,6 +1028,7 @@ fn extrapolation_weights(dt: f64, h: [f64; 3], order: usize) -> [f64; 3] {
     ]
 }
 
+/// Gap `phi(r_k) - U - u_z,k` of candidate k (mm).
 fn gap(model: &Model, k: usize, depth: f64, u: &[f64]) -> f64 {
     model.candidate_profile[k] - depth - u[2 * model.candidates[k] + 1]
 }

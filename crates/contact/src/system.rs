@@ -116,7 +116,15 @@ impl ConstrainedSystem {
     ) -> bool {
         let t0 = std::time::Instant::now();
         let fresh = self.new_key(reuse);
-        if fresh {
+        if fresh && reuse.is_some() {
+            // a new key changes every element: a full sum, which the next delta restarts from
+            model.pattern.assemble_b_c_b_cached(
+                &model.disc,
+                tangents,
+                &mut self.elements,
+                &mut self.k_values,
+            );
+        } else if fresh {
             model.pattern.assemble_b_c_b_delta(
                 &model.disc,
                 tangents,
@@ -217,12 +225,20 @@ impl ConstrainedSystem {
         Ok(())
     }
 
+    /// Makes the next assembly sum every element afresh instead of adding differences to
+    /// the last matrix: what follows then depends on the tangents alone (call it at the
+    /// start of any computation that must not depend on earlier ones, and after a failure
+    /// that may have left non-finite values behind).
+    pub fn forget_assembly(&mut self) {
+        self.elements.forget_sum();
+    }
+
     /// Makes the next [`ConstrainedSystem::prepare_inexact`] factorize and the next
     /// assembly sum every element afresh: a time step that starts with this depends on its
     /// initial state alone, not on the factor or the assembly updates an earlier step left
     /// behind, so that replaying it from a checkpoint repeats it bit for bit.
     pub fn forget_preconditioner(&mut self) {
-        self.elements.forget_sum();
+        self.forget_assembly();
         self.factor_ok = self.factor_ok && self.k_key.is_some();
         self.last_pcg = 0;
     }
@@ -506,9 +522,10 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 const MAX_PCG: usize = 6;
 
 /// An inexact solve that needed this many CG iterations makes the next one factorize:
-/// the old factor has drifted too far from the tangent (R2, 283 Newton iterations: 41
-/// factorizations and 579 CG iterations; 3 gives 55 and 429, 5 with at most 8 CG
-/// iterations 36 and 690, 6 30 and 844, all within the machine's noise in time).
+/// the old factor has drifted too far from the tangent (R2 with the degree-2 predictor,
+/// 283 Newton iterations: 41 factorizations and 579 CG iterations; 3 gives 55 and 429, 5
+/// with at most 8 CG iterations 36 and 690, 6 30 and 844, all within the machine's noise
+/// in time).
 const REFRESH_PCG: usize = 4;
 
 /// Largest number of prescribed dofs handled by the capacitance mode.

@@ -5,8 +5,8 @@
 //! scatter per supernode: at FE sizes (a few thousand equations, supernodes of a few
 //! columns) faer's general kernels spend more on dispatch than on arithmetic. The block
 //! products take four columns per pass in the widest SIMD the CPU offers (pulp's runtime
-//! dispatch: AVX2 with FMA on x86-64-v3, SSE2 otherwise), so results may differ in the
-//! last bits between CPUs, as faer's factorization itself does.
+//! dispatch: AVX2 with FMA on x86-64-v3, plain scalar code otherwise), so results may
+//! differ in the last bits between CPUs, as faer's factorization itself does.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SparseColMatRef;
@@ -433,5 +433,13 @@ mod tests {
         }
         assert!(chol.layout.supernodes.len() > 1);
         assert!(chol.layout.supernodes.iter().any(|s| s.ncols > 1));
+        // the block products ran four-column passes with a remainder over SIMD-long columns
+        assert!(
+            chol.layout
+                .supernodes
+                .iter()
+                .any(|s| s.ncols > 4 && s.ncols % 4 != 0 && s.p1 - s.p0 >= 8),
+            "no supernode exercises the four-column kernel"
+        );
     }
 }

@@ -292,7 +292,9 @@ impl Law for NortonHoff {
     /// increasing, so the root is unique). Otherwise `s_eq1 = sY + K x` with `x > 0` the
     /// root of `K x + 3G dt x^m = s_eq_tr - sY`, solved by a safeguarded Newton in
     /// `ln x` (see the bracket in the source). The tangent is the closed form of
-    /// [`Law::tangent`] at the converged state, the exact derivative of this map.
+    /// [`Law::tangent`] at the converged state, the exact derivative of this map (below
+    /// yield the elastic stiffness of [`Law::elastic_domain`], formed from the moduli at
+    /// hand: `tangent`'s to round-off).
     ///
     /// # Errors
     /// [`LocalFailure`] on non-finite input or a negative `dt`, or when the scalar
