@@ -583,6 +583,30 @@ mod tests {
     /// The capacitance solve equals the direct one to round-off, for growing and shrinking
     /// sets of prescribed dofs, and needs one factorization for all of them.
     /// A graded unit cylinder under R0's cone.
+    /// `x1` equals the reference `x2` to `tol` of its largest entry, and holds the
+    /// prescribed values `xbar` exactly on the equations `sys` constrains.
+    fn assert_same_solution(
+        x1: &[f64],
+        x2: &[f64],
+        xbar: &[f64],
+        sys: &ConstrainedSystem,
+        tol: f64,
+        what: &str,
+    ) {
+        let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for e in 0..x2.len() {
+            assert!(
+                (x1[e] - x2[e]).abs() <= tol * scale,
+                "{what}: x[{e}] {} vs {}",
+                x1[e],
+                x2[e]
+            );
+            if sys.is_constrained(e) {
+                assert_eq!(x1[e], xbar[e], "{what}: prescribed x[{e}]");
+            }
+        }
+    }
+
     fn small_model(nr: usize, nz: usize) -> Model {
         let mesh = CylinderMesher {
             radius: 1.0,
@@ -628,18 +652,14 @@ mod tests {
             let (mut x1, mut x2) = (b0.clone(), b0.clone());
             reusable.solve_dirichlet(&model, &mut x1, &xbar);
             direct.solve_dirichlet(&model, &mut x2, &xbar);
-            let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for e in 0..n {
-                assert!(
-                    (x1[e] - x2[e]).abs() <= 1e-10 * scale,
-                    "{k_active} active: x[{e}] {} vs {}",
-                    x1[e],
-                    x2[e]
-                );
-                if direct.is_constrained(e) {
-                    assert_eq!(x1[e], xbar[e]);
-                }
-            }
+            assert_same_solution(
+                &x1,
+                &x2,
+                &xbar,
+                &direct,
+                1e-10,
+                &format!("{k_active} active"),
+            );
         }
         assert!(reusable.capacitance);
         assert_eq!(reusable.factorizations(), 1);
@@ -699,18 +719,7 @@ mod tests {
                 fallback,
                 "soft {soft}: {its} its"
             );
-            let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for e in 0..n {
-                assert!(
-                    (x1[e] - x2[e]).abs() <= 1e-7 * scale,
-                    "soft {soft}: x[{e}] {} vs {}",
-                    x1[e],
-                    x2[e]
-                );
-                if direct.is_constrained(e) {
-                    assert_eq!(x1[e], xbar[e]);
-                }
-            }
+            assert_same_solution(&x1, &x2, &xbar, &direct, 1e-7, &format!("soft {soft}"));
         }
         assert_eq!(inexact.factorizations(), 2);
         assert!(inexact.pcg_iterations > 0);

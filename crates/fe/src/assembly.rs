@@ -180,12 +180,7 @@ impl Pattern {
         cache.recomputed = 0;
         cache.summed = false;
         for e in 0..ne {
-            let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
-            if !same_bits(&c[qs.clone()], &cache.tangents[qs.clone()]) {
-                cache.ke[e] = element_matrix(disc, e, |q| &c[q]);
-                cache.tangents[qs.clone()].copy_from_slice(&c[qs]);
-                cache.recomputed += 1;
-            }
+            cache.refresh(disc, c, e);
             self.scatter_add(e, &cache.ke[e], values);
         }
     }
@@ -210,16 +205,11 @@ impl Pattern {
         }
         cache.recomputed = 0;
         for e in 0..ne {
-            let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
-            if !same_bits(&c[qs.clone()], &cache.tangents[qs.clone()]) {
-                let ke = element_matrix(disc, e, |q| &c[q]);
-                let (new, old) = (ke.as_flattened(), cache.ke[e].as_flattened());
+            if let Some(old) = cache.refresh(disc, c, e) {
+                let (new, old) = (cache.ke[e].as_flattened(), old.as_flattened());
                 for &(pos, ab) in &self.scatter[self.scatter_ptr[e]..self.scatter_ptr[e + 1]] {
                     values[pos as usize] += new[ab as usize] - old[ab as usize];
                 }
-                cache.ke[e] = ke;
-                cache.tangents[qs.clone()].copy_from_slice(&c[qs]);
-                cache.recomputed += 1;
             }
         }
     }
@@ -316,6 +306,20 @@ pub struct ElementCache {
 }
 
 impl ElementCache {
+    /// Re-forms element `e`'s matrix if its nine tangents in `c` differ (bit for bit) from
+    /// those it was formed with; returns the previous matrix then.
+    #[inline]
+    fn refresh(&mut self, disc: &Discretization, c: &[Mat4], e: usize) -> Option<[[f64; 16]; 16]> {
+        let qs = QP_PER_ELEMENT * e..QP_PER_ELEMENT * (e + 1);
+        if same_bits(&c[qs.clone()], &self.tangents[qs.clone()]) {
+            return None;
+        }
+        let old = std::mem::replace(&mut self.ke[e], element_matrix(disc, e, |q| &c[q]));
+        self.tangents[qs.clone()].copy_from_slice(&c[qs]);
+        self.recomputed += 1;
+        Some(old)
+    }
+
     /// Makes the next [`Pattern::assemble_b_c_b_delta`] sum every element afresh: its result
     /// then depends on the tangents alone, not on the assemblies before (call it where a
     /// computation must repeat bit for bit from a saved state, or when the values were

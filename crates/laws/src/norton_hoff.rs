@@ -113,7 +113,7 @@ fn closed_tangent(c: &[f64], over: Option<&Overstress>, dt: f64) -> Mat4 {
         }
         // Maxwell limit m = 1, sY = 0 at s = 0: H = 3P/(2K).
         None if m == 1.0 && sy == 0.0 => isotropic_operator(1.0 / (inv_2g + 1.5 * dt / k), kappa3),
-        None => isotropic_operator(1.0 / inv_2g, kappa3),
+        None => isotropic_operator(e / (1.0 + nu), kappa3),
     }
 }
 
@@ -206,11 +206,11 @@ impl Law for NortonHoff {
     fn name(&self) -> &'static str {
         "norton-hoff"
     }
-    fn elastic_domain(&self, c: &[f64], _dt: f64) -> Option<ElasticDomain> {
-        let (e, nu, sy) = (c[0], c[1], c[SY]);
-        (sy > 0.0).then(|| ElasticDomain {
-            stiffness: isotropic_operator(e / (1.0 + nu), e / (1.0 - 2.0 * nu)),
-            yield_stress: sy,
+    fn elastic_domain(&self, c: &[f64], dt: f64) -> Option<ElasticDomain> {
+        // below yield the tangent is the update's own (sY > 0: not the Maxwell limit)
+        (c[SY] > 0.0).then(|| ElasticDomain {
+            stiffness: closed_tangent(c, None, dt),
+            yield_stress: c[SY],
         })
     }
     fn params(&self) -> &'static [ParamInfo] {
@@ -293,8 +293,7 @@ impl Law for NortonHoff {
     /// root of `K x + 3G dt x^m = s_eq_tr - sY`, solved by a safeguarded Newton in
     /// `ln x` (see the bracket in the source). The tangent is the closed form of
     /// [`Law::tangent`] at the converged state, the exact derivative of this map (below
-    /// yield the elastic stiffness of [`Law::elastic_domain`], formed from the moduli at
-    /// hand: `tangent`'s to round-off).
+    /// yield the elastic stiffness, also that of [`Law::elastic_domain`]).
     ///
     /// # Errors
     /// [`LocalFailure`] on non-finite input or a negative `dt`, or when the scalar
@@ -336,14 +335,9 @@ impl Law for NortonHoff {
                 "norton-hoff: non-finite stress from s0 = {s0:?}, deps = {deps:?}, dt = {dt}"
             )));
         }
-        let tangent = match over {
-            // below yield (most of the body): the elastic stiffness, from the moduli at hand
-            None if !(m == 1.0 && sy == 0.0) => isotropic_operator(g2, kappa3),
-            _ => closed_tangent(c, over.as_ref(), dt),
-        };
         Ok(LocalUpdate {
             sigma,
-            tangent,
+            tangent: closed_tangent(c, over.as_ref(), dt),
             iterations,
         })
     }
