@@ -208,13 +208,7 @@ impl ConstrainedSystem {
             return Ok(());
         }
         let t0 = std::time::Instant::now();
-        model
-            .pattern
-            .constrain(&self.k_values, &self.constrained, &mut self.k_constrained);
-        self.factor_for = None;
-        self.base = false;
-        self.columns.clear();
-        self.schur_set.clear();
+        self.form_constrained(model);
         self.factor_ok = false;
         self.chol.factorize(&self.k_constrained)?;
         self.factor_ok = true;
@@ -223,6 +217,18 @@ impl ConstrainedSystem {
         }
         self.seconds[1] += t0.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Forms the constrained matrix of the current tangent and active set (direct mode):
+    /// the cached direct factor and the capacitance columns no longer belong to it.
+    fn form_constrained(&mut self, model: &Model) {
+        model
+            .pattern
+            .constrain(&self.k_values, &self.constrained, &mut self.k_constrained);
+        self.factor_for = None;
+        self.base = false;
+        self.columns.clear();
+        self.schur_set.clear();
     }
 
     /// Makes the next assembly sum every element afresh instead of adding differences to
@@ -258,14 +264,8 @@ impl ConstrainedSystem {
             return self.factorize(model);
         }
         let t0 = std::time::Instant::now();
-        model
-            .pattern
-            .constrain(&self.k_values, &self.constrained, &mut self.k_constrained);
+        self.form_constrained(model);
         self.capacitance = false;
-        self.factor_for = None;
-        self.base = false;
-        self.columns.clear();
-        self.schur_set.clear();
         self.pcg = true;
         self.seconds[1] += t0.elapsed().as_secs_f64();
         Ok(())
