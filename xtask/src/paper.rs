@@ -736,6 +736,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         TargetCost => "target",
         RoundOff => "round-off",
         MaxIterations => "max-iter",
+        Interrupted => "interrupted",
         Stalled(_) => "stalled",
     }
 }

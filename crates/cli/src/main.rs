@@ -2,14 +2,9 @@
 //! frictionless rigid punch) from RON configurations. Parsing and dispatch only.
 
 mod commands;
-mod config;
-mod data;
-mod figures;
-mod history;
+mod interrupt;
 mod log;
-mod output;
-mod report;
-mod solve;
+mod print;
 
 use std::process::ExitCode;
 
@@ -114,6 +109,25 @@ enum Command {
                             indentify identify my-test.ron --data curve.csv --free E,eta --fixed nu=0.3 --method lbfgsb\n  \
                             indentify identify examples/r2-norton-hoff.ron --max-iter 5 --out out/r2 && indentify identify examples/r2-norton-hoff.ron --out out/r2 --resume")]
     Identify(commands::identify::Args),
+    /// Identify every indent of a manifest in parallel (a map); shards, Slurm arrays, merge.
+    #[command(
+        after_help = "The manifest is a CSV file with a header: `id` (unique; it names \
+                            the folder OUT/indents/<id>/), `config` (optional with --config), \
+                            `data` (a record or curve file), `test` (of a multi-test file), `x`, \
+                            `y` (positions, for the maps) and any configuration path as a \
+                            column (law.E, identify.params.E.start, ...). Relative paths are \
+                            relative to the manifest. Each indent's result.json, fit.csv, \
+                            history.csv and status.json are written into OUT/indents/<id>/; \
+                            OUT/results.csv and OUT/maps/ (heat maps and histograms of every \
+                            free parameter and R², SVG and PNG) are rebuilt at the end. A rerun \
+                            skips finished indents; one indent's failure never stops the batch.\n\n\
+                            Examples:\n  \
+                            indentify batch map/manifest.csv --config map/base.ron --out out/map\n  \
+                            indentify batch map/manifest.csv --config map/base.ron --out out/map --shard 1/4\n  \
+                            indentify batch slurm map/manifest.csv --config map/base.ron --out /scratch/map --array 16 --time 02:00:00\n  \
+                            indentify batch merge /scratch/map"
+    )]
+    Batch(commands::batch::Args),
 }
 
 fn main() -> ExitCode {
@@ -126,6 +140,7 @@ fn main() -> ExitCode {
         Command::Gradient(args) => commands::gradient::run(args),
         Command::GradientCheck(args) => commands::gradient_check::run(args),
         Command::Identify(args) => commands::identify::run(args),
+        Command::Batch(args) => commands::batch::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

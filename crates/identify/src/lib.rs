@@ -71,7 +71,7 @@ pub use data::ForceRecord;
 pub use identifiability::Identifiability;
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
-    IdentifyConfig, IdentifyResult, IterationRecord, Method, MultiStart, ParamOutcome,
+    Cancel, IdentifyConfig, IdentifyResult, IterationRecord, Method, MultiStart, ParamOutcome,
     StopCriteria, StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};

@@ -123,6 +123,32 @@ pub struct IdentifyConfig {
     pub initial_step: f64,
     /// Compute the [`Identifiability`] summary at the end (one sensitivity solve).
     pub identifiability: bool,
+    /// Raised from another thread (a signal handler, a user interface), it ends the run
+    /// after the iteration in progress with [`StopReason::Interrupted`].
+    pub cancel: Cancel,
+}
+
+/// A flag that asks a running identification to stop after its current iteration. Clones
+/// share the flag; two flags compare equal when they are the same flag.
+#[derive(Clone, Debug, Default)]
+pub struct Cancel(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl Cancel {
+    /// Asks the run to stop.
+    pub fn raise(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// Whether a stop was asked.
+    pub fn is_raised(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+impl PartialEq for Cancel {
+    fn eq(&self, other: &Cancel) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 impl IdentifyConfig {
@@ -134,6 +160,7 @@ impl IdentifyConfig {
             stop: StopCriteria::default(),
             initial_step: 0.5,
             identifiability: true,
+            cancel: Cancel::default(),
         }
     }
 
@@ -226,6 +253,8 @@ pub enum StopReason {
     RoundOff,
     /// The iteration limit.
     MaxIterations,
+    /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
+    Interrupted,
     /// No decrease could be found (line search or LM damping exhausted, or the optimizer
     /// library gave up); the message says why.
     Stalled(String),
@@ -252,6 +281,7 @@ impl std::fmt::Display for StopReason {
             StopReason::TargetCost => write!(f, "target cost reached"),
             StopReason::RoundOff => write!(f, "cost at the solver's round-off"),
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
+            StopReason::Interrupted => write!(f, "interrupted"),
             StopReason::Stalled(why) => write!(f, "stalled: {why}"),
         }
     }
@@ -446,6 +476,8 @@ pub(crate) struct Monitor<'a, 'p> {
     pub reason: RefCell<Option<StopReason>>,
     /// BFGS updates skipped because the curvature condition failed.
     pub skipped_updates: Cell<usize>,
+    /// The run's stop request.
+    cancel: Cancel,
 }
 
 impl<'a, 'p> Monitor<'a, 'p> {
@@ -490,6 +522,8 @@ impl<'a, 'p> Monitor<'a, 'p> {
             Some(StopReason::RelativeDecrease)
         } else if rec.iteration >= s.max_iterations {
             Some(StopReason::MaxIterations)
+        } else if self.cancel.is_raised() {
+            Some(StopReason::Interrupted)
         } else {
             None
         };
@@ -672,6 +706,7 @@ fn run(
         prev_cost: Cell::new(f64::NAN),
         reason: RefCell::new(None),
         skipped_updates: Cell::new(0),
+        cancel: config.cancel.clone(),
     };
     let outcome = match config.method {
         Method::Bfgs => run_bfgs(&monitor, &y0),

@@ -70,6 +70,7 @@
 
 mod error;
 mod fit;
+mod map;
 mod markdown;
 mod model;
 mod plot;
@@ -77,6 +78,7 @@ mod units;
 
 pub use error::ReportError;
 pub use fit::FitQuality;
+pub use map::{MapData, MapFigure};
 pub use model::{
     BoundHit, Convergence, Correlation, Curves, FigureLink, IterationRecord, NameValue, Parameter,
     PreprocessingStep, Report, Source,

@@ -74,7 +74,7 @@ impl Default for FigureSize {
 }
 
 impl FigureSize {
-    fn check(self) -> Result<(), ReportError> {
+    pub(crate) fn check(self) -> Result<(), ReportError> {
         let ok = |v: u32| (100..=4000).contains(&v);
         if ok(self.width) && ok(self.height) {
             Ok(())
@@ -145,7 +145,7 @@ impl Report {
     }
 }
 
-fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
+pub(crate) fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
     let mut out = Vec::new();
     let png_err = |e: png::EncodingError| ReportError::Png(e.to_string());
     {
@@ -160,7 +160,7 @@ fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
 }
 
 /// Registers DejaVu Sans as "sans-serif" once per process.
-fn ensure_font() -> Result<(), ReportError> {
+pub(crate) fn ensure_font() -> Result<(), ReportError> {
     static FONT: OnceLock<bool> = OnceLock::new();
     let ok = *FONT.get_or_init(|| {
         register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular()).is_ok()

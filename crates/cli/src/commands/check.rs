@@ -6,8 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::commands::init::annotated;
-use crate::config;
+use indentify_study::ConfigSource;
+use indentify_study::identify::prepare;
+use indentify_study::templates::annotated;
 
 /// Arguments of `indentify check`.
 #[derive(Debug, clap::Args)]
@@ -28,8 +29,8 @@ pub struct Args {
 /// An invalid configuration or a closed standard output.
 pub fn run(args: &Args) -> Result<()> {
     let name = args.config.display().to_string();
-    let cfg = config::load(&args.config, &args.sets)?;
-    let prepared = cfg.prepare(&name)?;
+    let cfg = ConfigSource::Path(args.config.clone()).load(&args.sets)?;
+    let prepared = prepare(&cfg, &name)?;
     let schedule = &prepared.schedule;
     let mut header = vec![format!("Resolved from `{name}` by `indentify check`.")];
     if !args.sets.is_empty() {
@@ -45,7 +46,7 @@ pub fn run(args: &Args) -> Result<()> {
         cfg.punch.describe(),
         prepared.mesher.describe(),
         schedule.n_steps(),
-        crate::report::sig(schedule.t.last().copied().unwrap_or(0.0), 6)
+        indentify_study::format::sig(schedule.t.last().copied().unwrap_or(0.0), 6)
             .parse::<f64>()
             .unwrap_or(0.0)
     );

@@ -1,24 +1,15 @@
-//! `indentify gradient`: the least-squares misfit `J` between a configuration's simulated
-//! force and a measured curve, and its exact gradient `dJ/dc` by the discrete adjoint, with
-//! the wall time of the forward run and of the adjoint sweep.
-//!
-//! `J = 1/2 sum_i (F_i - F_i^exp)^2` over the schedule times `t_i` of the configuration
-//! (index 0, the stress-free start, included; every weight 1), `F^exp` being the data
-//! interpolated linearly at `t_i` (the cost of `indentify_identify::Problem`).
+//! `indentify gradient`: prints `J` and `dJ/dc` of `indentify_study::gradient` as a table
+//! or one JSON object.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
-use indentify_adjoint::{Adjoint, Gradient};
-use indentify_contact::DirectSolver;
-use indentify_identify::Problem;
+use anyhow::Result;
+use indentify_study::ConfigSource;
+use indentify_study::format::{Named, bytes, gradient_unit, table};
+use indentify_study::gradient::{self, GradientOptions};
 use serde::Serialize;
 
-use crate::config;
-use crate::data;
-use crate::report::{self, Named, gradient_unit, table};
-use crate::solve::{ensure_differentiable, forward, param_names};
+use crate::print;
 
 /// Arguments of `indentify gradient`.
 #[derive(Debug, clap::Args)]
@@ -78,113 +69,34 @@ struct JsonReport {
 /// law not differentiable at the configured parameters, a failing forward run, or a
 /// non-finite gradient.
 pub fn run(args: &Args) -> Result<()> {
-    let name = args.config.display().to_string();
-    let cfg = config::load(&args.config, &args.sets)?;
-    let (law, params) = cfg.law.build()?;
-    ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))?;
-    let mut cfg = cfg;
-    if let (Some(d), Some(path)) = (&mut cfg.data, &args.data) {
-        d.file = crate::commands::identify::absolute(path);
-    }
-    let prepared = cfg.prepare(&name)?;
-    let curve = match (&prepared.measured, &args.data) {
-        // the measured record: its preprocessed force at its own times (the schedule's)
-        (Some(m), _) => data::Curve {
-            name: m.path.display().to_string(),
-            t: m.record.t.clone(),
-            h: Some(m.record.h.clone()),
-            f: m.record.f.clone(),
-        },
-        (None, Some(path)) => data::read_curve(path)?,
-        (None, None) => bail!(
-            "no data for `{name}`: give --data CURVE.csv, or a `data` section in the \
-             configuration"
-        ),
-    };
-    let schedule = prepared.schedule;
-    let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
-    curve.check_covers(t0, t1, &name)?;
-    let mut opts = cfg.solver.options(true);
-    if let Some(n) = args.checkpoint {
-        opts.record_fields = false;
-        opts.checkpoint_every = n as usize;
-    }
-    let problem = Problem::new(
-        prepared.model,
-        law,
-        schedule,
-        &curve.record()?,
-        None,
-        opts.clone(),
-    )
-    .with_context(|| format!("cannot compare `{}` with `{name}`", curve.name))?;
-    let model = &problem.model;
-
-    let mut solver = DirectSolver::new(model)?;
-    let start = Instant::now();
-    let traj = forward(
-        &mut solver,
-        model,
-        law,
-        &params,
-        &problem.schedule,
-        &opts,
-        &name,
-    )?;
-    let forward_seconds = start.elapsed().as_secs_f64();
-    let j = problem.cost_of(&traj.forces());
-    let rho = problem.dj_df(&traj);
-    let mut adjoint = Adjoint::new(model)?;
-    let grad: Gradient = if args.checkpoint.is_some() {
-        adjoint.gradient_replayed(
-            model,
-            law,
-            &params,
-            &traj,
-            &rho,
-            &mut solver,
-            &problem.schedule,
-            &opts,
-        )
-    } else {
-        adjoint.gradient(model, law, &params, &traj, &rho)
-    }
-    .with_context(|| format!("the adjoint sweep of `{name}` failed"))?;
-    let names = param_names(law);
-    if let Some(k) = grad.dj_dc.iter().position(|g| !g.is_finite()) {
-        bail!(
-            "the adjoint gave dJ/d{} = {} at {}: no finite gradient there",
-            names[k],
-            grad.dj_dc[k],
-            report::assignments(&names, &params)
-        );
-    }
-    let full_bytes = (traj.steps.len() + 1) * (8 * model.disc.n_dofs() + 32 * model.disc.n_qp());
-    let n_times = problem.schedule.t.len();
-    let ratio = grad.seconds / forward_seconds.max(1e-12);
-
+    let g = gradient::run(&GradientOptions {
+        config: ConfigSource::Path(args.config.clone()),
+        sets: args.sets.clone(),
+        data: args.data.clone(),
+        checkpoint: args.checkpoint.map(|n| n as usize),
+    })?;
+    let names = &g.names;
+    let ratio = g.adjoint_seconds / g.forward_seconds.max(1e-12);
     if args.json {
-        let infos = law.params();
-        return report::print_json(&JsonReport {
-            law: law.name(),
-            config: name,
-            data: curve.name.clone(),
-            params: Named::new(names.iter().copied().zip(params.iter().copied())),
-            units: Named::new(infos.iter().map(|i| (i.name, i.unit))),
-            j,
-            gradient: Named::new(names.iter().copied().zip(grad.dj_dc.iter().copied())),
-            forward_seconds,
-            adjoint_seconds: grad.seconds,
+        return print::print_json(&JsonReport {
+            law: g.law,
+            config: g.config.clone(),
+            data: g.data.clone(),
+            params: Named::new(names.iter().copied().zip(g.params.iter().copied())),
+            units: Named::new(names.iter().copied().zip(g.units.iter().copied())),
+            j: g.j,
+            gradient: Named::new(names.iter().copied().zip(g.gradient.iter().copied())),
+            forward_seconds: g.forward_seconds,
+            adjoint_seconds: g.adjoint_seconds,
             adjoint_to_forward: ratio,
-            steps: traj.steps.len(),
-            schedule_times: n_times,
-            factorizations: grad.factorizations,
-            forward_factorizations: traj.timing.factorizations,
-            recorded_bytes: traj.recorded_bytes(),
+            steps: g.steps,
+            schedule_times: g.schedule_times,
+            factorizations: g.factorizations,
+            forward_factorizations: g.forward_factorizations,
+            recorded_bytes: g.recorded_bytes,
             checkpoint_every: args.checkpoint,
         });
     }
-
     let mut rows = vec![vec![
         "parameter".to_string(),
         "unit".into(),
@@ -192,26 +104,26 @@ pub fn run(args: &Args) -> Result<()> {
         "dJ/dc".into(),
         "unit of dJ/dc".into(),
     ]];
-    for ((info, v), g) in law.params().iter().zip(&params).zip(&grad.dj_dc) {
+    for k in 0..names.len() {
         rows.push(vec![
-            info.name.into(),
-            info.unit.into(),
-            v.to_string(),
-            format!("{g:.10e}"),
-            gradient_unit(info.unit),
+            names[k].into(),
+            g.units[k].into(),
+            g.params[k].to_string(),
+            format!("{:.10e}", g.gradient[k]),
+            gradient_unit(g.units[k]),
         ]);
     }
-    let sub_steps = traj.steps.len() + 1 - n_times;
+    let sub_steps = g.steps + 1 - g.schedule_times;
     let memory = match args.checkpoint {
         Some(n) => format!(
             "recorded {} (states every {n} schedule steps; storing every step would take {}); \
              the adjoint time includes replaying the segments",
-            report::bytes(traj.recorded_bytes()),
-            report::bytes(full_bytes)
+            bytes(g.recorded_bytes),
+            bytes(g.full_bytes)
         ),
         None => format!(
             "recorded {} (the fields of every step; --checkpoint N bounds it)",
-            report::bytes(traj.recorded_bytes())
+            bytes(g.recorded_bytes)
         ),
     };
     let sets: String = args.sets.iter().map(|s| format!(" --set {s}")).collect();
@@ -221,20 +133,30 @@ pub fn run(args: &Args) -> Result<()> {
          ({rows_n} rows, t in [{a}, {b}] s)\n  \
          J = 1/2 sum_i (F_i - F_exp,i)^2 over the {n_times} schedule times (weights 1) = {j:.10e} N^2\n\n\
          {table}\n\n  \
-         forward {forward_seconds:.3} s ({fwd_fact} factorizations), adjoint sweep {adj:.3} s \
-         ({adj_fact} factorizations): adjoint / forward = {ratio:.2}\n  \
+         forward {fwd:.3} s ({fwd_fact} factorization{fwd_s}), adjoint sweep {adj:.3} s \
+         ({adj_fact} factorization{adj_s}): adjoint / forward = {ratio:.2}\n  \
          {memory}\n",
-        data = curve.name,
+        name = g.config,
+        data = g.data,
         plural = if sub_steps == 1 { "" } else { "s" },
-        law_name = law.name(),
-        steps = traj.steps.len(),
-        rows_n = curve.t.len(),
-        a = curve.span().0,
-        b = curve.span().1,
+        law_name = g.law,
+        steps = g.steps,
+        rows_n = g.data_rows,
+        a = g.data_span.0,
+        b = g.data_span.1,
+        n_times = g.schedule_times,
+        j = g.j,
         table = table(&rows, "  ").trim_end(),
-        fwd_fact = traj.timing.factorizations,
-        adj = grad.seconds,
-        adj_fact = grad.factorizations,
+        fwd = g.forward_seconds,
+        fwd_fact = g.forward_factorizations,
+        fwd_s = if g.forward_factorizations == 1 {
+            ""
+        } else {
+            "s"
+        },
+        adj = g.adjoint_seconds,
+        adj_fact = g.factorizations,
+        adj_s = if g.factorizations == 1 { "" } else { "s" },
     );
-    report::print_text(&text)
+    print::print_text(&text)
 }

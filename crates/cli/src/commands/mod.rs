@@ -1,5 +1,6 @@
 //! The subcommands of `indentify`, one module each.
 
+pub mod batch;
 pub mod check;
 pub mod gradient;
 pub mod gradient_check;

@@ -2,14 +2,11 @@
 //! force-depth curve (CSV) and, on request, the fields of every step (VTU + PVD).
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
-use indentify_contact::{ContactError, DirectSolver, Trajectory};
-use indentify_identify::multiplicative_noise;
-
-use crate::config;
-use crate::output;
+use anyhow::{Result, bail};
+use indentify_study::ConfigSource;
+use indentify_study::output;
+use indentify_study::simulate::{self, SimulateOptions};
 
 /// Arguments of `indentify simulate`.
 #[derive(Debug, clap::Args)]
@@ -53,106 +50,52 @@ pub struct Args {
 /// An invalid configuration, an output that cannot be written, or a step that fails even
 /// after cutting (the curve up to the last converged step is still written).
 pub fn run(args: &Args) -> Result<()> {
-    let start = Instant::now();
-    let name = args.config.display().to_string();
-    if let Some(a) = args.noise {
-        if !(0.0..1.0).contains(&a) {
-            bail!("--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)");
-        }
+    let o = simulate::run(&SimulateOptions {
+        config: ConfigSource::Path(args.config.clone()),
+        sets: args.sets.clone(),
+        noise: args.noise.map(|a| (a, args.seed)),
+        out: args.out.clone(),
+        vtu: args.vtu.clone(),
+    })?;
+    if args.out.is_none() {
+        output::write_curve(None, &o.rows)?;
     }
-    let cfg = config::load(&args.config, &args.sets)?;
-    let (law, params) = cfg.law.build()?;
-    let prepared = cfg.prepare(&name)?;
-    let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
-    let measured = prepared.measured;
-    let (n_nodes, n_elements) = (model.mesh.nodes.len(), model.mesh.elements.len());
-    let opts = cfg.solver.options(args.vtu.is_some());
-    // fail on unwritable outputs before solving
-    if let Some(p) = &args.out {
-        std::fs::File::create(p)
-            .with_context(|| format!("cannot create the curve file `{}`", p.display()))?;
-    }
-    if let Some(dir) = &args.vtu {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the VTU directory `{}`", dir.display()))?;
-    }
-    let mut solver = DirectSolver::new(&model)?;
-
-    let (traj, failure): (Trajectory, Option<String>) =
-        match solver.run(&model, law, &params, &schedule, &opts) {
-            Ok(t) => (t, None),
-            Err(ContactError::StepFailed {
-                step,
-                t,
-                cuts,
-                reason,
-                partial,
-            }) => (
-                *partial,
-                Some(format!(
-                    "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
-                )),
-            ),
-            Err(e) => return Err(e).context(format!("cannot simulate `{name}`")),
-        };
-
-    let mut rows = output::curve(&schedule, &traj);
-    if let Some(a) = args.noise {
-        let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
-        for (r, f) in rows
-            .iter_mut()
-            .zip(multiplicative_noise(&forces, a, args.seed))
-        {
-            r.f = f;
-        }
-    }
-    output::write_curve(args.out.as_deref(), &rows)?;
-    let vtu_states = match &args.vtu {
-        Some(dir) => Some((
-            dir,
-            output::write_vtu_series(dir, &model, law, &params, &traj)?,
-        )),
-        None => None,
-    };
-
+    let rows = &o.rows;
     // first row of largest force
     let peak = rows
         .iter()
         .copied()
         .fold(rows[0], |best, r| if r.f > best.f { r } else { best });
-    let params_text: Vec<String> = law
-        .params()
-        .iter()
-        .zip(&params)
-        .map(|(i, v)| format!("{} = {v}", i.name))
-        .collect();
-    let tm = &traj.timing;
+    let tm = &o.trajectory.timing;
     tracing::info!(
         "indentify simulate {name}\n  \
          law {} ({}), punch {}\n  \
-         mesh: {} ({n_nodes} nodes, {n_elements} elements)\n  \
+         mesh: {} ({} nodes, {} elements)\n  \
          {} of {} schedule steps ({} sub-steps from cuts), {} Newton iterations, {} factorizations\n  \
          max force {:.6} N at t = {} s, h = {} mm (contact radius {:.6} mm)\n  \
          wall time {:.3} s (solver {:.3} s: local {:.3}, assembly {:.3}, factorization {:.3}, solve {:.3})",
-        law.name(),
-        params_text.join(", "),
-        cfg.punch.describe(),
-        mesher.describe(),
+        o.law,
+        o.params.join(", "),
+        o.punch,
+        o.mesher.describe(),
+        o.size.0,
+        o.size.1,
         rows.len() - 1,
-        schedule.n_steps(),
-        traj.steps.len() - (rows.len() - 1),
-        traj.total_iterations(),
+        o.schedule_steps,
+        o.trajectory.steps.len() - (rows.len() - 1),
+        o.trajectory.total_iterations(),
         tm.factorizations,
         peak.f,
         peak.t,
         peak.h,
         peak.a,
-        start.elapsed().as_secs_f64(),
+        o.seconds,
         tm.total,
         tm.local,
         tm.assembly,
         tm.factorization,
         tm.solve,
+        name = o.config,
     );
     let curve_to = args
         .out
@@ -167,20 +110,21 @@ pub fn run(args: &Args) -> Result<()> {
             args.seed
         );
     }
-    if let Some(m) = &measured {
+    if let Some(m) = &o.measured {
         tracing::info!("  depth history from the data: {}", m.summary());
     }
     tracing::info!("  curve ({} row{plural}) written to {curve_to}", rows.len());
-    if let Some((dir, n)) = vtu_states {
+    if let (Some(dir), Some(n)) = (&args.vtu, o.vtu_states) {
         tracing::info!(
             "  {n} states written to `{}` (open steps.pvd in ParaView)",
             dir.display()
         );
     }
-    if let Some(why) = failure {
+    if let Some(why) = o.failure {
         bail!(
-            "the simulation of `{name}` stopped: {why}; the curve up to t = {} s was written \
+            "the simulation of `{}` stopped: {why}; the curve up to t = {} s was written \
              (try smaller steps in `history.segments` or a larger `solver.max_cuts`)",
+            o.config,
             rows.last().map_or(0.0, |r| r.t)
         );
     }

@@ -111,7 +111,7 @@ impl ParamSetting {
 }
 
 /// The optimizers, as named in configs (`Bfgs`) and on the command line (`bfgs`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum MethodName {
     /// BFGS with Armijo backtracking (the paper's algorithm); bounds by projection.
     #[default]
@@ -125,6 +125,37 @@ pub enum MethodName {
 }
 
 impl MethodName {
+    /// Every method, in the order of the documentation.
+    pub const ALL: [MethodName; 4] = [
+        MethodName::Bfgs,
+        MethodName::Lbfgs,
+        MethodName::Lbfgsb,
+        MethodName::Lm,
+    ];
+
+    /// The command-line name (`bfgs`, `lbfgs`, `lbfgsb`, `lm`).
+    pub fn cli_name(self) -> &'static str {
+        match self {
+            MethodName::Bfgs => "bfgs",
+            MethodName::Lbfgs => "lbfgs",
+            MethodName::Lbfgsb => "lbfgsb",
+            MethodName::Lm => "lm",
+        }
+    }
+
+    /// Parses a command-line name, case-insensitively.
+    ///
+    /// # Errors
+    /// An unknown name, with the allowed ones.
+    pub fn parse(text: &str) -> Result<MethodName> {
+        MethodName::ALL
+            .into_iter()
+            .find(|m| m.cli_name().eq_ignore_ascii_case(text.trim()))
+            .ok_or_else(|| {
+                anyhow::anyhow!("unknown method `{text}`: expected one of bfgs, lbfgs, lbfgsb, lm")
+            })
+    }
+
     /// The library's method.
     pub fn method(self, memory: usize) -> Method {
         match self {
@@ -428,6 +459,7 @@ impl IdentifySection {
             stop,
             initial_step: s.initial_step,
             identifiability: s.identifiability,
+            cancel: Default::default(),
         })
     }
 

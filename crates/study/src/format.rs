@@ -1,9 +1,7 @@
-//! Report helpers shared by the commands: aligned text tables, JSON objects that keep
-//! their keys in the order written, units of derivatives, and the JSON writer.
+//! Formatting helpers shared by the pipelines and front ends: aligned text tables, JSON
+//! objects that keep their keys in the order written, units of derivatives, significant
+//! digits, byte counts.
 
-use std::io::Write as _;
-
-use anyhow::{Context, Result};
 use serde::Serialize;
 use serde::ser::SerializeMap;
 
@@ -27,27 +25,6 @@ impl<T: Serialize> Serialize for Named<T> {
         }
         map.end()
     }
-}
-
-/// Writes `value` as one pretty-printed JSON object to standard output.
-///
-/// # Errors
-/// A closed standard output.
-pub fn print_json<T: Serialize>(value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).context("cannot represent the report")?;
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{text}").context("cannot write to standard output")
-}
-
-/// Writes `text` to standard output.
-///
-/// # Errors
-/// A closed standard output.
-pub fn print_text(text: &str) -> Result<()> {
-    std::io::stdout()
-        .lock()
-        .write_all(text.as_bytes())
-        .context("cannot write to standard output")
 }
 
 /// The unit of `dJ/dc` for `J` in N^2 and `c` in `unit` (`N^2/MPa`, `N^2/(MPa s)`, `N^2`

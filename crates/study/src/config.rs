@@ -17,7 +17,7 @@ use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
 
-use crate::report::sig;
+use crate::format::sig;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -809,12 +809,12 @@ impl Config {
             Some(d) => {
                 let m = d
                     .load(self.base_dir.as_deref())
-                    .with_context(|| format!("cannot use the data of `{name}`"))?;
+                    .with_context(|| DataFailure(format!("cannot use the data of `{name}`")))?;
                 let s = Schedule::from_record(&m.record.t, &m.record.h).with_context(|| {
-                    format!(
+                    DataFailure(format!(
                         "the record `{}` cannot drive a simulation",
                         m.path.display()
-                    )
+                    ))
                 })?;
                 (s, Some(m))
             }
@@ -847,6 +847,17 @@ impl Config {
             rim,
             measured,
         })
+    }
+}
+
+/// The context of an error of [`Config::prepare`] that lies in the measured record (not in
+/// the configuration): front ends classify it as a data error.
+#[derive(Debug)]
+pub struct DataFailure(pub String);
+
+impl std::fmt::Display for DataFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
     }
 }
 

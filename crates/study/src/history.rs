@@ -163,7 +163,7 @@ impl HistoryWriter {
             text.push_str(&line(r));
             text.push('\n');
         }
-        std::fs::write(path, text).with_context(|| format!("cannot rewrite `{name}`"))?;
+        crate::atomic::write(path, text).with_context(|| format!("cannot rewrite `{name}`"))?;
         let file = OpenOptions::new()
             .append(true)
             .open(path)

@@ -209,7 +209,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
             .with_context(|| format!("cannot draw the {stem} figure"))?;
         for (ext, bytes) in [("svg", svg.into_bytes()), ("png", png)] {
             let path = dir.join(format!("{stem}.{ext}"));
-            std::fs::write(&path, bytes)
+            crate::atomic::write(&path, bytes)
                 .with_context(|| format!("cannot write `{}`", path.display()))?;
             figures.push(path);
         }
@@ -217,11 +217,11 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
     }
     report.figures = links;
     let markdown = dir.join("report.md");
-    std::fs::write(&markdown, report.to_markdown())
+    crate::atomic::write(&markdown, report.to_markdown())
         .with_context(|| format!("cannot write `{}`", markdown.display()))?;
     let json = dir.join("report.json");
     let text = report.to_json().context("cannot represent the report")?;
-    std::fs::write(&json, text + "\n")
+    crate::atomic::write(&json, text + "\n")
         .with_context(|| format!("cannot write `{}`", json.display()))?;
     Ok(Written {
         markdown,

@@ -53,7 +53,7 @@ pub fn forward(
                 "the direct problem of `{config}` at {} failed at step {step} (t = {t} s) after \
                  {cuts} step cuts: {reason} (try smaller steps in `history.segments` or a larger \
                  `solver.max_cuts`)",
-                crate::report::assignments(
+                crate::format::assignments(
                     &law.params().iter().map(|i| i.name).collect::<Vec<_>>(),
                     params
                 )

@@ -56,16 +56,17 @@ pub fn write_curve_csv<W: Write>(out: W, rows: &[CurveRow]) -> Result<()> {
     Ok(())
 }
 
-/// Writes the curve to the file `path`, or to standard output when `None`.
+/// Writes the curve to the file `path` atomically (an interrupted write leaves the
+/// previous file whole), or to standard output when `None`.
 ///
 /// # Errors
 /// The file cannot be created or written.
 pub fn write_curve(path: Option<&Path>, rows: &[CurveRow]) -> Result<()> {
     match path {
         Some(p) => {
-            let file = std::fs::File::create(p)
-                .with_context(|| format!("cannot create the curve file `{}`", p.display()))?;
-            write_curve_csv(std::io::BufWriter::new(file), rows)
+            let mut bytes = Vec::new();
+            write_curve_csv(&mut bytes, rows)?;
+            crate::atomic::write(p, bytes)
                 .with_context(|| format!("cannot write the curve file `{}`", p.display()))
         }
         None => write_curve_csv(std::io::stdout().lock(), rows)
@@ -214,8 +215,7 @@ pub fn write_vtu_series(
         let gauss_name = format!("gauss_{k:04}.vtu");
         for (name, doc) in [(&mesh_name, mesh_doc), (&gauss_name, gauss_doc)] {
             let path = dir.join(name);
-            std::fs::write(&path, doc)
-                .with_context(|| format!("cannot write `{}`", path.display()))?;
+            crate::atomic::write(&path, doc)?;
         }
         pvd.push_str(&format!(
             "<DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{mesh_name}\"/>\n\
@@ -224,7 +224,7 @@ pub fn write_vtu_series(
     }
     pvd.push_str("</Collection>\n</VTKFile>\n");
     let path = dir.join("steps.pvd");
-    std::fs::write(&path, pvd).with_context(|| format!("cannot write `{}`", path.display()))?;
+    crate::atomic::write(&path, pvd)?;
     Ok(traj.fields.len())
 }
 

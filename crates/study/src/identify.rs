@@ -1,0 +1,808 @@
+//! The identification pipeline: a configuration and its data -> the least-squares misfit
+//! minimized with its adjoint gradient (`indentify_identify`) -> the result, the fitted
+//! curves and, with an output folder, the report directory (`result.json`, `history.csv`
+//! written as iterations complete, `fit.csv`, `report.md`/`report.json` and figures).
+//!
+//! Every file but the history is written atomically, after the run: a run refused for bad
+//! input writes nothing, an interrupted one leaves the previous complete files. A folder
+//! that holds another run's history is refused unless the run resumes it or is forced.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context as _, anyhow};
+use indentify_contact::{DirectSolver, SolverOptions};
+use indentify_identify::{
+    Cancel, ForceRecord, Identifiability, IdentifyConfig, IdentifyResult, IterationRecord, Problem,
+    multiplicative_noise, resume,
+};
+use indentify_laws::Law;
+use serde::Serialize;
+
+use crate::config::{Config, IdentifySection, Measured, Overrides, Prepared};
+use crate::error::{Classify, Error, ErrorKind, Result};
+use crate::figures::{self, Written};
+use crate::format::{Named, assignments};
+use crate::history::HistoryWriter;
+use crate::solve::{ensure_differentiable, forward, param_names};
+use crate::source::ConfigSource;
+
+/// What to identify, from what, and where the report goes.
+#[derive(Clone, Debug)]
+pub struct IdentifyOptions {
+    /// The configuration.
+    pub config: ConfigSource,
+    /// `dotted.path=value` overrides.
+    pub sets: Vec<String>,
+    /// A measured curve (CSV with `t` and `F`), or the record replacing `data.file`.
+    pub data: Option<PathBuf>,
+    /// The report directory; `None` writes nothing.
+    pub out: Option<PathBuf>,
+    /// Free / fixed / start / method / iteration-limit overrides.
+    pub overrides: Overrides,
+    /// Continue from the last line of `out/history.csv`.
+    pub resume: bool,
+    /// Replace another run's report in `out`.
+    pub force: bool,
+    /// Synthesized data only: multiplicative noise amplitude and seed.
+    pub noise: Option<(f64, u64)>,
+    /// Draw the figures and write report.md/json (real-data reports); off for batch runs
+    /// that only need result.json and fit.csv.
+    pub figures: bool,
+    /// Stops the run after its current iteration when raised.
+    pub cancel: Cancel,
+}
+
+impl IdentifyOptions {
+    /// The identification of `config` with its own settings, no report directory.
+    pub fn new(config: ConfigSource) -> IdentifyOptions {
+        IdentifyOptions {
+            config,
+            sets: Vec::new(),
+            data: None,
+            out: None,
+            overrides: Overrides::default(),
+            resume: false,
+            force: false,
+            noise: None,
+            figures: true,
+            cancel: Cancel::default(),
+        }
+    }
+}
+
+/// Progress of a run, for front ends (progress bars, Python callbacks, logs).
+pub trait Observer {
+    /// The run is set up and about to start.
+    fn started(&mut self, _info: &RunInfo) {}
+    /// An iteration completed (the start is iteration 0; a resumed run first repeats the
+    /// iterate it resumes from).
+    fn iteration(&mut self, _record: &IterationRecord) {}
+}
+
+/// An observer that ignores everything.
+impl Observer for () {}
+
+/// What a run is about to do.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunInfo {
+    /// The configuration's name.
+    pub config: String,
+    /// The law's name.
+    pub law: &'static str,
+    /// Every parameter name, in the law's order.
+    pub names: Vec<&'static str>,
+    /// Which are free.
+    pub free: Vec<bool>,
+    /// The held values as `name = value`.
+    pub held: Vec<String>,
+    /// The method's name.
+    pub method: &'static str,
+    /// The iteration limit.
+    pub max_iterations: usize,
+    /// The iteration resumed from, if any.
+    pub resumed_at: Option<usize>,
+    /// Where the data come from.
+    pub data: String,
+    /// The report directory.
+    pub out: Option<PathBuf>,
+}
+
+/// The curves of the fit at the schedule times.
+#[derive(Clone, Debug, Serialize)]
+pub struct FitCurves {
+    /// Times (s).
+    pub t: Vec<f64>,
+    /// Depths (mm).
+    pub h: Vec<f64>,
+    /// Data force (N).
+    pub f_data: Vec<f64>,
+    /// Simulated force at the start (N).
+    pub f_start: Vec<f64>,
+    /// Simulated force at the result (N).
+    pub f_final: Vec<f64>,
+}
+
+/// The files of a report directory.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReportFiles {
+    /// result.json.
+    pub result: PathBuf,
+    /// history.csv.
+    pub history: PathBuf,
+    /// fit.csv.
+    pub fit: PathBuf,
+    /// report.md, report.json and the figures, when drawn.
+    pub report: Option<(PathBuf, PathBuf, Vec<PathBuf>)>,
+    /// Why the report or figures are missing, when they are.
+    pub report_error: Option<String>,
+}
+
+/// The outcome of an identification.
+#[derive(Clone, Debug)]
+pub struct IdentifyOutcome {
+    /// The configuration's name.
+    pub config: String,
+    /// The law's name.
+    pub law: &'static str,
+    /// The parameter names.
+    pub names: Vec<&'static str>,
+    /// The optimizer's result (parameters, cost, counts, stop reason, identifiability).
+    pub result: IdentifyResult,
+    /// The law values that generated synthesized data.
+    pub truth: Option<Vec<f64>>,
+    /// Where the data come from.
+    pub data: String,
+    /// The measured record and its file's test label, if any.
+    pub test: Option<String>,
+    /// The curves.
+    pub fit: FitCurves,
+    /// R², RMS and largest residual of the final curve.
+    pub quality: Option<indentify_report::FitQuality>,
+    /// The report files, with an output folder.
+    pub files: Option<ReportFiles>,
+    /// Whether the run resumed an earlier one.
+    pub resumed: bool,
+    /// Wall time of the whole pipeline (s).
+    pub wall_seconds: f64,
+}
+
+impl IdentifyOutcome {
+    /// Whether the run converged.
+    pub fn converged(&self) -> bool {
+        self.result.stop_reason.is_converged()
+    }
+
+    /// The final value of parameter `name`.
+    pub fn value(&self, name: &str) -> Option<f64> {
+        self.result
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| p.value)
+    }
+
+    /// Gauss-Newton standard deviation of parameter `name` (free and identifiable only).
+    pub fn std_dev(&self, name: &str) -> Option<f64> {
+        let i = self.result.identifiability.as_ref()?;
+        let k = i.names.iter().position(|n| *n == name)?;
+        Some(i.std_dev[k]).filter(|s| s.is_finite())
+    }
+}
+
+/// Where the data come from.
+struct Data {
+    record: ForceRecord,
+    describe: String,
+    truth: Option<Vec<f64>>,
+}
+
+/// Runs the identification described by `opts`, reporting progress to `observer`.
+///
+/// A run that stops without converging (iteration limit, stall, interruption) is `Ok`:
+/// its [`IdentifyOutcome::converged`] says so, and its report is written.
+///
+/// # Errors
+/// Invalid configuration, settings or data ([`ErrorKind::Config`], [`ErrorKind::Data`])
+/// before any solve and before any file is written; an unwritable or occupied report
+/// directory ([`ErrorKind::Io`]); a start that cannot be solved ([`ErrorKind::Solver`]).
+pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<IdentifyOutcome> {
+    let wall = Instant::now();
+    let name = opts.config.name();
+    let mut cfg = opts.config.load(&opts.sets)?;
+    let (law, law_values) = cfg.law.build().kind(ErrorKind::Config)?;
+    let names = param_names(law);
+    let mut id_cfg = IdentifySection::resolve(cfg.identify.as_ref(), &cfg.law, &opts.overrides)
+        .with_context(|| format!("invalid identification settings for `{name}`"))
+        .kind(ErrorKind::Config)?;
+    id_cfg.cancel = opts.cancel.clone();
+    let start: Vec<f64> = id_cfg
+        .params
+        .iter()
+        .map(|p| p.value.unwrap_or(0.0))
+        .collect();
+    ensure_differentiable(law, &start, "cannot identify from this start")
+        .kind(ErrorKind::Config)?;
+    if let Some((a, _)) = opts.noise {
+        if !(0.0..1.0).contains(&a) {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)"
+                ),
+            ));
+        }
+        if cfg.data.is_some() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "noise perturbs synthesized data only, and `{name}` fits a measured record \
+                     (its `data` section)"
+                ),
+            ));
+        }
+    }
+    let paths = match &opts.out {
+        Some(out) => Some(check_report_dir(out, opts.resume, opts.force)?),
+        None => None,
+    };
+    if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {
+        // the data path replaces the configuration's record, read with its preprocessing
+        d.file = absolute(path);
+    }
+    let prepared = prepare(&cfg, &name)?;
+    let solver_opts = cfg.solver.options(false);
+    let data = load_data(&prepared, opts, &name, law, &law_values, &solver_opts)?;
+    let Prepared {
+        schedule,
+        model,
+        measured,
+        ..
+    } = prepared;
+    let problem = Problem::new(
+        model,
+        law,
+        schedule,
+        &data.record,
+        None,
+        solver_opts.clone(),
+    )
+    .with_context(|| format!("cannot compare the data with `{name}`"))
+    .kind(ErrorKind::Data)?;
+
+    // the history, once every input is known good
+    let (mut history, resume_from) = match &paths {
+        Some(p) if opts.resume => {
+            let (w, last) = HistoryWriter::resume(&p.history, &names).kind(ErrorKind::Io)?;
+            (Some(w), Some(last))
+        }
+        Some(p) => (
+            Some(HistoryWriter::create(&p.history, &names).kind(ErrorKind::Io)?),
+            None,
+        ),
+        None => (None, None),
+    };
+    observer.started(&RunInfo {
+        config: name.clone(),
+        law: law.name(),
+        names: names.clone(),
+        free: id_cfg.params.iter().map(|p| p.free).collect(),
+        held: id_cfg
+            .params
+            .iter()
+            .filter(|p| !p.free)
+            .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
+            .collect(),
+        method: id_cfg.method.name(),
+        max_iterations: id_cfg.stop.max_iterations,
+        resumed_at: resume_from.as_ref().map(|r| r.iteration),
+        data: data.describe.clone(),
+        out: opts.out.clone(),
+    });
+    let result = optimize(
+        &problem,
+        &id_cfg,
+        resume_from.as_ref(),
+        history.as_mut(),
+        observer,
+    )
+    .map_err(|e| {
+        let kept = match (&history, &paths) {
+            (Some(h), Some(p)) if h.lines > 0 => format!(
+                "; the history so far ({} lines) is in `{}`",
+                h.lines,
+                p.history.display()
+            ),
+            _ => String::new(),
+        };
+        e.context(format!("the identification of `{name}` failed{kept}"))
+    })?;
+
+    // the curves at the start and at the result
+    let fit = fit_curves(&problem, law, &result, &solver_opts, &name)?;
+    let test = measured.as_ref().and_then(|m| m.raw.meta.test_name.clone());
+    let mut outcome = IdentifyOutcome {
+        config: name.clone(),
+        law: law.name(),
+        names: names.clone(),
+        quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
+        result,
+        truth: data.truth.clone(),
+        data: data.describe.clone(),
+        test,
+        fit,
+        files: None,
+        resumed: resume_from.is_some(),
+        wall_seconds: 0.0,
+    };
+    if let Some(p) = paths {
+        outcome.files = Some(write_report(
+            &p,
+            &outcome,
+            opts,
+            measured.as_ref(),
+            &problem,
+        )?);
+    }
+    outcome.wall_seconds = wall.elapsed().as_secs_f64();
+    Ok(outcome)
+}
+
+/// The files of a report directory.
+struct Paths {
+    dir: PathBuf,
+    history: PathBuf,
+    result: PathBuf,
+    fit: PathBuf,
+}
+
+/// Checks the report directory before any solve: writable, and not holding another run's
+/// history unless resuming it or forced.
+fn check_report_dir(out: &Path, resume: bool, force: bool) -> Result<Paths> {
+    crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
+    let paths = Paths {
+        dir: out.to_path_buf(),
+        history: out.join("history.csv"),
+        result: out.join("result.json"),
+        fit: out.join("fit.csv"),
+    };
+    let occupied = std::fs::metadata(&paths.history).is_ok_and(|m| m.len() > 0);
+    if occupied && !resume && !force {
+        return Err(Error::msg(
+            ErrorKind::Io,
+            format!(
+                "the report directory `{}` holds another run (history.csv): continue it with \
+                 --resume, replace it with --force, or choose another --out",
+                out.display()
+            ),
+        ));
+    }
+    Ok(paths)
+}
+
+/// [`Config::prepare`] with its errors classified: a record that cannot be read or drive
+/// a simulation is a data error, anything else a configuration error.
+///
+/// # Errors
+/// As [`Config::prepare`].
+pub fn prepare(cfg: &Config, name: &str) -> Result<Prepared> {
+    cfg.prepare(name).map_err(|e| {
+        let kind = if e.downcast_ref::<crate::config::DataFailure>().is_some() {
+            ErrorKind::Data
+        } else {
+            ErrorKind::Config
+        };
+        Error::new(kind, e)
+    })
+}
+
+/// The data: the measured record, a curve file, or the configuration's own curve.
+fn load_data(
+    prepared: &Prepared,
+    opts: &IdentifyOptions,
+    name: &str,
+    law: &'static dyn Law,
+    law_values: &[f64],
+    solver_opts: &SolverOptions,
+) -> Result<Data> {
+    let schedule = &prepared.schedule;
+    match (&prepared.measured, &opts.data) {
+        (Some(m), _) => Ok(Data {
+            record: ForceRecord::new(m.record.t.clone(), m.record.f.clone())
+                .with_context(|| format!("cannot use `{}` as data", m.path.display()))
+                .kind(ErrorKind::Data)?,
+            describe: describe_measured(m),
+            truth: None,
+        }),
+        (None, Some(path)) => {
+            let curve = crate::data::read_curve(path).kind(ErrorKind::Data)?;
+            let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
+            curve.check_covers(t0, t1, name).kind(ErrorKind::Data)?;
+            Ok(Data {
+                record: curve.record().kind(ErrorKind::Data)?,
+                describe: curve.name.clone(),
+                truth: None,
+            })
+        }
+        (None, None) => {
+            let model = &prepared.model;
+            let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
+            let traj = forward(
+                &mut solver,
+                model,
+                law,
+                law_values,
+                schedule,
+                solver_opts,
+                name,
+            )
+            .kind(ErrorKind::Solver)?;
+            let mut forces = traj.forces();
+            let names = param_names(law);
+            let mut describe = format!(
+                "synthesized: the curve of `{name}` at {}",
+                assignments(&names, law_values)
+            );
+            if let Some((a, seed)) = opts.noise {
+                forces = multiplicative_noise(&forces, a, seed);
+                describe.push_str(&format!(
+                    ", noise F (1 + {a} xi), xi uniform in [-1, 1], seed {seed}"
+                ));
+            } else {
+                describe.push_str(" (exact)");
+            }
+            Ok(Data {
+                record: ForceRecord::new(schedule.t.clone(), forces)
+                    .context("cannot use the simulated curve as data")
+                    .kind(ErrorKind::Data)?,
+                describe,
+                truth: Some(law_values.to_vec()),
+            })
+        }
+    }
+}
+
+/// `` `FILE` (anton-paar, test 1), 1000 samples, 60 points after preprocessing (...)``.
+fn describe_measured(m: &Measured) -> String {
+    format!(
+        "`{}` ({}{}), {} samples, {} points after preprocessing ({})",
+        m.path.display(),
+        m.raw.meta.format.name(),
+        m.raw
+            .meta
+            .test_name
+            .as_ref()
+            .map_or(String::new(), |t| format!(", test {t}")),
+        m.raw.t.len(),
+        m.record.t.len(),
+        if m.applied.is_empty() {
+            "none applied".to_string()
+        } else {
+            m.applied
+                .iter()
+                .map(|a| a.step.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    )
+}
+
+/// The optimizer's run, the history written line by line.
+fn optimize(
+    problem: &Problem,
+    id_cfg: &IdentifyConfig,
+    resume_from: Option<&IterationRecord>,
+    mut history: Option<&mut HistoryWriter>,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyResult> {
+    let mut write_error: Option<anyhow::Error> = None;
+    let mut callback = |r: &IterationRecord| {
+        if write_error.is_some() {
+            return;
+        }
+        if let Some(h) = history.as_deref_mut() {
+            match h.record(r) {
+                Ok(false) => return,
+                Ok(true) => {}
+                Err(e) => {
+                    write_error = Some(e);
+                    // stop the run: its history can no longer be kept
+                    id_cfg.cancel.raise();
+                    return;
+                }
+            }
+        }
+        observer.iteration(r);
+    };
+    let outcome = match resume_from {
+        Some(last) => resume(problem, id_cfg, last, &mut callback),
+        None => indentify_identify::identify(problem, id_cfg, &mut callback),
+    };
+    if let Some(e) = write_error {
+        return Err(Error::new(ErrorKind::Io, e));
+    }
+    outcome.map_err(|e| Error::new(ErrorKind::Solver, anyhow!(e)))
+}
+
+/// The curves at the start and at the result.
+fn fit_curves(
+    problem: &Problem,
+    law: &'static dyn Law,
+    result: &IdentifyResult,
+    opts: &SolverOptions,
+    name: &str,
+) -> Result<FitCurves> {
+    let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
+    let mut solver = DirectSolver::new(&problem.model).kind(ErrorKind::Solver)?;
+    let quiet = SolverOptions {
+        record_fields: false,
+        ..opts.clone()
+    };
+    let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
+        Ok(forward(
+            &mut solver,
+            &problem.model,
+            law,
+            c,
+            &problem.schedule,
+            &quiet,
+            name,
+        )
+        .kind(ErrorKind::Solver)?
+        .forces())
+    };
+    let f_start = curve_at(&start_params)?;
+    let f_final = curve_at(&result.c)?;
+    Ok(FitCurves {
+        t: problem.schedule.t.clone(),
+        h: problem.schedule.depth.clone(),
+        f_data: problem.target.clone(),
+        f_start,
+        f_final,
+    })
+}
+
+/// Writes result.json, fit.csv and (with `opts.figures`) the report and its figures.
+fn write_report(
+    paths: &Paths,
+    outcome: &IdentifyOutcome,
+    opts: &IdentifyOptions,
+    measured: Option<&Measured>,
+    problem: &Problem,
+) -> Result<ReportFiles> {
+    crate::atomic::write(&paths.fit, fit_csv(&outcome.fit)).kind(ErrorKind::Io)?;
+    // result.json first: a report or figure that cannot be made must not lose the result
+    let json = serde_json::to_string_pretty(&result_json(outcome, opts, paths))
+        .context("cannot represent the result")
+        .kind(ErrorKind::Io)?;
+    crate::atomic::write(&paths.result, json + "\n").kind(ErrorKind::Io)?;
+    let mut files = ReportFiles {
+        result: paths.result.clone(),
+        history: paths.history.clone(),
+        fit: paths.fit.clone(),
+        report: None,
+        report_error: None,
+    };
+    if !opts.figures {
+        return Ok(files);
+    }
+    let history_records = crate::history::read_all(&paths.history, outcome.names.len());
+    let (file, test) = match measured {
+        Some(m) => (
+            m.path.display().to_string(),
+            m.raw.meta.test_name.clone().unwrap_or_default(),
+        ),
+        None => (outcome.data.clone(), String::new()),
+    };
+    let written: anyhow::Result<Written> = figures::write(
+        &paths.dir,
+        &outcome.result,
+        &figures::Inputs {
+            title: format!(
+                "Identification of {} parameters: {}",
+                outcome.law, outcome.config
+            ),
+            file,
+            test,
+            measured,
+            t: &problem.schedule.t,
+            h: &problem.schedule.depth,
+            f_data: &problem.target,
+            f_start: &outcome.fit.f_start,
+            f_final: &outcome.fit.f_final,
+            history: &history_records,
+        },
+    );
+    match written {
+        Ok(w) => files.report = Some((w.markdown, w.json, w.figures)),
+        Err(e) => {
+            tracing::warn!(
+                "warning: no report.md, report.json or figures: {e:#} (result.json, \
+                 history.csv and fit.csv are written)"
+            );
+            files.report_error = Some(format!("{e:#}"));
+        }
+    }
+    Ok(files)
+}
+
+/// `t,h,F_data,F_start,F_final` at the schedule times.
+pub fn fit_csv(fit: &FitCurves) -> String {
+    let mut text = String::from("t,h,F_data,F_start,F_final\n");
+    for i in 0..fit.t.len() {
+        let at = |f: &[f64]| f.get(i).copied().unwrap_or(f64::NAN);
+        text.push_str(&format!(
+            "{},{},{},{},{}\n",
+            fit.t[i],
+            fit.h[i],
+            at(&fit.f_data),
+            at(&fit.f_start),
+            at(&fit.f_final)
+        ));
+    }
+    text
+}
+
+/// `path` made absolute against the working directory (the configuration's folder does
+/// not apply to a path given on the command line).
+pub fn absolute(path: &Path) -> String {
+    std::env::current_dir()
+        .map_or_else(|_| path.to_path_buf(), |d| d.join(path))
+        .display()
+        .to_string()
+}
+
+/// One parameter in result.json.
+#[derive(Debug, Serialize)]
+struct ParamJson {
+    name: &'static str,
+    unit: &'static str,
+    free: bool,
+    start: f64,
+    value: f64,
+    lower: f64,
+    upper: f64,
+    bound_hit: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    truth: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rel_error: Option<f64>,
+}
+
+/// The identifiability summary in result.json.
+#[derive(Debug, Serialize)]
+struct IdentifiabilityJson {
+    names: Vec<&'static str>,
+    n_data: usize,
+    sigma2: f64,
+    std_dev: Named<f64>,
+    rel_std_dev: Named<f64>,
+    correlation: Vec<Vec<f64>>,
+    condition_number: f64,
+    unidentifiable: Vec<&'static str>,
+}
+
+impl From<&Identifiability> for IdentifiabilityJson {
+    fn from(i: &Identifiability) -> Self {
+        IdentifiabilityJson {
+            names: i.names.clone(),
+            n_data: i.n_data,
+            sigma2: i.sigma2,
+            std_dev: Named::new(i.names.iter().copied().zip(i.std_dev.clone())),
+            rel_std_dev: Named::new(i.names.iter().copied().zip(i.rel_std_dev.clone())),
+            correlation: i.correlation.clone(),
+            condition_number: i.condition_number,
+            unidentifiable: i.unidentifiable.clone(),
+        }
+    }
+}
+
+/// result.json.
+#[derive(Debug, Serialize)]
+struct ResultJson {
+    law: &'static str,
+    config: String,
+    data: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    noise: Option<NoiseJson>,
+    method: &'static str,
+    parameters: Vec<ParamJson>,
+    #[serde(rename = "J")]
+    j: f64,
+    #[serde(rename = "J_start")]
+    j_start: f64,
+    #[serde(rename = "J_ref")]
+    j_ref: f64,
+    iterations: usize,
+    forward_solves: usize,
+    adjoint_solves: usize,
+    sensitivity_solves: usize,
+    stop_reason: String,
+    converged: bool,
+    seconds: f64,
+    resumed: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fit_quality: Option<FitJson>,
+    identifiability: Option<IdentifiabilityJson>,
+    history: String,
+    fit: String,
+}
+
+/// The quality of the final fit in result.json.
+#[derive(Debug, Serialize)]
+struct FitJson {
+    r2: f64,
+    rms: f64,
+    rms_rel: f64,
+    max_abs: f64,
+    n: usize,
+}
+
+/// Noise of synthesized data.
+#[derive(Debug, Serialize)]
+struct NoiseJson {
+    amplitude: f64,
+    seed: u64,
+}
+
+fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> ResultJson {
+    let r = &o.result;
+    let parameters = r
+        .params
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let truth = o.truth.as_ref().map(|t| t[k]);
+            ParamJson {
+                name: p.name,
+                unit: p.unit,
+                free: p.free,
+                start: p.start,
+                value: p.value,
+                lower: p.lower,
+                upper: p.upper,
+                bound_hit: if p.at_lower {
+                    Some("lower")
+                } else if p.at_upper {
+                    Some("upper")
+                } else {
+                    None
+                },
+                truth,
+                rel_error: truth.filter(|_| p.free).map(|t| ((p.value - t) / t).abs()),
+            }
+        })
+        .collect();
+    ResultJson {
+        law: r.law,
+        config: o.config.clone(),
+        data: o.data.clone(),
+        noise: opts
+            .noise
+            .filter(|_| o.truth.is_some())
+            .map(|(amplitude, seed)| NoiseJson { amplitude, seed }),
+        method: r.method.name(),
+        parameters,
+        j: r.cost,
+        j_start: r.initial_cost,
+        j_ref: r.reference_cost,
+        iterations: r.iterations,
+        forward_solves: r.forward_solves,
+        adjoint_solves: r.adjoint_solves,
+        sensitivity_solves: r.sensitivity_solves,
+        stop_reason: r.stop_reason.to_string(),
+        converged: r.stop_reason.is_converged(),
+        seconds: r.seconds,
+        resumed: o.resumed,
+        fit_quality: o.quality.as_ref().map(|q| FitJson {
+            r2: q.r2,
+            rms: q.rms,
+            rms_rel: q.rms_rel,
+            max_abs: q.max_abs,
+            n: q.n,
+        }),
+        identifiability: r.identifiability.as_ref().map(IdentifiabilityJson::from),
+        history: paths.history.display().to_string(),
+        fit: paths.fit.display().to_string(),
+    }
+}

@@ -1,0 +1,40 @@
+//! The application layer of indentify, shared by every front end (the `indentify` CLI,
+//! the Python package, the batch runner, `cargo xtask`): the configuration schema (RON,
+//! `--set` overrides, validation with field paths), the set-up of an experiment from a
+//! configuration (mesh, model, schedule, measured record), the pipelines (simulate,
+//! gradient, gradient check, identify, batch) with an [`identify::Observer`] for
+//! progress, serializable results, and report directories written atomically.
+//!
+//! It knows nothing of terminals or argument parsers: front ends map their arguments onto
+//! the option types here ([`identify::IdentifyOptions`], [`batch::BatchOptions`], ...)
+//! and print the outcomes their own way. It may do file IO; the numerical crates below it
+//! do none.
+//!
+//! ```no_run
+//! use indentify_study::{ConfigSource, identify::{self, IdentifyOptions}};
+//!
+//! let outcome = identify::run(&IdentifyOptions::new(ConfigSource::Default), &mut ())?;
+//! println!("E = {:?} MPa, converged: {}", outcome.value("E"), outcome.converged());
+//! # Ok::<(), indentify_study::Error>(())
+//! ```
+
+pub mod atomic;
+pub mod batch;
+pub mod check;
+pub mod config;
+pub mod data;
+pub mod error;
+pub mod figures;
+pub mod format;
+pub mod gradient;
+pub mod history;
+pub mod identify;
+pub mod output;
+pub mod simulate;
+pub mod solve;
+pub mod source;
+pub mod synthetic;
+pub mod templates;
+
+pub use error::{Classify, Error, ErrorKind, Result};
+pub use source::{ConfigSource, DEFAULT_CONFIG, DEFAULT_NAME};

@@ -1,0 +1,179 @@
+//! The simulation pipeline: the direct problem of a configuration, its force-depth curve
+//! (with optional multiplicative noise), the optional VTU field series, and the assembled
+//! tangent of a step for users who inspect the matrices.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use indentify_contact::{ContactError, DirectSolver, Trajectory};
+use indentify_identify::multiplicative_noise;
+
+use crate::config::{Measured, Mesher};
+use crate::error::{Classify, Error, ErrorKind, Result};
+use crate::identify::prepare;
+use crate::output::{self, CurveRow};
+use crate::source::ConfigSource;
+
+/// What to simulate and what to write.
+#[derive(Clone, Debug)]
+pub struct SimulateOptions {
+    /// The configuration.
+    pub config: ConfigSource,
+    /// `dotted.path=value` overrides.
+    pub sets: Vec<String>,
+    /// Multiplicative noise `F (1 + a xi)` with amplitude and seed.
+    pub noise: Option<(f64, u64)>,
+    /// Write the curve here (atomically); `None` keeps it in the outcome only.
+    pub out: Option<PathBuf>,
+    /// Write the field series (VTU and steps.pvd) into this folder.
+    pub vtu: Option<PathBuf>,
+}
+
+impl SimulateOptions {
+    /// The simulation of `config`, nothing written.
+    pub fn new(config: ConfigSource) -> SimulateOptions {
+        SimulateOptions {
+            config,
+            sets: Vec::new(),
+            noise: None,
+            out: None,
+            vtu: None,
+        }
+    }
+}
+
+/// A simulation's outcome.
+#[derive(Debug)]
+pub struct SimulateOutcome {
+    /// The configuration's name.
+    pub config: String,
+    /// The law's name and its parameters as `name = value`.
+    pub law: &'static str,
+    /// `name = value` of every parameter.
+    pub params: Vec<String>,
+    /// The punch, described.
+    pub punch: String,
+    /// The mesher.
+    pub mesher: Mesher,
+    /// Nodes and elements.
+    pub size: (usize, usize),
+    /// Schedule steps.
+    pub schedule_steps: usize,
+    /// The curve at the schedule times reached (noise applied).
+    pub rows: Vec<CurveRow>,
+    /// The trajectory (timings, iterations, steps).
+    pub trajectory: Trajectory,
+    /// The measured record driving the schedule, if any.
+    pub measured: Option<Measured>,
+    /// Field states written to `vtu`.
+    pub vtu_states: Option<usize>,
+    /// Why the run stopped early (a step that failed even after cutting); the curve is
+    /// then the converged part.
+    pub failure: Option<String>,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+/// Runs the simulation and writes what `opts` asks.
+///
+/// # Errors
+/// An invalid configuration or noise amplitude, an output that cannot be written (checked
+/// before solving). A step that fails even after cutting is not an error: the outcome's
+/// `failure` says so and the curve up to there is written.
+pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
+    let start = Instant::now();
+    let name = opts.config.name();
+    if let Some((a, _)) = opts.noise {
+        if !(0.0..1.0).contains(&a) {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)"
+                ),
+            ));
+        }
+    }
+    let cfg = opts.config.load(&opts.sets)?;
+    let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
+    let prepared = prepare(&cfg, &name)?;
+    let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
+    let solver_opts = cfg.solver.options(opts.vtu.is_some());
+    // fail on unwritable outputs before solving
+    if let Some(p) = &opts.out {
+        let dir = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), PathBuf::from);
+        if !dir.is_dir() {
+            return Err(Error::msg(
+                ErrorKind::Io,
+                format!(
+                    "cannot write the curve file `{}`: the folder `{}` does not exist",
+                    p.display(),
+                    dir.display()
+                ),
+            ));
+        }
+    }
+    if let Some(dir) = &opts.vtu {
+        crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
+    }
+    let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
+    let (trajectory, failure) = match solver.run(&model, law, &params, &schedule, &solver_opts) {
+        Ok(t) => (t, None),
+        Err(ContactError::StepFailed {
+            step,
+            t,
+            cuts,
+            reason,
+            partial,
+        }) => (
+            *partial,
+            Some(format!(
+                "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
+            )),
+        ),
+        Err(e) => {
+            return Err(Error::new(
+                ErrorKind::Solver,
+                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
+            ));
+        }
+    };
+    let mut rows = output::curve(&schedule, &trajectory);
+    if let Some((a, seed)) = opts.noise {
+        let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
+        for (r, f) in rows.iter_mut().zip(multiplicative_noise(&forces, a, seed)) {
+            r.f = f;
+        }
+    }
+    if let Some(p) = &opts.out {
+        output::write_curve(Some(p), &rows).kind(ErrorKind::Io)?;
+    }
+    let vtu_states = match &opts.vtu {
+        Some(dir) => Some(
+            output::write_vtu_series(dir, &model, law, &params, &trajectory).kind(ErrorKind::Io)?,
+        ),
+        None => None,
+    };
+    Ok(SimulateOutcome {
+        config: name,
+        law: law.name(),
+        params: law
+            .params()
+            .iter()
+            .zip(&params)
+            .map(|(i, v)| format!("{} = {v}", i.name))
+            .collect(),
+        punch: cfg.punch.describe(),
+        mesher,
+        size: (model.mesh.nodes.len(), model.mesh.elements.len()),
+        schedule_steps: schedule.n_steps(),
+        rows,
+        trajectory,
+        measured: prepared.measured,
+        vtu_states,
+        failure,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,570 @@
+//! Annotated template configurations: one per law, set to the reference problems R0-R2
+//! (the files in `examples/` are exactly this output), and the template for a measured
+//! record. `indentify init` prints them.
+
+use serde_json::Value;
+
+use indentify_contact::punch::AutoOptions;
+
+use crate::config::{
+    Config, DataSection, IdentifySection, LawSpec, ParamSetting, Reference, Specimen, library_law,
+};
+
+/// The annotated template of a reference problem.
+pub fn template(reference: Reference) -> String {
+    let law = match reference {
+        Reference::R0Elastic => "elastic",
+        Reference::R1Maxwell => "maxwell",
+        Reference::R2NortonHoff => "norton-hoff",
+    };
+    annotated(
+        &reference.config(),
+        &[
+            format!(
+                "{} (examples/{}).",
+                reference.title(),
+                reference.example_file()
+            ),
+            format!(
+                "indentify configuration written by `indentify init {law}`; \
+                 run it with `indentify simulate FILE.ron` or `indentify identify FILE.ron`."
+            ),
+        ],
+    )
+}
+
+/// The annotated template for the measured record `file` with the law of `reference`.
+pub fn data_template(reference: Reference, file: &str) -> String {
+    let mut cfg = reference.config();
+    cfg.specimen = Specimen::Auto {
+        elements_in_contact: AutoOptions::default().elements_in_contact,
+        size_factor: AutoOptions::default().size_factor,
+        grading: AutoOptions::default().grading,
+    };
+    cfg.punch = indentify_contact::Punch::Berkovich { tip_radius: None };
+    cfg.history = None;
+    cfg.data = Some(DataSection {
+        file: file.to_string(),
+        format: indentify_records::Format::Auto,
+        test: None,
+        preprocessing: indentify_records::Preprocessing {
+            resample: Some(indentify_records::Resample {
+                n: 60,
+                ..indentify_records::Resample::default()
+            }),
+            ..indentify_records::Preprocessing::default()
+        },
+    });
+    let mut id = reference.identify_section();
+    for (name, setting) in id.params.iter_mut() {
+        *setting = if name == "nu" {
+            ParamSetting::Fixed { value: Some(0.3) }
+        } else {
+            ParamSetting::Free {
+                start: None,
+                lower: None,
+                upper: None,
+                scaling: None,
+            }
+        };
+    }
+    cfg.identify = Some(id);
+    let law = cfg.law.name();
+    annotated(
+        &cfg,
+        &[
+            format!("Identification of {law} parameters from the measured record `{file}`."),
+            format!(
+                "indentify configuration written by `indentify init {law} --data {file}`: set \
+                 the punch, the law's start values (the vendor's E_IT is a fair start for E) \
+                 and nu, check it with `indentify check FILE.ron`, run it with `indentify \
+                 identify FILE.ron` (docs/tutorial-real-data.md)."
+            ),
+        ],
+    )
+}
+
+/// A configuration as RON text with comments on every field (units, admissible ranges,
+/// alternatives); `header` lines open the file. Parses back to `cfg` exactly.
+pub fn annotated(cfg: &Config, header: &[String]) -> String {
+    let mut out = String::new();
+    for line in header {
+        out.push_str(&format!("// {line}\n"));
+    }
+    out.push_str(
+        "//\n\
+         // Units: N, mm, s, MPa. Every field is required except `solver` and `identify`; an unknown or\n\
+         // mistyped field is an error. Any scalar can be overridden on the command line by its\n\
+         // dotted path, e.g. `--set law.E=25000 --set specimen.nr=10 --set history.segments.0.depth=0.2`.\n\
+         (\n",
+    );
+
+    out.push_str(
+        "    // The specimen, one of\n\
+         \x20   //   Cylinder(radius, height, nr, nz, grading_r, grading_z): the cylinder\n\
+         \x20   //     0 <= r <= radius, -height <= z <= 0 (the punch presses on z = 0) cut into nr x nz\n\
+         \x20   //     8-node quadrilaterals whose sizes grow geometrically away from the axis (ratio\n\
+         \x20   //     grading_r) and away from the top surface (ratio grading_z);\n\
+         \x20   //   Auto(elements_in_contact: 8, size_factor: 48.0, grading: 1.5): sized from the punch\n\
+         \x20   //     and the maximum depth a = contact-radius bound (geometric radius x 1.2): radius =\n\
+         \x20   //     height = size_factor x a, a uniform core of elements_in_contact squares per side\n\
+         \x20   //     over a, graded beyond (instrument scale: nm to mm indents alike).\n",
+    );
+    match cfg.specimen {
+        Specimen::Cylinder {
+            radius,
+            height,
+            nr,
+            nz,
+            grading_r,
+            grading_z,
+        } => {
+            out.push_str("    specimen: Cylinder(\n");
+            block(
+                &mut out,
+                "        ",
+                &[
+                    (format!("radius: {},", num(radius)), "mm, > 0".into()),
+                    (format!("height: {},", num(height)), "mm, > 0".into()),
+                    (
+                        format!("nr: {nr},"),
+                        "elements along r, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("nz: {nz},"),
+                        "elements along z, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("grading_r: {},", num(grading_r)),
+                        "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                    (
+                        format!("grading_z: {},", num(grading_z)),
+                        "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+        Specimen::Auto {
+            elements_in_contact,
+            size_factor,
+            grading,
+        } => {
+            out.push_str("    specimen: Auto(\n");
+            block(
+                &mut out,
+                "        ",
+                &[
+                    (
+                        format!("elements_in_contact: {elements_in_contact},"),
+                        "element edges across the contact-radius bound, in [2, 64]".into(),
+                    ),
+                    (
+                        format!("size_factor: {},", num(size_factor)),
+                        "specimen radius and height in contact-radius bounds, in [5, 10000]".into(),
+                    ),
+                    (
+                        format!("grading: {},", num(grading)),
+                        "largest size ratio of neighbouring elements beyond the core, in [1.05, 3]"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+    }
+    out.push_str("    ),\n");
+
+    out.push_str(
+        "    // Rigid frictionless punch (lengths in mm, half-angles from the axis in degrees), one of\n\
+         \x20   //   Cone(half_angle_deg: 68.0)                     half-angle in (0, 90); 70.3 = Berkovich-equivalent\n\
+         \x20   //   Sphere(radius: 1.0)                            exact spherical profile, radius > 0\n\
+         \x20   //   Flat(radius: 0.5)                              flat-ended cylinder, radius > 0\n\
+         \x20   //   SpheroCone(radius: 1.0, half_angle_deg: 68.0)  spherical tip blended tangentially into a cone\n\
+         \x20   //   Tabulated(r: [0.0, 1.0], z: [0.0, 0.4])        heights z above the tip at increasing radii r\n\
+         \x20   //   Berkovich(), Vickers()                         area-equivalent cone of 70.3 deg (A = 24.5 h^2)\n\
+         \x20   //   CubeCorner()                                   area-equivalent cone of 42.28 deg (A = 2.598 h^2)\n\
+         \x20   //   Berkovich(tip_radius: 2e-4)                    the same with a rounded tip (mm), also Vickers, CubeCorner\n",
+    );
+    let punch = serde_json::to_value(&cfg.punch).unwrap_or(Value::Null);
+    out.push_str(&format!("    punch: {},\n", ron_inline(&punch)));
+
+    let forms: Vec<String> = Reference::ALL
+        .iter()
+        .map(|r| {
+            let l = r.config().law;
+            let names: Vec<&str> = l.named_params().iter().map(|(n, _)| *n).collect();
+            format!("{}({})", l.variant(), names.join(", "))
+        })
+        .collect();
+    out.push_str(&format!(
+        "    // Constitutive law, one of {}.\n    law: {}(\n",
+        forms.join(", "),
+        cfg.law.variant()
+    ));
+    block(&mut out, "        ", &law_lines(&cfg.law));
+    out.push_str("    ),\n");
+
+    if let Some(history) = &cfg.history {
+        out.push_str(
+            "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
+             \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
+             \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
+             \x20   history: (\n        segments: [\n",
+        );
+        let mut previous = 0.0;
+        let lines: Vec<(String, String)> = history
+            .segments
+            .iter()
+            .map(|seg| {
+                let what = if seg.depth > previous {
+                    "load"
+                } else if seg.depth < previous {
+                    "unload"
+                } else {
+                    "hold"
+                };
+                previous = seg.depth;
+                (
+                    format!(
+                        "(duration: {}, depth: {}, steps: {}),",
+                        num(seg.duration),
+                        num(seg.depth),
+                        seg.steps
+                    ),
+                    what.into(),
+                )
+            })
+            .collect();
+        block(&mut out, "            ", &lines);
+        out.push_str("        ],\n    ),\n");
+    }
+    if let Some(d) = &cfg.data {
+        out.push_str(&data_block(d));
+    }
+
+    let o = &cfg.solver;
+    out.push_str(
+        "    // Optional: numerical options of the direct solver (the defaults are shown).\n    solver: (\n",
+    );
+    block(
+        &mut out,
+        "        ",
+        &[
+            (
+                format!("residual_tol: {},", num(o.residual_tol)),
+                "relative equilibrium residual, in (0, 1)".into(),
+            ),
+            (
+                format!("max_iterations: {},", o.max_iterations),
+                "global Newton iterations per step, in [1, 10000]".into(),
+            ),
+            (
+                format!("max_cuts: {},", o.max_cuts),
+                "halvings of a failing step before giving up, in [0, 30]".into(),
+            ),
+            (
+                format!("active_set_check_tol: {},", num(o.active_set_check_tol)),
+                "relative residual at which the active set is checked, in [0, 1)".into(),
+            ),
+            (
+                format!("gap_tol: {},", num(o.gap_tol)),
+                "relative penetration before a node is activated, in [0, 1)".into(),
+            ),
+            (
+                format!("lambda_tol: {},", num(o.lambda_tol)),
+                "relative tensile reaction before a node is released, in [0, 1)".into(),
+            ),
+        ],
+    );
+    out.push_str("    ),\n");
+    if let Some(id) = &cfg.identify {
+        identify_block(&mut out, cfg, id);
+    }
+    out.push_str(")\n");
+    out
+}
+
+/// The annotated `identify: (...)` section.
+fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
+    out.push_str(
+        "    // Optional: what `indentify identify` identifies, and how. A parameter listed in `params`\n\
+         \x20   // is Free (identified from `start` within [lower, upper]; the optimizer sees Log: ln c,\n\
+         \x20   // Bounds: (c - lower)/(upper - lower), or Linear: c/|start|) or Fixed (held at `value`).\n\
+         \x20   // An omitted start or value is the `law` value, omitted bounds the law's admissible range,\n\
+         \x20   // an omitted scaling Log (Linear if the lower bound is negative); a parameter not listed\n\
+         \x20   // is held at its `law` value; without this section every parameter but nu is identified\n\
+         \x20   // from its `law` value. Without --data, the data are this file's curve simulated at its\n\
+         \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
+         \x20   identify: (\n        params: {\n",
+    );
+    let infos = library_law(cfg.law.name())
+        .map(|l| l.params())
+        .unwrap_or(&[]);
+    let mut listed: Vec<&str> = cfg
+        .law
+        .named_params()
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| id.params.contains_key(*n))
+        .collect();
+    // names the law does not have (rejected on load) keep their place at the end
+    let extra: Vec<&str> = id
+        .params
+        .keys()
+        .map(String::as_str)
+        .filter(|n| !listed.contains(n))
+        .collect();
+    listed.extend(extra);
+    let mut lines = Vec::new();
+    for name in listed {
+        let code = match id.params[name] {
+            ParamSetting::Free {
+                start,
+                lower,
+                upper,
+                scaling,
+            } => {
+                let mut fields: Vec<String> =
+                    [("start", start), ("lower", lower), ("upper", upper)]
+                        .iter()
+                        .filter_map(|(k, v)| v.map(|v| format!("{k}: {}", num(v))))
+                        .collect();
+                if let Some(sc) = scaling {
+                    fields.push(format!("scaling: {sc:?}"));
+                }
+                format!("\"{name}\": Free({}),", fields.join(", "))
+            }
+            ParamSetting::Fixed { value: Some(v) } => {
+                format!("\"{name}\": Fixed(value: {}),", num(v))
+            }
+            ParamSetting::Fixed { value: None } => format!("\"{name}\": Fixed(),"),
+        };
+        let note = infos
+            .iter()
+            .find(|i| i.name == name)
+            .map_or_else(String::new, |i| format!("{} ({})", i.description, i.unit));
+        lines.push((code, note));
+    }
+    block(out, "            ", &lines);
+    out.push_str("        },\n");
+    let st = &id.stop;
+    block(
+        out,
+        "        ",
+        &[
+            (
+                format!("method: {:?},", id.method),
+                "Bfgs (BFGS + Armijo backtracking, the paper's), Lbfgs (More-Thuente), \
+                 Lbfgsb (bounds in the method), Lm (Levenberg-Marquardt)"
+                    .into(),
+            ),
+            (
+                format!("memory: {},", id.memory),
+                "correction pairs of Lbfgs and Lbfgsb, in [1, 100]".into(),
+            ),
+            (
+                format!("initial_step: {},", num(id.initial_step)),
+                "first trial step in scaled variables (0.5: a factor e^0.5 on a Log parameter)"
+                    .into(),
+            ),
+        ],
+    );
+    out.push_str("        stop: (\n");
+    block(
+        out,
+        "            ",
+        &[
+            (
+                format!("gradient_tol: {},", num(st.gradient_tol)),
+                "|projected gradient in scaled variables| / J_ref, J_ref = 1/2 sum F_exp^2".into(),
+            ),
+            (
+                format!("relative_decrease_tol: {},", num(st.relative_decrease_tol)),
+                "relative decrease of J over one iteration, in [0, 1)".into(),
+            ),
+            (
+                format!("target_cost: {},", num(st.target_cost)),
+                "J / J_ref to stop at (0: off)".into(),
+            ),
+            (
+                format!("max_iterations: {},", st.max_iterations),
+                "iteration limit".into(),
+            ),
+            (
+                format!(
+                    "max_line_search_evaluations: {},",
+                    st.max_line_search_evaluations
+                ),
+                "trial points of one line search before it has stalled".into(),
+            ),
+            (
+                format!("roundoff_cost: {},", num(st.roundoff_cost)),
+                "J / J_ref under which a stall counts as converged".into(),
+            ),
+        ],
+    );
+    out.push_str("        ),\n");
+    block(
+        out,
+        "        ",
+        &[(
+            format!("identifiability: {},", id.identifiability),
+            "standard deviations and correlations at the optimum (one sensitivity solve)".into(),
+        )],
+    );
+    out.push_str("    ),\n");
+}
+
+/// `name: value,` lines of the law with the library's description, unit and range.
+/// The `data` section: the record, its format and test, its preprocessing (written out in
+/// full, every default included).
+fn data_block(d: &DataSection) -> String {
+    let pretty = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .indentor("    ".to_string());
+    let pre =
+        ron::ser::to_string_pretty(&d.preprocessing, pretty).unwrap_or_else(|_| "()".to_string());
+    let pre = pre.replace('\n', "\n        ");
+    let mut out = String::from(
+        "    // Measured record: its preprocessed depth drives the simulation and its force is the\n\
+         \x20   // data to fit. `file` is relative to this file's folder; `format` one of Auto, Csv,\n\
+         \x20   // AntonPaar, AntonPaarMulti, HysitronTxt, Hld; `test` (from 1) picks one test of a\n\
+         \x20   // multi-test file. Preprocessing runs drift, zero_point, compliance, segments, resample\n\
+         \x20   // in that order (None skips a step; see docs/tutorial-real-data.md).\n\
+         \x20   data: (\n",
+    );
+    out.push_str(&format!("        file: {:?},\n", d.file));
+    out.push_str(&format!("        format: {:?},\n", d.format));
+    if let Some(t) = d.test {
+        out.push_str(&format!("        test: {t},\n"));
+    }
+    out.push_str(&format!("        preprocessing: {pre},\n    ),\n"));
+    out
+}
+
+fn law_lines(law: &LawSpec) -> Vec<(String, String)> {
+    let infos = library_law(law.name()).map(|l| l.params()).unwrap_or(&[]);
+    law.named_params()
+        .iter()
+        .map(|(name, v)| {
+            let note = infos.iter().find(|i| i.name == *name).map_or_else(
+                || "(no metadata in indentify_laws)".to_string(),
+                |i| format!("{} ({}), in {}", i.description, i.unit, i.range_text()),
+            );
+            (format!("{name}: {},", num(*v)), note)
+        })
+        .collect()
+}
+
+/// Appends `indent + code  // comment` lines with the comments aligned.
+fn block(out: &mut String, indent: &str, lines: &[(String, String)]) {
+    let width = lines.iter().map(|(c, _)| c.len()).max().unwrap_or(0);
+    for (code, comment) in lines {
+        out.push_str(&format!("{indent}{code:<width$} // {comment}\n"));
+    }
+}
+
+/// A float as RON text that parses back to the same bits (`20000.0`, `1e-10`).
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// One-line RON of a serialized value: `Cone(half_angle_deg: 68.0)`, `[0.0, 1.0]`.
+fn ron_inline(v: &Value) -> String {
+    let fields = |map: &serde_json::Map<String, Value>| {
+        map.iter()
+            .map(|(k, v)| format!("{k}: {}", ron_inline(v)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match v {
+        Value::Object(map) => match map.iter().next() {
+            Some((variant, Value::Object(inner)))
+                if map.len() == 1 && variant.starts_with(|c: char| c.is_ascii_uppercase()) =>
+            {
+                format!("{variant}({})", fields(inner))
+            }
+            _ => format!("({})", fields(map)),
+        },
+        Value::Array(a) => format!(
+            "[{}]",
+            a.iter().map(ron_inline).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Number(n) => match n.as_f64() {
+            Some(f) if n.is_f64() => num(f),
+            _ => n.to_string(),
+        },
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::parse;
+    use indentify_contact::Punch;
+
+    #[test]
+    fn every_template_parses_back_exactly() {
+        for r in Reference::ALL {
+            let text = template(r);
+            let cfg = parse(&text, "template").unwrap();
+            assert_eq!(cfg, r.config(), "{text}");
+            cfg.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn annotated_round_trips_every_punch_and_odd_numbers() {
+        let punches = [
+            Punch::Sphere { radius: 0.25 },
+            Punch::Flat { radius: 1e-3 },
+            Punch::SpheroCone {
+                radius: 0.1,
+                half_angle_deg: 70.3,
+            },
+            Punch::Tabulated {
+                r: vec![0.0, 0.1, 1.0],
+                z: vec![0.0, 0.01, 0.7],
+            },
+        ];
+        for punch in punches {
+            let mut cfg = Reference::R2NortonHoff.config();
+            cfg.punch = punch;
+            cfg.solver.residual_tol = 1.234_567_890_123e-11;
+            if let Specimen::Cylinder { radius, .. } = &mut cfg.specimen {
+                *radius = 1.0 / 3.0;
+            }
+            let text = annotated(&cfg, &[]);
+            assert_eq!(parse(&text, "t").unwrap(), cfg, "{text}");
+        }
+    }
+
+    #[test]
+    fn shipped_examples_are_the_init_output() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        for (kind, r) in [
+            ("elastic", Reference::R0Elastic),
+            ("maxwell", Reference::R1Maxwell),
+            ("norton-hoff", Reference::R2NortonHoff),
+        ] {
+            let shipped = std::fs::read_to_string(dir.join(r.example_file())).unwrap();
+            assert!(
+                shipped == template(r),
+                "examples/{} is stale: regenerate it with \
+                 `cargo run -p indentify-cli -- init {kind} > examples/{}`",
+                r.example_file(),
+                r.example_file()
+            );
+        }
+    }
+
+    #[test]
+    fn template_comments_carry_library_ranges() {
+        let t = template(Reference::R2NortonHoff);
+        assert!(t.contains("sY: 500.0,"), "{t}");
+        assert!(t.contains("nu: 0.3,") && t.contains("(-1, 0.5)"), "{t}");
+    }
+}
