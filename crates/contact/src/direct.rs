@@ -425,6 +425,12 @@ pub struct DirectSolver {
 }
 
 impl DirectSolver {
+    /// The constrained tangent system of the last step solved (see
+    /// [`ConstrainedSystem::matrix`]).
+    pub fn system(&self) -> &ConstrainedSystem {
+        &self.system
+    }
+
     /// Analyses the model's pattern once.
     ///
     /// # Errors

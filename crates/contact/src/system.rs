@@ -183,6 +183,18 @@ impl ConstrainedSystem {
         }
     }
 
+    /// The current tangent with its constraints, as assembled for the last Newton iteration
+    /// (constrained rows and columns replaced by their diagonal: the matrix the direct
+    /// solver factorizes), as a full symmetric `sprs` matrix over the equations, and which
+    /// equations are constrained (active contact dofs).
+    pub fn matrix(&self, model: &Model) -> (sprs::CsMat<f64>, Vec<bool>) {
+        let mut values = vec![0.0; self.k_values.len()];
+        model
+            .pattern
+            .constrain(&self.k_values, &self.constrained, &mut values);
+        (model.pattern.to_csmat(&values), self.constrained.clone())
+    }
+
     /// Whether equation `e` is currently constrained.
     pub fn is_constrained(&self, e: usize) -> bool {
         self.constrained[e]

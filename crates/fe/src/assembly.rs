@@ -278,6 +278,31 @@ impl Pattern {
         }
     }
 
+    /// The symmetric matrix whose lower triangle `values` holds (on this pattern) as a full
+    /// `sprs` CSC matrix over the equations, for users who inspect or reuse the matrices
+    /// (scipy reads it through Matrix Market, `sprs::io::write_matrix_market`). Entries that
+    /// are exactly zero (the rows and columns of constrained equations) are not stored.
+    ///
+    /// # Panics
+    /// If `values` does not have [`Pattern::nnz`] entries.
+    pub fn to_csmat(&self, values: &[f64]) -> sprs::CsMat<f64> {
+        assert_eq!(values.len(), self.nnz(), "one value per pattern entry");
+        let mut tri = sprs::TriMat::with_capacity((self.n, self.n), 2 * values.len());
+        for j in 0..self.n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[p];
+                if values[p] == 0.0 {
+                    continue;
+                }
+                tri.add_triplet(i, j, values[p]);
+                if i != j {
+                    tri.add_triplet(j, i, values[p]);
+                }
+            }
+        }
+        tri.to_csc()
+    }
+
     /// Copies `src` into `dst` with the rows and columns of the constrained equations
     /// replaced by the identity scaled by the original diagonal (kept for conditioning).
     /// Returns nothing; the constrained equation `k` then reads `K_kk x_k = K_kk xbar_k`.

@@ -73,8 +73,10 @@ impl Problem {
                 why: "all weights are zero".into(),
             });
         }
+        // with checkpoints, the states are saved every `checkpoint_every` steps and the
+        // gradient replays the segments (bounded memory); otherwise every step's fields
         let solver_options = SolverOptions {
-            record_fields: true,
+            record_fields: solver_options.checkpoint_every == 0,
             ..solver_options
         };
         Ok(Problem {
@@ -348,13 +350,24 @@ impl<'p> Evaluator<'p> {
             return Err(IdentifyError::Optimizer("trajectory missing".into()));
         };
         let rho = p.dj_df(traj);
-        let g = self
-            .adjoint
-            .gradient(&p.model, p.law, c, traj, &rho)
-            .map_err(|source| IdentifyError::Adjoint {
-                params: c.to_vec(),
-                source,
-            })?;
+        let g = if p.solver_options.checkpoint_every > 0 {
+            self.adjoint.gradient_replayed(
+                &p.model,
+                p.law,
+                c,
+                traj,
+                &rho,
+                &mut self.solver,
+                &p.schedule,
+                &p.solver_options,
+            )
+        } else {
+            self.adjoint.gradient(&p.model, p.law, c, traj, &rho)
+        }
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
         e.gradient = Some(g.dj_dc.clone());
         Ok((e.cost, g.dj_dc))
     }
@@ -377,6 +390,26 @@ impl<'p> Evaluator<'p> {
         };
         let Some(traj) = e.traj.as_ref() else {
             return Err(IdentifyError::Optimizer("trajectory missing".into()));
+        };
+        // the forward sensitivities need every step's fields: a checkpointed trajectory
+        // is recorded again in full for them (the memory of one unbounded run)
+        let full;
+        let traj = if traj.fields.len() == traj.steps.len() + 1 {
+            traj
+        } else {
+            let opts = SolverOptions {
+                record_fields: true,
+                checkpoint_every: 0,
+                ..p.solver_options.clone()
+            };
+            full = self
+                .solver
+                .run(&p.model, p.law, c, &p.schedule, &opts)
+                .map_err(|source| IdentifyError::Forward {
+                    params: c.to_vec(),
+                    source,
+                })?;
+            &full
         };
         let sens = self
             .adjoint

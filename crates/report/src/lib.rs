@@ -56,6 +56,7 @@
 //!         IterationRecord { iteration: 1, cost: 1e-9, grad_norm: Some(1e-4), params: vec![72e3] },
 //!     ],
 //!     figures: vec![Figure::ForceDepth.link("force_depth.svg")],
+//!     warnings: Vec::new(),
 //! };
 //!
 //! let md = report.to_markdown();

@@ -29,6 +29,10 @@ impl Report {
         let mut out = String::new();
         line!(out, "# {}", escape(&self.title));
         line!(out);
+        for w in &self.warnings {
+            line!(out, "> **Warning:** {}", escape(w));
+            line!(out);
+        }
         self.source_section(&mut out);
         self.parameter_section(&mut out);
         self.fit_section(&mut out);

@@ -34,6 +34,10 @@ pub struct Report {
     pub history: Vec<IterationRecord>,
     /// Figure files to link from the Markdown (paths relative to the Markdown file).
     pub figures: Vec<FigureLink>,
+    /// Where the model is stretched beyond its validity, or the data fall short (shown
+    /// first in the Markdown).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Origin of the measured curve.

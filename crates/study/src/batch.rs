@@ -298,6 +298,9 @@ pub struct BatchOptions {
     /// Stops the batch: running indents end after their current iteration, no new one
     /// starts.
     pub cancel: Cancel,
+    /// Memory for the recorded runs of all workers together (bytes): an indent whose
+    /// recording would exceed its share checkpoints (see [`IdentifyOptions::memory_budget`]).
+    pub memory_budget: usize,
 }
 
 impl BatchOptions {
@@ -313,6 +316,16 @@ impl BatchOptions {
             overrides: Overrides::default(),
             figures: false,
             cancel: Cancel::default(),
+            memory_budget: identify::DEFAULT_MEMORY_BUDGET,
+        }
+    }
+
+    /// The number of worker threads.
+    pub fn workers(&self) -> usize {
+        if self.jobs == 0 {
+            std::thread::available_parallelism().map_or(1, usize::from)
+        } else {
+            self.jobs
         }
     }
 }
@@ -502,11 +515,7 @@ pub fn run(opts: &BatchOptions, observer: &dyn BatchObserver) -> Result<BatchSum
         .collect();
     let skipped = in_shard.len() - pending.len();
     observer.started(pending.len(), skipped);
-    let jobs = if opts.jobs == 0 {
-        std::thread::available_parallelism().map_or(1, usize::from)
-    } else {
-        opts.jobs
-    };
+    let jobs = opts.workers();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
@@ -581,6 +590,9 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         noise: None,
         figures: opts.figures,
         cancel: opts.cancel.clone(),
+        checkpoint: None,
+        // every worker holds one run: the budget is shared between them
+        memory_budget: opts.memory_budget / opts.workers().max(1),
     };
     let mut status = IndentStatus {
         id: indent.id.clone(),

@@ -328,6 +328,14 @@ pub enum Mesher {
 }
 
 impl Mesher {
+    /// The specimen's radius and height (mm).
+    pub fn size(&self) -> (f64, f64) {
+        match self {
+            Mesher::Cylinder(m) => (m.radius, m.height),
+            Mesher::Zoned(m) => (m.radius, m.height),
+        }
+    }
+
     /// The mesh.
     ///
     /// # Errors
@@ -822,6 +830,11 @@ impl Config {
         };
         let h_max = schedule.depth.iter().copied().fold(0.0, f64::max);
         let mesher = self.specimen.mesher(&self.punch, h_max)?;
+        let (radius, height) = mesher.size();
+        let warnings = validity(&self.punch, h_max, radius, height, name)?;
+        for w in &warnings {
+            tracing::warn!("warning: {w}");
+        }
         let (mesh, moved, rim) = mesher
             .build_for(&self.punch)
             .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
@@ -846,6 +859,7 @@ impl Config {
             model,
             rim,
             measured,
+            warnings,
         })
     }
 }
@@ -874,6 +888,89 @@ pub struct Prepared {
     pub rim: Rim,
     /// The measured record driving the schedule, if the configuration has `data`.
     pub measured: Option<Measured>,
+    /// Where the model is stretched beyond its validity (also logged as warnings).
+    pub warnings: Vec<String>,
+}
+
+/// Largest representative strain (Tabor: `0.2 cot(alpha)` for a cone, `0.2 a / R` for a
+/// sphere) under which the small-strain model is taken as valid without a warning.
+pub const REPRESENTATIVE_STRAIN_LIMIT: f64 = 0.1;
+
+/// Refuses what cannot be right (a depth reaching the specimen's bottom, a contact zone
+/// that may reach its outer radius, a sphere pushed past its radius) and returns warnings
+/// where the small-strain model is stretched (a sphere deeper than 0.3 R, a representative
+/// strain beyond [`REPRESENTATIVE_STRAIN_LIMIT`]).
+///
+/// # Errors
+/// The refusals, each with the size it would need.
+pub fn validity(
+    punch: &Punch,
+    h_max: f64,
+    radius: f64,
+    height: f64,
+    name: &str,
+) -> Result<Vec<String>> {
+    if !(h_max.is_finite()) {
+        bail!("{name}: the maximum depth {h_max} mm is not finite");
+    }
+    if h_max >= 0.5 * height {
+        bail!(
+            "{name}: the punch goes {} mm deep into a specimen {} mm high: the depth must stay \
+             a small fraction of the height (the bottom is fixed); give specimen.height >= {} \
+             mm (20 times the depth), or use specimen: Auto()",
+            short(h_max),
+            short(height),
+            short(20.0 * h_max)
+        );
+    }
+    let a = punch.contact_radius_bound(h_max);
+    if !(a < radius) {
+        bail!(
+            "{name}: at the depth {} mm the contact may spread over {} mm, and the specimen's \
+             radius is {} mm: the contact would reach its outer edge; give specimen.radius >= \
+             {} mm (10 contact radii), or use specimen: Auto()",
+            short(h_max),
+            short(a),
+            short(radius),
+            short(10.0 * a)
+        );
+    }
+    let mut warnings = Vec::new();
+    let equivalent = punch.equivalent();
+    if let Punch::Sphere { radius: r } = &equivalent {
+        if h_max >= *r {
+            bail!(
+                "{name}: the sphere of radius {} mm is pushed {} mm deep, past its own radius: \
+                 its profile ends there; keep the depth below about 0.3 R",
+                short(*r),
+                short(h_max)
+            );
+        }
+        if h_max > 0.3 * r {
+            let a = (h_max * (2.0 * r - h_max)).sqrt();
+            warnings.push(format!(
+                "{name}: the sphere goes {} R deep (h = {} mm, R = {} mm): beyond about 0.3 R \
+                 the small-strain model is stretched (representative strain 0.2 a/R = {:.0}%)",
+                short(h_max / r),
+                short(h_max),
+                short(*r),
+                100.0 * 0.2 * a / r
+            ));
+        }
+    }
+    if let Some(alpha) = equivalent.half_angle_deg() {
+        let strain = 0.2 / alpha.to_radians().tan();
+        if strain > REPRESENTATIVE_STRAIN_LIMIT {
+            warnings.push(format!(
+                "{name}: a cone of half-angle {} deg has a representative strain of {:.0}% \
+                 (0.2 cot(alpha)), beyond the {:.0}% where the small-strain model holds",
+                short(alpha),
+                100.0 * strain,
+                100.0 * REPRESENTATIVE_STRAIN_LIMIT
+            ));
+        }
+    }
+    Ok(warnings)
 }
 
 /// Reads, overrides and validates the configuration file `path`.
@@ -1327,14 +1424,13 @@ mod tests {
         let p = r0().prepare("r0").unwrap();
         assert_eq!(p.rim, Rim::Smooth);
         assert_eq!(p.model.mesh, p.mesher.build().unwrap());
-        // a punch wider than the specimen: reported, untreated
+        // a punch wider than the specimen: refused, with the size it needs
         let mut wide = r0();
         wide.punch = Punch::Flat { radius: 12.0 };
-        let p = wide.prepare("wide").unwrap();
+        let e = format!("{:#}", wide.prepare("wide").map(|_| ()).unwrap_err());
         assert!(
-            matches!(p.rim, Rim::OffCorner { inner: 10.0, .. }),
-            "{:?}",
-            p.rim
+            e.contains("would reach its outer edge") && e.contains("specimen.radius >= 120 mm"),
+            "{e}"
         );
     }
 

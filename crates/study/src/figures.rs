@@ -35,6 +35,8 @@ pub struct Inputs<'a> {
     pub f_final: &'a [f64],
     /// The iteration history (history.csv).
     pub history: &'a [IterationRecord],
+    /// Where the model is stretched or the data fall short.
+    pub warnings: &'a [String],
 }
 
 /// The files written.
@@ -193,6 +195,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         ),
         history,
         figures: Vec::new(),
+        warnings: inputs.warnings.to_vec(),
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();

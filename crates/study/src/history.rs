@@ -15,6 +15,20 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::IterationRecord;
 
+/// `fields` as one CSV line (no newline), quoted where needed, by the `csv` crate.
+fn csv_line<I: IntoIterator<Item = String>>(fields: I) -> String {
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    let fields: Vec<String> = fields.into_iter().collect();
+    w.write_record(&fields).expect("writing to memory");
+    let bytes = w.into_inner().expect("writing to memory");
+    String::from_utf8(bytes)
+        .expect("the fields are text")
+        .trim_end_matches('\n')
+        .to_string()
+}
+
 /// The header line for a law with parameters `names`.
 pub fn header(names: &[&str]) -> String {
     let mut cols = vec!["iteration".to_string()];
@@ -30,7 +44,7 @@ pub fn header(names: &[&str]) -> String {
         ]
         .map(String::from),
     );
-    cols.join(",")
+    csv_line(cols)
 }
 
 /// One record as a CSV line (no newline).
@@ -43,7 +57,7 @@ pub fn line(r: &IterationRecord) -> String {
     cols.push(r.adjoint_solves.to_string());
     cols.push(r.sensitivity_solves.to_string());
     cols.push(r.seconds.to_string());
-    cols.join(",")
+    csv_line(cols)
 }
 
 /// Every complete line of the history file `path` for `n_params` parameters (an
@@ -60,9 +74,18 @@ pub fn read_all(path: &Path, n_params: usize) -> Vec<IterationRecord> {
         .unwrap_or_default()
 }
 
-/// Parses a line written by [`line`] for `n_params` parameters.
+/// Parses a line written by [`line`] for `n_params` parameters (`None` for anything
+/// else, e.g. a line cut short by an interruption).
 fn parse_line(text: &str, n_params: usize) -> Option<IterationRecord> {
-    let f: Vec<&str> = text.split(',').map(str::trim).collect();
+    let record = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes())
+        .records()
+        .next()?
+        .ok()?;
+    let f: Vec<&str> = record.iter().collect();
     if f.len() != n_params + 7 {
         return None;
     }

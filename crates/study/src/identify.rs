@@ -51,6 +51,21 @@ pub struct IdentifyOptions {
     pub figures: bool,
     /// Stops the run after its current iteration when raised.
     pub cancel: Cancel,
+    /// Record no fields: save the solver state every N schedule steps and replay the
+    /// segments for each gradient (memory bounded; same results to round-off).
+    pub checkpoint: Option<usize>,
+    /// Without `checkpoint`, checkpoint automatically (every about sqrt(steps) steps) when
+    /// recording every step's fields would take more than this many bytes.
+    pub memory_budget: usize,
+}
+
+/// The default [`IdentifyOptions::memory_budget`]: 1 GiB.
+pub const DEFAULT_MEMORY_BUDGET: usize = 1 << 30;
+
+/// Bytes that recording every step's fields takes for a model of `n_dofs` dofs and `n_qp`
+/// Gauss points over `steps` steps (the dominant part of `Trajectory::recorded_bytes`).
+pub fn recording_bytes(n_dofs: usize, n_qp: usize, steps: usize) -> usize {
+    (steps + 1) * (8 * n_dofs + 32 * n_qp)
 }
 
 impl IdentifyOptions {
@@ -67,6 +82,8 @@ impl IdentifyOptions {
             noise: None,
             figures: true,
             cancel: Cancel::default(),
+            checkpoint: None,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
         }
     }
 }
@@ -163,6 +180,8 @@ pub struct IdentifyOutcome {
     pub files: Option<ReportFiles>,
     /// Whether the run resumed an earlier one.
     pub resumed: bool,
+    /// Where the model is stretched beyond its validity (also in the report).
+    pub warnings: Vec<String>,
     /// Wall time of the whole pipeline (s).
     pub wall_seconds: f64,
 }
@@ -251,12 +270,14 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         d.file = absolute(path);
     }
     let prepared = prepare(&cfg, &name)?;
-    let solver_opts = cfg.solver.options(false);
+    let mut solver_opts = cfg.solver.options(false);
     let data = load_data(&prepared, opts, &name, law, &law_values, &solver_opts)?;
+    solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
     let Prepared {
         schedule,
         model,
         measured,
+        warnings,
         ..
     } = prepared;
     let problem = Problem::new(
@@ -333,6 +354,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         fit,
         files: None,
         resumed: resume_from.is_some(),
+        warnings,
         wall_seconds: 0.0,
     };
     if let Some(p) = paths {
@@ -346,6 +368,37 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// The checkpoint interval of a run: the one asked, or about sqrt(steps) when recording
+/// every step would exceed the memory budget, or 0 (record everything).
+fn checkpoint_interval(opts: &IdentifyOptions, prepared: &Prepared) -> Result<usize> {
+    if let Some(n) = opts.checkpoint {
+        if n == 0 {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                "--checkpoint 0 is not allowed: expected a number of schedule steps >= 1",
+            ));
+        }
+        return Ok(n);
+    }
+    let steps = prepared.schedule.n_steps();
+    let bytes = recording_bytes(
+        prepared.model.disc.n_dofs(),
+        prepared.model.disc.n_qp(),
+        steps,
+    );
+    if bytes <= opts.memory_budget {
+        return Ok(0);
+    }
+    let n = ((steps as f64).sqrt().ceil() as usize).max(1);
+    tracing::info!(
+        "  recording the {steps} steps' fields would take {} (budget {}): checkpointing every \
+         {n} steps instead",
+        crate::format::bytes(bytes),
+        crate::format::bytes(opts.memory_budget)
+    );
+    Ok(n)
 }
 
 /// The files of a report directory.
@@ -611,6 +664,7 @@ fn write_report(
             f_start: &outcome.fit.f_start,
             f_final: &outcome.fit.f_final,
             history: &history_records,
+            warnings: &outcome.warnings,
         },
     );
     match written {
@@ -721,6 +775,8 @@ struct ResultJson {
     converged: bool,
     seconds: f64,
     resumed: bool,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     fit_quality: Option<FitJson>,
     identifiability: Option<IdentifiabilityJson>,
@@ -794,6 +850,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         converged: r.stop_reason.is_converged(),
         seconds: r.seconds,
         resumed: o.resumed,
+        warnings: o.warnings.clone(),
         fit_quality: o.quality.as_ref().map(|q| FitJson {
             r2: q.r2,
             rms: q.rms,

@@ -27,6 +27,10 @@ pub struct SimulateOptions {
     pub out: Option<PathBuf>,
     /// Write the field series (VTU and steps.pvd) into this folder.
     pub vtu: Option<PathBuf>,
+    /// Write the constrained tangent of schedule step N (from 1) into this folder as
+    /// Matrix Market (`K_step_N.mtx`, through sprs), with `equations.csv` (equation, node,
+    /// component, r, z, constrained).
+    pub matrix_market: Option<(PathBuf, usize)>,
 }
 
 impl SimulateOptions {
@@ -38,6 +42,7 @@ impl SimulateOptions {
             noise: None,
             out: None,
             vtu: None,
+            matrix_market: None,
         }
     }
 }
@@ -67,6 +72,8 @@ pub struct SimulateOutcome {
     pub measured: Option<Measured>,
     /// Field states written to `vtu`.
     pub vtu_states: Option<usize>,
+    /// The Matrix Market file written, with its size and non-zeros.
+    pub matrix: Option<(PathBuf, usize, usize)>,
     /// Why the run stopped early (a step that failed even after cutting); the curve is
     /// then the converged part.
     pub failure: Option<String>,
@@ -118,6 +125,18 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     if let Some(dir) = &opts.vtu {
         crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
     }
+    if let Some((dir, step)) = &opts.matrix_market {
+        if *step == 0 || *step > schedule.n_steps() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "--at-step {step} is not a step of `{name}`: expected 1 to {}",
+                    schedule.n_steps()
+                ),
+            ));
+        }
+        crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
+    }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
     let (trajectory, failure) = match solver.run(&model, law, &params, &schedule, &solver_opts) {
         Ok(t) => (t, None),
@@ -156,6 +175,10 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         ),
         None => None,
     };
+    let matrix = match &opts.matrix_market {
+        Some((dir, step)) => Some(write_matrix(dir, *step, &model, law, &params, &schedule)?),
+        None => None,
+    };
     Ok(SimulateOutcome {
         config: name,
         law: law.name(),
@@ -173,7 +196,59 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         trajectory,
         measured: prepared.measured,
         vtu_states,
+        matrix,
         failure,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Runs the first `step` schedule steps again and writes the constrained tangent of the
+/// last one (Matrix Market, full symmetric storage) and the equation map.
+fn write_matrix(
+    dir: &std::path::Path,
+    step: usize,
+    model: &indentify_contact::Model,
+    law: &'static dyn indentify_laws::Law,
+    params: &[f64],
+    schedule: &indentify_contact::Schedule,
+) -> Result<(PathBuf, usize, usize)> {
+    let prefix = indentify_contact::Schedule {
+        t: schedule.t[..=step].to_vec(),
+        depth: schedule.depth[..=step].to_vec(),
+    };
+    let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
+    let opts = indentify_contact::SolverOptions {
+        record_fields: false,
+        ..Default::default()
+    };
+    solver
+        .run(model, law, params, &prefix, &opts)
+        .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
+    let (k, constrained) = solver.system().matrix(model);
+    let path = dir.join(format!("K_step_{step}.mtx"));
+    let tmp = dir.join(format!(".K_step_{step}.mtx.tmp-{}", std::process::id()));
+    sprs::io::write_matrix_market(&tmp, &k)
+        .and_then(|()| std::fs::rename(&tmp, &path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            Error::msg(
+                ErrorKind::Io,
+                format!("cannot write `{}`: {e}", path.display()),
+            )
+        })?;
+    let mut eqs = String::from("equation,node,component,r,z,constrained\n");
+    for (d, &e) in model.dofs.eq.iter().enumerate() {
+        if e == indentify_fe::dofs::NO_EQ {
+            continue;
+        }
+        let node = d / 2;
+        let [r, z] = model.mesh.nodes[node];
+        eqs.push_str(&format!(
+            "{e},{node},{},{r},{z},{}\n",
+            if d % 2 == 0 { "r" } else { "z" },
+            u8::from(constrained[e as usize])
+        ));
+    }
+    crate::atomic::write(&dir.join("equations.csv"), eqs).kind(ErrorKind::Io)?;
+    Ok((path, k.rows(), k.nnz()))
 }

@@ -72,6 +72,11 @@ pub struct RunArgs {
     /// Also draw each indent's figures and report.md (slower).
     #[arg(long)]
     pub figures: bool,
+
+    /// Memory for the recorded runs of all workers together (MB): an indent whose
+    /// recording would exceed its share checkpoints instead.
+    #[arg(long, value_name = "MB", default_value_t = 1024)]
+    pub memory_budget: usize,
 }
 
 /// `batch slurm`.
@@ -171,6 +176,7 @@ fn run_batch(a: &RunArgs) -> Result<()> {
     opts.overrides.method = a.method;
     opts.overrides.max_iterations = a.max_iter;
     opts.figures = a.figures;
+    opts.memory_budget = a.memory_budget.saturating_mul(1 << 20);
     opts.cancel = crate::interrupt::cancel_on_ctrl_c();
     let console = Console {
         bar: std::sync::Mutex::new(None),

@@ -62,6 +62,17 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
 
+    /// Bound the memory: record no fields, save the solver state every N schedule steps and
+    /// replay the segments for each gradient (same result to round-off; Levenberg-Marquardt
+    /// and the final identifiability summary still record one run in full).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub checkpoint: Option<u32>,
+
+    /// Without --checkpoint, checkpoint automatically when recording every step's fields
+    /// would take more than this many MB.
+    #[arg(long, value_name = "MB", default_value_t = 1024)]
+    pub memory_budget: usize,
+
     /// Synthesized data only: multiplicative noise F (1 + a xi), xi uniform in [-1, 1].
     #[arg(long, value_name = "A", conflicts_with = "data")]
     pub noise: Option<f64>,
@@ -190,6 +201,8 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
         noise: args.noise.map(|a| (a, args.seed)),
         figures: true,
         cancel: crate::interrupt::cancel_on_ctrl_c(),
+        checkpoint: args.checkpoint.map(|n| n as usize),
+        memory_budget: args.memory_budget.saturating_mul(1 << 20),
     })
 }
 

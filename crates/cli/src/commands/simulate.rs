@@ -33,6 +33,16 @@ pub struct Args {
     #[arg(long, value_name = "A")]
     pub noise: Option<f64>,
 
+    /// Write the constrained tangent of step N (see --at-step) into DIR as Matrix Market
+    /// (K_step_N.mtx, full symmetric, through sprs; scipy.io.mmread reads it) with
+    /// equations.csv (equation, node, component, r, z, constrained).
+    #[arg(long, value_name = "DIR", requires = "at_step")]
+    pub matrix_market: Option<PathBuf>,
+
+    /// The schedule step (from 1) whose tangent --matrix-market writes.
+    #[arg(long, value_name = "N", requires = "matrix_market")]
+    pub at_step: Option<usize>,
+
     /// Seed of the noise generator (with --noise).
     #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
     pub seed: u64,
@@ -56,6 +66,7 @@ pub fn run(args: &Args) -> Result<()> {
         noise: args.noise.map(|a| (a, args.seed)),
         out: args.out.clone(),
         vtu: args.vtu.clone(),
+        matrix_market: args.matrix_market.clone().zip(args.at_step),
     })?;
     if args.out.is_none() {
         output::write_curve(None, &o.rows)?;
@@ -118,6 +129,13 @@ pub fn run(args: &Args) -> Result<()> {
         tracing::info!(
             "  {n} states written to `{}` (open steps.pvd in ParaView)",
             dir.display()
+        );
+    }
+    if let Some((path, n, nnz)) = &o.matrix {
+        tracing::info!(
+            "  tangent of step {} ({n} equations, {nnz} non-zeros) written to `{}`",
+            args.at_step.unwrap_or(0),
+            path.display()
         );
     }
     if let Some(why) = o.failure {

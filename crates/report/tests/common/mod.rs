@@ -124,6 +124,7 @@ pub fn nano_report() -> Report {
             FigureLink::new("force-depth", "fig/force_depth.svg"),
             FigureLink::new("convergence", "fig/convergence.svg"),
         ],
+        warnings: Vec::new(),
     }
 }
 

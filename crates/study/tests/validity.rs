@@ -1,0 +1,81 @@
+//! Meaningless set-ups are refused before any solve with the size they would need, and a
+//! model stretched beyond small strain says so.
+
+use indentify_study::ConfigSource;
+use indentify_study::identify::prepare;
+
+fn prepared(sets: &[&str]) -> Result<indentify_study::config::Prepared, indentify_study::Error> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let cfg = ConfigSource::Default.load(&sets)?;
+    prepare(&cfg, "r1")
+}
+
+#[test]
+fn depths_beyond_the_specimen_and_contact_at_its_edge_are_refused() {
+    let too_deep = ["history.segments.0.depth=50", "history.segments.1.depth=50"];
+    let e = prepared(&too_deep).map(|_| ()).unwrap_err();
+    let all = e.messages().join("\n");
+    assert!(
+        all.contains("50 mm deep into a specimen 10 mm high"),
+        "{all}"
+    );
+    assert!(all.contains("specimen.height >= 1000 mm"), "{all}");
+    let absurd = [
+        "history.segments.0.depth=1e12",
+        "history.segments.1.depth=1e12",
+    ];
+    assert!(prepared(&absurd).is_err());
+    // a wide contact on a narrow specimen
+    let e = prepared(&["specimen.radius=0.25"]).map(|_| ()).unwrap_err();
+    let all = e.messages().join("\n");
+    assert!(all.contains("would reach its outer edge"), "{all}");
+    assert!(all.contains("specimen.radius >="), "{all}");
+    // the reference problem itself is fine and silent
+    assert!(prepared(&[]).unwrap().warnings.is_empty());
+}
+
+#[test]
+fn deep_spheres_are_refused_or_warned() {
+    let sphere = |depth: &str| {
+        let text = indentify_study::DEFAULT_CONFIG.replace(
+            "punch: Cone(half_angle_deg: 68.0)",
+            "punch: Sphere(radius: 0.2)",
+        );
+        let sets: Vec<String> = [
+            format!("history.segments.0.depth={depth}"),
+            format!("history.segments.1.depth={depth}"),
+        ]
+        .into();
+        let cfg = ConfigSource::Text {
+            text,
+            name: "sphere".into(),
+        }
+        .load(&sets)
+        .unwrap();
+        prepare(&cfg, "sphere")
+    };
+    let e = sphere("2.0").map(|_| ()).unwrap_err().messages().join("\n");
+    assert!(e.contains("past its own radius"), "{e}");
+    let w = sphere("0.1").unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("0.5 R deep") && w[0].contains("small-strain"),
+        "{}",
+        w[0]
+    );
+    assert!(sphere("0.02").unwrap().warnings.is_empty());
+    // a cube corner's representative strain is beyond small strain
+    let text = indentify_study::DEFAULT_CONFIG
+        .replace("punch: Cone(half_angle_deg: 68.0)", "punch: CubeCorner()");
+    let cfg = ConfigSource::Text {
+        text,
+        name: "cc".into(),
+    }
+    .load(&[])
+    .unwrap();
+    let w = prepare(&cfg, "cc").unwrap().warnings;
+    assert!(
+        w.iter().any(|w| w.contains("representative strain of 22%")),
+        "{w:?}"
+    );
+}
