@@ -106,3 +106,12 @@ fn simulate_out_is_replaced_whole_or_kept() {
     let bad = indentify(&coarse(&["simulate", &r0, "--out", "/no/such/dir/c.csv"]));
     assert_rejected(&bad, &["does not exist"], "bad folder");
 }
+
+#[test]
+fn a_negative_noise_is_read_as_a_value_and_refused_with_its_range() {
+    let r0 = example("r0-elastic.ron");
+    let o = indentify(&["simulate", &r0, "--noise", "-1"]);
+    assert_rejected(&o, &["--noise -1 is not allowed", "[0, 1)"], "simulate");
+    let o = indentify(&["identify", "--noise", "-0.5", "--out", "/nonexistent/x"]);
+    assert_rejected(&o, &["--noise -0.5 is not allowed"], "identify");
+}

@@ -88,6 +88,20 @@ pub struct Measured {
 }
 
 impl Measured {
+    /// `` `FILE` (anton-paar, test 1)``.
+    pub fn label(&self) -> String {
+        format!(
+            "`{}` ({}{})",
+            self.path.display(),
+            self.raw.meta.format.name(),
+            self.raw
+                .meta
+                .test_name
+                .as_ref()
+                .map_or(String::new(), |t| format!(", test {t}"))
+        )
+    }
+
     /// `` `FILE` (anton-paar, test 1): 1000 samples -> 60 points (zero point: ...; ...)``.
     pub fn summary(&self) -> String {
         let steps: Vec<String> = self
@@ -96,14 +110,8 @@ impl Measured {
             .map(|a| format!("{}: {}", a.step, a.description))
             .collect();
         format!(
-            "`{}` ({}{}): {} samples -> {} points, h_max {:.4e} mm, F_max {:.4e} N{}",
-            self.path.display(),
-            self.raw.meta.format.name(),
-            self.raw
-                .meta
-                .test_name
-                .as_ref()
-                .map_or(String::new(), |t| format!(", test {t}")),
+            "{}: {} samples -> {} points, h_max {:.4e} mm, F_max {:.4e} N{}",
+            self.label(),
             self.raw.t.len(),
             self.record.t.len(),
             self.record.h_max(),
@@ -1063,6 +1071,23 @@ fn describe_ron_error(src: &str, name: &str, e: &ron::error::SpannedError) -> St
         },
     };
     msg.push_str(&format!(" ({location})"));
+    // `nr: 20.5`: the integer 20 was read, then `.5` is where a comma should be
+    let before: String = src
+        .lines()
+        .nth(pos.line.saturating_sub(1))
+        .map(|l| l.chars().take(pos.col.saturating_sub(1)).collect())
+        .unwrap_or_default();
+    let after: String = src
+        .lines()
+        .nth(pos.line.saturating_sub(1))
+        .map(|l| l.chars().skip(pos.col.saturating_sub(1)).take(2).collect())
+        .unwrap_or_default();
+    if matches!(e.code, E::ExpectedComma | E::ExpectedStructLikeEnd)
+        && before.trim_end().ends_with(|c: char| c.is_ascii_digit())
+        && (after.starts_with('.') || after.starts_with('e') || after.starts_with('E'))
+    {
+        msg.push_str(": this field takes an integer (a whole number such as 20), not a decimal");
+    }
     if let Some(text) = src.lines().nth(pos.line.saturating_sub(1)) {
         let gutter = pos.line.to_string();
         let caret_at: String = text
@@ -1321,6 +1346,10 @@ mod tests {
         Reference::R0Elastic.config()
     }
 
+    fn r0_text() -> String {
+        crate::templates::template(Reference::R0Elastic)
+    }
+
     fn set(cfg: Config, s: &str) -> Result<Config> {
         apply_sets(cfg, &[s.to_string()])
     }
@@ -1432,6 +1461,14 @@ mod tests {
             e.contains("would reach its outer edge") && e.contains("specimen.radius >= 120 mm"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_decimal_for_an_integer_says_an_integer_is_expected() {
+        let src = r0_text().replace("nr: 20,", "nr: 20.5,");
+        let e = format!("{:#}", parse(&src, "x.ron").unwrap_err());
+        assert!(e.contains("takes an integer"), "{e}");
+        assert!(e.contains("specimen.nr"), "{e}");
     }
 
     #[test]

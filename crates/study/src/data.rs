@@ -52,6 +52,25 @@ pub fn read_curve(path: &Path) -> Result<Curve> {
 
 /// [`read_curve`] on the bytes of a file called `name`.
 ///
+/// The column separator of a CSV file: `;` or a tab when the first line that is not a
+/// comment has those and no comma (files written with a decimal comma, spreadsheets),
+/// `,` otherwise.
+fn delimiter(bytes: &[u8]) -> u8 {
+    let first = bytes
+        .split(|&b| b == b'\n')
+        .find(|l| !l.starts_with(b"#") && !l.iter().all(u8::is_ascii_whitespace))
+        .unwrap_or(&[]);
+    if first.contains(&b',') {
+        b','
+    } else if first.contains(&b';') {
+        b';'
+    } else if first.contains(&b'\t') {
+        b'\t'
+    } else {
+        b','
+    }
+}
+
 /// # Errors
 /// As [`read_curve`].
 pub fn parse_curve(bytes: &[u8], name: &str) -> Result<Curve> {
@@ -62,6 +81,7 @@ pub fn parse_curve(bytes: &[u8], name: &str) -> Result<Curve> {
         .flexible(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
+        .delimiter(delimiter(bytes))
         .from_reader(bytes);
     let header_record = reader
         .headers()
@@ -204,6 +224,15 @@ mod tests {
 
     fn err(text: &str) -> String {
         format!("{:#}", parse_curve(text.as_bytes(), "d.csv").unwrap_err())
+    }
+
+    #[test]
+    fn semicolons_and_tabs_separate_columns_too() {
+        for sep in [";", "\t"] {
+            let text = format!("t{sep}h{sep}F\n0{sep}0{sep}0\n1{sep}0.1{sep}2.5\n");
+            let c = parse_curve(text.as_bytes(), "x.csv").unwrap();
+            assert_eq!(c.f, [0.0, 2.5], "{sep:?}");
+        }
     }
 
     #[test]

@@ -242,24 +242,15 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         .collect();
     ensure_differentiable(law, &start, "cannot identify from this start")
         .kind(ErrorKind::Config)?;
-    if let Some((a, _)) = opts.noise {
-        if !(0.0..1.0).contains(&a) {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)"
-                ),
-            ));
-        }
-        if cfg.data.is_some() {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "noise perturbs synthesized data only, and `{name}` fits a measured record \
-                     (its `data` section)"
-                ),
-            ));
-        }
+    check_noise(opts.noise)?;
+    if opts.noise.is_some() && cfg.data.is_some() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "noise perturbs synthesized data only, and `{name}` fits a measured record (its \
+                 `data` section)"
+            ),
+        ));
     }
     let paths = match &opts.out {
         Some(out) => Some(check_report_dir(out, opts.resume, opts.force)?),
@@ -368,6 +359,20 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// Refuses a noise amplitude outside [0, 1).
+///
+/// # Errors
+/// A [`ErrorKind::Config`] error naming `--noise` and the range.
+pub fn check_noise(noise: Option<(f64, u64)>) -> Result<()> {
+    match noise {
+        Some((a, _)) if !(0.0..1.0).contains(&a) => Err(Error::msg(
+            ErrorKind::Config,
+            format!("--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The checkpoint interval of a run: the one asked, or about sqrt(steps) when recording
@@ -518,14 +523,8 @@ fn load_data(
 /// `` `FILE` (anton-paar, test 1), 1000 samples, 60 points after preprocessing (...)``.
 fn describe_measured(m: &Measured) -> String {
     format!(
-        "`{}` ({}{}), {} samples, {} points after preprocessing ({})",
-        m.path.display(),
-        m.raw.meta.format.name(),
-        m.raw
-            .meta
-            .test_name
-            .as_ref()
-            .map_or(String::new(), |t| format!(", test {t}")),
+        "{}, {} samples, {} points after preprocessing ({})",
+        m.label(),
         m.raw.t.len(),
         m.record.t.len(),
         if m.applied.is_empty() {

@@ -90,16 +90,7 @@ pub struct SimulateOutcome {
 pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     let start = Instant::now();
     let name = opts.config.name();
-    if let Some((a, _)) = opts.noise {
-        if !(0.0..1.0).contains(&a) {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "--noise {a} is not allowed: expected an amplitude in [0, 1) (0.1 = +-10%)"
-                ),
-            ));
-        }
-    }
+    crate::identify::check_noise(opts.noise)?;
     let cfg = opts.config.load(&opts.sets)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
     let prepared = prepare(&cfg, &name)?;

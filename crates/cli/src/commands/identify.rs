@@ -74,7 +74,12 @@ pub struct Args {
     pub memory_budget: usize,
 
     /// Synthesized data only: multiplicative noise F (1 + a xi), xi uniform in [-1, 1].
-    #[arg(long, value_name = "A", conflicts_with = "data")]
+    #[arg(
+        long,
+        value_name = "A",
+        conflicts_with = "data",
+        allow_negative_numbers = true
+    )]
     pub noise: Option<f64>,
 
     /// Seed of the noise generator (SplitMix64).

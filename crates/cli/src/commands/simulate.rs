@@ -30,7 +30,7 @@ pub struct Args {
     /// Perturb the written force multiplicatively, F_i (1 + A xi_i) with xi_i uniform in
     /// [-1, 1) drawn in row order (the initial row included) from SplitMix64 seeded with
     /// --seed: the same curve on every machine. 0.1 is the paper's 10% noise.
-    #[arg(long, value_name = "A")]
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
     pub noise: Option<f64>,
 
     /// Write the constrained tangent of step N (see --at-step) into DIR as Matrix Market
