@@ -404,5 +404,20 @@ mod tests {
         // convex vertex: positive curvature on its fillet
         let p = s.project([0.1, 0.0]);
         assert!(p.kappa > 0.0, "{p:?}");
+        // a concave vertex (slope decreasing): negative curvature, the fillet below the
+        // vertex by at most its sag, gaps continuous across it
+        let concave = Punch::Tabulated {
+            r: vec![0.0, 0.1, 0.2],
+            z: vec![0.0, 0.05, 0.08],
+        };
+        let s = Surface::new(&concave).unwrap();
+        let p = s.project([0.1, 0.05]);
+        assert!(p.kappa < 0.0 && p.gap < 0.0 && p.gap > -0.01, "{p:?}");
+        let mut last = s.project([0.05, 0.0]).gap;
+        for i in 1..=100 {
+            let g = s.project([0.05 + 1e-3 * i as f64, 0.0]).gap;
+            assert!((g - last).abs() < 2e-3, "jump at {i}");
+            last = g;
+        }
     }
 }
