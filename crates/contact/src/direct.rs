@@ -201,7 +201,7 @@ impl Model {
             .iter()
             .zip(lambda)
             .filter_map(|(&k, &lam)| {
-                let p = self.project(k as usize, u, depth);
+                let p = self.project(k as usize, u, depth).in_contact();
                 self.frame(k as usize, &p, lam)
             })
             .collect()
@@ -916,7 +916,10 @@ impl DirectSolver {
             timing.local += tl.elapsed().as_secs_f64();
             if normal {
                 proj.clear();
-                proj.extend((0..nc).map(|k| model.project(k, &u, depth)));
+                proj.extend((0..nc).map(|k| {
+                    let p = model.project(k, &u, depth);
+                    if active[k] { p.in_contact() } else { p }
+                }));
             }
             // the force on a node along its contact normal (normal contact)
             let f_node = |k: usize| -> [f64; 2] {
@@ -1217,7 +1220,6 @@ fn beyond_end_message(model: &Model, k: usize, u: &[f64]) -> String {
     let n = model.candidates[k];
     let r = model.mesh.nodes[n][0];
     let where_ = match &model.punch {
-        Punch::Flat { radius } => format!("the flat punch's rim (R = {radius} mm)"),
         Punch::Tabulated { r: rs, .. } => format!(
             "the last point of the tabulated profile (r = {} mm)",
             rs.last().copied().unwrap_or(0.0)

@@ -56,6 +56,10 @@ enum Piece {
 pub struct Projection {
     /// Signed gap along the normal (mm, > 0: separated, < 0: penetrating).
     pub gap: f64,
+    /// The gap of a node in contact: past a flat punch's rim, the gap to the face's plane
+    /// (the rim bears a node that slides past it while in contact, as vertical contact
+    /// holds every node of reference radius <= R at the face's level); `gap` elsewhere.
+    pub gap_in_contact: f64,
     /// Unit tangent `(t_r, t_z)` at the closest point (pointing away from the axis).
     pub t: [f64; 2],
     /// Unit upward normal `(m_r, m_z)` (into the punch); the reaction on the body is
@@ -65,16 +69,26 @@ pub struct Projection {
     pub kappa: f64,
     /// Radius of the closest point (mm).
     pub rho: f64,
-    /// The closest point lies beyond the end of the surface (past a flat punch's rim, or
-    /// past the last point of a tabulated profile): no normal contact is defined there.
+    /// The closest point lies beyond the last point of a tabulated profile: no surface is
+    /// given there (a node in contact there is an error of the solver, never a force from
+    /// an extrapolation).
     pub beyond_end: bool,
 }
 
 impl Projection {
+    /// This projection for a node in contact (`gap` replaced by `gap_in_contact`).
+    pub fn in_contact(self) -> Projection {
+        Projection {
+            gap: self.gap_in_contact,
+            ..self
+        }
+    }
+
     /// The vertical projection of the axis node: the tip's normal by symmetry.
     pub fn vertical(gap: f64) -> Projection {
         Projection {
             gap,
+            gap_in_contact: gap,
             t: [1.0, 0.0],
             m: [0.0, 1.0],
             kappa: 0.0,
@@ -89,10 +103,12 @@ impl Projection {
 /// - cone: one ray from the tip (its apex meets only the axis node, whose normal is
 ///   vertical by symmetry);
 /// - sphere: the arc up to r = R, then the vertical wall;
-/// - flat: the face up to the rim; the rim is a corner: a node whose displaced radius is
-///   beyond it has a gap equal to its distance to the rim (never negative: the punch is
-///   a cylinder), and is flagged `beyond_end` (a node in contact there is an error of
-///   the solver, never a silent force);
+/// - flat: the face up to the rim; the rim is a corner: a node not in contact whose
+///   displaced radius is beyond it has a gap equal to its distance to the rim (never
+///   negative: the punch is a cylinder, so it is never activated there), while a node in
+///   contact that slides past the rim stays on the face's plane (`gap_in_contact`: the
+///   rim bears it, with the face's vertical normal, as in vertical contact) until its
+///   reaction turns tensile;
 /// - sphero-cone and the instrument presets with a tip radius: the arc then the tangent
 ///   ray;
 /// - tabulated: the segments with every interior vertex rounded by the circular arc
@@ -289,17 +305,16 @@ impl Surface {
             if best.as_ref().is_none_or(|(b, _)| d2 < *b) {
                 let t = [theta.cos(), theta.sin()];
                 let m = [-t[1], t[0]];
-                let beyond_end = clamped_end && (self.closed_end || i == last);
-                let gap = if beyond_end && self.closed_end {
-                    // past a rim: the distance to the corner (the punch is a cylinder)
-                    d2.sqrt()
-                } else {
-                    -((x[0] - p[0]) * m[0] + (x[1] - p[1]) * m[1])
-                };
+                let past_rim = clamped_end && self.closed_end;
+                let beyond_end = clamped_end && !self.closed_end && i == last;
+                let plane = -((x[0] - p[0]) * m[0] + (x[1] - p[1]) * m[1]);
+                // past a rim: the distance to the corner (the punch is a cylinder)
+                let gap = if past_rim { d2.sqrt() } else { plane };
                 best = Some((
                     d2,
                     Projection {
                         gap,
+                        gap_in_contact: plane,
                         t,
                         m,
                         kappa,
@@ -350,7 +365,8 @@ mod tests {
         let p = flat.project([0.3, 0.01]);
         assert!(close(p.gap, -0.01, 1e-16) && !p.beyond_end);
         let p = flat.project([0.8, -0.4]);
-        assert!(close(p.gap, 0.5, 1e-15) && p.beyond_end, "{p:?}");
+        assert!(close(p.gap, 0.5, 1e-15) && !p.beyond_end, "{p:?}");
+        assert!(close(p.in_contact().gap, 0.4, 1e-15), "{p:?}");
     }
 
     /// The sphero-cone's projection is continuous across the blend, with the sphere's

@@ -41,7 +41,7 @@ fn check_complementarity(model: &Model, traj: &Trajectory) {
         let u = &traj.fields[i + 1].u;
         let mut fz = 0.0;
         for (&k, &lam) in s.active.iter().zip(&s.lambda) {
-            let p = model.project(k as usize, u, s.depth);
+            let p = model.project(k as usize, u, s.depth).in_contact();
             assert!(p.gap.abs() <= 1e-12, "step {i} node {k}: gap {}", p.gap);
             assert!(
                 lam >= -1e-9 * s.force.abs(),
@@ -250,4 +250,79 @@ fn vertical_is_the_default() {
     .unwrap();
     assert_eq!(m.contact, ContactKind::Vertical);
     assert_eq!(ContactKind::default(), ContactKind::Vertical);
+}
+
+/// The solver shall run Norton-Hoff (sY > 0, plastic flow outward along the flanks) with
+/// normal contact on curved, steep and flat profiles over load-hold-unload, with
+/// complementarity at every step; a node of the flat punch that slides past the rim while
+/// in contact stays on the face's plane, so the flat punch's force is vertical contact's.
+#[test]
+fn norton_hoff_runs_on_every_profile() {
+    let sched = Schedule::from_segments(&trapezoid(0.03, 1.0, 1.0, 1.0, 6)).unwrap();
+    let c = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    let flat_mesh = |punch: &Punch| {
+        let mesh = CylinderMesher {
+            radius: 2.0,
+            height: 2.0,
+            nr: 12,
+            nz: 12,
+            grading_r: 1.3,
+            grading_z: 1.3,
+        }
+        .build_through(0.1)
+        .unwrap()
+        .0;
+        indentify_contact::punch::treat_rim(mesh, punch).unwrap().0
+    };
+    for punch in [
+        Punch::Sphere { radius: 0.5 },
+        Punch::SpheroCone {
+            radius: 0.05,
+            half_angle_deg: 70.3,
+        },
+        Punch::CubeCorner { tip_radius: None },
+        Punch::Flat { radius: 0.1 },
+    ] {
+        let mut fmax = [0.0; 2];
+        for (j, kind) in [ContactKind::Vertical, ContactKind::Normal]
+            .into_iter()
+            .enumerate()
+        {
+            let m = match punch {
+                Punch::Flat { .. } => {
+                    Model::with_contact(flat_mesh(&punch), punch.clone(), kind).unwrap()
+                }
+                _ => model(punch.clone(), kind),
+            };
+            let mut solver = DirectSolver::new(&m).unwrap();
+            let traj = solver
+                .run(&m, &NortonHoff, &c, &sched, &SolverOptions::default())
+                .unwrap_or_else(|e| panic!("{punch:?} {kind:?}: {e}"));
+            if kind == ContactKind::Normal {
+                check_complementarity(&m, &traj);
+                if let Punch::Flat { radius } = punch {
+                    // the rim node slides outward past the rim while in contact
+                    let past = traj.steps.iter().enumerate().any(|(i, s)| {
+                        s.active.iter().any(|&k| {
+                            let n = m.candidates[k as usize];
+                            m.mesh.nodes[n][0] + traj.fields[i + 1].u[2 * n] > radius
+                        })
+                    });
+                    assert!(past, "no node in contact past the rim");
+                }
+            }
+            fmax[j] = traj.forces().iter().fold(0.0f64, |a, &b| a.max(b));
+        }
+        println!(
+            "{}: vertical {:.3} N, normal {:.3} N ({:+.1}%)",
+            punch.describe(),
+            fmax[0],
+            fmax[1],
+            100.0 * (fmax[1] / fmax[0] - 1.0)
+        );
+        assert!(fmax[1] > 0.0);
+        if let Punch::Flat { .. } = punch {
+            assert!((fmax[1] / fmax[0] - 1.0).abs() < 1e-9, "{fmax:?}");
+        }
+    }
 }
