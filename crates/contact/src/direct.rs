@@ -1243,6 +1243,10 @@ fn beyond_end_message(model: &Model, k: usize, u: &[f64]) -> String {
 /// which no converged state reaches).
 fn curvature_stiffness(lambda: f64, p: &Projection) -> f64 {
     let den = 1.0 + p.gap * p.kappa;
+    #[cfg(test)]
+    if tests::NO_CURVATURE.with(std::cell::Cell::get) {
+        return 0.0;
+    }
     if p.kappa == 0.0 || !(den > 0.0) {
         0.0
     } else {
@@ -1273,6 +1277,69 @@ pub fn nodal_pressures(model: &Model, rec: &StepRecord) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::extrapolation_weights;
+    use crate::{ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
+    use indentify_laws::Elastic;
+    use indentify_mesh::CylinderMesher;
+
+    thread_local! {
+        /// Drops the curvature stiffness (this thread's tests only): the tangent is then
+        /// not the derivative of the residual on a curved punch.
+        pub(super) static NO_CURVATURE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// Newton iterations and residuals of the last step of an elastic ramp to 0.05 mm
+    /// under a sphere (R = 0.5 mm) with normal contact, on a 2 x 2 mm cylinder.
+    fn sphere_last_step(no_curvature: bool) -> Vec<f64> {
+        let mesh = CylinderMesher {
+            radius: 2.0,
+            height: 2.0,
+            nr: 12,
+            nz: 12,
+            grading_r: 1.3,
+            grading_z: 1.3,
+        }
+        .build()
+        .unwrap();
+        let model =
+            Model::with_contact(mesh, Punch::Sphere { radius: 0.5 }, ContactKind::Normal).unwrap();
+        let sched = Schedule::from_segments(&[Segment {
+            duration: 1.0,
+            depth: 0.05,
+            steps: 10,
+        }])
+        .unwrap();
+        let opts = SolverOptions {
+            residual_tol: 1e-13,
+            ..Default::default()
+        };
+        NO_CURVATURE.with(|c| c.set(no_curvature));
+        let mut solver = DirectSolver::new(&model).unwrap();
+        let run = solver.run(&model, &Elastic, &[20000.0, 0.3], &sched, &opts);
+        NO_CURVATURE.with(|c| c.set(false));
+        run.unwrap();
+        solver.last_residuals().iter().map(|r| r.0).collect()
+    }
+
+    /// The curvature stiffness makes Newton quadratic on a sphere; without it the same
+    /// step converges linearly (each residual a roughly constant fraction of the last),
+    /// in more iterations.
+    #[test]
+    fn curvature_stiffness_makes_newton_quadratic() {
+        let with = sphere_last_step(false);
+        let without = sphere_last_step(true);
+        println!("with curvature stiffness: {with:?}\nwithout: {without:?}");
+        assert!(without.len() > with.len() + 1, "{with:?} {without:?}");
+        // without: linear contraction between 1e-3 and 1e-11 (no pair squares)
+        let pairs: Vec<f64> = without
+            .windows(2)
+            .filter(|w| w[0] < 1e-3 && w[1] > 1e-11)
+            .map(|w| w[1] / w[0])
+            .collect();
+        assert!(pairs.len() >= 3, "{without:?}");
+        for w in without.windows(2).filter(|w| w[0] < 1e-3 && w[1] > 1e-11) {
+            assert!(w[1] > 10.0 * w[0] * w[0], "{:e} -> {:e}", w[0], w[1]);
+        }
+    }
 
     /// The extrapolation of degree p is exact for polynomials of degree p and misses
     /// degree p + 1, with unequal steps (a cut step among full ones).
