@@ -8,6 +8,13 @@
 //! `u_z,k = phi(r_k) - U_i`, and `lambda_k = -f_int,z,k` is the nodal reaction. The set is
 //! updated by releasing nodes with `lambda_k < 0` and activating nodes with `gap_k < 0`.
 //!
+//! With [`ContactKind::Normal`] the gap of an active node is its signed distance to the
+//! punch surface along the normal `m` at its closest point, `lambda_k = -m . f_int,k`, and
+//! its two dofs are rotated into the surface frame: `m . du = g` is prescribed, the
+//! tangential equation `t . f_int = 0` is solved with the curvature stiffness
+//! `-lambda kappa / (1 + g kappa)` (docs/validation-contact.md §2). The force is always the
+//! vertical one, `F = -sum_k f_int,z,k`.
+//!
 //! Cost (see `ConstrainedSystem`): affine laws (elasticity, Maxwell) converge in one solve
 //! per active set and start each step from the stored internal force; nonlinear laws start
 //! Newton from the displacement extrapolated in time while the depth keeps its rate
