@@ -6,7 +6,7 @@ use indentify_contact::{
     ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions,
     Trajectory, trapezoid,
 };
-use indentify_laws::{Elastic, Law, NortonHoff};
+use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
 /// A 2 x 2 mm cylinder, 12 x 12 Q8 graded 1.3 towards the axis and the top.
@@ -324,5 +324,47 @@ fn norton_hoff_runs_on_every_profile() {
         if let Punch::Flat { .. } = punch {
             assert!((fmax[1] / fmax[0] - 1.0).abs() < 1e-9, "{fmax:?}");
         }
+    }
+}
+
+/// A normal-contact run shall repeat bit for bit with the same solver (its caches warm)
+/// and with a fresh one, and the stretch between two checkpoints, replayed, shall repeat
+/// the recorded steps bit for bit (Maxwell: capacitance with frames; Norton-Hoff: inexact
+/// solves on rotated systems).
+#[test]
+fn normal_contact_runs_repeat_bit_for_bit() {
+    let sched = Schedule::from_segments(&trapezoid(0.03, 1.0, 1.0, 1.0, 5)).unwrap();
+    let cases: [(&dyn Law, Vec<f64>); 2] = [
+        (&Maxwell, vec![20000.0, 0.3, 30000.0]),
+        (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 500.0]),
+    ];
+    for (law, c) in cases {
+        let m = model(Punch::Sphere { radius: 0.5 }, ContactKind::Normal);
+        let opts = SolverOptions {
+            checkpoint_every: 4,
+            ..SolverOptions::default()
+        };
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let first = solver.run(&m, law, &c, &sched, &opts).unwrap();
+        let again = solver.run(&m, law, &c, &sched, &opts).unwrap();
+        let fresh = DirectSolver::new(&m)
+            .unwrap()
+            .run(&m, law, &c, &sched, &opts)
+            .unwrap();
+        for other in [&again, &fresh] {
+            assert_eq!(first.steps, other.steps, "{}", law.name());
+            assert_eq!(first.fields, other.fields, "{}", law.name());
+        }
+        // the stretch between two checkpoints, as the adjoint replays it
+        let (cp, next) = (&first.checkpoints[1], &first.checkpoints[2]);
+        let seg = solver
+            .replay(&m, law, &c, &sched, &opts, cp, next.schedule_index)
+            .unwrap();
+        let steps = &first.steps[cp.steps_done..next.steps_done];
+        assert_eq!(seg.steps[..], steps[..], "{}", law.name());
+        let again = solver
+            .replay(&m, law, &c, &sched, &opts, cp, next.schedule_index)
+            .unwrap();
+        assert_eq!(seg.fields, again.fields, "{}", law.name());
     }
 }
