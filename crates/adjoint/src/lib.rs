@@ -14,11 +14,20 @@
 //! dofs; `dF_i = -sum_{k in A_i} (sum_g w B^T dsigma_i)_k`. Transposing, with `mu_{I+1} = 0`:
 //! `K_i V_i = sum_g w B^T (C_i S - I) mu_{i+1}` with `V_i = dJ/dF_i` on `A_i`;
 //! `mu_i = C_i (S mu_{i+1} - B V_i)`; `dJ/dc = -sum_i sum_g w mu_i . R_i`.
+//!
+//! Normal contact ([`indentify_contact::ContactKind::Normal`]): each step's system is the
+//! forward's rotated one (`Q^T K Q + D` with the curvature stiffness `D` on the tangential
+//! dofs, [`Model::frames`] from the recorded displacement and reactions); the active
+//! dofs are the normal ones, `m . du = 0` in the sensitivities, and the adjoint's data
+//! become `m . V = rho m_z` on them plus the source `rho d t_z` on the tangential dofs
+//! (`D` couples the tangential motion to the vertical force), so that the same transposed
+//! recursion holds (docs/validation-contact.md).
 
 pub mod check;
 
 use indentify_contact::{
-    ConstrainedSystem, DirectSolver, Model, Schedule, SolverOptions, StepRecord, Trajectory,
+    ConstrainedSystem, DirectSolver, Model, NodeFrame, Schedule, SolverOptions, StepFields,
+    StepRecord, Trajectory,
 };
 use indentify_fe::dofs::NO_EQ;
 use indentify_laws::{Law, LawError, Mat4, Vec4};
@@ -110,6 +119,8 @@ pub struct Adjoint {
     full: Vec<f64>,
     eq: Vec<f64>,
     xbar: Vec<f64>,
+    /// Frames of the current step's active nodes (normal contact; empty otherwise).
+    frames: Vec<NodeFrame>,
 }
 
 impl Adjoint {
@@ -128,11 +139,14 @@ impl Adjoint {
             full: vec![0.0; model.disc.n_dofs()],
             eq: vec![0.0; model.dofs.n_eq],
             xbar: vec![0.0; model.dofs.n_eq],
+            frames: Vec::new(),
         })
     }
 
-    /// Forms `C_i` at every Gauss point, sets the tangent, the active set of step `i`, and
+    /// Forms `C_i` at every Gauss point, sets the tangent, the active set of step `i` (and
+    /// its frames under normal contact, from the step's displacement `u1`), and
     /// factorizes.
+    #[allow(clippy::too_many_arguments)]
     fn prepare_step(
         &mut self,
         model: &Model,
@@ -140,6 +154,7 @@ impl Adjoint {
         c: &[f64],
         rec: &StepRecord,
         sigma1: &[Vec4],
+        u1: &[f64],
         i: usize,
     ) -> Result<(), AdjointError> {
         let fail = |reason: String| AdjointError::Step {
@@ -167,6 +182,8 @@ impl Adjoint {
             active[k as usize] = true;
         }
         self.system.set_active(model, &active);
+        self.frames = model.frames(&rec.active, &rec.lambda, u1, rec.depth);
+        self.system.set_frames(&self.frames);
         self.system
             .factorize(model)
             .map_err(|e| fail(e.to_string()))
@@ -206,11 +223,7 @@ impl Adjoint {
         let mut sweep = Sweep::new(law, c);
         self.field_a.fill(Vec4::ZERO);
         for i in (0..traj.steps.len()).rev() {
-            let (rec, s0, s1) = (
-                &traj.steps[i],
-                &traj.fields[i].sigma,
-                &traj.fields[i + 1].sigma,
-            );
+            let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
             self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[i], i)?;
         }
         Ok(Gradient {
@@ -281,11 +294,7 @@ impl Adjoint {
                 )));
             }
             for i in (0..seg.steps.len()).rev() {
-                let (rec, s0, s1) = (
-                    &seg.steps[i],
-                    &seg.fields[i].sigma,
-                    &seg.fields[i + 1].sigma,
-                );
+                let (rec, s0, s1) = (&seg.steps[i], &seg.fields[i], &seg.fields[i + 1]);
                 let g = cp.steps_done + i;
                 self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[g], g)?;
             }
@@ -307,17 +316,18 @@ impl Adjoint {
         c: &[f64],
         sweep: &mut Sweep,
         rec: &StepRecord,
-        sig0: &[Vec4],
-        sig1: &[Vec4],
+        f0: &StepFields,
+        f1: &StepFields,
         rho: f64,
         i: usize,
     ) -> Result<(), AdjointError> {
+        let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data and no contact, mu_i = 0: nothing to do
         if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() {
             return Ok(());
         }
         sweep.mu_zero = false;
-        self.prepare_step(model, law, c, rec, sig1, i)?;
+        self.prepare_step(model, law, c, rec, sig1, &f1.u, i)?;
         let s = sweep.s;
         // b = sum_g w B^T (C S - I) mu_{i+1}
         for q in 0..self.field_b.len() {
@@ -326,10 +336,22 @@ impl Adjoint {
         }
         model.disc.internal_force(&self.field_b, &mut self.full);
         self.restrict(model);
-        // V = dJ/dF_i on the active contact dofs
-        for &k in &rec.active {
-            if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
-                self.xbar[e] = rho;
+        // V = dJ/dF_i on the active contact dofs (normal contact: m . V = rho m_z, and the
+        // source rho d t_z along t on the tangential dofs)
+        if self.frames.is_empty() {
+            for &k in &rec.active {
+                if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
+                    self.xbar[e] = rho;
+                }
+            }
+        } else {
+            for f in &self.frames {
+                self.xbar[f.ez] = rho * f.m[1];
+                if let Some(er) = f.er {
+                    let src = rho * f.d * f.t[1];
+                    self.eq[er] += src * f.t[0];
+                    self.eq[f.ez] += src * f.t[1];
+                }
             }
         }
         let mut eq = std::mem::take(&mut self.eq);
@@ -385,7 +407,8 @@ impl Adjoint {
         let mut q_field = vec![Vec4::ZERO; nq];
         for i in 0..n {
             let rec = &traj.steps[i];
-            self.prepare_step(model, law, c, rec, &traj.fields[i + 1].sigma, i)?;
+            let f1 = &traj.fields[i + 1];
+            self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
             let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
             for k in 0..np {
                 // q = y_{i-1} - R_i e_k

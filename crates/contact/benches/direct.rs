@@ -1,43 +1,49 @@
 //! Benchmarks of the direct problem on the reference problems R0 (elastic), R1 (Maxwell)
 //! and R2 (Norton-Hoff) of DESIGN.md §5: 20 x 20 Q8, cone 68 deg, trapezoid 30 steps per
-//! segment. `cargo bench -p indentify-contact`.
+//! segment, with the paper's vertical contact; R1 and R2 also with normal contact
+//! (`*_normal`, [`ContactKind::Normal`]), run right after their vertical twins so that the
+//! ratio is measured back to back. `cargo bench -p indentify-contact`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_contact::{
+    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
-fn reference_model() -> Model {
+fn reference_model(contact: ContactKind) -> Model {
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
-    Model::new(
+    Model::with_contact(
         mesh,
         Punch::Cone {
             half_angle_deg: 68.0,
         },
+        contact,
     )
     .expect("reference model")
 }
 
 fn bench_forward(c: &mut Criterion) {
-    let model = reference_model();
+    let vertical = reference_model(ContactKind::Vertical);
+    let normal = reference_model(ContactKind::Normal);
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
-    let cases: [(&str, &dyn Law, Vec<f64>); 3] = [
-        ("r0_elastic", &Elastic, vec![20000.0, 0.3]),
-        ("r1_maxwell", &Maxwell, vec![20000.0, 0.3, 30000.0]),
-        (
-            "r2_norton_hoff",
-            &NortonHoff,
-            vec![1e5, 0.3, 1500.0, 5.0, 500.0],
-        ),
+    let r1 = vec![20000.0, 0.3, 30000.0];
+    let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
+    let cases: [(&str, &dyn Law, Vec<f64>, &Model); 5] = [
+        ("r0_elastic", &Elastic, vec![20000.0, 0.3], &vertical),
+        ("r1_maxwell", &Maxwell, r1.clone(), &vertical),
+        ("r1_maxwell_normal", &Maxwell, r1, &normal),
+        ("r2_norton_hoff", &NortonHoff, r2.clone(), &vertical),
+        ("r2_norton_hoff_normal", &NortonHoff, r2, &normal),
     ];
     let mut group = c.benchmark_group("forward");
     group.sample_size(10);
-    for (name, law, params) in cases {
-        let mut solver = DirectSolver::new(&model).expect("solver");
+    for (name, law, params, model) in cases {
+        let mut solver = DirectSolver::new(model).expect("solver");
         let opts = SolverOptions::default();
         // one run to report the split, then the timed runs
         let t = solver
-            .run(&model, law, &params, &schedule, &opts)
+            .run(model, law, &params, &schedule, &opts)
             .expect("run");
         eprintln!(
             "{name}: {} steps, {} iterations, {}",
@@ -48,7 +54,7 @@ fn bench_forward(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 solver
-                    .run(&model, law, &params, &schedule, &opts)
+                    .run(model, law, &params, &schedule, &opts)
                     .expect("run")
             })
         });

@@ -8,6 +8,13 @@
 //! `u_z,k = phi(r_k) - U_i`, and `lambda_k = -f_int,z,k` is the nodal reaction. The set is
 //! updated by releasing nodes with `lambda_k < 0` and activating nodes with `gap_k < 0`.
 //!
+//! With [`ContactKind::Normal`] the gap of an active node is its signed distance to the
+//! punch surface along the normal `m` at its closest point, `lambda_k = -m . f_int,k`, and
+//! its two dofs are rotated into the surface frame: `m . du = g` is prescribed, the
+//! tangential equation `t . f_int = 0` is solved with the curvature stiffness
+//! `-lambda kappa / (1 + g kappa)` (docs/validation-contact.md §2). The force is always the
+//! vertical one, `F = -sum_k f_int,z,k`.
+//!
 //! Cost (see `ConstrainedSystem`): affine laws (elasticity, Maxwell) converge in one solve
 //! per active set and start each step from the stored internal force; nonlinear laws start
 //! Newton from the displacement extrapolated in time while the depth keeps its rate
@@ -23,8 +30,9 @@ use indentify_mesh::Mesh;
 
 use crate::ContactError;
 use crate::history::Schedule;
+use crate::normal::{ContactKind, Projection, Surface};
 use crate::punch::Punch;
-use crate::system::ConstrainedSystem;
+use crate::system::{ConstrainedSystem, NodeFrame};
 
 /// Numerical options of the direct solver.
 #[derive(Clone, Debug, PartialEq)]
@@ -88,6 +96,10 @@ pub struct Model {
     pub candidate_area: Vec<f64>,
     /// The punch.
     pub punch: Punch,
+    /// Direction of the contact constraint (set at construction).
+    pub contact: ContactKind,
+    /// The punch surface of normal contact (`None` for vertical contact).
+    surface: Option<Surface>,
 }
 
 impl Model {
@@ -99,7 +111,24 @@ impl Model {
     /// # Errors
     /// [`ContactError::Input`] for an invalid punch or a mesh without a `top` set.
     pub fn new(mesh: Mesh, punch: Punch) -> Result<Model, ContactError> {
+        Model::with_contact(mesh, punch, ContactKind::Vertical)
+    }
+
+    /// As [`Model::new`] with the contact direction `contact` ([`ContactKind::Vertical`]
+    /// is [`Model::new`]).
+    ///
+    /// # Errors
+    /// As [`Model::new`].
+    pub fn with_contact(
+        mesh: Mesh,
+        punch: Punch,
+        contact: ContactKind,
+    ) -> Result<Model, ContactError> {
         punch.validate()?;
+        let surface = match contact {
+            ContactKind::Vertical => None,
+            ContactKind::Normal => Some(Surface::new(&punch)?),
+        };
         let candidates = mesh.node_set("top").to_vec();
         if candidates.len() < 3 || candidates.len() % 2 == 0 {
             return Err(ContactError::Input {
@@ -139,6 +168,67 @@ impl Model {
             candidate_profile,
             candidate_area,
             punch,
+            contact,
+            surface,
+        })
+    }
+
+    /// The closest point of the punch surface to candidate `k` displaced by `u` (all
+    /// dofs) at depth `depth` (normal contact; the axis node, whose `u_r` is fixed, gets
+    /// the vertical projection). With vertical contact: the vertical gap and frame.
+    pub fn project(&self, k: usize, u: &[f64], depth: f64) -> Projection {
+        let node = self.candidates[k];
+        self.project_at(k, [u[2 * node], u[2 * node + 1]], depth)
+    }
+
+    /// As [`Model::project`] with the displacement `(u_r, u_z)` of the candidate.
+    pub fn project_at(&self, k: usize, [ur, uz]: [f64; 2], depth: f64) -> Projection {
+        let node = self.candidates[k];
+        match &self.surface {
+            Some(s) if self.dofs.equation(2 * node).is_some() => {
+                let x = self.mesh.nodes[node];
+                s.project([x[0] + ur, x[1] + uz + depth])
+            }
+            _ => Projection::vertical(
+                self.candidate_profile[k] - depth - uz - self.mesh.nodes[node][1],
+            ),
+        }
+    }
+
+    /// The frames of the active candidates of a converged normal-contact step (empty for
+    /// vertical contact): the rotation of each node's dofs and the curvature stiffness
+    /// `-lambda kappa / (1 + g kappa)` on its tangential dof, from the recorded reactions
+    /// `lambda` and the displacement `u` (all dofs) at depth `depth`. The adjoint and the
+    /// sensitivities transpose the system these frames define.
+    pub fn frames(&self, active: &[u32], lambda: &[f64], u: &[f64], depth: f64) -> Vec<NodeFrame> {
+        if self.surface.is_none() {
+            return Vec::new();
+        }
+        active
+            .iter()
+            .zip(lambda)
+            .filter_map(|(&k, &lam)| {
+                let p = self.project(k as usize, u, depth).in_contact();
+                self.frame(k as usize, &p, lam)
+            })
+            .collect()
+    }
+
+    /// The frame of candidate `k` with projection `p` and normal reaction `lambda`.
+    fn frame(&self, k: usize, p: &Projection, lambda: f64) -> Option<NodeFrame> {
+        let node = self.candidates[k];
+        let ez = self.dofs.equation(2 * node + 1)?;
+        let er = self.dofs.equation(2 * node);
+        Some(NodeFrame {
+            er,
+            ez,
+            t: p.t,
+            m: p.m,
+            d: if er.is_some() {
+                curvature_stiffness(lambda, p)
+            } else {
+                0.0
+            },
         })
     }
 
@@ -301,6 +391,8 @@ enum StepFailure {
         changes: u32,
     },
     Linear(String),
+    /// A node in normal contact beyond the end of the punch surface: not cured by cutting.
+    Geometry(String),
 }
 
 impl std::fmt::Display for StepFailure {
@@ -321,6 +413,7 @@ impl std::fmt::Display for StepFailure {
                 write!(f, "active set cycling after {changes} changes")
             }
             StepFailure::Linear(m) => write!(f, "linear solve failed: {m}"),
+            StepFailure::Geometry(m) => write!(f, "{m}"),
         }
     }
 }
@@ -422,6 +515,9 @@ pub struct DirectSolver {
     f_int: Vec<f64>,
     rhs: Vec<f64>,
     aux: Vec<f64>,
+    /// Relative residual of every pass of the last step attempted, with the active-set
+    /// changes made before it.
+    residuals: Vec<(f64, u32)>,
 }
 
 impl DirectSolver {
@@ -444,7 +540,15 @@ impl DirectSolver {
             f_int: vec![0.0; model.disc.n_dofs()],
             rhs: vec![0.0; n],
             aux: vec![0.0; n],
+            residuals: Vec::new(),
         })
+    }
+
+    /// The relative equilibrium residual of every Newton pass of the last step attempted
+    /// (the last step of a run: its convergence history, for rate checks), each with the
+    /// number of active-set changes made before that pass.
+    pub fn last_residuals(&self) -> &[(f64, u32)] {
+        &self.residuals
     }
 
     /// Runs the whole schedule for parameters `c` of `law`.
@@ -605,7 +709,7 @@ impl DirectSolver {
                     Err(fail) => {
                         // a failed step may have assembled non-finite tangents
                         self.system.forget_assembly();
-                        if level >= opts.max_cuts {
+                        if level >= opts.max_cuts || matches!(fail, StepFailure::Geometry(_)) {
                             traj.timing.total += start.elapsed().as_secs_f64();
                             return Err(ContactError::StepFailed {
                                 step: j,
@@ -748,9 +852,23 @@ impl DirectSolver {
         let last = &state.past[0];
         let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         let zdof = |k: usize| 2 * model.candidates[k] + 1;
-        for k in 0..nc {
-            if !active[k] && gap(model, k, depth, &u) - ratio * last.du[zdof(k)] < 0.0 {
-                active[k] = true;
+        let normal = model.contact == ContactKind::Normal;
+        if normal {
+            for k in 0..nc {
+                let n = model.candidates[k];
+                let x = [
+                    u[2 * n] + ratio * last.du[2 * n],
+                    u[2 * n + 1] + ratio * last.du[2 * n + 1],
+                ];
+                if !active[k] && model.project_at(k, x, depth).gap < 0.0 {
+                    active[k] = true;
+                }
+            }
+        } else {
+            for k in 0..nc {
+                if !active[k] && gap(model, k, depth, &u) - ratio * last.du[zdof(k)] < 0.0 {
+                    active[k] = true;
+                }
             }
         }
         let affine = law.affine_update(c, dt);
@@ -801,17 +919,46 @@ impl DirectSolver {
         let mut iterations = 0u32;
         let mut constrained = vec![false; n_eq];
         let mut single_change = false;
+        let mut proj: Vec<Projection> = Vec::new();
+        self.residuals.clear();
+        let mut frames: Vec<NodeFrame> = Vec::new();
         loop {
             // every pass evaluates the current iterate once, then checks or solves
             let tl = std::time::Instant::now();
             self.evaluate(model, law, c, state, &u, dt, affine.as_ref(), &mut sigma)?;
             timing.local += tl.elapsed().as_secs_f64();
-            // residual on free, unconstrained equations
+            if normal {
+                proj.clear();
+                proj.extend((0..nc).map(|k| {
+                    let p = model.project(k, &u, depth);
+                    if active[k] { p.in_contact() } else { p }
+                }));
+            }
+            // the force on a node along its contact normal (normal contact)
+            let f_node = |k: usize| -> [f64; 2] {
+                let n = model.candidates[k];
+                [self.f_int[2 * n], self.f_int[2 * n + 1]]
+            };
+            let lambda_of = |k: usize| -> f64 {
+                if normal {
+                    let (f, m) = (f_node(k), proj[k].m);
+                    -(f[0] * m[0] + f[1] * m[1])
+                } else {
+                    -self.f_int[zdof(k)]
+                }
+            };
+            // residual on free, unconstrained equations (normal contact: the tangential
+            // component at the active nodes)
             constrained.fill(false);
             for k in 0..nc {
                 if active[k] {
                     if let Some(e) = model.dofs.equation(zdof(k)) {
                         constrained[e] = true;
+                    }
+                    if normal {
+                        if let Some(e) = model.dofs.equation(zdof(k) - 1) {
+                            constrained[e] = true;
+                        }
                     }
                 }
             }
@@ -825,12 +972,27 @@ impl DirectSolver {
                     }
                 }
             }
-            let targets_met = (0..nc).filter(|&k| active[k]).all(|k| {
-                let target = model.candidate_profile[k] - depth;
-                (u[zdof(k)] - target).abs() <= 1e-13 * (1.0 + target.abs())
-            });
+            if normal {
+                for k in (0..nc).filter(|&k| active[k]) {
+                    if model.dofs.equation(zdof(k) - 1).is_some() {
+                        let (f, t) = (f_node(k), proj[k].t);
+                        res = res.max((f[0] * t[0] + f[1] * t[1]).abs());
+                    }
+                }
+            }
+            let targets_met = if normal {
+                (0..nc)
+                    .filter(|&k| active[k])
+                    .all(|k| proj[k].gap.abs() <= 1e-13 * (1.0 + depth.abs()))
+            } else {
+                (0..nc).filter(|&k| active[k]).all(|k| {
+                    let target = model.candidate_profile[k] - depth;
+                    (u[zdof(k)] - target).abs() <= 1e-13 * (1.0 + target.abs())
+                })
+            };
             let scale = fmax.max(state.f_scale);
             let rel = if scale > 0.0 { res / scale } else { res };
+            self.residuals.push((rel, changes));
             let converged = rel <= opts.residual_tol || res == 0.0;
             // complementarity is checked once equilibrium for the current set is loosely met
             // (semi-smooth Newton): a wrong set is corrected without a full Newton solve
@@ -845,14 +1007,18 @@ impl DirectSolver {
                 let mut violations = Vec::new();
                 for k in 0..nc {
                     let v = if active[k] {
-                        let lam = -self.f_int[zdof(k)];
+                        let lam = lambda_of(k);
                         if lam < -ltol {
                             -lam / force.abs().max(1e-300)
                         } else {
                             0.0
                         }
                     } else {
-                        let g = gap(model, k, depth, &u);
+                        let g = if normal {
+                            proj[k].gap
+                        } else {
+                            gap(model, k, depth, &u)
+                        };
                         if g < -gtol {
                             -g / depth.abs().max(1e-12)
                         } else {
@@ -867,7 +1033,20 @@ impl DirectSolver {
                     }
                 }
                 if violations.is_empty() && converged {
-                    let rec = self.record(model, &active, &u, t1, dt, depth, iterations, changes);
+                    if let Some(k) = (0..proj.len()).find(|&k| active[k] && proj[k].beyond_end) {
+                        return Err(StepFailure::Geometry(beyond_end_message(model, k, &u)));
+                    }
+                    let mut rec =
+                        self.record(model, &active, &u, t1, dt, depth, iterations, changes);
+                    if normal {
+                        for (l, &k) in rec.lambda.iter_mut().zip(&rec.active) {
+                            *l = lambda_of(k as usize);
+                        }
+                        rec.contact_radius = rec.active.last().map_or(0.0, |&k| {
+                            let n = model.candidates[k as usize];
+                            model.mesh.nodes[n][0] + u[2 * n]
+                        });
+                    }
                     let f_scale = state.f_scale.max(fmax);
                     let du: Vec<f64> = u.iter().zip(&state.u).map(|(a, b)| a - b).collect();
                     // hindsight: the degree that would have predicted this step best
@@ -936,6 +1115,15 @@ impl DirectSolver {
                 }
             };
             self.system.set_active(model, &active);
+            if normal {
+                frames.clear();
+                frames.extend(
+                    (0..nc)
+                        .filter(|&k| active[k])
+                        .filter_map(|k| model.frame(k, &proj[k], lambda_of(k))),
+                );
+                self.system.set_frames(&frames);
+            }
             // reusable tangents factorize (or reuse) exactly; others prepare inexact solves
             self.system
                 .prepare_inexact(model)
@@ -945,7 +1133,12 @@ impl DirectSolver {
             for k in 0..nc {
                 if active[k] {
                     if let Some(e) = model.dofs.equation(zdof(k)) {
-                        self.aux[e] = model.candidate_profile[k] - depth - u[zdof(k)];
+                        self.aux[e] = if normal {
+                            // Newton on the gap: m . du = g
+                            proj[k].gap
+                        } else {
+                            model.candidate_profile[k] - depth - u[zdof(k)]
+                        };
                     }
                 }
             }
@@ -1035,6 +1228,45 @@ fn extrapolation_weights(dt: f64, h: [f64; 3], order: usize) -> [f64; 3] {
     ]
 }
 
+/// Why a node in normal contact beyond the surface's end stops the run.
+fn beyond_end_message(model: &Model, k: usize, u: &[f64]) -> String {
+    let n = model.candidates[k];
+    let r = model.mesh.nodes[n][0];
+    let where_ = match &model.punch {
+        Punch::Tabulated { r: rs, .. } => format!(
+            "the last point of the tabulated profile (r = {} mm)",
+            rs.last().copied().unwrap_or(0.0)
+        ),
+        other => format!("the end of the {} surface", other.describe()),
+    };
+    format!(
+        "candidate {k} (node {n}, r = {r} mm, displaced to r = {} mm) is in normal contact \
+         beyond {where_}: the punch has no surface (or no normal) there; extend the \
+         tabulated profile or use `contact: Vertical`",
+        r + u[2 * n]
+    )
+}
+
+/// The stiffness `-lambda kappa / (1 + g kappa)` (N/mm) that the rotation of the normal
+/// adds on the tangential dof of a node in normal contact: the derivative of the
+/// tangential residual `t(x) . f_int` through `t` is `f_int . dt = -lambda m . dt`, and
+/// `m . dt = kappa ds = kappa (t . du) / (1 + g kappa)` (the closest point moves by the
+/// arc length `ds` when the node moves by `du` at a distance `g` from the surface).
+/// Zero on straight pieces; 0 also past the center of curvature (`1 + g kappa <= 0`,
+/// which no converged state reaches).
+fn curvature_stiffness(lambda: f64, p: &Projection) -> f64 {
+    let den = 1.0 + p.gap * p.kappa;
+    #[cfg(test)]
+    if tests::NO_CURVATURE.with(std::cell::Cell::get) {
+        return 0.0;
+    }
+    if p.kappa == 0.0 || !(den > 0.0) {
+        0.0
+    } else {
+        -lambda * p.kappa / den
+    }
+}
+
 /// Gap `phi(r_k) - U - u_z,k` of candidate k (mm).
 fn gap(model: &Model, k: usize, depth: f64, u: &[f64]) -> f64 {
     model.candidate_profile[k] - depth - u[2 * model.candidates[k] + 1]
@@ -1058,6 +1290,69 @@ pub fn nodal_pressures(model: &Model, rec: &StepRecord) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::extrapolation_weights;
+    use crate::{ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
+    use indentify_laws::Elastic;
+    use indentify_mesh::CylinderMesher;
+
+    thread_local! {
+        /// Drops the curvature stiffness (this thread's tests only): the tangent is then
+        /// not the derivative of the residual on a curved punch.
+        pub(super) static NO_CURVATURE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// Newton iterations and residuals of the last step of an elastic ramp to 0.05 mm
+    /// under a sphere (R = 0.5 mm) with normal contact, on a 2 x 2 mm cylinder.
+    fn sphere_last_step(no_curvature: bool) -> Vec<f64> {
+        let mesh = CylinderMesher {
+            radius: 2.0,
+            height: 2.0,
+            nr: 12,
+            nz: 12,
+            grading_r: 1.3,
+            grading_z: 1.3,
+        }
+        .build()
+        .unwrap();
+        let model =
+            Model::with_contact(mesh, Punch::Sphere { radius: 0.5 }, ContactKind::Normal).unwrap();
+        let sched = Schedule::from_segments(&[Segment {
+            duration: 1.0,
+            depth: 0.05,
+            steps: 10,
+        }])
+        .unwrap();
+        let opts = SolverOptions {
+            residual_tol: 1e-13,
+            ..Default::default()
+        };
+        NO_CURVATURE.with(|c| c.set(no_curvature));
+        let mut solver = DirectSolver::new(&model).unwrap();
+        let run = solver.run(&model, &Elastic, &[20000.0, 0.3], &sched, &opts);
+        NO_CURVATURE.with(|c| c.set(false));
+        run.unwrap();
+        solver.last_residuals().iter().map(|r| r.0).collect()
+    }
+
+    /// The curvature stiffness makes Newton quadratic on a sphere; without it the same
+    /// step converges linearly (each residual a roughly constant fraction of the last),
+    /// in more iterations.
+    #[test]
+    fn curvature_stiffness_makes_newton_quadratic() {
+        let with = sphere_last_step(false);
+        let without = sphere_last_step(true);
+        println!("with curvature stiffness: {with:?}\nwithout: {without:?}");
+        assert!(without.len() > with.len() + 1, "{with:?} {without:?}");
+        // without: linear contraction between 1e-3 and 1e-11 (no pair squares)
+        let pairs: Vec<f64> = without
+            .windows(2)
+            .filter(|w| w[0] < 1e-3 && w[1] > 1e-11)
+            .map(|w| w[1] / w[0])
+            .collect();
+        assert!(pairs.len() >= 3, "{without:?}");
+        for w in without.windows(2).filter(|w| w[0] < 1e-3 && w[1] > 1e-11) {
+            assert!(w[1] > 10.0 * w[0] * w[0], "{:e} -> {:e}", w[0], w[1]);
+        }
+    }
 
     /// The extrapolation of degree p is exact for polynomials of degree p and misses
     /// degree p + 1, with unequal steps (a cut step among full ones).

@@ -8,6 +8,7 @@
 
 pub mod direct;
 pub mod history;
+pub mod normal;
 pub mod punch;
 pub mod system;
 
@@ -16,8 +17,9 @@ pub use direct::{
     nodal_pressures,
 };
 pub use history::{Schedule, Segment, trapezoid};
+pub use normal::ContactKind;
 pub use punch::Punch;
-pub use system::ConstrainedSystem;
+pub use system::{ConstrainedSystem, NodeFrame};
 
 /// Errors of the direct problem.
 #[derive(Debug, thiserror::Error)]

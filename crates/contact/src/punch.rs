@@ -1,5 +1,7 @@
 //! Rigid axisymmetric punch profiles `phi(r)`: the height of the punch surface above its
-//! tip at radius r (mm). The gap at a surface node is `phi(r) - U - u_z`. Instrument tips
+//! tip at radius r (mm). The gap at a surface node is `phi(r) - U - u_z` with vertical
+//! contact ([`crate::ContactKind::Vertical`]); normal contact measures the displaced
+//! node's distance along the surface normal ([`crate::normal::Surface`]). Instrument tips
 //! (Berkovich, Vickers, cube corner) are their area-equivalent cones; [`specimen`] sizes
 //! and meshes the specimen from the punch and the maximum depth.
 //!

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
-use indentify_contact::{Model, Punch, Schedule, Segment, SolverOptions};
+use indentify_contact::{ContactKind, Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
@@ -33,6 +33,10 @@ pub struct Config {
     pub specimen: Specimen,
     /// The rigid punch (the contact crate's own type).
     pub punch: Punch,
+    /// The direction of the contact constraint: `Vertical` (the paper's formulation, the
+    /// default) or `Normal` (the displaced node's gap along the punch's normal).
+    #[serde(default)]
+    pub contact: ContactKind,
     /// The constitutive law and its parameters.
     pub law: LawSpec,
     /// The depth history of the punch; omitted when `data` gives a measured record, whose
@@ -708,6 +712,7 @@ impl Reference {
             punch: Punch::Cone {
                 half_angle_deg: 68.0,
             },
+            contact: ContactKind::Vertical,
             law,
             history: Some(History {
                 segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
@@ -859,7 +864,7 @@ impl Config {
             Rim::QuarterPoint { .. } => tracing::debug!("{name}: {}", rim.describe()),
             Rim::OffCorner { .. } => tracing::warn!("warning: {name}: {}", rim.describe()),
         }
-        let model = Model::new(mesh, self.punch.clone())
+        let model = Model::with_contact(mesh, self.punch.clone(), self.contact)
             .with_context(|| format!("cannot build the model of `{name}`"))?;
         Ok(Prepared {
             schedule,

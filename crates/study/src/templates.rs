@@ -189,6 +189,12 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
     );
     let punch = serde_json::to_value(&cfg.punch).unwrap_or(Value::Null);
     out.push_str(&format!("    punch: {},\n", ron_inline(&punch)));
+    out.push_str(&format!(
+        "    contact: {:?}, // Vertical: the paper's (gap at the reference radius, vertical \
+         reaction); Normal: gap of the displaced node along the punch's normal, frictionless \
+         (docs/validation-contact.md)\n",
+        cfg.contact
+    ));
 
     let forms: Vec<String> = Reference::ALL
         .iter()
