@@ -1,0 +1,219 @@
+"""Type stub of `indentify`: identify constitutive-law parameters from instrumented
+indentation curves (units N, mm, s, MPa; arrays are float64 numpy arrays)."""
+
+import os
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Literal, Optional, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+FloatArray = npt.NDArray[np.float64]
+
+ConfigLike = Union[str, "os.PathLike[str]", Mapping[str, Any], None]
+"""A RON file's path, RON text (a str containing "(" that is no file's path), a dict with the RON structure, or
+None for the embedded R1 example (examples/r1-maxwell.ron)."""
+
+Sets = Union[Mapping[str, Union[float, int, bool, str]], Sequence[str], None]
+"""Overrides by dotted path, e.g. {"law.E": 25000, "specimen.nr": 8}, or ["law.E=25000"]."""
+
+DataLike = Union[
+    str,
+    "os.PathLike[str]",
+    "Record",
+    Mapping[str, npt.ArrayLike],
+    npt.ArrayLike,
+    None,
+]
+"""A curve file (CSV t, F [, h]) or instrument record path, a Record, a dict with arrays t
+(s), F (N) and optionally h (mm), or an array of shape (n, 2) [t, F] or (n, 3) [t, h, F]."""
+
+class Error(Exception):
+    """Base class of indentify's errors: `str(e)` is the whole message chain, one line each."""
+
+    messages: list[str]
+    """The message chain, outermost first."""
+    kind: Literal["config", "data", "solver", "io"]
+
+class ConfigError(Error):
+    """An invalid configuration or option (syntax, unknown key, out-of-range value, sets)."""
+
+class DataError(Error):
+    """Data that cannot be used (missing or malformed file, NaN, wrong shape, too short)."""
+
+class SolverError(Error):
+    """The solvers failed (a step that does not converge even after cutting)."""
+
+    partial: dict[str, FloatArray]
+    """`simulate` only: the curve up to the failure."""
+
+class IoError(Error):
+    """An output cannot be written (unwritable folder, a report folder of another run)."""
+
+class Record:
+    """An instrumented-indentation record (s, mm, N)."""
+
+    name: str
+    """The test's name (file name, with the test for multi-test files)."""
+    @property
+    def t(self) -> FloatArray:
+        """Time (s)."""
+    @property
+    def h(self) -> FloatArray:
+        """Depth into the surface (mm)."""
+    @property
+    def F(self) -> FloatArray:
+        """Force (N)."""
+    @property
+    def segment(self) -> Optional[npt.NDArray[np.uint32]]:
+        """Segment id of each sample, or None when unknown."""
+    @property
+    def metadata(self) -> dict[str, Any]:
+        """What the file says: format, instrument, tip, protocol, date, vendor results, ..."""
+    @property
+    def applied(self) -> list[dict[str, Any]]:
+        """The preprocessing steps applied: {step, description, values}."""
+    def __len__(self) -> int: ...
+
+class GradientResult:
+    """J (N^2) and dJ/dc; unpacks as `J, grad = indentify.gradient(...)`."""
+
+    J: float
+    gradient: dict[str, float]
+    """{name: dJ/dc} in the law's order."""
+    params: dict[str, float]
+    """{name: value}: the point."""
+    units: dict[str, str]
+    names: list[str]
+    forward_seconds: float
+    adjoint_seconds: float
+    def __iter__(self) -> Any: ...
+
+class IterationRecord(TypedDict):
+    """One iteration, as given to `progress` and listed in `Result.history`."""
+
+    iteration: int
+    params: dict[str, float]
+    J: float
+    grad_norm: float
+    forward_solves: int
+    adjoint_solves: int
+    sensitivity_solves: int
+    seconds: float
+
+class Fit(TypedDict):
+    """The curves at the schedule times."""
+
+    t: FloatArray
+    h: FloatArray
+    F_data: FloatArray
+    F_fit: FloatArray
+    F_start: FloatArray
+
+class Result:
+    """The result of `identify`."""
+
+    params: dict[str, float]
+    """{name: final value} of every law parameter (free and held)."""
+    std: dict[str, Optional[float]]
+    """{name: standard deviation}; None for held or undetermined parameters."""
+    correlation: FloatArray
+    """Correlation matrix of the free parameters (p x p; 0 x 0 without identifiability)."""
+    correlation_names: list[str]
+    converged: bool
+    stop_reason: str
+    fit: Fit
+    history: list[IterationRecord]
+    parameters: list[dict[str, Any]]
+    """Per parameter: name, unit, free, start, value, lower, upper, at_lower, at_upper."""
+    free: dict[str, bool]
+    bounds: dict[str, tuple[float, float]]
+    J: float
+    J_start: float
+    iterations: int
+    forward_solves: int
+    adjoint_solves: int
+    seconds: float
+    """The optimizer's wall time (s)."""
+    wall_seconds: float
+    """The whole pipeline's wall time (s)."""
+    law: str
+    method: str
+    data: str
+    quality: Optional[dict[str, float]]
+    truth: Optional[dict[str, float]]
+    files: Optional[dict[str, Any]]
+
+class MapIndent(TypedDict):
+    id: str
+    data: str
+    x: float
+    y: float
+    phase: Literal["A", "B"]
+
+class Map(TypedDict):
+    manifest: str
+    base: str
+    indents: list[MapIndent]
+    phases: dict[str, dict[str, float]]
+
+def read_record(
+    path: Union[str, "os.PathLike[str]"],
+    format: Optional[str] = None,
+    test: Optional[int] = None,
+    preprocessing: Union[Mapping[str, Any], bool, None] = None,
+) -> Record:
+    """Reads one record (CSV, Anton Paar, Hysitron TXT/.hld) and preprocesses it.
+
+    format: None/"auto", "csv", "anton-paar", "anton-paar-multi", "hysitron-txt", "hld".
+    test: 1-based test of a multi-test file. preprocessing: None for the defaults (zero
+    point, segments), False for none, or a dict like {"resample": {"n": 60}}.
+    """
+
+def simulate(
+    config: ConfigLike = None,
+    sets: Sets = None,
+    noise: Optional[float] = None,
+    seed: int = 1,
+) -> dict[str, FloatArray]:
+    """Simulates the test: {"t" (s), "h" (mm), "F" (N), "a" (contact radius, mm)}."""
+
+def gradient(
+    config: ConfigLike = None,
+    data: DataLike = None,
+    sets: Sets = None,
+) -> GradientResult:
+    """J = 1/2 sum (F - F_data)^2 (N^2) and dJ/dc by the discrete adjoint."""
+
+def identify(
+    config: ConfigLike = None,
+    data: DataLike = None,
+    sets: Sets = None,
+    progress: Optional[Callable[[IterationRecord], object]] = None,
+    *,
+    out: Union[str, "os.PathLike[str]", None] = None,
+    force: bool = False,
+    method: Optional[Literal["bfgs", "lbfgs", "lbfgsb", "lm"]] = None,
+    max_iterations: Optional[int] = None,
+    free: Optional[Sequence[str]] = None,
+    fixed: Union[Mapping[str, Optional[float]], Sequence[str], None] = None,
+    start: Optional[Mapping[str, float]] = None,
+    noise: Optional[float] = None,
+    seed: int = 1,
+) -> Result:
+    """Identifies the parameters (GIL released; Ctrl-C stops after the iteration)."""
+
+def make_map(
+    dir: Union[str, "os.PathLike[str]"],
+    n: int = 10,
+    noise: float = 0.02,
+    seed: int = 1,
+    coarse: bool = False,
+    spacing: float = 0.05,
+) -> Map:
+    """Writes a synthetic two-phase Maxwell map (records, manifest.csv, base.ron)."""
+
+def load_config(config: ConfigLike = None, sets: Sets = None) -> dict[str, Any]:
+    """A validated configuration as a dict with the RON structure."""
