@@ -688,7 +688,7 @@ impl DirectSolver {
                         targets.pop();
                         rec.on_schedule = targets.is_empty();
                         rec.schedule_index = j;
-                        tracing::trace!(
+                        tracing::debug!(
                             step = j,
                             t = rec.t,
                             depth_mm = rec.depth,

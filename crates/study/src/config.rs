@@ -89,6 +89,8 @@ pub struct Measured {
     pub record: Record,
     /// The preprocessing steps as applied, with their numbers.
     pub applied: Vec<Applied>,
+    /// What is missing or made up: a record without unloading, up-sampling.
+    pub warnings: Vec<String>,
 }
 
 impl Measured {
@@ -157,6 +159,30 @@ impl DataSection {
         let raw = indentify_records::read_one(&bytes, &shown, &opts)?;
         let (record, applied) = indentify_records::apply(&raw, &self.preprocessing)
             .with_context(|| format!("cannot preprocess `{shown}` (data.preprocessing)"))?;
+        let mut warnings = Vec::new();
+        if let Some(rs) = &self.preprocessing.resample {
+            if rs.n > raw.t.len() {
+                warnings.push(format!(
+                    "`{shown}` has {} samples and data.preprocessing.resample asks for {} points: \
+                     they are interpolated between the samples and add no information (resample \
+                     to at most {} points)",
+                    raw.t.len(),
+                    rs.n,
+                    raw.t.len()
+                ));
+            }
+        }
+        let (h_peak, h_end) = (raw.h_max(), raw.h.last().copied().unwrap_or(0.0));
+        if h_peak > 0.0 && h_end > 0.5 * h_peak {
+            warnings.push(format!(
+                "`{shown}` ends at {:.0}% of its maximum depth: no unloading (a truncated record, \
+                 or a test stopped early); the elastic unloading is what determines E best",
+                100.0 * h_end / h_peak
+            ));
+        }
+        for w in &warnings {
+            tracing::warn!("warning: {w}");
+        }
         if raw.meta.format == Format::Csv && (raw.h_max() > 1.0 || raw.f_max() > 100.0) {
             tracing::warn!(
                 "warning: `{shown}` reaches a depth of {} mm and a force of {} N: if its columns \
@@ -195,6 +221,7 @@ impl DataSection {
             raw,
             record,
             applied,
+            warnings,
         })
     }
 }
@@ -844,9 +871,12 @@ impl Config {
         let h_max = schedule.depth.iter().copied().fold(0.0, f64::max);
         let mesher = self.specimen.mesher(&self.punch, h_max)?;
         let (radius, height) = mesher.size();
-        let warnings = validity(&self.punch, h_max, radius, height, name)?;
+        let mut warnings = validity(&self.punch, h_max, radius, height, name)?;
         for w in &warnings {
             tracing::warn!("warning: {w}");
+        }
+        if let Some(m) = &measured {
+            warnings.extend(m.warnings.iter().cloned());
         }
         let (mesh, moved, rim) = mesher
             .build_for(&self.punch)
