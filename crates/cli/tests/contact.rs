@@ -24,7 +24,10 @@ fn normal_contact_is_selected_by_set_and_its_gradient_is_exact() {
         args.extend(extra.iter().map(|s| s.to_string()));
         let o = indentify(&args);
         assert_ok(&o);
-        parse_curve(&stdout(&o)).iter().map(|r| r[2]).fold(0.0, f64::max)
+        parse_curve(&stdout(&o))
+            .iter()
+            .map(|r| r[2])
+            .fold(0.0, f64::max)
     };
     let vertical = peak(&[]);
     let normal = peak(&["--set", "contact=Normal"]);
@@ -32,7 +35,14 @@ fn normal_contact_is_selected_by_set_and_its_gradient_is_exact() {
     // the flank pushes the surface outward: a few percent on Maxwell (+2..4% on R1)
     assert!(change > 0.005 && change < 0.08, "{vertical} -> {normal}");
 
-    let args = short(&["-q", "gradient-check", &r1, "--set", "contact=Normal", "--json"]);
+    let args = short(&[
+        "-q",
+        "gradient-check",
+        &r1,
+        "--set",
+        "contact=Normal",
+        "--json",
+    ]);
     let o = indentify(&args);
     assert_ok(&o);
     assert_eq!(json(&o)["passed"], true, "{}", stdout(&o));
