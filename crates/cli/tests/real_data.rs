@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_ok, assert_rejected, example, examples, indentify, stderr};
+use common::{assert_ok, assert_rejected, example, examples, indentify, stderr, stdout};
 
 #[test]
 fn maxwell_on_the_anton_paar_berkovich_record_identifies_and_reports() {
@@ -257,4 +257,77 @@ fn init_with_data_writes_a_valid_template_for_the_record() {
             stderr(&o)
         );
     }
+}
+
+/// `init --data` on every shipped record: the file is read (a missing one is an error, a
+/// multi-test file gets its test), the template passes `check`, and a short identification
+/// runs on it.
+#[test]
+fn init_templates_of_every_shipped_record_check_and_identify() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = examples().join("data");
+    let records = [
+        ("anton-paar-unht-berkovich/anonNI.TXT", None, None),
+        (
+            "anton-paar-sphere-creep/HT_V_100mN.TXT",
+            Some("3"),
+            Some("sphere:0.01"),
+        ),
+        ("hysitron/Exp-50mN_0000.hld", None, None),
+        ("hysitron/RobinSteel0000LC.txt", None, None),
+    ];
+    for (k, (rel, test, tip)) in records.iter().enumerate() {
+        let file = data.join(rel).display().to_string();
+        let mut args = vec!["init", "maxwell", "--data", &file];
+        if let Some(t) = test {
+            args.extend(["--test", t]);
+        }
+        if let Some(t) = tip {
+            args.extend(["--tip", t]);
+        }
+        let o = indentify(&args);
+        assert_ok(&o);
+        let text = stdout(&o);
+        if let Some(t) = test {
+            assert!(text.contains(&format!("test: {t}")), "{text}");
+            assert!(text.contains("holds 4 tests"), "{text}");
+            assert!(text.contains("Sphere(radius: 0.01)"), "{text}");
+        } else {
+            assert!(text.contains("Berkovich, assumed"), "{text}");
+        }
+        assert!(text.contains("relative_decrease_tol: 0.0001"), "{text}");
+        let p = dir.path().join(format!("t{k}.ron"));
+        std::fs::write(&p, &text).unwrap();
+        let p = p.display().to_string();
+        assert_ok(&indentify(&["-q", "check", &p]));
+        let out = dir.path().join(format!("out{k}")).display().to_string();
+        let o = indentify(&[
+            "-q",
+            "identify",
+            &p,
+            "--out",
+            &out,
+            "--max-iter",
+            "2",
+            "--set",
+            "data.preprocessing.resample.n=15",
+        ]);
+        // two iterations need not converge, but the run and its report must complete
+        assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+        assert!(
+            dir.path().join(format!("out{k}/result.json")).is_file(),
+            "{rel}: {}",
+            stderr(&o)
+        );
+    }
+    let o = indentify(&["init", "maxwell", "--data", "no-such-file.txt"]);
+    assert_rejected(&o, &["no-such-file.txt"], "missing file");
+    let anon = data
+        .join("anton-paar-unht-berkovich/anonNI.TXT")
+        .display()
+        .to_string();
+    let o = indentify(&["init", "maxwell", "--data", &anon, "--test", "2"]);
+    assert_rejected(&o, &["--test 2 is not a test", "holds 1 test"], "bad test");
+    let o = indentify(&["init", "maxwell", "--data", &anon, "--tip", "pyramid"]);
+    assert_rejected(&o, &["--tip `pyramid`", "sphere:R"], "bad tip");
 }

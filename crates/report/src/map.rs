@@ -7,7 +7,7 @@ use plotters::prelude::*;
 
 use crate::error::ReportError;
 use crate::plot::{FigureSize, encode_png, ensure_font};
-use crate::units::fmt_sig;
+use crate::units::fmt_tick;
 
 /// One quantity over the indents of a map.
 #[derive(Debug, Clone, PartialEq)]
@@ -161,8 +161,9 @@ impl MapData {
             .disable_mesh()
             .x_desc("x")
             .y_desc("y")
-            .x_label_formatter(&|v| fmt_sig(*v))
-            .y_label_formatter(&|v| fmt_sig(*v))
+            .label_style(("sans-serif", 15))
+            .x_label_formatter(&|v| fmt_tick(*v))
+            .y_label_formatter(&|v| fmt_tick(*v))
             .draw()
             .map_err(|e| e.to_string())?;
         let cells = (0..self.values.len()).map(|i| {
@@ -193,7 +194,8 @@ impl MapData {
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_label_formatter(&|v| fmt_sig(*v))
+            .y_label_style(("sans-serif", 15))
+            .y_label_formatter(&|v| fmt_tick(*v))
             .draw()
             .map_err(|e| e.to_string())?;
         let n = 64;
@@ -239,7 +241,8 @@ impl MapData {
             .disable_x_mesh()
             .x_desc(&self.title)
             .y_desc("indents")
-            .x_label_formatter(&|v| fmt_sig(*v))
+            .label_style(("sans-serif", 15))
+            .x_label_formatter(&|v| fmt_tick(*v))
             .y_label_formatter(&|v| format!("{v:.0}"))
             .draw()
             .map_err(|e| e.to_string())?;

@@ -33,20 +33,92 @@ pub fn template(reference: Reference) -> String {
     )
 }
 
-/// The annotated template for the measured record `file` with the law of `reference`.
-pub fn data_template(reference: Reference, file: &str) -> String {
+/// What `init --data` knows of the record it writes a template for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataTemplate {
+    /// The path written into `data.file` (as given).
+    pub file: String,
+    /// The test of a multi-test file (from 1), if it has several.
+    pub test: Option<usize>,
+    /// The tests' names, when the file holds several.
+    pub tests: Vec<String>,
+    /// The punch, and where it comes from (`--tip`, the file's metadata, or assumed).
+    pub punch: indentify_contact::Punch,
+    /// Where the punch comes from, for the header.
+    pub punch_source: String,
+}
+
+/// Parses a `--tip` value: `berkovich`, `vickers`, `cube-corner`, `sphere:R` (R in mm) or
+/// `cone:DEG` (half-angle in degrees).
+///
+/// # Errors
+/// Anything else, with the allowed forms.
+pub fn parse_tip(text: &str) -> anyhow::Result<indentify_contact::Punch> {
+    use indentify_contact::Punch;
+    let t = text.trim().to_ascii_lowercase();
+    let number = |v: &str, what: &str| -> anyhow::Result<f64> {
+        match v.trim().parse::<f64>() {
+            Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+            _ => anyhow::bail!("--tip `{text}`: `{v}` is not a {what} > 0"),
+        }
+    };
+    let punch = match t.split_once(':') {
+        None if t == "berkovich" => Punch::Berkovich { tip_radius: None },
+        None if t == "vickers" => Punch::Vickers { tip_radius: None },
+        None if t == "cube-corner" || t == "cubecorner" => Punch::CubeCorner { tip_radius: None },
+        Some(("sphere", r)) => Punch::Sphere {
+            radius: number(r, "radius in mm")?,
+        },
+        Some(("cone", a)) => Punch::Cone {
+            half_angle_deg: number(a, "half-angle in degrees")?,
+        },
+        _ => anyhow::bail!(
+            "--tip `{text}` is not a tip: expected berkovich, vickers, cube-corner, sphere:R (R \
+             in mm, e.g. sphere:0.01) or cone:DEG (half-angle, e.g. cone:70.3)"
+        ),
+    };
+    punch.validate()?;
+    Ok(punch)
+}
+
+/// The punch a record's metadata states (`Berkovich`, `Vickers`, `cube corner`, a sphere
+/// with its radius), if any.
+pub fn tip_from_metadata(meta: &indentify_records::Meta) -> Option<indentify_contact::Punch> {
+    use indentify_contact::Punch;
+    let tip = meta.tip.as_deref().unwrap_or("").to_ascii_lowercase();
+    if tip.contains("berkovich") {
+        Some(Punch::Berkovich { tip_radius: None })
+    } else if tip.contains("vickers") {
+        Some(Punch::Vickers { tip_radius: None })
+    } else if tip.contains("cube") {
+        Some(Punch::CubeCorner { tip_radius: None })
+    } else if tip.contains("spher") || tip.contains("ball") || meta.tip_radius.is_some() {
+        meta.tip_radius
+            .filter(|r| *r > 0.0)
+            .map(|radius| Punch::Sphere { radius })
+    } else {
+        None
+    }
+}
+
+/// The annotated template for a measured record with the law of `reference`: the automatic
+/// specimen, the record's punch, 60 resampled points, every parameter but nu free within
+/// ranges and stopping rules that work on real records (m > 1.1 for Norton-Hoff, where the
+/// adjoint is defined; a relative decrease of 1e-4, since a real record's misfit does not
+/// go to zero).
+pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
     let mut cfg = reference.config();
     cfg.specimen = Specimen::Auto {
         elements_in_contact: AutoOptions::default().elements_in_contact,
         size_factor: AutoOptions::default().size_factor,
         grading: AutoOptions::default().grading,
     };
-    cfg.punch = indentify_contact::Punch::Berkovich { tip_radius: None };
+    cfg.punch = d.punch.clone();
     cfg.history = None;
     cfg.data = Some(DataSection {
-        file: file.to_string(),
+        file: d.file.clone(),
         format: indentify_records::Format::Auto,
-        test: None,
+        test: d.test,
         preprocessing: indentify_records::Preprocessing {
             resample: Some(indentify_records::Resample {
                 n: 60,
@@ -57,31 +129,45 @@ pub fn data_template(reference: Reference, file: &str) -> String {
     });
     let mut id = reference.identify_section();
     for (name, setting) in id.params.iter_mut() {
-        *setting = if name == "nu" {
-            ParamSetting::Fixed { value: Some(0.3) }
-        } else {
-            ParamSetting::Free {
+        *setting = match name.as_str() {
+            "nu" => ParamSetting::Fixed { value: Some(0.3) },
+            "m" => ParamSetting::Free {
+                start: None,
+                lower: Some(1.1),
+                upper: Some(30.0),
+                scaling: None,
+            },
+            _ => ParamSetting::Free {
                 start: None,
                 lower: None,
                 upper: None,
                 scaling: None,
-            }
+            },
         };
     }
+    id.stop.relative_decrease_tol = 1e-4;
     cfg.identify = Some(id);
     let law = cfg.law.name();
-    annotated(
-        &cfg,
-        &[
-            format!("Identification of {law} parameters from the measured record `{file}`."),
-            format!(
-                "indentify configuration written by `indentify init {law} --data {file}`: set \
-                 the punch, the law's start values (the vendor's E_IT is a fair start for E) \
-                 and nu, check it with `indentify check FILE.ron`, run it with `indentify \
-                 identify FILE.ron` (docs/tutorial-real-data.md)."
-            ),
-        ],
-    )
+    let file = &d.file;
+    let mut header = vec![format!(
+        "Identification of {law} parameters from the measured record `{file}`{}.",
+        d.test.map_or(String::new(), |t| format!(", test {t}"))
+    )];
+    if d.tests.len() > 1 {
+        header.push(format!(
+            "The file holds {} tests ({}): data.test chooses one.",
+            d.tests.len(),
+            d.tests.join(", ")
+        ));
+    }
+    header.push(format!("Punch: {}.", d.punch_source));
+    header.push(format!(
+        "indentify configuration written by `indentify init {law} --data {file}`: check the \
+         punch, the law's start values (the vendor's E_IT is a fair start for E) and nu, check \
+         it with `indentify check FILE.ron`, run it with `indentify identify FILE.ron` \
+         (docs/tutorial-real-data.md)."
+    ));
+    annotated(&cfg, &header)
 }
 
 /// A configuration as RON text with comments on every field (units, admissible ranges,

@@ -3,10 +3,12 @@
 
 use std::io::Write as _;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
-use indentify_study::templates::{data_template, template};
+use indentify_study::templates::{
+    DataTemplate, data_template, parse_tip, template, tip_from_metadata,
+};
 
 /// Arguments of `indentify init`.
 #[derive(Debug, clap::Args)]
@@ -15,12 +17,22 @@ pub struct Args {
     #[arg(value_enum)]
     pub law: LawKind,
 
-    /// A template for a measured record instead: its depth drives the simulation (no
-    /// `history`), a Berkovich tip, the automatic specimen, 60 resampled points, every
-    /// parameter but nu free within the law's ranges. The path is written as given: make it
+    /// A template for a measured record instead: the file is read (its tests listed, its
+    /// tip taken from its metadata when it states one); its depth drives the simulation
+    /// (no `history`), the automatic specimen, 60 resampled points, every parameter but nu
+    /// free within ranges that work on real records. The path is written as given: make it
     /// relative to the folder where the configuration will live, or absolute.
     #[arg(long, value_name = "FILE")]
     pub data: Option<String>,
+
+    /// The test of a multi-test file (from 1; default 1).
+    #[arg(long, value_name = "K", requires = "data")]
+    pub test: Option<usize>,
+
+    /// The tip: berkovich, vickers, cube-corner, sphere:R (mm) or cone:DEG (default: the
+    /// file's, else Berkovich).
+    #[arg(long, value_name = "TIP", requires = "data")]
+    pub tip: Option<String>,
 }
 
 /// The laws `init` has a template for.
@@ -52,11 +64,62 @@ impl LawKind {
 pub fn run(args: &Args) -> Result<()> {
     let reference = args.law.reference();
     let text = match &args.data {
-        Some(file) => data_template(reference, file),
+        Some(file) => data_template(reference, &inspect(file, args)?),
         None => template(reference),
     };
     std::io::stdout()
         .lock()
         .write_all(text.as_bytes())
         .context("cannot write the template to standard output")
+}
+
+/// Reads the record `file` for its tests and tip.
+fn inspect(file: &str, args: &Args) -> Result<DataTemplate> {
+    let bytes =
+        std::fs::read(file).with_context(|| format!("cannot read the data file `{file}`"))?;
+    let records = indentify_records::read(&bytes, file, &Default::default())
+        .with_context(|| format!("cannot read `{file}` as an instrument record"))?;
+    let tests: Vec<String> = records
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            r.meta
+                .test_name
+                .clone()
+                .unwrap_or_else(|| format!("{}", k + 1))
+        })
+        .collect();
+    let test = match (args.test, records.len()) {
+        (Some(t), n) if t == 0 || t > n => bail!(
+            "--test {t} is not a test of `{file}`: it holds {n} test{} ({})",
+            if n == 1 { "" } else { "s" },
+            tests.join(", ")
+        ),
+        (Some(t), n) if n > 1 => Some(t),
+        (None, n) if n > 1 => Some(1),
+        _ => None,
+    };
+    let record = &records[test.map_or(0, |t| t - 1)];
+    let (punch, punch_source) = match (&args.tip, tip_from_metadata(&record.meta)) {
+        (Some(t), _) => (
+            parse_tip(t)?,
+            format!("{} (--tip {t})", parse_tip(t)?.describe()),
+        ),
+        (None, Some(p)) => {
+            let d = p.describe();
+            (p, format!("{d}, as the file states"))
+        }
+        (None, None) => (
+            indentify_contact::Punch::Berkovich { tip_radius: None },
+            "Berkovich, assumed: the file does not state its tip (give --tip, or edit `punch`)"
+                .to_string(),
+        ),
+    };
+    Ok(DataTemplate {
+        file: file.to_string(),
+        test,
+        tests: if records.len() > 1 { tests } else { Vec::new() },
+        punch,
+        punch_source,
+    })
 }
