@@ -16,10 +16,11 @@ fn main() -> Result<()> {
         Some("compare-methods") => compare_methods(),
         Some("fuzz-readers") => fuzz::run(&args[1..]),
         Some("make-map") => map::run(&args[1..]),
+        Some("fuzz-configs") => fuzz_configs(&args[1..]),
         Some("slurm-check") => slurm::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)"
             );
             bail!("unknown or missing command")
         }
@@ -151,6 +152,40 @@ fn compare_methods() -> Result<()> {
                 r.seconds
             );
         }
+    }
+    Ok(())
+}
+
+/// `cargo xtask fuzz-configs [--cases N] [--seed S]`: mutated configurations and random
+/// `--set` values through loading, set-up and simulation (indentify_study::fuzzing).
+fn fuzz_configs(args: &[String]) -> Result<()> {
+    let (mut cases, mut seed) = (20_000usize, 1u64);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_default();
+        match a.as_str() {
+            "--cases" => cases = val().parse()?,
+            "--seed" => seed = val().parse()?,
+            other => bail!("unknown option {other}"),
+        }
+    }
+    let t0 = std::time::Instant::now();
+    let c = indentify_study::fuzzing::run(seed, cases);
+    println!(
+        "fuzz-configs: {} cases in {:.1} s: {} configuration errors, {} data errors, {} solver \
+         errors, {} simulated, {} too large to simulate; {} panics, {} non-finite forces",
+        c.cases,
+        t0.elapsed().as_secs_f64(),
+        c.config_errors,
+        c.data_errors,
+        c.solver_errors,
+        c.simulated,
+        c.too_large,
+        c.panics,
+        c.non_finite
+    );
+    if c.panics > 0 || c.non_finite > 0 {
+        bail!("{} panics and {} non-finite forces", c.panics, c.non_finite);
     }
     Ok(())
 }
