@@ -146,7 +146,7 @@ pub fn case(seed: u64) -> Case {
                     let b = a + text[a..]
                         .find(|c: char| !(c.is_ascii_alphanumeric() || c == '.' || c == '-'))
                         .unwrap_or(text.len() - a);
-                    let v: &str = pick(&mut rng, &NASTY[..]);
+                    let v: &&str = pick(&mut rng, &NASTY);
                     text.replace_range(a..b, v);
                 }
             }
