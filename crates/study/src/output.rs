@@ -50,10 +50,19 @@ pub fn write_curve_csv<W: Write>(out: W, rows: &[CurveRow]) -> Result<()> {
     let mut w = csv::Writer::from_writer(out);
     w.write_record(["t", "h", "F", "a"])?;
     for r in rows {
-        w.write_record([r.t, r.h, r.f, r.a].map(|v| v.to_string()))?;
+        w.write_record([r.t, r.h, r.f, r.a].map(csv_number))?;
     }
     w.flush()?;
     Ok(())
+}
+
+/// A number as CSV text: its shortest exact form, with `-0` written `0`.
+pub fn csv_number(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        v.to_string()
+    }
 }
 
 /// Writes the curve to the file `path` atomically (an interrupted write leaves the
@@ -231,6 +240,12 @@ pub fn write_vtu_series(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn negative_zero_is_written_as_zero() {
+        assert_eq!(csv_number(-0.0), "0");
+        assert_eq!(csv_number(-1.5), "-1.5");
+    }
 
     #[test]
     fn csv_has_the_header_and_one_line_per_row() {
