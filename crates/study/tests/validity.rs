@@ -87,12 +87,17 @@ fn a_truncated_record_and_up_sampling_are_said() {
     let mut csv = String::from("Time (s),Depth (nm),Load (mN)\n");
     for i in 0..37 {
         let t = i as f64;
-        csv.push_str(&format!("{t},{},{}\n", 2000.0 * t / 36.0, 10.0 * (t / 36.0).powi(2)));
+        csv.push_str(&format!(
+            "{t},{},{}\n",
+            2000.0 * t / 36.0,
+            10.0 * (t / 36.0).powi(2)
+        ));
     }
     let file = tmp.path().join("cut.csv");
     std::fs::write(&file, csv).unwrap();
     let cfg = ConfigSource::Path(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/real/anon-maxwell.ron"),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/real/anon-maxwell.ron"),
     )
     .load(&[
         format!("data.file={}", file.display()),
@@ -101,6 +106,9 @@ fn a_truncated_record_and_up_sampling_are_said() {
     .unwrap();
     let p = prepare(&cfg, "cut").unwrap();
     let all = p.warnings.join("\n");
-    assert!(all.contains("37 samples") && all.contains("60 points"), "{all}");
+    assert!(
+        all.contains("37 samples") && all.contains("60 points"),
+        "{all}"
+    );
     assert!(all.contains("no unloading"), "{all}");
 }
