@@ -58,11 +58,7 @@ pub fn write_curve_csv<W: Write>(out: W, rows: &[CurveRow]) -> Result<()> {
 
 /// A number as CSV text: its shortest exact form, with `-0` written `0`.
 pub fn csv_number(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else {
-        v.to_string()
-    }
+    if v == 0.0 { "0".into() } else { v.to_string() }
 }
 
 /// Writes the curve to the file `path` atomically (an interrupted write leaves the
