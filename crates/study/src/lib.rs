@@ -26,6 +26,7 @@ pub mod data;
 pub mod error;
 pub mod figures;
 pub mod format;
+pub mod fuzzing;
 pub mod gradient;
 pub mod history;
 pub mod identify;
