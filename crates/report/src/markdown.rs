@@ -42,6 +42,72 @@ impl Report {
         out
     }
 
+    /// The section `## Discretization error` for this report's parameters: the fit
+    /// re-run on `refined` (mesh and steps), its force change (`rms_rel` of F_max, largest
+    /// `max_abs` N), and per parameter (law order) the shift `c_refined - c_fit` it
+    /// implies (`None`: fixed or undetermined) beside the standard deviation.
+    pub fn discretization_markdown(
+        &self,
+        refined: &str,
+        rms_rel: f64,
+        max_abs: f64,
+        shift: &[Option<f64>],
+        seconds: f64,
+    ) -> String {
+        let mut out = String::new();
+        let fu = &self.curves.force_unit;
+        line!(out, "## Discretization error");
+        line!(out);
+        line!(
+            out,
+            "The forward problem re-run at the optimum on {}: the force changes by RMS {}% \
+             of F_max (largest {} {}), {} s. The shift is what the refined discretization \
+             would identify from the same data minus the fit, to first order: \
+             `delta_c = -(S^T W S)^-1 S^T W delta_F`.",
+            escape(refined),
+            fmt_sig(100.0 * rms_rel),
+            fmt_sig(fu.show(max_abs)),
+            escape(&fu.label),
+            fmt_sig(seconds)
+        );
+        line!(out);
+        line!(
+            out,
+            "| parameter | value | ± σ | disc. shift | shift / σ | unit |"
+        );
+        line!(out, "|---|--:|--:|--:|--:|---|");
+        for (k, p) in self.parameters.iter().enumerate() {
+            if p.fixed {
+                continue;
+            }
+            let u = &p.unit;
+            let s = shift.get(k).copied().flatten();
+            let ratio = match (s, p.std_dev) {
+                (Some(s), Some(sd)) if sd > 0.0 => {
+                    let r = s.abs() / sd;
+                    if r > 1.0 {
+                        format!("**{}**", fmt_sig(r))
+                    } else {
+                        fmt_sig(r)
+                    }
+                }
+                _ => String::new(),
+            };
+            line!(
+                out,
+                "| {} | {} | {} | {} | {} | {} |",
+                escape(&p.name),
+                shown(u, Some(p.value)),
+                shown(u, p.std_dev),
+                s.map_or_else(|| "undetermined".to_string(), |s| fmt_sig(u.show(s))),
+                ratio,
+                escape(&u.label)
+            );
+        }
+        line!(out);
+        out
+    }
+
     fn source_section(&self, out: &mut String) {
         line!(out, "| | |");
         line!(out, "|---|---|");

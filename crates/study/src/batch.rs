@@ -593,6 +593,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         checkpoint: None,
         // every worker holds one run: the budget is shared between them
         memory_budget: opts.memory_budget / opts.workers().max(1),
+        refine: false,
     };
     let mut status = IndentStatus {
         id: indent.id.clone(),

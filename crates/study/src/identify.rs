@@ -20,6 +20,7 @@ use indentify_laws::Law;
 use serde::Serialize;
 
 use crate::config::{Config, IdentifySection, Measured, Overrides, Prepared};
+use crate::discretization::{self as disc, Discretization};
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::figures::{self, Written};
 use crate::format::{Named, assignments};
@@ -57,6 +58,10 @@ pub struct IdentifyOptions {
     /// Without `checkpoint`, checkpoint automatically (every about sqrt(steps) steps) when
     /// recording every step's fields would take more than this many bytes.
     pub memory_budget: usize,
+    /// After the fit, re-run the forward problem at the optimum on a 2x refined mesh with
+    /// halved time steps and report the force change and the parameter shift it implies
+    /// ([`crate::discretization`]); does not change the fit. Default true.
+    pub refine: bool,
 }
 
 /// The default [`IdentifyOptions::memory_budget`]: 1 GiB.
@@ -84,6 +89,7 @@ impl IdentifyOptions {
             cancel: Cancel::default(),
             checkpoint: None,
             memory_budget: DEFAULT_MEMORY_BUDGET,
+            refine: true,
         }
     }
 }
@@ -184,6 +190,9 @@ pub struct IdentifyOutcome {
     pub warnings: Vec<String>,
     /// Wall time of the whole pipeline (s).
     pub wall_seconds: f64,
+    /// The discretization error of the fit (`None` with `refine: false`, or when the
+    /// refined run failed: then a warning says why).
+    pub discretization: Option<Discretization>,
 }
 
 impl IdentifyOutcome {
@@ -267,6 +276,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     let Prepared {
         schedule,
         model,
+        mesher,
         measured,
         warnings,
         ..
@@ -347,7 +357,35 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         resumed: resume_from.is_some(),
         warnings,
         wall_seconds: 0.0,
+        discretization: None,
     };
+    if opts.refine && !opts.cancel.is_raised() {
+        let free: Vec<bool> = outcome.result.params.iter().map(|p| p.free).collect();
+        let computed = disc::compute(&disc::Inputs {
+            config: &cfg,
+            mesher: &mesher,
+            problem: &problem,
+            c: &outcome.result.c,
+            free: &free,
+            solver: &solver_opts,
+            name: &name,
+        });
+        match computed {
+            Ok(d) => {
+                tracing::info!("{}", d.summary());
+                for w in discretization_warnings(&outcome, &d) {
+                    tracing::warn!("warning: {w}");
+                    outcome.warnings.push(w);
+                }
+                outcome.discretization = Some(d);
+            }
+            Err(e) => {
+                let w = format!("no discretization error: {e:#}");
+                tracing::warn!("warning: {w}");
+                outcome.warnings.push(w);
+            }
+        }
+    }
     if let Some(p) = paths {
         outcome.files = Some(write_report(
             &p,
@@ -359,6 +397,32 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// One warning per parameter that the discretization moves by more than its standard
+/// deviation.
+pub fn discretization_warnings(outcome: &IdentifyOutcome, d: &Discretization) -> Vec<String> {
+    let mut out = Vec::new();
+    for (k, p) in outcome.result.params.iter().enumerate() {
+        let (Some(shift), Some(sd)) = (d.shift[k], outcome.std_dev(p.name)) else {
+            continue;
+        };
+        if shift.abs() > sd {
+            let unit = if p.unit == "-" { "" } else { p.unit };
+            out.push(format!(
+                "the mesh/time discretization moves {} by {}{}{unit}, more than its standard \
+                 deviation {}{}{unit}: refine the mesh (specimen nr and nz, or elements_in_contact) \
+                 or the steps (history.segments[].steps, or the record's points: \
+                 data.preprocessing.resample)",
+                p.name,
+                crate::format::sig(shift, 3),
+                if unit.is_empty() { "" } else { " " },
+                crate::format::sig(sd, 3),
+                if unit.is_empty() { "" } else { " " },
+            ));
+        }
+    }
+    out
 }
 
 /// Refuses a noise amplitude outside [0, 1).
@@ -666,6 +730,12 @@ fn write_report(
             warnings: &outcome.warnings,
         },
     );
+    let written = written.and_then(|w| {
+        if let Some(d) = &outcome.discretization {
+            add_discretization(&w, outcome, d)?;
+        }
+        Ok(w)
+    });
     match written {
         Ok(w) => files.report = Some((w.markdown, w.json, w.figures)),
         Err(e) => {
@@ -677,6 +747,42 @@ fn write_report(
         }
     }
     Ok(files)
+}
+
+/// Adds the discretization error to report.md (a section after the parameters) and
+/// report.json (a `discretization` object, which [`indentify_report::Report::from_json`]
+/// ignores).
+fn add_discretization(
+    w: &Written,
+    outcome: &IdentifyOutcome,
+    d: &Discretization,
+) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(&w.json)
+        .with_context(|| format!("cannot read `{}`", w.json.display()))?;
+    let report = indentify_report::Report::from_json(&text)?;
+    let section = report.discretization_markdown(
+        &format!("{} with {}", d.mesh, d.steps),
+        d.rms_rel,
+        d.max_abs,
+        &d.shift,
+        d.seconds,
+    );
+    let md = std::fs::read_to_string(&w.markdown)
+        .with_context(|| format!("cannot read `{}`", w.markdown.display()))?;
+    let md = match md.find("\n## Fit quality") {
+        Some(at) => format!("{}\n{section}{}", &md[..at], &md[at + 1..]),
+        None => format!("{md}\n{section}"),
+    };
+    crate::atomic::write(&w.markdown, md)?;
+    let mut json: serde_json::Value = serde_json::from_str(&text)?;
+    if let Some(map) = json.as_object_mut() {
+        map.insert(
+            "discretization".into(),
+            serde_json::to_value(DiscretizationJson::new(outcome, d))?,
+        );
+    }
+    crate::atomic::write(&w.json, serde_json::to_string_pretty(&json)? + "\n")?;
+    Ok(())
 }
 
 /// `t,h,F_data,F_start,F_final` at the schedule times.
@@ -779,8 +885,57 @@ struct ResultJson {
     #[serde(skip_serializing_if = "Option::is_none")]
     fit_quality: Option<FitJson>,
     identifiability: Option<IdentifiabilityJson>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    discretization: Option<DiscretizationJson>,
     history: String,
     fit: String,
+}
+
+/// The discretization error in result.json.
+#[derive(Debug, Serialize)]
+struct DiscretizationJson {
+    mesh: String,
+    steps: String,
+    elements: [usize; 2],
+    n_steps: [usize; 2],
+    rms: f64,
+    rms_rel: f64,
+    max_abs: f64,
+    /// Per free parameter: `c_refined - c_fit` predicted (null: undetermined).
+    shift: Named<Option<f64>>,
+    relative_shift: Named<Option<f64>>,
+    std_dev: Named<Option<f64>>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    undetermined: Vec<&'static str>,
+    seconds: f64,
+}
+
+impl DiscretizationJson {
+    fn new(o: &IdentifyOutcome, d: &Discretization) -> DiscretizationJson {
+        let free: Vec<(usize, &'static str)> = o
+            .result
+            .params
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.free)
+            .map(|(k, p)| (k, p.name))
+            .collect();
+        let named = |v: &[Option<f64>]| Named::new(free.iter().map(|&(k, n)| (n, v[k])));
+        DiscretizationJson {
+            mesh: d.mesh.clone(),
+            steps: d.steps.clone(),
+            elements: [d.elements.0, d.elements.1],
+            n_steps: [d.n_steps.0, d.n_steps.1],
+            rms: d.rms,
+            rms_rel: d.rms_rel,
+            max_abs: d.max_abs,
+            shift: named(&d.shift),
+            relative_shift: named(&d.relative_shift),
+            std_dev: Named::new(free.iter().map(|&(_, n)| (n, o.std_dev(n)))),
+            undetermined: d.undetermined.clone(),
+            seconds: d.seconds,
+        }
+    }
 }
 
 /// The quality of the final fit in result.json.
@@ -858,6 +1013,10 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
             n: q.n,
         }),
         identifiability: r.identifiability.as_ref().map(IdentifiabilityJson::from),
+        discretization: o
+            .discretization
+            .as_ref()
+            .map(|d| DiscretizationJson::new(o, d)),
         history: paths.history.display().to_string(),
         fit: paths.fit.display().to_string(),
     }

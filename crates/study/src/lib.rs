@@ -23,6 +23,7 @@ pub mod batch;
 pub mod check;
 pub mod config;
 pub mod data;
+pub mod discretization;
 pub mod error;
 pub mod figures;
 pub mod format;
