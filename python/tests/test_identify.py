@@ -121,18 +121,33 @@ def test_a_start_that_cannot_be_solved_is_an_error(coarse):
     assert e.value.kind == "solver"
 
 
-@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(), reason="signals")
-def test_ctrl_c_stops_after_the_iteration_and_raises_keyboard_interrupt():
-    # the full R1 mesh: long enough to be interrupted (about 60 ms per iteration)
-    full = indentify.identify(R1, max_iterations=200)
-    timer = threading.Timer(min(0.3, full.wall_seconds / 4), os.kill, (os.getpid(), signal.SIGINT))
+def _interrupted_run(delay, full):
+    """One identification with SIGINT sent after `delay` s: (raised, seconds, iterations)."""
+    timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
     seen = []
     start = time.perf_counter()
     timer.start()
+    raised = False
     try:
-        with pytest.raises(KeyboardInterrupt):
-            indentify.identify(R1, max_iterations=200, progress=seen.append)
+        indentify.identify(R1, max_iterations=200, progress=seen.append)
+    except KeyboardInterrupt:
+        raised = True
     finally:
         timer.cancel()
-    assert time.perf_counter() - start < full.wall_seconds
-    assert 0 < len(seen) < len(full.history)
+    return raised, time.perf_counter() - start, len(seen)
+
+
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(), reason="signals")
+def test_ctrl_c_stops_after_the_iteration_and_raises_keyboard_interrupt():
+    # the full R1 mesh: long enough to be interrupted (about 60 ms per iteration). A signal
+    # is a timing matter on a shared machine: up to three tries, one must show it.
+    full = indentify.identify(R1, max_iterations=200)
+    tries = []
+    for delay in (0.3, 0.5, 0.8):
+        if delay > full.wall_seconds / 3:
+            delay = full.wall_seconds / 4
+        raised, seconds, iterations = _interrupted_run(delay, full)
+        tries.append((delay, raised, seconds, iterations))
+        if raised and seconds < full.wall_seconds and 0 < iterations < len(full.history):
+            return
+    pytest.fail(f"Ctrl-C did not stop the run: (delay, raised, seconds, iterations) = {tries}")
