@@ -142,6 +142,16 @@ def test_ctrl_c_stops_after_the_iteration_and_raises_keyboard_interrupt():
     # the full R1 mesh: long enough to be interrupted (about 60 ms per iteration). A signal
     # is a timing matter on a shared machine: up to three tries, one must show it.
     full = indentify.identify(R1, max_iterations=200)
+    # a process started in the background by a non-interactive shell (as CI may be) inherits
+    # SIGINT ignored, and Python then installs no KeyboardInterrupt handler: install it
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _tries(full)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _tries(full):
     tries = []
     for delay in (0.3, 0.5, 0.8):
         if delay > full.wall_seconds / 3:
