@@ -373,6 +373,9 @@ pub struct IndentStatus {
     pub error_kind: Option<String>,
     /// Parameter names, law order.
     pub names: Vec<String>,
+    /// Their units.
+    #[serde(default)]
+    pub units: Vec<String>,
     /// Final values.
     pub values: Vec<f64>,
     /// Gauss-Newton standard deviations (`None` for held or undetermined parameters).
@@ -603,6 +606,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         message: String::new(),
         error_kind: None,
         names: Vec::new(),
+        units: Vec::new(),
         values: Vec::new(),
         std_dev: Vec::new(),
         free: Vec::new(),
@@ -622,6 +626,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
             };
             status.message = o.result.stop_reason.to_string();
             status.names = o.names.iter().map(|n| n.to_string()).collect();
+            status.units = o.result.params.iter().map(|p| p.unit.to_string()).collect();
             status.values = o.result.params.iter().map(|p| p.value).collect();
             status.free = o.result.params.iter().map(|p| p.free).collect();
             status.std_dev = o.names.iter().map(|n| o.std_dev(n)).collect();
@@ -793,7 +798,11 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
                     .map_or(f64::NAN, |j| if ok { s.values[j] } else { f64::NAN })
             })
             .collect();
-        quantities.push((n.clone(), n.clone(), values));
+        let unit = placed
+            .iter()
+            .find_map(|s| s.units.get(k).filter(|u| !u.is_empty() && *u != "-"))
+            .map_or(String::new(), |u| format!(" ({u})"));
+        quantities.push((n.clone(), format!("{n}{unit}"), values));
     }
     quantities.push((
         "R2".into(),
@@ -999,6 +1008,7 @@ mod tests {
             },
             error_kind: None,
             names: vec!["E".into(), "nu".into()],
+            units: vec!["MPa".into(), "-".into()],
             values: vec![e, 0.3],
             std_dev: vec![Some(12.5), None],
             free: vec![true, false],

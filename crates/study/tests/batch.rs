@@ -57,6 +57,11 @@ fn a_map_is_identified_sharded_merged_and_rerun() {
     for f in ["E_map.svg", "E_map.png", "eta_hist.svg", "R2_map.png"] {
         assert!(whole.join("maps").join(f).is_file(), "{f}");
     }
+    let svg = std::fs::read_to_string(whole.join("maps/eta_map.svg")).unwrap();
+    assert!(
+        svg.contains("eta (MPa s)"),
+        "the map's title names the unit"
+    );
 
     // a rerun skips every finished indent and rebuilds the same results
     let before = results_without_seconds(&whole);
