@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::model::{BoundHit, Parameter, Report};
+use crate::model::{BoundHit, DiscretizationSummary, Parameter, Report};
 use crate::units::{DisplayUnit, fmt_sig};
 
 /// Writing to a `String` cannot fail; this drops the `fmt::Result`.
@@ -35,6 +35,9 @@ impl Report {
         }
         self.source_section(&mut out);
         self.parameter_section(&mut out);
+        if let Some(d) = &self.discretization {
+            out.push_str(&self.discretization_section(d));
+        }
         self.fit_section(&mut out);
         self.convergence_section(&mut out);
         self.preprocessing_section(&mut out);
@@ -43,17 +46,12 @@ impl Report {
     }
 
     /// The section `## Discretization error` for this report's parameters: the fit
-    /// re-run on `refined` (mesh and steps), its force change (`rms_rel` of F_max, largest
+    /// re-run on `d.refined` (mesh and steps), its force change (`rms_rel` of F_max, largest
     /// `max_abs` N), and per parameter (law order) the shift `c_refined - c_fit` it
     /// implies (`None`: fixed or undetermined) beside the standard deviation.
-    pub fn discretization_markdown(
-        &self,
-        refined: &str,
-        rms_rel: f64,
-        max_abs: f64,
-        shift: &[Option<f64>],
-        seconds: f64,
-    ) -> String {
+    fn discretization_section(&self, d: &DiscretizationSummary) -> String {
+        let (refined, rms_rel, max_abs, shift, seconds) =
+            (&d.refined, d.rms_rel, d.max_abs, &d.shift, d.seconds);
         let mut out = String::new();
         let fu = &self.curves.force_unit;
         line!(out, "## Discretization error");

@@ -38,6 +38,25 @@ pub struct Report {
     /// first in the Markdown).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// The discretization error of the fit, when it was estimated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discretization: Option<DiscretizationSummary>,
+}
+
+/// The fit's force re-computed on a refined discretization and the parameter shift it
+/// implies (shown in the Markdown's `## Discretization error`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DiscretizationSummary {
+    /// The refined mesh and steps, described.
+    pub refined: String,
+    /// RMS of the force change / F_max.
+    pub rms_rel: f64,
+    /// Largest force change (N).
+    pub max_abs: f64,
+    /// Parameter shift per law parameter (`None`: held or undetermined).
+    pub shift: Vec<Option<f64>>,
+    /// Wall time of the refined run (s).
+    pub seconds: f64,
 }
 
 /// Origin of the measured curve.

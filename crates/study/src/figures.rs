@@ -37,6 +37,8 @@ pub struct Inputs<'a> {
     pub history: &'a [IterationRecord],
     /// Where the model is stretched or the data fall short.
     pub warnings: &'a [String],
+    /// The discretization error of the fit, if estimated.
+    pub discretization: Option<indentify_report::DiscretizationSummary>,
 }
 
 /// The files written.
@@ -196,6 +198,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         history,
         figures: Vec::new(),
         warnings: inputs.warnings.to_vec(),
+        discretization: inputs.discretization.clone(),
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();

@@ -728,14 +728,17 @@ fn write_report(
             f_final: &outcome.fit.f_final,
             history: &history_records,
             warnings: &outcome.warnings,
+            discretization: outcome.discretization.as_ref().map(|d| {
+                indentify_report::DiscretizationSummary {
+                    refined: format!("{} with {}", d.mesh, d.steps),
+                    rms_rel: d.rms_rel,
+                    max_abs: d.max_abs,
+                    shift: d.shift.clone(),
+                    seconds: d.seconds,
+                }
+            }),
         },
     );
-    let written = written.and_then(|w| {
-        if let Some(d) = &outcome.discretization {
-            add_discretization(&w, outcome, d)?;
-        }
-        Ok(w)
-    });
     match written {
         Ok(w) => files.report = Some((w.markdown, w.json, w.figures)),
         Err(e) => {
@@ -747,42 +750,6 @@ fn write_report(
         }
     }
     Ok(files)
-}
-
-/// Adds the discretization error to report.md (a section after the parameters) and
-/// report.json (a `discretization` object, which [`indentify_report::Report::from_json`]
-/// ignores).
-fn add_discretization(
-    w: &Written,
-    outcome: &IdentifyOutcome,
-    d: &Discretization,
-) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(&w.json)
-        .with_context(|| format!("cannot read `{}`", w.json.display()))?;
-    let report = indentify_report::Report::from_json(&text)?;
-    let section = report.discretization_markdown(
-        &format!("{} with {}", d.mesh, d.steps),
-        d.rms_rel,
-        d.max_abs,
-        &d.shift,
-        d.seconds,
-    );
-    let md = std::fs::read_to_string(&w.markdown)
-        .with_context(|| format!("cannot read `{}`", w.markdown.display()))?;
-    let md = match md.find("\n## Fit quality") {
-        Some(at) => format!("{}\n{section}{}", &md[..at], &md[at + 1..]),
-        None => format!("{md}\n{section}"),
-    };
-    crate::atomic::write(&w.markdown, md)?;
-    let mut json: serde_json::Value = serde_json::from_str(&text)?;
-    if let Some(map) = json.as_object_mut() {
-        map.insert(
-            "discretization".into(),
-            serde_json::to_value(DiscretizationJson::new(outcome, d))?,
-        );
-    }
-    crate::atomic::write(&w.json, serde_json::to_string_pretty(&json)? + "\n")?;
-    Ok(())
 }
 
 /// `t,h,F_data,F_start,F_final` at the schedule times.

@@ -125,6 +125,7 @@ pub fn nano_report() -> Report {
             FigureLink::new("convergence", "fig/convergence.svg"),
         ],
         warnings: Vec::new(),
+        discretization: None,
     }
 }
 
