@@ -172,12 +172,14 @@ impl DataSection {
                 ));
             }
         }
-        let (h_peak, h_end) = (raw.h_max(), raw.h.last().copied().unwrap_or(0.0));
-        if h_peak > 0.0 && h_end > 0.5 * h_peak {
+        // Unloading shows in the force: a plastic imprint can keep the final depth near
+        // the maximum (h_f / h_max of 0.6 to 0.95 for metals) while the force returns to zero.
+        let (f_peak, f_end) = (raw.f_max(), raw.f.last().copied().unwrap_or(0.0));
+        if f_peak > 0.0 && f_end > 0.5 * f_peak {
             warnings.push(format!(
-                "`{shown}` ends at {:.0}% of its maximum depth: no unloading (a truncated record, \
+                "`{shown}` ends at {:.0}% of its maximum force: no unloading (a truncated record, \
                  or a test stopped early); the elastic unloading is what determines E best",
-                100.0 * h_end / h_peak
+                100.0 * f_end / f_peak
             ));
         }
         for w in &warnings {
@@ -805,6 +807,16 @@ impl Config {
         self.specimen.validate()?;
         self.punch.validate()?;
         self.law.build()?;
+        if let Some(&(_, nu)) = self.law.named_params().iter().find(|(n, _)| *n == "nu") {
+            if nu > NU_MAX {
+                bail!(
+                    "law.nu = {nu} is beyond what the displacement (Q8) elements solve: expected \
+                     a value in (-1, {NU_MAX}]; nearer 0.5 the elements lock and Newton cannot \
+                     reach solver.residual_tol (for a nearly incompressible material, use \
+                     {NU_MAX}: F (1 - nu^2) at {NU_MAX} is within 1% of its value at 0.3 on R0)"
+                );
+            }
+        }
         match (&self.history, &self.data) {
             (Some(_), None) => {
                 self.schedule()?;
@@ -934,6 +946,12 @@ pub struct Prepared {
     /// Where the model is stretched beyond its validity (also logged as warnings).
     pub warnings: Vec<String>,
 }
+
+/// Largest Poisson's ratio the displacement-based Q8 elements are trusted with: the
+/// normalized elastic force `F (1 - nu^2)` of R0 is 318.4, 319.0 and 320.5 N at nu = 0.49,
+/// 0.495 and 0.499 (317.2 N at 0.3; locking begins), and at 0.4999 Newton no longer
+/// reaches a relative residual of 1e-10.
+pub const NU_MAX: f64 = 0.499;
 
 /// Largest representative strain (Tabor: `0.2 cot(alpha)` for a cone, `0.2 a / R` for a
 /// sphere) under which the small-strain model is taken as valid without a warning.

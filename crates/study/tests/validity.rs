@@ -112,3 +112,49 @@ fn a_truncated_record_and_up_sampling_are_said() {
     );
     assert!(all.contains("no unloading"), "{all}");
 }
+
+#[test]
+fn a_record_with_a_plastic_imprint_is_not_taken_for_a_truncated_one() {
+    // anonNI.TXT unloads to zero force and ends at about 60% of its maximum depth (the
+    // residual imprint): the unloading is there and no warning may say otherwise.
+    let cfg = ConfigSource::Path(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/real/anon-maxwell.ron"),
+    )
+    .load(&[])
+    .unwrap();
+    let p = prepare(&cfg, "anon").unwrap();
+    let m = p.measured.as_ref().unwrap();
+    let (h_end, h_max) = (*m.raw.h.last().unwrap(), m.raw.h_max());
+    assert!(
+        h_end > 0.5 * h_max,
+        "the record's final depth {h_end} of {h_max}"
+    );
+    assert!(
+        !p.warnings.iter().any(|w| w.contains("no unloading")),
+        "{:?}",
+        p.warnings
+    );
+}
+
+#[test]
+fn a_poisson_ratio_the_elements_cannot_solve_is_refused_with_the_range() {
+    let load = |nu: &str| {
+        ConfigSource::Path(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/r0-elastic.ron"),
+        )
+        .load(&[format!("law.nu={nu}")])
+    };
+    let err = load("0.49999").unwrap_err();
+    let mut e = err.to_string();
+    let mut src = std::error::Error::source(&err);
+    while let Some(s) = src {
+        e.push_str(&format!(": {s}"));
+        src = s.source();
+    }
+    assert!(
+        e.contains("law.nu = 0.49999") && e.contains("(-1, 0.499]"),
+        "{e}"
+    );
+    load("0.499").unwrap();
+}
