@@ -26,7 +26,7 @@ pub enum FeError {
     Factorization(String),
     /// The matrix is not numerically positive definite.
     #[error(
-        "the stiffness matrix is not positive definite ({0}); is a rigid-body mode unconstrained?"
+        "the stiffness matrix is not positive definite ({0}): a degenerate mesh (elements of vanishing size or extreme aspect ratio: check specimen sizes and gradings), a material tangent that is not positive definite, or a rigid-body mode left unconstrained"
     )]
     NotPositiveDefinite(String),
 }

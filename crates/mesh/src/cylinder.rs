@@ -41,6 +41,10 @@ impl CylinderMesher {
     };
 }
 
+/// Largest ratio of the largest to the smallest element along r or z that
+/// [`CylinderMesher::validate`] accepts.
+pub const MAX_SIZE_SPREAD: f64 = 1e8;
+
 /// Cumulative positions `0 = x_0 < ... < x_n = length` of a geometric grading with ratio `q`.
 pub fn graded_positions(length: f64, n: usize, q: f64) -> Vec<f64> {
     let h0 = if (q - 1.0).abs() < 1e-12 {
@@ -98,6 +102,25 @@ impl CylinderMesher {
                     field,
                     value: q.to_string(),
                     allowed: "a ratio in [1, 3]",
+                });
+            }
+        }
+        for (field, q, n) in [
+            ("specimen.grading_r", self.grading_r, self.nr),
+            ("specimen.grading_z", self.grading_z, self.nz),
+        ] {
+            // The largest element is q^(n-1) times the smallest: past about 1e16 the
+            // smallest has no size left in double precision, and well before that the
+            // stiffness matrix loses its digits.
+            let spread = q.powi(i32::try_from(n.saturating_sub(1)).unwrap_or(i32::MAX));
+            if spread > MAX_SIZE_SPREAD {
+                return Err(MeshError::Input {
+                    field,
+                    value: format!(
+                        "{q} over {n} elements (the largest element {spread:.1e} times the smallest)"
+                    ),
+                    allowed: "a largest-to-smallest element size ratio grading^(n - 1) of at \
+                              most 1e8: lower the grading or the number of elements",
                 });
             }
         }
@@ -256,6 +279,24 @@ mod tests {
 
     fn default_mesher() -> CylinderMesher {
         CylinderMesher::REFERENCE
+    }
+
+    #[test]
+    fn a_grading_that_leaves_no_size_to_the_smallest_element_is_refused() {
+        let m = CylinderMesher {
+            nr: 2000,
+            grading_r: 3.0,
+            ..default_mesher()
+        };
+        let e = m.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("specimen.grading_r")
+                && e.contains("over 2000 elements")
+                && e.contains("1e8"),
+            "{e}"
+        );
+        // 1.3 over 20 elements (R0-R2) spreads sizes by 146: accepted
+        default_mesher().validate().unwrap();
     }
 
     #[test]

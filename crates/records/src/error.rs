@@ -80,7 +80,8 @@ pub enum PrepError {
     },
     /// The force never rises through the contact threshold.
     #[error(
-        "{record}: no contact: the force never exceeds the threshold {threshold_mn:.6} mN above the baseline {baseline_mn:.6} mN (max {max_mn:.6} mN); expected a loading curve whose force rises"
+        "{record}: no contact: the force never exceeds the threshold {threshold_mn:.4e} mN above the baseline {baseline_mn:.4e} mN (the force spans {min_mn:.4e} to {max_mn:.4e} mN); expected a loading curve whose force rises{}",
+        if *max_mn <= 0.0 { "; the force is never positive: is the force column's sign reversed (compression counted negative)?" } else { "" }
     )]
     NoContact {
         /// Record name.
@@ -91,6 +92,8 @@ pub enum PrepError {
         baseline_mn: f64,
         /// Maximum force, mN.
         max_mn: f64,
+        /// Minimum force of the whole record, mN.
+        min_mn: f64,
     },
     /// Too few points are left (after trimming, or for the requested resampling).
     #[error("{record}: {step}: {n} points left; expected at least {min}")]

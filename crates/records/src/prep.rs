@@ -510,6 +510,7 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
         threshold_mn: rise * 1e3,
         baseline_mn: f_min * 1e3,
         max_mn: f_max * 1e3,
+        min_mn: f.iter().copied().fold(f64::INFINITY, f64::min) * 1e3,
     };
     if !(rise > 0.0) || !(f_max > level) {
         return Err(no_contact());
@@ -1196,6 +1197,21 @@ mod tests {
         let e = zero_point(&r, &ZeroPoint::default()).unwrap_err();
         assert!(matches!(e, PrepError::NoContact { .. }), "{e}");
         assert!(e.to_string().contains("no contact"), "{e}");
+    }
+
+    #[test]
+    fn a_force_negative_throughout_shows_its_range_and_the_sign() {
+        // compression counted negative: the force falls from 0 to -3 mN
+        let r = rec(
+            vec![0.0, 1.0, 2.0, 3.0],
+            vec![0.0, 1e-6, 2e-6, 3e-6],
+            vec![0.0, -1e-3, -2e-3, -3e-3],
+        );
+        let e = zero_point(&r, &ZeroPoint::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("-3.0000e0 to 0.0000e0 mN"), "{e}");
+        assert!(e.contains("sign reversed"), "{e}");
     }
 
     #[test]

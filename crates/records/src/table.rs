@@ -202,6 +202,38 @@ fn quantity_name(q: Quantity) -> &'static str {
     }
 }
 
+/// `'raw'`, with invisible characters (control bytes, a byte-order mark, non-breaking or
+/// zero-width spaces) written as `\u{..}` and named, so that a field that looks like a
+/// number shows why it is not one.
+pub(crate) fn visible(raw: &str) -> String {
+    let hidden = |c: char| {
+        c.is_control()
+            || matches!(
+                c,
+                '\u{feff}' | '\u{a0}' | '\u{200b}' | '\u{2007}' | '\u{202f}'
+            )
+    };
+    let shown: String = raw
+        .chars()
+        .map(|c| {
+            if hidden(c) {
+                format!("\\u{{{:x}}}", c as u32)
+            } else {
+                c.to_string()
+            }
+        })
+        .collect();
+    let n = raw.chars().filter(|&c| hidden(c)).count();
+    if n == 0 {
+        format!("'{shown}'")
+    } else {
+        format!(
+            "'{shown}' (with {n} invisible character{}, shown as \\u{{..}})",
+            if n == 1 { "" } else { "s" }
+        )
+    }
+}
+
 /// Parses one field of column `col` on `line` into internal units.
 pub(crate) fn field(
     file: &str,
@@ -216,7 +248,7 @@ pub(crate) fn field(
             file,
             Some(line),
             K::NotANumber,
-            format!("'{raw}' in column '{label}' is not a number"),
+            format!("{} in column '{label}' is not a number", visible(raw)),
             if decimal_comma {
                 "a decimal number (point or comma)"
             } else {
@@ -347,4 +379,31 @@ pub(crate) fn check(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invisible_characters_are_shown_and_counted() {
+        assert_eq!(visible("12.3"), "'12.3'");
+        let v = visible("12.304803\u{0}");
+        assert!(v.starts_with("'12.304803\\u{0}'"), "{v}");
+        assert!(v.contains("1 invisible character,"), "{v}");
+        let v = visible("\u{feff}1\u{a0}2");
+        assert!(
+            v.contains("\\u{feff}1\\u{a0}2") && v.contains("2 invisible characters"),
+            "{v}"
+        );
+    }
+
+    #[test]
+    fn a_field_with_a_control_byte_names_it() {
+        let e = field("f.csv", 7, "12.304803\u{1}", "Load", 1.0, false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\\u{1}") && e.contains("invisible"), "{e}");
+        assert!(e.contains("f.csv") && e.contains('7'), "{e}");
+    }
 }
