@@ -7,7 +7,9 @@ use std::ops::Range;
 use std::sync::OnceLock;
 
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
 
 use crate::error::ReportError;
@@ -281,10 +283,54 @@ fn draw_force<DB: DrawingBackend>(
 
     let fonts = Fonts::for_area(root);
     let caption = title(report, figure);
+    // A header with the caption and, in small type, what was identified and how well.
+    let (w, h) = root.dim_in_pixel();
+    let note_px = fonts.tick * 0.9;
+    let head = (fonts.label * 0.8 + fonts.caption * 1.3 + note_px * 2.6) as u32;
+    let (header, body) = root.split_vertically(head.min(h / 3));
+    let centre = i32::try_from(w / 2).unwrap_or(0);
+    let top = (fonts.label * 0.8) as i32;
+    header
+        .draw(&Text::new(
+            caption,
+            (centre, top),
+            ("sans-serif", fonts.caption)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, VPos::Top)),
+        ))
+        .map_err(err)?;
+    let grey = RGBColor(80, 80, 80);
+    for (i, line) in header_notes(report).into_iter().enumerate() {
+        let y = top + (fonts.caption * 1.3 + note_px * 1.3 * i as f64) as i32;
+        header
+            .draw(&Text::new(
+                line,
+                (centre, y),
+                ("sans-serif", note_px)
+                    .into_font()
+                    .color(&grey)
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
+            ))
+            .map_err(err)?;
+    }
+    let (main, residual_area) = if figure == Figure::ForceTime {
+        let (_, bh) = body.dim_in_pixel();
+        let (a, b) = body.split_vertically(bh * 7 / 10);
+        (a, Some(b))
+    } else {
+        (body, None)
+    };
+    let root = &main;
+    let (x_desc, x_area) = if residual_area.is_some() {
+        (String::new(), fonts.label * 1.8)
+    } else {
+        (x_desc, fonts.label * 3.2)
+    };
     let mut chart = ChartBuilder::on(root)
-        .caption(caption, ("sans-serif", fonts.caption))
         .margin(fonts.label)
-        .x_label_area_size(fonts.label * 3.2)
+        .margin_top(0.0)
+        .x_label_area_size(x_area)
         .y_label_area_size(fonts.label * 5.0)
         .build_cartesian_2d(xr, yr)
         .map_err(err)?;
@@ -326,7 +372,7 @@ fn draw_force<DB: DrawingBackend>(
             .draw_series(DashedLineSeries::new(start, dash, dash / 2 + 1, style))
             .map_err(err)?
             .label("fit, start parameters")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+            .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 3, style));
     }
     let style = FINAL.stroke_width(2);
     chart
@@ -351,6 +397,127 @@ fn draw_force<DB: DrawingBackend>(
         .border_style(RGBColor(160, 160, 160))
         .draw()
         .map_err(err)?;
+    if let Some(area) = residual_area {
+        draw_residuals(report, &area, &fonts, fx, ff).map_err(err)?;
+    }
+    Ok(())
+}
+
+/// The header's two lines: the identified values, then the fit's numbers and the source.
+fn header_notes(report: &Report) -> Vec<String> {
+    vec![identified_label(report), fit_note(report)]
+}
+
+/// `identified: E = 1683 MPa, eta = 1.033e5 MPa s` (the free parameters, in the report's
+/// display units).
+fn identified_label(report: &Report) -> String {
+    let free: Vec<String> = report
+        .parameters
+        .iter()
+        .filter(|p| !p.fixed)
+        .map(|p| {
+            let v = p.value * p.unit.factor;
+            let unit = if p.unit.label == "-" {
+                String::new()
+            } else {
+                format!(" {}", p.unit.label)
+            };
+            format!("{} = {}{unit}", p.name, short_value(v))
+        })
+        .collect();
+    if free.is_empty() {
+        "no free parameter".to_string()
+    } else {
+        format!("identified: {}", free.join(", "))
+    }
+}
+
+/// Four significant digits, in exponent notation outside [0.01, 1e5).
+fn short_value(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-2..1e5).contains(&a) {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// `R² = 0.9781, RMS residual 4.90% of F_max (60 points); anonNI.TXT, test 1`.
+fn fit_note(report: &Report) -> String {
+    let f = &report.fit;
+    let file = report
+        .source
+        .file
+        .rsplit(['/', '\\'])
+        .next()
+        .unwrap_or(&report.source.file)
+        .to_string();
+    let mut note = format!(
+        "R\u{b2} = {:.4}, RMS residual {:.2}% of F_max ({} points)",
+        f.r2,
+        100.0 * f.rms_rel,
+        f.n
+    );
+    if !file.is_empty() {
+        note.push_str(&format!("; {file}"));
+        if !report.source.test.is_empty() {
+            note.push_str(&format!(", {}", report.source.test));
+        }
+    }
+    note
+}
+
+/// The residual panel under the force-time curves: `F_fit - F_data` over time, with the
+/// zero line, in the force figure's unit.
+fn draw_residuals<DB: DrawingBackend>(
+    report: &Report,
+    area: &DrawingArea<DB, Shift>,
+    fonts: &Fonts,
+    fx: f64,
+    ff: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let c = &report.curves;
+    let pts: Vec<(f64, f64)> =
+        c.t.iter()
+            .zip(c.f_final.iter().zip(&c.f_data))
+            .map(|(&t, (&m, &d))| (t * fx, (m - d) * ff))
+            .filter(|(t, r)| t.is_finite() && r.is_finite())
+            .collect();
+    if pts.is_empty() {
+        return Ok(());
+    }
+    let xr = padded(pts.iter().map(|p| p.0));
+    let rmax = pts.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
+    let rmax = if rmax > 0.0 { rmax * 1.1 } else { 1.0 };
+    let xm = xr.start.abs().max(xr.end.abs());
+    let mut chart = ChartBuilder::on(area)
+        .margin(fonts.label)
+        .margin_top(0.0)
+        .x_label_area_size(fonts.label * 3.2)
+        .y_label_area_size(fonts.label * 5.0)
+        .build_cartesian_2d(xr.clone(), -rmax..rmax)?;
+    chart
+        .configure_mesh()
+        .x_desc("time t [s]")
+        .y_desc(format!("fit - data [{}]", c.force_unit.label))
+        .y_labels(5)
+        .x_label_formatter(&|v| fmt_axis_tick(*v, xm))
+        .y_label_formatter(&|v| fmt_axis_tick(*v, rmax))
+        .label_style(("sans-serif", fonts.tick))
+        .axis_desc_style(("sans-serif", fonts.label))
+        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(RGBColor(210, 210, 210))
+        .draw()?;
+    chart.draw_series(LineSeries::new(
+        vec![(xr.start, 0.0), (xr.end, 0.0)],
+        RGBColor(120, 120, 120).stroke_width(1),
+    ))?;
+    chart.draw_series(LineSeries::new(pts.iter().copied(), FINAL.stroke_width(1)))?;
+    let marker = (fonts.tick / 5.0).max(1.5);
+    chart.draw_series(pts.iter().map(|&p| Circle::new(p, marker, FINAL.filled())))?;
     Ok(())
 }
 

@@ -53,14 +53,10 @@ pub struct Written {
     pub fit: FitQuality,
 }
 
-/// How a parameter is shown: moduli and stresses of 1000 MPa and more in GPa, others in
-/// their own unit.
-fn display_unit(unit: &str, value: f64) -> DisplayUnit {
-    if unit == "MPa" && value.abs() >= 1e3 {
-        DisplayUnit::new("GPa", 1e-3)
-    } else {
-        DisplayUnit::internal(unit)
-    }
+/// How a parameter is shown: in its internal unit (MPa, MPa s, ...), as on the terminal
+/// and in result.json, so that one number reads the same everywhere.
+fn display_unit(unit: &str, _value: f64) -> DisplayUnit {
+    DisplayUnit::internal(unit)
 }
 
 /// The file's metadata worth a line in the report.
