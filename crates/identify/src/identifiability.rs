@@ -286,7 +286,7 @@ impl Identifiability {
                             "its standard deviation {} is {} its value {}",
                             short(sd),
                             if by_value >= 2.0 {
-                                format!("{by_value:.1}x")
+                                format!("{}x", short(by_value))
                             } else {
                                 "as large as".into()
                             },
