@@ -535,13 +535,7 @@ fn honest_stop(config: &str, method: &str, start: &str, truth: &[(&str, f64)]) -
         assert_eq!(v["converged"], true, "{v}");
         return Vec::new();
     }
-    assert_eq!(
-        o.status.code(),
-        Some(3),
-        "{}\n{}",
-        stdout(&o),
-        stderr(&o)
-    );
+    assert_eq!(o.status.code(), Some(3), "{}\n{}", stdout(&o), stderr(&o));
     assert_eq!(v["converged"], false, "{v}");
     let undetermined: Vec<String> = v["undetermined"]
         .as_array()
@@ -564,7 +558,10 @@ fn honest_stop(config: &str, method: &str, start: &str, truth: &[(&str, f64)]) -
     assert!(stderr(&o).contains("What to do"), "{}", stderr(&o));
     assert!(table.contains("NOT converged:"), "{table}");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("## Identifiability") && md.contains("**undetermined**"), "{md}");
+    assert!(
+        md.contains("## Identifiability") && md.contains("**undetermined**"),
+        "{md}"
+    );
     undetermined
 }
 

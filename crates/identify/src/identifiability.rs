@@ -183,7 +183,12 @@ impl Identifiability {
             .iter()
             .zip(weights)
             .filter(|(_, w)| **w > 0.0)
-            .map(|(r, w)| columns.iter().map(|col| w.sqrt() * r[col.index] * col.dc_dy).collect())
+            .map(|(r, w)| {
+                columns
+                    .iter()
+                    .map(|col| w.sqrt() * r[col.index] * col.dc_dy)
+                    .collect()
+            })
             .collect();
         let n = rows.len();
         let sigma2 = if n > p {
@@ -212,7 +217,11 @@ impl Identifiability {
                 undetermined.push(k);
                 reasons.push(format!(
                     "no effect on the force (sensitivity {:.1e} of the largest)",
-                    if largest > 0.0 { norm[k] / largest } else { 0.0 }
+                    if largest > 0.0 {
+                        norm[k] / largest
+                    } else {
+                        0.0
+                    }
                 ));
             }
         }
@@ -226,7 +235,13 @@ impl Identifiability {
                     undetermined.push(k);
                     reasons.push("its sensitivity is not finite".into());
                 }
-                break (Vec::new(), Analysis { s: vec![], v: vec![] });
+                break (
+                    Vec::new(),
+                    Analysis {
+                        s: vec![],
+                        v: vec![],
+                    },
+                );
             };
             let analysis = Analysis { s, v };
             let smax = analysis.s.first().copied().unwrap_or(0.0);
@@ -400,7 +415,12 @@ impl Identifiability {
                 // along the direction, b y_a - a y_b stays constant
                 let invariant = match (self.scalings[a], self.scalings[b]) {
                     (Scaling::Log, Scaling::Log) => {
-                        format!("{}·{}^{} ≈ const", self.names[a], self.names[b], exponent(-v[a] / v[b]))
+                        format!(
+                            "{}·{}^{} ≈ const",
+                            self.names[a],
+                            self.names[b],
+                            exponent(-v[a] / v[b])
+                        )
                     }
                     (Scaling::Log, _) => format!(
                         "ln {} {} {}·{} ≈ const",
@@ -539,7 +559,11 @@ mod tests {
         let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, xi]).collect();
         let s = Identifiability::from_jacobian(&jac, &w, 4.0, &[1.0, 1.0], &[0, 1], vec!["a", "b"]);
         assert_eq!(s.undetermined, vec!["a", "b"], "{:?}", s.reasons);
-        assert!(s.reasons[0].contains("combination of a and b"), "{:?}", s.reasons);
+        assert!(
+            s.reasons[0].contains("combination of a and b"),
+            "{:?}",
+            s.reasons
+        );
         assert!(s.std_dev.iter().all(|v| v.is_infinite()), "{:?}", s.std_dev);
     }
 
@@ -572,12 +596,19 @@ mod tests {
         // alone, sY's variance is sigma^2 / sum w t^4 (the others held)
         let sxx: f64 = t.iter().map(|x| x.powi(4)).sum();
         let want = (2.0 / (n - 3) as f64 / sxx).sqrt();
-        assert!((s.std_dev[2] - want).abs() < 1e-12 * want, "{} {want}", s.std_dev[2]);
+        assert!(
+            (s.std_dev[2] - want).abs() < 1e-12 * want,
+            "{} {want}",
+            s.std_dev[2]
+        );
         assert!(s.singular_values[2] / s.singular_values[0] < RANK_TOL);
         assert_eq!(s.condition_text(), "singular");
         // the weakest direction is K against m, in equal parts: K·m^1.00 ≈ const
         let words = s.weakest_direction().unwrap();
-        assert!(words.starts_with("K and m trade along K·m^1.00 ≈ const"), "{words}");
+        assert!(
+            words.starts_with("K and m trade along K·m^1.00 ≈ const"),
+            "{words}"
+        );
     }
 
     /// The statistical test: a noisy fit whose deviation exceeds the value (the anon-nh
@@ -610,7 +641,13 @@ mod tests {
             },
         ];
         let s = Identifiability::from_columns(&jac, &w, cost, &[10.0, 16.6], &cols);
-        assert_eq!(s.undetermined, vec!["sY"], "{:?} {:?}", s.reasons, s.std_dev);
+        assert_eq!(
+            s.undetermined,
+            vec!["sY"],
+            "{:?} {:?}",
+            s.reasons,
+            s.std_dev
+        );
         assert!(s.reasons[0].contains("its value 16.6"), "{:?}", s.reasons);
         assert!(s.std_dev[1].is_infinite() && s.std_dev[0].is_finite());
         // E alone: std = sigma / |S e_E| * dc/dy
@@ -626,7 +663,13 @@ mod tests {
         cols[1].dc_dy = 1.0;
         let jac: Vec<Vec<f64>> = t.iter().map(|&ti| vec![ti, 0.5 * ti * ti]).collect();
         let s = Identifiability::from_columns(&jac, &w, cost, &[10.0, 16.6], &cols);
-        assert_eq!(s.undetermined, vec!["sY"], "{:?} {:?}", s.reasons, s.std_dev);
+        assert_eq!(
+            s.undetermined,
+            vec!["sY"],
+            "{:?} {:?}",
+            s.reasons,
+            s.std_dev
+        );
         assert!(s.reasons[0].contains("admissible range"), "{:?}", s.reasons);
     }
 

@@ -67,7 +67,9 @@ pub fn solve_spd(m: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
     let mat = from_rows(m, n);
     let chol = mat.cholesky()?;
     let x = chol.solve(&DVector::from_column_slice(b));
-    x.iter().all(|v| v.is_finite()).then(|| x.iter().copied().collect())
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
 }
 
 #[cfg(test)]

@@ -39,7 +39,11 @@ fn linearize(monitor: &Monitor<'_, '_>, y: &[f64]) -> Result<Linearization, Iden
     }
     let f = 0.5 * r.iter().map(|v| v * v).sum::<f64>();
     let a = from_rows(&a, np);
-    let g: Vec<f64> = a.tr_mul(&DVector::from_column_slice(&r)).iter().copied().collect();
+    let g: Vec<f64> = a
+        .tr_mul(&DVector::from_column_slice(&r))
+        .iter()
+        .copied()
+        .collect();
     Ok((f, r, a, g))
 }
 

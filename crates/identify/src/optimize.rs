@@ -774,20 +774,17 @@ fn run(
                 .iter()
                 .map(|f| Column::of(f, last.params[f.index]))
                 .collect();
-            Identifiability::from_columns(
-                &jac,
-                &problem.weights,
-                last.cost,
-                &last.params,
-                &columns,
-            )
+            Identifiability::from_columns(&jac, &problem.weights, last.cost, &last.params, &columns)
         })
     } else {
         None
     };
     // honest stops: a first-order point where the data leave a parameter undetermined
     // has not identified it
-    if let Some(id) = identifiability.as_ref().filter(|i| !i.undetermined.is_empty()) {
+    if let Some(id) = identifiability
+        .as_ref()
+        .filter(|i| !i.undetermined.is_empty())
+    {
         if reason.is_converged() {
             let params = id
                 .undetermined

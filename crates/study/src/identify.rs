@@ -833,7 +833,10 @@ impl From<&Identifiability> for IdentifiabilityJson {
             weakest_direction: i.weakest_direction(),
             undetermined: i.undetermined.clone(),
             undetermined_reasons: Named::new(
-                i.undetermined.iter().copied().zip(i.reasons.iter().cloned()),
+                i.undetermined
+                    .iter()
+                    .copied()
+                    .zip(i.reasons.iter().cloned()),
             ),
             unidentifiable: i.undetermined.clone(),
         }
