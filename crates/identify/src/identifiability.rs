@@ -517,7 +517,7 @@ mod tests {
         // singular values of S = A diag(2, 3): the eigenvalues of the 2x2 Fisher matrix
         // [[4 Sxx, 6 Sx], [6 Sx, 9 n]] = [[1140, 270], [270, 90]]
         let (tr, det) = (1140.0 + 90.0, 1140.0 * 90.0 - 270.0 * 270.0);
-        let disc: f64 = (tr * tr / 4.0 - det) as f64;
+        let disc: f64 = tr * tr / 4.0 - det;
         let (l1, l2) = (tr / 2.0 + disc.sqrt(), tr / 2.0 - disc.sqrt());
         assert!((s.singular_values[0] - l1.sqrt()).abs() < 1e-11 * l1.sqrt());
         assert!((s.singular_values[1] - l2.sqrt()).abs() < 1e-11 * l1.sqrt());
