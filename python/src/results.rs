@@ -225,9 +225,13 @@ pub struct IdentifyResult {
     /// The names of the correlation matrix's rows and columns.
     #[pyo3(get)]
     correlation_names: Vec<&'static str>,
-    /// Whether a convergence criterion was met.
+    /// Whether a convergence criterion was met with every free parameter determined.
     #[pyo3(get)]
     converged: bool,
+    /// The free parameters the data do not determine (no deviation, NaN correlations; a
+    /// run that stops there is not converged).
+    #[pyo3(get)]
+    undetermined: Vec<&'static str>,
     /// Why the run stopped, in words.
     #[pyo3(get)]
     stop_reason: String,
@@ -372,6 +376,10 @@ impl IdentifyResult {
             correlation: correlation.unbind(),
             correlation_names,
             converged: o.converged(),
+            undetermined: r
+                .identifiability
+                .as_ref()
+                .map_or_else(Vec::new, |i| i.undetermined.clone()),
             stop_reason: r.stop_reason.to_string(),
             fit: fit.unbind(),
             history: history.unbind(),

@@ -18,6 +18,7 @@ def test_r1_synthesized_identification(coarse):
     r = indentify.identify(R1, sets=coarse, progress=seen.append)
     assert isinstance(r, indentify.Result)
     assert r.converged is True
+    assert r.undetermined == []
     assert isinstance(r.stop_reason, str) and r.stop_reason
     assert r.params["E"] == pytest.approx(20000, rel=1e-4)
     assert r.params["eta"] == pytest.approx(30000, rel=1e-4)

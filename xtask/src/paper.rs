@@ -738,6 +738,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",
+        Undetermined { .. } => "undetermined",
     }
 }
 

@@ -99,9 +99,17 @@ enum Command {
                             Writes DIR/result.json (parameters with start, final value, bound hit; \
                             J, iterations, solves, stop reason, wall time, identifiability), \
                             DIR/history.csv (one line per iteration, written as it completes) and \
-                            DIR/fit.csv (t, h, F_data, F_start, F_final). The exit status is \
-                            non-zero for invalid input and for a run that does not converge \
-                            (stall, iteration limit), after the report is written.\n\n\
+                            DIR/fit.csv (t, h, F_data, F_start, F_final). The table's std. dev. \
+                            column says `undetermined` for a parameter the data do not \
+                            determine (from the singular values of the scaled sensitivity \
+                            matrix; see result.json `undetermined`).\n\n\
+                            Exit status: 0 converged with every free parameter determined; 1 \
+                            invalid input, a stall or the iteration limit (after the report is \
+                            written); 2 a malformed command line; 3 a convergence criterion met \
+                            but some free parameter undetermined by the data (a parameter at a \
+                            bound where it has no effect, a combination the test cannot tell \
+                            apart): the report is written and the message says what to do; \
+                            130 interrupted (Ctrl-C).\n\n\
                             Examples:\n  \
                             indentify identify\n  \
                             indentify identify examples/r1-maxwell.ron --start E=60000,eta=10000 --out out/start2\n  \

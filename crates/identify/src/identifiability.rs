@@ -1,25 +1,44 @@
-//! How well each parameter is determined at the optimum, from the weighted sensitivity
-//! Jacobian `A_ik = sqrt(w_i) dF_i/dc_k` of the free parameters (a linearization):
+//! How well each parameter is determined at the optimum, from the scaled sensitivity
+//! matrix `S_ik = sqrt(w_i) dF_i/dc_k dc_k/dy_k` of the free parameters in the optimizer's
+//! scaled variables `y` (`y = ln c` for log-scaled ones, so a column is the force change
+//! for a relative change of the parameter), a linearization:
 //!
-//! - residual variance `sigma^2 = 2 J / (n - p)` (n data with non-zero weight, p free),
-//! - covariance `Cov = sigma^2 (A^T A)^-1`, standard deviations `sqrt(Cov_kk)`,
-//!   relative ones `sqrt(Cov_kk) / |c_k|`,
-//! - correlations `Cov_kl / sqrt(Cov_kk Cov_ll)` (|.| near 1: the data constrain only a
-//!   combination of the two parameters, the valley of the paper's Fig. 11),
-//! - the condition number of the relative Fisher matrix `D A^T A D`, `D = diag(c)`
-//!   (the same information on the log scale, independent of units).
+//! - the singular value decomposition `S = U diag(s) V^T` (nalgebra): each singular value
+//!   `s_j` with its right singular vector `v_j`, the parameter combination it determines.
+//!   A step of length 1 in `y` along `v_j` changes the weighted force by `s_j` (2-norm);
+//!   the last, weakest direction is the valley of the paper's Fig. 11, said in words by
+//!   [`Identifiability::weakest_direction`] (for log-scaled parameters, `v = (a, b)` moves
+//!   along `c1^b c2^-a = const`);
+//! - residual variance `sigma^2 = 2 J / (n - p)` (n data with non-zero weight, p free);
+//! - Gauss-Newton covariance `Cov_y = sigma^2 V diag(1/s^2) V^T` of the scaled variables,
+//!   standard deviations `sqrt(Cov_kk) dc_k/dy_k` in parameter units, relative ones
+//!   `std / |c_k|`, correlations `Cov_kl / sqrt(Cov_kk Cov_ll)` (|.| near 1: the data see
+//!   only a combination of the two);
+//! - the condition number of the Fisher matrix `S^T S`, `(s_max / s_min)^2`.
 //!
-//! With exact synthetic data `J` is at round-off and so are the deviations; the
-//! correlations and the condition number still tell which combinations are weakly seen.
+//! **Undetermined parameters** ([`Identifiability::undetermined`], with the reason in
+//! [`Identifiability::reasons`]) are found in three ways, one at a time, each time the
+//! analysis being repeated on the parameters still kept (as if the undetermined ones were
+//! held at their values):
 //!
-//! A parameter whose relative sensitivity `|c_k| ||A e_k||` is below
-//! [`INSENSITIVE`] times the largest one does not act on the data at all (a yield stress
-//! driven to zero, a viscosity so large the material never flows): it is listed in
-//! [`Identifiability::unidentifiable`], its deviation is infinite, its correlations are
-//! left at zero, and the others are computed without it. A Fisher matrix that is still
-//! singular gives infinite deviations throughout, never NaN.
+//! 1. *no effect*: a column of `S` below [`INSENSITIVE`] times the largest;
+//! 2. *numerically singular*: a singular value below [`RANK_TOL`] times the largest, i.e. a
+//!    Fisher condition number beyond `1 / RANK_TOL^2 = 1e16 ~ 1 / eps`: the normal
+//!    equations lose every digit in that direction, and the forward sensitivities
+//!    (solver tolerance 1e-10 or so) cannot tell it from zero. The parameters with the
+//!    largest components of that direction (at least half of the largest) are undetermined;
+//! 3. *statistically*: a Gauss-Newton standard deviation at least the value itself
+//!    (`std >= |c|`: not even the order of magnitude is known, `sY = 16.6 ± 52.5 MPa`), or
+//!    a 2-sigma interval at least as wide as the admissible range (`4 std >= hi - lo`: the
+//!    data do not narrow the bounds). The worst such parameter goes first.
+//!
+//! Undetermined parameters have an infinite standard deviation and NaN correlations (no
+//! number is shown for them); the others are computed without them. With exact synthetic
+//! data `J` is at round-off and so are the deviations: only (1) and (2) then speak, and the
+//! singular values and the condition number tell which combinations are weakly seen.
 
-use crate::linalg::{inverse, normal_matrix, symmetric_eigenvalues};
+use crate::linalg::{from_rows, right_svd};
+use crate::params::{FreeParam, Scaling};
 
 /// The identifiability summary at a parameter point.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,31 +47,104 @@ pub struct Identifiability {
     pub names: Vec<&'static str>,
     /// Their values.
     pub values: Vec<f64>,
+    /// Their scalings (how a direction reads: factors for `Log`, increments otherwise).
+    pub scalings: Vec<Scaling>,
+    /// `dc/dy` of each free parameter at its value (the column scale of `S`).
+    pub dc_dy: Vec<f64>,
     /// Data points with non-zero weight.
     pub n_data: usize,
     /// `sigma^2 = 2 J / (n - p)` (N^2).
     pub sigma2: f64,
-    /// Standard deviations (parameter units); infinite for an unidentifiable parameter.
+    /// Standard deviations (parameter units); infinite for an undetermined parameter.
     pub std_dev: Vec<f64>,
     /// Relative standard deviations `std / |value|`.
     pub rel_std_dev: Vec<f64>,
-    /// Correlation matrix (p x p).
+    /// Correlation matrix (p x p); NaN in the rows and columns of undetermined parameters.
     pub correlation: Vec<Vec<f64>>,
-    /// Condition number of `D A^T A D` (ratio of extreme eigenvalues); `inf` if singular.
+    /// Condition number of the Fisher matrix `S^T S`, `(s_max / s_min)^2`; `inf` if
+    /// singular. Beyond [`SINGULAR_CONDITION`] it means nothing but "singular".
     pub condition_number: f64,
-    /// Free parameters that do not act on the data (relative sensitivity below
-    /// [`INSENSITIVE`] times the largest): not determined by these data at all.
+    /// Singular values of `S` (N per unit of `y`), descending.
+    pub singular_values: Vec<f64>,
+    /// For each singular value, its right singular vector over the free parameters (unit
+    /// length, largest component positive): the combination of scaled variables it sees.
+    pub directions: Vec<Vec<f64>>,
+    /// Free parameters the data do not determine, in the order they were found.
+    pub undetermined: Vec<&'static str>,
+    /// For each undetermined parameter, why (in words, with the numbers).
+    pub reasons: Vec<String>,
+    /// The older name of [`Identifiability::undetermined`] (the same list), kept for
+    /// callers and result files that read it.
     pub unidentifiable: Vec<&'static str>,
 }
 
-/// Relative sensitivity, as a fraction of the largest, under which a parameter counts as
-/// not acting on the data.
+/// Relative column norm of `S`, as a fraction of the largest, under which a parameter
+/// counts as not acting on the data.
 pub const INSENSITIVE: f64 = 1e-7;
+
+/// Singular value, as a fraction of the largest, under which a direction is numerically
+/// null (Fisher condition number beyond `1e16`).
+pub const RANK_TOL: f64 = 1e-8;
+
+/// A Fisher condition number beyond this is shown as "singular".
+pub const SINGULAR_CONDITION: f64 = 1e16;
+
+/// A column of the scaled sensitivity matrix: which law parameter, how it is scaled, its
+/// bounds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Column {
+    /// Index in the law's parameter vector.
+    pub index: usize,
+    /// Name.
+    pub name: &'static str,
+    /// Scaling.
+    pub scaling: Scaling,
+    /// `dc/dy` at the point.
+    pub dc_dy: f64,
+    /// Lower bound (`-inf` if none).
+    pub lower: f64,
+    /// Upper bound (`inf` if none).
+    pub upper: f64,
+}
+
+impl Column {
+    /// The column of an optimizer's free parameter at value `c`.
+    pub fn of(f: &FreeParam, c: f64) -> Column {
+        Column {
+            index: f.index,
+            name: f.name,
+            scaling: f.scaling,
+            dc_dy: f.dc_dy(c),
+            lower: f.lower,
+            upper: f.upper,
+        }
+    }
+}
+
+/// The Gauss-Newton analysis of one set of kept columns.
+struct Analysis {
+    s: Vec<f64>,
+    v: Vec<Vec<f64>>,
+}
+
+impl Analysis {
+    /// `Cov_y / sigma^2` entry `(a, b)` (indices into the kept set); infinite for a zero
+    /// singular value.
+    fn inv_fisher(&self, a: usize, b: usize) -> f64 {
+        self.s
+            .iter()
+            .zip(&self.v)
+            .map(|(s, v)| v[a] * v[b] / (s * s))
+            .sum()
+    }
+}
 
 impl Identifiability {
     /// Computes the summary from the full Jacobian (`jac[i][k] = dF_i/dc_k`, all law
     /// parameters), the weights, the cost `J`, the full parameter vector and the indices
-    /// and names of the free parameters.
+    /// and names of the free parameters, every free parameter log-scaled and unbounded
+    /// (the relative analysis). [`Identifiability::from_columns`] takes the optimizer's
+    /// scalings and bounds.
     pub fn from_jacobian(
         jac: &[Vec<f64>],
         weights: &[f64],
@@ -61,12 +153,42 @@ impl Identifiability {
         free: &[usize],
         names: Vec<&'static str>,
     ) -> Identifiability {
-        let p = free.len();
+        let columns: Vec<Column> = free
+            .iter()
+            .zip(names)
+            .map(|(&k, name)| Column {
+                index: k,
+                name,
+                scaling: Scaling::Log,
+                dc_dy: c[k],
+                lower: f64::NEG_INFINITY,
+                upper: f64::INFINITY,
+            })
+            .collect();
+        Identifiability::from_columns(jac, weights, cost, c, &columns)
+    }
+
+    /// Computes the summary from the full Jacobian (`jac[i][k] = dF_i/dc_k`), the
+    /// weights, the cost `J`, the full parameter vector and the free parameters' columns
+    /// (scaling and bounds, as the optimizer saw them).
+    pub fn from_columns(
+        jac: &[Vec<f64>],
+        weights: &[f64],
+        cost: f64,
+        c: &[f64],
+        columns: &[Column],
+    ) -> Identifiability {
+        let p = columns.len();
         let rows: Vec<Vec<f64>> = jac
             .iter()
             .zip(weights)
             .filter(|(_, w)| **w > 0.0)
-            .map(|(r, w)| free.iter().map(|&k| w.sqrt() * r[k]).collect())
+            .map(|(r, w)| {
+                columns
+                    .iter()
+                    .map(|col| w.sqrt() * r[col.index] * col.dc_dy)
+                    .collect()
+            })
             .collect();
         let n = rows.len();
         let sigma2 = if n > p {
@@ -74,44 +196,143 @@ impl Identifiability {
         } else {
             f64::NAN
         };
-        let ata = normal_matrix(&rows, p);
-        let values: Vec<f64> = free.iter().map(|&k| c[k]).collect();
-        // relative Fisher matrix D A^T A D (log-scale sensitivities)
-        let rel: Vec<Vec<f64>> = (0..p)
-            .map(|a| (0..p).map(|b| ata[a][b] * values[a] * values[b]).collect())
-            .collect();
-        let ev = symmetric_eigenvalues(&rel);
-        let condition_number = match (ev.first(), ev.last()) {
-            (Some(&lo), Some(&hi)) if lo > 0.0 => hi / lo,
+        let values: Vec<f64> = columns.iter().map(|col| c[col.index]).collect();
+        let names: Vec<&'static str> = columns.iter().map(|col| col.name).collect();
+        let full = from_rows(&rows, p);
+        let (singular_values, directions) = right_svd(&full).unwrap_or_default();
+        let condition_number = match (singular_values.first(), singular_values.last()) {
+            (Some(&hi), Some(&lo)) if lo > 0.0 && hi.is_finite() => (hi / lo).powi(2),
             _ => f64::INFINITY,
         };
-        // invert the relative matrix (better conditioned than A^T A across units)
-        // parameters that act on the data, and the Fisher matrix restricted to them
-        let scale: Vec<f64> = (0..p).map(|a| rel[a][a].max(0.0).sqrt()).collect();
-        let largest = scale.iter().copied().fold(0.0, f64::max);
-        let kept: Vec<usize> = (0..p)
-            .filter(|&a| scale[a] > INSENSITIVE * largest && scale[a].is_finite())
-            .collect();
-        let unidentifiable = (0..p)
-            .filter(|a| !kept.contains(a))
-            .map(|a| names[a])
-            .collect();
-        let sub: Vec<Vec<f64>> = kept
+        let norm: Vec<f64> = (0..p).map(|k| full.column(k).norm()).collect();
+        let largest = norm
             .iter()
-            .map(|&a| kept.iter().map(|&b| rel[a][b]).collect())
-            .collect();
-        let mut std_dev = vec![f64::INFINITY; p];
-        let mut correlation: Vec<Vec<f64>> = (0..p)
-            .map(|a| (0..p).map(|b| if a == b { 1.0 } else { 0.0 }).collect())
-            .collect();
-        if let Some(inv) = inverse(&sub)
-            .filter(|inv| (0..kept.len()).all(|i| inv[i][i].is_finite() && inv[i][i] > 0.0))
-        {
-            for (i, &a) in kept.iter().enumerate() {
-                std_dev[a] = (sigma2 * inv[i][i]).max(0.0).sqrt() * values[a].abs();
-                for (j, &b) in kept.iter().enumerate() {
-                    correlation[a][b] = inv[i][j] / (inv[i][i] * inv[j][j]).sqrt();
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max);
+        let mut undetermined: Vec<usize> = Vec::new();
+        let mut reasons: Vec<String> = Vec::new();
+        for k in 0..p {
+            if !(norm[k].is_finite() && norm[k] > INSENSITIVE * largest) {
+                undetermined.push(k);
+                reasons.push(format!(
+                    "no effect on the force (sensitivity {:.1e} of the largest)",
+                    if largest > 0.0 {
+                        norm[k] / largest
+                    } else {
+                        0.0
+                    }
+                ));
+            }
+        }
+        // the analysis of the kept columns, repeated as parameters are found undetermined
+        let (kept, analysis) = loop {
+            let kept: Vec<usize> = (0..p).filter(|k| !undetermined.contains(k)).collect();
+            let sub = full.select_columns(kept.iter());
+            let Some((s, v)) = right_svd(&sub) else {
+                // a non-finite sensitivity: nothing can be said about the kept ones
+                for &k in &kept {
+                    undetermined.push(k);
+                    reasons.push("its sensitivity is not finite".into());
                 }
+                break (
+                    Vec::new(),
+                    Analysis {
+                        s: vec![],
+                        v: vec![],
+                    },
+                );
+            };
+            let analysis = Analysis { s, v };
+            let smax = analysis.s.first().copied().unwrap_or(0.0);
+            // (2) numerically null directions
+            let mut found = false;
+            for (j, &sj) in analysis.s.iter().enumerate() {
+                if sj > RANK_TOL * smax {
+                    continue;
+                }
+                let v = &analysis.v[j];
+                let big = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                let members: Vec<usize> = (0..kept.len())
+                    .filter(|&i| v[i].abs() >= 0.5 * big && !undetermined.contains(&kept[i]))
+                    .collect();
+                let others: Vec<&str> = members.iter().map(|&i| names[kept[i]]).collect();
+                for &i in &members {
+                    undetermined.push(kept[i]);
+                    reasons.push(if members.len() > 1 {
+                        format!(
+                            "the data see only a combination of {} (singular value {:.1e} of \
+                             the largest)",
+                            others.join(" and "),
+                            if smax > 0.0 { sj / smax } else { 0.0 }
+                        )
+                    } else {
+                        format!(
+                            "numerically no effect on the force (singular value {:.1e} of the \
+                             largest)",
+                            if smax > 0.0 { sj / smax } else { 0.0 }
+                        )
+                    });
+                    found = true;
+                }
+            }
+            if found {
+                continue;
+            }
+            // (3) statistically: the worst standard deviation against value and range
+            if sigma2.is_finite() {
+                let worst = kept
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &k)| {
+                        let sd = (sigma2 * analysis.inv_fisher(i, i)).max(0.0).sqrt()
+                            * columns[k].dc_dy.abs();
+                        let range = columns[k].upper - columns[k].lower;
+                        let by_value = sd / values[k].abs();
+                        let by_range = 4.0 * sd / range;
+                        (k, sd, by_value, by_range)
+                    })
+                    .filter(|&(_, _, a, b)| a >= 1.0 || b >= 1.0 || a.is_nan())
+                    .max_by(|x, y| x.2.max(x.3).total_cmp(&y.2.max(y.3)));
+                if let Some((k, sd, by_value, by_range)) = worst {
+                    undetermined.push(k);
+                    reasons.push(if by_value >= by_range {
+                        format!(
+                            "its standard deviation {} is {} its value {}",
+                            short(sd),
+                            if by_value >= 2.0 {
+                                format!("{}x", short(by_value))
+                            } else {
+                                "as large as".into()
+                            },
+                            short(values[k])
+                        )
+                    } else {
+                        format!(
+                            "its 2-sigma interval (std. dev. {}) is as wide as its admissible \
+                             range [{}, {}]",
+                            short(sd),
+                            short(columns[k].lower),
+                            short(columns[k].upper)
+                        )
+                    });
+                    continue;
+                }
+            }
+            break (kept, analysis);
+        };
+        let mut std_dev = vec![f64::INFINITY; p];
+        let mut correlation = vec![vec![f64::NAN; p]; p];
+        for (i, &a) in kept.iter().enumerate() {
+            let faa = analysis.inv_fisher(i, i);
+            std_dev[a] = (sigma2 * faa).max(0.0).sqrt() * columns[a].dc_dy.abs();
+            for (j, &b) in kept.iter().enumerate() {
+                let fbb = analysis.inv_fisher(j, j);
+                correlation[a][b] = if i == j {
+                    1.0
+                } else {
+                    analysis.inv_fisher(i, j) / (faa * fbb).sqrt()
+                };
             }
         }
         let rel_std_dev = std_dev
@@ -119,7 +340,10 @@ impl Identifiability {
             .zip(&values)
             .map(|(s, v)| s / v.abs())
             .collect();
+        let undetermined: Vec<&'static str> = undetermined.iter().map(|&k| names[k]).collect();
         Identifiability {
+            scalings: columns.iter().map(|col| col.scaling).collect(),
+            dc_dy: columns.iter().map(|col| col.dc_dy).collect(),
             names,
             values,
             n_data: n,
@@ -128,8 +352,140 @@ impl Identifiability {
             rel_std_dev,
             correlation,
             condition_number,
-            unidentifiable,
+            singular_values,
+            directions,
+            unidentifiable: undetermined.clone(),
+            undetermined,
+            reasons,
         }
+    }
+
+    /// Whether parameter `name` is undetermined.
+    pub fn is_undetermined(&self, name: &str) -> bool {
+        self.undetermined.contains(&name)
+    }
+
+    /// The condition number as text: 3 significant digits, or `singular` beyond
+    /// [`SINGULAR_CONDITION`] (or infinite).
+    pub fn condition_text(&self) -> String {
+        condition_text(self.condition_number)
+    }
+
+    /// The weakest direction (the last singular vector) in words, e.g. `K and m trade
+    /// along K·m^0.83 ≈ const (K ×e^0.77, m ×e^-0.64 per unit step; singular value 1.2e-5
+    /// of the largest)`; `None` with fewer than two free parameters.
+    pub fn weakest_direction(&self) -> Option<String> {
+        if self.names.len() < 2 {
+            return None;
+        }
+        let v = self.directions.last()?;
+        let s = *self.singular_values.last()?;
+        let smax = *self.singular_values.first()?;
+        let mut order: Vec<usize> = (0..v.len()).collect();
+        order.sort_by(|&a, &b| v[b].abs().total_cmp(&v[a].abs()));
+        // the components that make up most of it: at least 30% of the largest
+        let big = v[order[0]].abs();
+        let mut main: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&k| v[k].abs() >= 0.3 * big)
+            .collect();
+        main.sort_unstable();
+        let ratio = if smax > 0.0 { s / smax } else { 0.0 };
+        let moves: Vec<String> = main
+            .iter()
+            .map(|&k| match self.scalings[k] {
+                Scaling::Log => format!("{} ×e^{:.2}", self.names[k], v[k]),
+                _ => format!("{} {:+}", self.names[k], short(v[k] * self.dc_dy[k])),
+            })
+            .collect();
+        let tail = format!(
+            "({} per unit step; singular value {} of the largest)",
+            moves.join(", "),
+            if ratio > 0.0 {
+                format!("{ratio:.1e}")
+            } else {
+                "0".into()
+            }
+        );
+        Some(match main.as_slice() {
+            [k] => format!("{} alone is the least determined {tail}", self.names[*k]),
+            [a, b] => {
+                let (a, b) = (*a, *b);
+                // along the direction, b y_a - a y_b stays constant
+                let invariant = match (self.scalings[a], self.scalings[b]) {
+                    (Scaling::Log, Scaling::Log) => {
+                        format!(
+                            "{}·{}^{} ≈ const",
+                            self.names[a],
+                            self.names[b],
+                            exponent(-v[a] / v[b])
+                        )
+                    }
+                    (Scaling::Log, _) => format!(
+                        "ln {} {} {}·{} ≈ const",
+                        self.names[a],
+                        if -v[a] / v[b] >= 0.0 { "+" } else { "-" },
+                        short((v[a] / v[b] / self.dc_dy[b]).abs()),
+                        self.names[b]
+                    ),
+                    (_, Scaling::Log) => format!(
+                        "{} {} {}·ln {} ≈ const",
+                        self.names[a],
+                        if -v[a] / v[b] >= 0.0 { "+" } else { "-" },
+                        short((v[a] / v[b] * self.dc_dy[a]).abs()),
+                        self.names[b]
+                    ),
+                    _ => format!(
+                        "{} {} {}·{} ≈ const",
+                        self.names[a],
+                        if -v[a] / v[b] >= 0.0 { "+" } else { "-" },
+                        short((v[a] * self.dc_dy[a] / (v[b] * self.dc_dy[b])).abs()),
+                        self.names[b]
+                    ),
+                };
+                format!(
+                    "{} and {} trade along {invariant} {tail}",
+                    self.names[a], self.names[b]
+                )
+            }
+            _ => {
+                let names: Vec<&str> = main.iter().map(|&k| self.names[k]).collect();
+                format!("{} move together {tail}", names.join(", "))
+            }
+        })
+    }
+}
+
+/// A Fisher condition number as text: `singular` beyond [`SINGULAR_CONDITION`].
+pub fn condition_text(kappa: f64) -> String {
+    if kappa.is_finite() && kappa <= SINGULAR_CONDITION {
+        format!("{kappa:.3e}")
+    } else {
+        "singular".into()
+    }
+}
+
+/// An exponent with 2 decimals, without a needless sign: `0.83`, `-1.20`.
+fn exponent(x: f64) -> String {
+    format!("{x:.2}")
+}
+
+/// A number with 3 significant digits, plain or in exponent form.
+fn short(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let a = x.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{x:.2e}")
+    } else {
+        let digits = if a == 0.0 {
+            0
+        } else {
+            (2 - a.log10().floor() as i32).max(0) as usize
+        };
+        format!("{x:.digits$}")
     }
 }
 
@@ -157,11 +513,22 @@ mod tests {
         let corr = -45.0 / 825.0 / (var_a * var_b).sqrt();
         assert!((s.correlation[0][1] - corr).abs() < 1e-12);
         assert!((s.correlation[0][0] - 1.0).abs() < 1e-14);
-        assert!(s.unidentifiable.is_empty());
+        assert!(s.undetermined.is_empty());
+        // singular values of S = A diag(2, 3): the eigenvalues of the 2x2 Fisher matrix
+        // [[4 Sxx, 6 Sx], [6 Sx, 9 n]] = [[1140, 270], [270, 90]]
+        let (tr, det) = (1140.0 + 90.0, 1140.0 * 90.0 - 270.0 * 270.0);
+        let disc: f64 = tr * tr / 4.0 - det;
+        let (l1, l2) = (tr / 2.0 + disc.sqrt(), tr / 2.0 - disc.sqrt());
+        assert!((s.singular_values[0] - l1.sqrt()).abs() < 1e-11 * l1.sqrt());
+        assert!((s.singular_values[1] - l2.sqrt()).abs() < 1e-11 * l1.sqrt());
+        assert!((s.condition_number - l1 / l2).abs() < 1e-10 * l1 / l2);
+        // the weak direction is an eigenvector of the Fisher matrix for l2
+        let v = &s.directions[1];
+        assert!((1140.0 * v[0] + 270.0 * v[1] - l2 * v[0]).abs() < 1e-9 * l1);
     }
 
     #[test]
-    fn a_parameter_without_effect_is_unidentifiable_and_the_others_still_computed() {
+    fn a_parameter_without_effect_is_undetermined_and_the_others_still_computed() {
         // the regression of the test above plus a third parameter that acts on nothing
         let x: Vec<f64> = (0..10).map(|i| i as f64).collect();
         let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, 1.0, 1e-30]).collect();
@@ -174,7 +541,9 @@ mod tests {
             &[0, 1, 2],
             vec!["a", "b", "c"],
         );
+        assert_eq!(s.undetermined, vec!["c"]);
         assert_eq!(s.unidentifiable, vec!["c"]);
+        assert!(s.reasons[0].contains("no effect"), "{:?}", s.reasons);
         assert!(s.std_dev[2].is_infinite());
         // sigma^2 counts the three free parameters: 8 / 7
         let var_a: f64 = 10.0 / 825.0 * 8.0 / 7.0;
@@ -183,13 +552,132 @@ mod tests {
             "{:?}",
             s.std_dev
         );
-        assert!(s.correlation.iter().flatten().all(|v| v.is_finite()));
-        assert_eq!(s.correlation[2][2], 1.0);
-        assert_eq!(s.correlation[0][2], 0.0);
-        // two parameters with the same effect: singular, infinite deviations, no NaN
+        assert!(s.correlation[0][1].is_finite());
+        assert!(s.correlation[0][2].is_nan() && s.correlation[2][2].is_nan());
+        assert_eq!(s.condition_text(), "singular");
+        // two parameters with the same effect: both undetermined, no NaN deviation
         let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, xi]).collect();
         let s = Identifiability::from_jacobian(&jac, &w, 4.0, &[1.0, 1.0], &[0, 1], vec!["a", "b"]);
+        assert_eq!(s.undetermined, vec!["a", "b"], "{:?}", s.reasons);
+        assert!(
+            s.reasons[0].contains("combination of a and b"),
+            "{:?}",
+            s.reasons
+        );
         assert!(s.std_dev.iter().all(|v| v.is_infinite()), "{:?}", s.std_dev);
-        assert!(s.correlation.iter().flatten().all(|v| v.is_finite()));
+    }
+
+    /// A synthetic S with a direction at 1e-9 of the largest singular value (beyond the
+    /// 1e16 condition) and a third, well-seen parameter: the pair along the null direction
+    /// is undetermined, the third is kept with its textbook deviation.
+    #[test]
+    fn a_numerically_null_direction_marks_its_members_only() {
+        let n = 40;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        // columns: u, u (1 + 1e-9 t) (almost equal: a combination), and w
+        let jac: Vec<Vec<f64>> = t
+            .iter()
+            .map(|&ti| {
+                let u = (3.0 * ti).sin() + 1.0;
+                vec![u, u * (1.0 + 1e-9 * ti), ti * ti]
+            })
+            .collect();
+        let w = vec![1.0; n];
+        let s = Identifiability::from_jacobian(
+            &jac,
+            &w,
+            1.0,
+            &[1.0, 1.0, 1.0],
+            &[0, 1, 2],
+            vec!["K", "m", "sY"],
+        );
+        assert_eq!(s.undetermined, vec!["K", "m"], "{:?}", s.reasons);
+        assert!(s.std_dev[2].is_finite());
+        // alone, sY's variance is sigma^2 / sum w t^4 (the others held)
+        let sxx: f64 = t.iter().map(|x| x.powi(4)).sum();
+        let want = (2.0 / (n - 3) as f64 / sxx).sqrt();
+        assert!(
+            (s.std_dev[2] - want).abs() < 1e-12 * want,
+            "{} {want}",
+            s.std_dev[2]
+        );
+        assert!(s.singular_values[2] / s.singular_values[0] < RANK_TOL);
+        assert_eq!(s.condition_text(), "singular");
+        // the weakest direction is K against m, in equal parts: K·m^1.00 ≈ const
+        let words = s.weakest_direction().unwrap();
+        assert!(
+            words.starts_with("K and m trade along K·m^1.00 ≈ const"),
+            "{words}"
+        );
+    }
+
+    /// The statistical test: a noisy fit whose deviation exceeds the value (the anon-nh
+    /// `sY = 16.6 ± 52.5` case), or whose 2-sigma interval covers the bounds.
+    #[test]
+    fn a_deviation_beyond_the_value_or_the_range_is_undetermined() {
+        let n = 30;
+        let t: Vec<f64> = (0..n).map(|i| 0.1 + i as f64 / n as f64).collect();
+        // a well-seen E and a weakly seen sY (column 100x smaller), J chosen so that
+        // sigma^2 = 1: std(y_sY) is then ~ 1 / |S e_sY| > 1 (a factor e)
+        let jac: Vec<Vec<f64>> = t.iter().map(|&ti| vec![ti, 0.005 * ti * ti]).collect();
+        let w = vec![1.0; n];
+        let cost = 0.5 * (n - 2) as f64;
+        let mut cols = vec![
+            Column {
+                index: 0,
+                name: "E",
+                scaling: Scaling::Log,
+                dc_dy: 10.0,
+                lower: 1.0,
+                upper: 1e4,
+            },
+            Column {
+                index: 1,
+                name: "sY",
+                scaling: Scaling::Log,
+                dc_dy: 16.6,
+                lower: 1e-3,
+                upper: 1e4,
+            },
+        ];
+        let s = Identifiability::from_columns(&jac, &w, cost, &[10.0, 16.6], &cols);
+        assert_eq!(
+            s.undetermined,
+            vec!["sY"],
+            "{:?} {:?}",
+            s.reasons,
+            s.std_dev
+        );
+        assert!(s.reasons[0].contains("its value 16.6"), "{:?}", s.reasons);
+        assert!(s.std_dev[1].is_infinite() && s.std_dev[0].is_finite());
+        // E alone: std = sigma / |S e_E| * dc/dy
+        let se: f64 = t.iter().map(|x| (10.0 * x).powi(2)).sum::<f64>().sqrt();
+        assert!((s.std_dev[0] - 10.0 / se).abs() < 1e-12);
+        // exact data (J = 0): nothing is statistically undetermined
+        let s = Identifiability::from_columns(&jac, &w, 0.0, &[10.0, 16.6], &cols);
+        assert!(s.undetermined.is_empty(), "{:?}", s.reasons);
+        // linear scaling, a narrow admissible range: the 2-sigma interval covers it
+        cols[1].scaling = Scaling::Bounds;
+        cols[1].lower = 16.0;
+        cols[1].upper = 17.0;
+        cols[1].dc_dy = 1.0;
+        let jac: Vec<Vec<f64>> = t.iter().map(|&ti| vec![ti, 0.5 * ti * ti]).collect();
+        let s = Identifiability::from_columns(&jac, &w, cost, &[10.0, 16.6], &cols);
+        assert_eq!(
+            s.undetermined,
+            vec!["sY"],
+            "{:?} {:?}",
+            s.reasons,
+            s.std_dev
+        );
+        assert!(s.reasons[0].contains("admissible range"), "{:?}", s.reasons);
+    }
+
+    #[test]
+    fn condition_numbers_beyond_1e16_print_as_singular() {
+        assert_eq!(condition_text(8.4e148), "singular");
+        assert_eq!(condition_text(f64::INFINITY), "singular");
+        assert_eq!(condition_text(f64::NAN), "singular");
+        assert_eq!(condition_text(11.05), "1.105e1");
     }
 }

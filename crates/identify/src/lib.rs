@@ -15,10 +15,12 @@
 //!   BFGS with Armijo backtracking (the paper's algorithm), L-BFGS with More-Thuente,
 //!   L-BFGS-B (bounds, feature `lbfgsb`), Levenberg-Marquardt on the sensitivity
 //!   Jacobian; stopping rules, iteration history through an observer callback.
-//! - [`identifiability`]: covariance, standard deviations and correlations at the
-//!   optimum from the sensitivity Jacobian.
+//! - [`identifiability`]: singular values and directions of the scaled sensitivity
+//!   matrix, Gauss-Newton standard deviations, correlations, the parameters the data do
+//!   not determine (a converged run with such parameters ends with
+//!   [`StopReason::Undetermined`]) and the weakest direction in words.
 //! - [`noise`]: seeded multiplicative noise (SplitMix64, reproducible everywhere).
-//! - [`linalg`]: the few small dense routines the above need.
+//! - [`linalg`]: thin wrappers over nalgebra (ordered SVD, Cholesky solves, norms).
 //!
 //! Use (what `indentify identify` does):
 //!

@@ -1,9 +1,12 @@
-//! Small dense linear algebra for matrices of the parameter count (p <= ~10): normal
-//! matrices, Gauss-Jordan inversion with partial pivoting, norms. Row-major `Vec<Vec<f64>>`.
+//! Thin wrappers over nalgebra for the dense parameter-space algebra (matrices of the
+//! parameter count, p <= ~10, and `n x p` sensitivity matrices): norms, the ordered
+//! singular value decomposition, Cholesky solves of the small normal systems.
+
+use nalgebra::{DMatrix, DVector};
 
 /// Euclidean norm.
 pub fn norm2(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    DVector::from_column_slice(v).norm()
 }
 
 /// Largest absolute entry.
@@ -11,118 +14,62 @@ pub fn norm_inf(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
-/// `A^T A` of an `n x p` matrix given by rows.
-pub fn normal_matrix(rows: &[Vec<f64>], p: usize) -> Vec<Vec<f64>> {
-    let mut m = vec![vec![0.0; p]; p];
-    for r in rows {
-        for a in 0..p {
-            for b in 0..p {
-                m[a][b] += r[a] * r[b];
-            }
-        }
-    }
-    m
+/// The `n x p` matrix whose rows are `rows` (each of length `p`).
+pub fn from_rows(rows: &[Vec<f64>], p: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(rows.len(), p, |i, k| rows[i][k])
 }
 
-/// `A^T v` of an `n x p` matrix given by rows.
-pub fn transpose_mul(rows: &[Vec<f64>], v: &[f64], p: usize) -> Vec<f64> {
-    let mut g = vec![0.0; p];
-    for (r, &x) in rows.iter().zip(v) {
-        for a in 0..p {
-            g[a] += r[a] * x;
-        }
+/// Singular value decomposition `A = U diag(s) V^T` of an `n x p` matrix, right side only:
+/// the singular values in descending order and, for each, its right singular vector
+/// (unit length, sign fixed so that its largest component is positive). When `n < p` the
+/// missing values are 0 and their vectors complete the basis (`A` is padded with zero
+/// rows, which leave `A^T A` unchanged). `None` when `A` holds a non-finite entry or the
+/// iteration does not converge.
+pub fn right_svd(a: &DMatrix<f64>) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let p = a.ncols();
+    if p == 0 {
+        return Some((Vec::new(), Vec::new()));
     }
-    g
-}
-
-/// Inverse by Gauss-Jordan elimination with partial pivoting; `None` when a pivot is
-/// below `1e-14` times the largest entry (numerically singular).
-pub fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = a.len();
-    let scale = a
-        .iter()
-        .flat_map(|r| r.iter())
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    if !(scale > 0.0) || !scale.is_finite() {
+    if a.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    let mut m: Vec<Vec<f64>> = a.to_vec();
-    let mut inv: Vec<Vec<f64>> = (0..n)
-        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+    let padded;
+    let m = if a.nrows() < p {
+        padded = a.clone().resize_vertically(p, 0.0);
+        &padded
+    } else {
+        a
+    };
+    let svd = nalgebra::linalg::SVD::try_new(m.clone(), false, true, f64::EPSILON, 1000)?;
+    let v_t = svd.v_t?;
+    let mut pairs: Vec<(f64, Vec<f64>)> = (0..p)
+        .map(|i| {
+            let mut v: Vec<f64> = v_t.row(i).iter().copied().collect();
+            let big = v
+                .iter()
+                .copied()
+                .max_by(|x, y| x.abs().total_cmp(&y.abs()))
+                .unwrap_or(0.0);
+            if big < 0.0 {
+                v.iter_mut().for_each(|x| *x = -*x);
+            }
+            (svd.singular_values[i].max(0.0), v)
+        })
         .collect();
-    for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
-        if m[piv][col].abs() <= 1e-14 * scale {
-            return None;
-        }
-        m.swap(col, piv);
-        inv.swap(col, piv);
-        let d = m[col][col];
-        for j in 0..n {
-            m[col][j] /= d;
-            inv[col][j] /= d;
-        }
-        for i in 0..n {
-            if i != col {
-                let f = m[i][col];
-                if f != 0.0 {
-                    for j in 0..n {
-                        m[i][j] -= f * m[col][j];
-                        inv[i][j] -= f * inv[col][j];
-                    }
-                }
-            }
-        }
-    }
-    Some(inv)
+    pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
+    Some(pairs.into_iter().unzip())
 }
 
-/// `A x` for a square matrix.
-pub fn mat_vec(a: &[Vec<f64>], x: &[f64]) -> Vec<f64> {
-    a.iter()
-        .map(|r| r.iter().zip(x).map(|(u, v)| u * v).sum())
-        .collect()
-}
-
-/// Eigenvalues of a symmetric matrix by cyclic Jacobi rotations, ascending.
-pub fn symmetric_eigenvalues(a: &[Vec<f64>]) -> Vec<f64> {
-    let n = a.len();
-    let mut m = a.to_vec();
-    for _sweep in 0..100 {
-        let off: f64 = (0..n)
-            .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
-            .map(|(i, j)| m[i][j] * m[i][j])
-            .sum();
-        let diag: f64 = (0..n).map(|i| m[i][i] * m[i][i]).sum();
-        if off <= 1e-30 * diag.max(1e-300) {
-            break;
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                if m[p][q] == 0.0 {
-                    continue;
-                }
-                let theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (mkp, mkq) = (m[k][p], m[k][q]);
-                    m[k][p] = c * mkp - s * mkq;
-                    m[k][q] = s * mkp + c * mkq;
-                }
-                for k in 0..n {
-                    let (mpk, mqk) = (m[p][k], m[q][k]);
-                    m[p][k] = c * mpk - s * mqk;
-                    m[q][k] = s * mpk + c * mqk;
-                }
-            }
-        }
-    }
-    let mut ev: Vec<f64> = (0..n).map(|i| m[i][i]).collect();
-    ev.sort_by(f64::total_cmp);
-    ev
+/// Solves `M x = b` for a symmetric positive definite `M` (given by rows) by Cholesky;
+/// `None` when `M` is not numerically positive definite.
+pub fn solve_spd(m: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
+    let n = b.len();
+    let mat = from_rows(m, n);
+    let chol = mat.cholesky()?;
+    let x = chol.solve(&DVector::from_column_slice(b));
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
 }
 
 #[cfg(test)]
@@ -130,28 +77,43 @@ mod tests {
     use super::*;
 
     #[test]
-    fn inverse_of_a_small_matrix() {
+    fn cholesky_solve_of_a_small_system() {
         let a = vec![
             vec![4.0, 1.0, 0.5],
             vec![1.0, 3.0, 0.2],
             vec![0.5, 0.2, 2.0],
         ];
-        let inv = inverse(&a).unwrap();
-        for i in 0..3 {
-            let col: Vec<f64> = (0..3).map(|k| inv[k][i]).collect();
-            let e = mat_vec(&a, &col);
-            for (j, v) in e.iter().enumerate() {
-                let want = if i == j { 1.0 } else { 0.0 };
-                assert!((v - want).abs() < 1e-14);
-            }
+        let x_true = [1.0, -2.0, 0.5];
+        let b: Vec<f64> = a
+            .iter()
+            .map(|r| r.iter().zip(&x_true).map(|(u, v)| u * v).sum())
+            .collect();
+        let x = solve_spd(&a, &b).unwrap();
+        for (u, v) in x.iter().zip(&x_true) {
+            assert!((u - v).abs() < 1e-14, "{x:?}");
         }
-        assert!(inverse(&[vec![1.0, 2.0], vec![2.0, 4.0]]).is_none());
+        assert!(solve_spd(&[vec![1.0, 2.0], vec![2.0, 1.0]], &[1.0, 1.0]).is_none());
     }
 
+    /// The SVD of a matrix built from a known orthogonal V and singular values shall give
+    /// them back (ordered, up to sign), also for fewer rows than columns.
     #[test]
-    fn eigenvalues_of_a_symmetric_matrix() {
-        let a = vec![vec![2.0, 1.0], vec![1.0, 2.0]];
-        let ev = symmetric_eigenvalues(&a);
-        assert!((ev[0] - 1.0).abs() < 1e-12 && (ev[1] - 3.0).abs() < 1e-12);
+    fn right_svd_recovers_a_constructed_decomposition() {
+        let (c, s) = (0.6f64, 0.8f64);
+        // A = U diag(5, 0.01) V^T with U = I (2 rows of a 3-row matrix) and V a rotation
+        let v = [[c, -s], [s, c]];
+        let sig = [5.0, 0.01];
+        let a = DMatrix::from_fn(3, 2, |i, k| if i < 2 { sig[i] * v[k][i] } else { 0.0 });
+        let (vals, vecs) = right_svd(&a).unwrap();
+        assert!((vals[0] - 5.0).abs() < 1e-14 && (vals[1] - 0.01).abs() < 1e-14);
+        assert!((vecs[0][0] - c).abs() < 1e-14 && (vecs[0][1] - s).abs() < 1e-14);
+        // second vector (-s, c), turned so that its largest entry is positive: (s, -c)
+        assert!((vecs[1][0] - s).abs() < 1e-14 && (vecs[1][1] + c).abs() < 1e-14);
+        // one row, two columns: one value, and a zero for the null vector (-2, 1)/sqrt(5)
+        let a = DMatrix::from_row_slice(1, 2, &[1.0, 2.0]);
+        let (vals, vecs) = right_svd(&a).unwrap();
+        assert!((vals[0] - 5f64.sqrt()).abs() < 1e-14 && vals[1].abs() < 1e-14);
+        assert!((vecs[1][0].abs() - 2.0 / 5f64.sqrt()).abs() < 1e-14);
+        assert!(right_svd(&DMatrix::from_row_slice(1, 1, &[f64::NAN])).is_none());
     }
 }

@@ -2,17 +2,19 @@
 //!
 //! Residuals `r_i = sqrt(kappa w_i / J_ref) (F_i - F_i^exp)` so that `f = |r|^2 / 2` is the
 //! internal objective of [`crate::optimize`]; Jacobian `A_ik = sqrt(kappa w_i / J_ref)
-//! dF_i/dc_k dc_k/dy_k` (scaled variables). Step: `(A^T A + lambda diag(A^T A)) d = -A^T r`,
-//! trial `y + d` projected onto the box; accepted if `f` decreases (then `lambda /= 3`),
-//! otherwise `lambda *= 4` and retry. Each accepted iterate costs one forward solve and one
-//! sensitivity solve; each rejected trial one forward solve.
+//! dF_i/dc_k dc_k/dy_k` (scaled variables). Step: `(A^T A + lambda diag(A^T A)) d = -A^T r`
+//! (Cholesky, nalgebra), trial `y + d` projected onto the box; accepted if `f` decreases
+//! (then `lambda /= 3`), otherwise `lambda *= 4` and retry. Each accepted iterate costs one
+//! forward solve and one sensitivity solve; each rejected trial one forward solve.
 
 use crate::IdentifyError;
-use crate::linalg::{inverse, mat_vec, normal_matrix, transpose_mul};
+use nalgebra::{DMatrix, DVector};
+
+use crate::linalg::{from_rows, solve_spd};
 use crate::optimize::Monitor;
 
 /// Residuals and scaled Jacobian at `y`: `(f, r, A, grad f)`.
-type Linearization = (f64, Vec<f64>, Vec<Vec<f64>>, Vec<f64>);
+type Linearization = (f64, Vec<f64>, DMatrix<f64>, Vec<f64>);
 
 fn linearize(monitor: &Monitor<'_, '_>, y: &[f64]) -> Result<Linearization, IdentifyError> {
     let o = monitor.objective;
@@ -36,7 +38,12 @@ fn linearize(monitor: &Monitor<'_, '_>, y: &[f64]) -> Result<Linearization, Iden
         a.push(row.iter().map(|v| sw * v).collect::<Vec<f64>>());
     }
     let f = 0.5 * r.iter().map(|v| v * v).sum::<f64>();
-    let g = transpose_mul(&a, &r, np);
+    let a = from_rows(&a, np);
+    let g: Vec<f64> = a
+        .tr_mul(&DVector::from_column_slice(&r))
+        .iter()
+        .copied()
+        .collect();
     Ok((f, r, a, g))
 }
 
@@ -53,18 +60,20 @@ pub(crate) fn run(monitor: &Monitor<'_, '_>, y0: &[f64]) -> Result<(), IdentifyE
         if monitor.iterate(iter, &y, f, &g).is_some() {
             return Ok(());
         }
-        let ata = normal_matrix(&a, np);
+        let ata = a.tr_mul(&a);
+        let ata: Vec<Vec<f64>> = (0..np)
+            .map(|i| (0..np).map(|k| ata[(i, k)]).collect())
+            .collect();
         let mut accepted = false;
         for _ in 0..max_trials {
             let mut m = ata.clone();
             for k in 0..np {
                 m[k][k] += lambda * ata[k][k].max(1e-12 * (1.0 + ata[k][k]));
             }
-            let Some(inv) = inverse(&m) else {
+            let Some(d) = solve_spd(&m, &g) else {
                 lambda *= 4.0;
                 continue;
             };
-            let d = mat_vec(&inv, &g);
             let trial: Vec<f64> = y.iter().zip(&d).map(|(v, dv)| v - dv).collect();
             let trial = o.param.project(&trial);
             let c = o.param.to_physical(&trial);

@@ -27,7 +27,7 @@ use argmin::solver::quasinewton::{BFGS, LBFGS};
 
 use crate::IdentifyError;
 use crate::argmin_glue::{ArgminObjective, Monitored};
-use crate::identifiability::Identifiability;
+use crate::identifiability::{Column, Identifiability};
 use crate::linalg::{norm_inf, norm2};
 use crate::params::{ParamSpec, Parameterization};
 use crate::problem::{Evaluator, Problem};
@@ -258,10 +258,27 @@ pub enum StopReason {
     /// No decrease could be found (line search or LM damping exhausted, or the optimizer
     /// library gave up); the message says why.
     Stalled(String),
+    /// A convergence criterion (`met`) held, but the data do not determine some free
+    /// parameters (see [`Identifiability::undetermined`]): not converged. A parameter at a
+    /// bound whose projected gradient vanishes because it has no effect ends here.
+    Undetermined {
+        /// The criterion that held.
+        met: Box<StopReason>,
+        /// The undetermined parameters, each with its bound and the reason, in words.
+        params: Vec<String>,
+    },
 }
 
 impl StopReason {
+    /// What to do after a run ended with [`StopReason::Undetermined`].
+    pub const UNDETERMINED_ADVICE: &'static str = "hold the undetermined parameters at \
+        values known otherwise (Fixed, --fixed), make the test tell them apart (a longer \
+        hold, several loading rates or depths, tests fitted together), or change the start \
+        (a parameter pushed to a bound where it has no effect may have a better optimum \
+        inside)";
+
     /// `true` for the convergence criteria (gradient, decrease, target, round-off).
+    /// [`StopReason::Undetermined`] is not converged.
     pub fn is_converged(&self) -> bool {
         matches!(
             self,
@@ -283,6 +300,11 @@ impl std::fmt::Display for StopReason {
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
             StopReason::Stalled(why) => write!(f, "stalled: {why}"),
+            StopReason::Undetermined { met, params } => write!(
+                f,
+                "{met}, but the data do not determine {}",
+                params.join("; ")
+            ),
         }
     }
 }
@@ -747,19 +769,51 @@ fn run(
     let identifiability = if config.identifiability {
         let mut ev = objective.eval.borrow_mut();
         ev.jacobian(&last.params).ok().map(|jac| {
-            let free: Vec<usize> = param.free.iter().map(|f| f.index).collect();
-            Identifiability::from_jacobian(
-                &jac,
-                &problem.weights,
-                last.cost,
-                &last.params,
-                &free,
-                param.free_names(),
-            )
+            let columns: Vec<Column> = param
+                .free
+                .iter()
+                .map(|f| Column::of(f, last.params[f.index]))
+                .collect();
+            Identifiability::from_columns(&jac, &problem.weights, last.cost, &last.params, &columns)
         })
     } else {
         None
     };
+    // honest stops: a first-order point where the data leave a parameter undetermined
+    // has not identified it
+    if let Some(id) = identifiability
+        .as_ref()
+        .filter(|i| !i.undetermined.is_empty())
+    {
+        if reason.is_converged() {
+            let params = id
+                .undetermined
+                .iter()
+                .zip(&id.reasons)
+                .map(|(name, why)| {
+                    let f = param.free.iter().find(|f| f.name == *name);
+                    let at = f.and_then(|f| {
+                        let v = last.params[f.index];
+                        if v <= f.lower {
+                            Some(format!("at its lower bound {}", f.lower))
+                        } else if v >= f.upper {
+                            Some(format!("at its upper bound {}", f.upper))
+                        } else {
+                            None
+                        }
+                    });
+                    match at {
+                        Some(at) => format!("{name} ({at}: {why})"),
+                        None => format!("{name} ({why})"),
+                    }
+                })
+                .collect();
+            reason = StopReason::Undetermined {
+                met: Box::new(reason),
+                params,
+            };
+        }
+    }
     let forces = objective
         .eval
         .borrow_mut()

@@ -58,6 +58,7 @@
 //!     figures: vec![Figure::ForceDepth.link("force_depth.svg")],
 //!     warnings: Vec::new(),
 //!     discretization: None,
+//!     identifiability: None,
 //! };
 //!
 //! let md = report.to_markdown();
@@ -82,8 +83,9 @@ pub use error::ReportError;
 pub use fit::FitQuality;
 pub use map::{MapData, MapFigure};
 pub use model::{
-    BoundHit, Convergence, Correlation, Curves, DiscretizationSummary, FigureLink, IterationRecord,
-    NameValue, Parameter, PreprocessingStep, Report, Source,
+    BoundHit, Convergence, Correlation, Curves, DiscretizationSummary, FigureLink,
+    IdentifiabilitySummary, IterationRecord, NameValue, Parameter, PreprocessingStep, Report,
+    Source, Undetermined,
 };
 pub use plot::{Figure, FigureSize};
 pub use units::{DisplayUnit, fmt_axis_tick, fmt_log_tick, fmt_sig, fmt_tick};

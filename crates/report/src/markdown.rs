@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::model::{BoundHit, DiscretizationSummary, Parameter, Report};
+use crate::model::{BoundHit, DiscretizationSummary, IdentifiabilitySummary, Parameter, Report};
 use crate::units::{DisplayUnit, fmt_sig};
 
 /// Writing to a `String` cannot fail; this drops the `fmt::Result`.
@@ -35,6 +35,9 @@ impl Report {
         }
         self.source_section(&mut out);
         self.parameter_section(&mut out);
+        if let Some(i) = &self.identifiability {
+            identifiability_section(&mut out, i);
+        }
         if let Some(d) = &self.discretization {
             out.push_str(&self.discretization_section(d));
         }
@@ -153,35 +156,57 @@ impl Report {
         line!(out, "|---|--:|--:|---|--:|--:|--:|---|");
         for p in &self.parameters {
             let u = &p.unit;
+            let undetermined = self.is_undetermined(&p.name);
             line!(
                 out,
-                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {}{} |",
                 escape(&p.name),
                 shown(u, Some(p.value)),
-                shown(u, p.std_dev),
+                if undetermined {
+                    "undetermined".to_string()
+                } else {
+                    shown(u, p.std_dev)
+                },
                 escape(&u.label),
                 shown(u, Some(p.start)),
                 shown(u, p.lower),
                 shown(u, p.upper),
-                status(p)
+                status(p),
+                if undetermined {
+                    ", **undetermined**"
+                } else {
+                    ""
+                }
             );
         }
         line!(out);
         if let Some(c) = &self.correlation {
+            // undetermined parameters have no correlation to show
+            let keep: Vec<usize> = (0..c.names.len())
+                .filter(|&k| !self.is_undetermined(&c.names[k]))
+                .collect();
+            if keep.len() < 2 {
+                return;
+            }
             line!(out, "Correlation of the identified parameters:");
             line!(out);
             let mut head = String::from("| |");
             let mut rule = String::from("|---|");
-            for n in &c.names {
-                let _ = write!(head, " {} |", escape(n));
+            for &k in &keep {
+                let _ = write!(head, " {} |", escape(&c.names[k]));
                 rule.push_str("--:|");
             }
             line!(out, "{head}");
             line!(out, "{rule}");
-            for (name, row) in c.names.iter().zip(&c.matrix) {
-                let mut l = format!("| {} |", escape(name));
-                for v in row {
-                    let _ = write!(l, " {v:.3} |");
+            for &a in &keep {
+                let mut l = format!("| {} |", escape(&c.names[a]));
+                for &b in &keep {
+                    let v = c.matrix[a][b];
+                    if v.is_finite() {
+                        let _ = write!(l, " {v:.3} |");
+                    } else {
+                        l.push_str(" |");
+                    }
                 }
                 line!(out, "{l}");
             }
@@ -312,6 +337,74 @@ impl Report {
             line!(out);
         }
     }
+}
+
+impl Report {
+    /// Whether the identifiability analysis found parameter `name` undetermined.
+    pub fn is_undetermined(&self, name: &str) -> bool {
+        self.identifiability
+            .as_ref()
+            .is_some_and(|i| i.is_undetermined(name))
+    }
+}
+
+/// `## Identifiability`: the undetermined parameters first (with the reason and what to
+/// do), the weakest direction in words, then the singular values and their directions.
+fn identifiability_section(out: &mut String, i: &IdentifiabilitySummary) {
+    line!(out, "## Identifiability");
+    line!(out);
+    if i.undetermined.is_empty() {
+        line!(out, "Every free parameter is determined by the data.");
+    } else {
+        line!(out, "**Not determined by the data:**");
+        line!(out);
+        for u in &i.undetermined {
+            line!(out, "- **{}**: {}", escape(&u.name), escape(&u.reason));
+        }
+        line!(out);
+        if !i.advice.is_empty() {
+            line!(out, "What to do: {}.", escape(&i.advice));
+        }
+    }
+    line!(out);
+    if let Some(w) = &i.weakest {
+        line!(out, "Weakest direction: {}.", escape(w));
+        line!(out);
+    }
+    line!(
+        out,
+        "Singular values of the scaled sensitivity matrix S (weighted dF/dy, y = ln c for \
+         log-scaled parameters) and the combination of parameters each one determines; \
+         condition number of S^T S: {}.",
+        escape(&i.condition)
+    );
+    line!(out);
+    let mut head = String::from("| j | s_j | s_j / s_1 |");
+    let mut rule = String::from("|--:|--:|--:|");
+    for n in &i.names {
+        let _ = write!(head, " {} |", escape(n));
+        rule.push_str("--:|");
+    }
+    line!(out, "{head}");
+    line!(out, "{rule}");
+    let s1 = i.singular_values.first().copied().unwrap_or(0.0);
+    for (j, (s, v)) in i.singular_values.iter().zip(&i.directions).enumerate() {
+        let mut l = format!(
+            "| {} | {} | {} |",
+            j + 1,
+            fmt_sig(*s),
+            if s1 > 0.0 {
+                fmt_sig(s / s1)
+            } else {
+                String::new()
+            }
+        );
+        for x in v {
+            let _ = write!(l, " {x:+.3} |");
+        }
+        line!(out, "{l}");
+    }
+    line!(out);
 }
 
 /// A value in `unit`, 4 significant digits; empty for `None`.

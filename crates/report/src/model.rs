@@ -41,6 +41,50 @@ pub struct Report {
     /// The discretization error of the fit, when it was estimated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub discretization: Option<DiscretizationSummary>,
+    /// What the data determine: singular values and directions of the scaled sensitivity
+    /// matrix, the parameters left undetermined (shown in `## Identifiability`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identifiability: Option<IdentifiabilitySummary>,
+}
+
+/// The singular value decomposition of the scaled sensitivity matrix `S` (weighted
+/// `dF/dy`, `y` the optimizer's scaled variables, `y = ln c` for log-scaled parameters) and
+/// the parameters it leaves undetermined.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IdentifiabilitySummary {
+    /// The free parameters, labelling the directions' components.
+    pub names: Vec<String>,
+    /// Singular values of `S` (N per unit of `y`), descending.
+    pub singular_values: Vec<f64>,
+    /// The right singular vector of each singular value (components in `names` order).
+    pub directions: Vec<Vec<f64>>,
+    /// Condition number of `S^T S` as text (`singular` beyond 1e16).
+    pub condition: String,
+    /// The weakest direction in words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weakest: Option<String>,
+    /// The parameters the data do not determine, with the reason.
+    #[serde(default)]
+    pub undetermined: Vec<Undetermined>,
+    /// What to do about them (empty when every parameter is determined).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub advice: String,
+}
+
+/// A free parameter the data do not determine.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Undetermined {
+    /// Parameter name.
+    pub name: String,
+    /// Why, with the numbers.
+    pub reason: String,
+}
+
+impl IdentifiabilitySummary {
+    /// Whether parameter `name` is undetermined.
+    pub fn is_undetermined(&self, name: &str) -> bool {
+        self.undetermined.iter().any(|u| u.name == name)
+    }
 }
 
 /// The fit's force re-computed on a refined discretization and the parameter shift it

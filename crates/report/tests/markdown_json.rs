@@ -59,3 +59,50 @@ fn long_history_is_elided_in_the_middle() {
     assert!(!md.contains(&row(10)) && !md.contains(&row(29)));
     assert!(md.contains("\n| … |"));
 }
+
+/// An undetermined parameter shall show `undetermined` instead of its deviation, no
+/// correlation, and a `## Identifiability` section with the reason, what to do, the weakest
+/// direction and the singular values; the JSON shall read back.
+#[test]
+fn undetermined_parameters_are_marked_not_shown_as_numbers() {
+    let mut r = common::nano_report();
+    r.identifiability = Some(indentify_report::IdentifiabilitySummary {
+        names: vec!["E".into(), "eta".into()],
+        singular_values: vec![1.6e3, 1.03],
+        directions: vec![vec![1.0, 0.0], vec![0.0, 1.0]],
+        condition: "2.401e6".into(),
+        weakest: Some("eta alone is the least determined".into()),
+        undetermined: vec![indentify_report::Undetermined {
+            name: "eta".into(),
+            reason: "its 2-sigma interval is as wide as its admissible range".into(),
+        }],
+        advice: "hold it".into(),
+    });
+    let md = r.to_markdown();
+    let row = md.lines().find(|l| l.starts_with("| eta |")).unwrap();
+    assert!(row.contains("| undetermined |"), "{row}");
+    assert!(row.contains("**undetermined**"), "{row}");
+    assert!(!row.contains("400"), "no deviation shown: {row}");
+    // E alone is left: no correlation table
+    assert!(
+        !md.contains("Correlation of the identified parameters"),
+        "{md}"
+    );
+    for needle in [
+        "## Identifiability",
+        "- **eta**: its 2-sigma interval",
+        "What to do: hold it.",
+        "Weakest direction: eta alone is the least determined.",
+        "condition number of S^T S: 2.401e6",
+        "| 2 | 1.030 | 6.438e-4 | +0.000 | +1.000 |",
+    ] {
+        assert!(md.contains(needle), "`{needle}` missing:\n{md}");
+    }
+    let back = Report::from_json(&r.to_json().unwrap()).unwrap();
+    assert_eq!(back, r);
+    // a report without the section reads back as before (older report.json files)
+    let mut v: serde_json::Value = serde_json::from_str(&r.to_json().unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("identifiability");
+    let old = Report::from_json(&v.to_string()).unwrap();
+    assert!(old.identifiability.is_none() && !old.is_undetermined("eta"));
+}

@@ -145,9 +145,39 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
             }
         })
         .collect();
-    let correlation = id.map(|i| Correlation {
+    // the determined parameters only: an undetermined one has no correlation to show
+    let correlation = id.map(|i| {
+        let keep: Vec<usize> = (0..i.names.len())
+            .filter(|&k| !i.is_undetermined(i.names[k]))
+            .collect();
+        Correlation {
+            names: keep.iter().map(|&k| i.names[k].to_string()).collect(),
+            matrix: keep
+                .iter()
+                .map(|&a| keep.iter().map(|&b| i.correlation[a][b]).collect())
+                .collect(),
+        }
+    });
+    let identifiability = id.map(|i| indentify_report::IdentifiabilitySummary {
         names: i.names.iter().map(|n| n.to_string()).collect(),
-        matrix: i.correlation.clone(),
+        singular_values: i.singular_values.clone(),
+        directions: i.directions.clone(),
+        condition: i.condition_text(),
+        weakest: i.weakest_direction(),
+        undetermined: i
+            .undetermined
+            .iter()
+            .zip(&i.reasons)
+            .map(|(n, r)| indentify_report::Undetermined {
+                name: n.to_string(),
+                reason: r.clone(),
+            })
+            .collect(),
+        advice: if i.undetermined.is_empty() {
+            String::new()
+        } else {
+            indentify_identify::StopReason::UNDETERMINED_ADVICE.to_string()
+        },
     });
     let preprocessing = inputs.measured.map_or_else(Vec::new, |m| {
         m.applied
@@ -195,6 +225,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         figures: Vec::new(),
         warnings: inputs.warnings.to_vec(),
         discretization: inputs.discretization.clone(),
+        identifiability,
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();

@@ -805,6 +805,15 @@ struct IdentifiabilityJson {
     rel_std_dev: Named<f64>,
     correlation: Vec<Vec<f64>>,
     condition_number: f64,
+    /// `condition_number` as text: `singular` beyond 1e16.
+    condition: String,
+    singular_values: Vec<f64>,
+    directions: Vec<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    weakest_direction: Option<String>,
+    undetermined: Vec<&'static str>,
+    undetermined_reasons: Named<String>,
+    /// The older name of `undetermined`.
     unidentifiable: Vec<&'static str>,
 }
 
@@ -818,7 +827,18 @@ impl From<&Identifiability> for IdentifiabilityJson {
             rel_std_dev: Named::new(i.names.iter().copied().zip(i.rel_std_dev.clone())),
             correlation: i.correlation.clone(),
             condition_number: i.condition_number,
-            unidentifiable: i.unidentifiable.clone(),
+            condition: i.condition_text(),
+            singular_values: i.singular_values.clone(),
+            directions: i.directions.clone(),
+            weakest_direction: i.weakest_direction(),
+            undetermined: i.undetermined.clone(),
+            undetermined_reasons: Named::new(
+                i.undetermined
+                    .iter()
+                    .copied()
+                    .zip(i.reasons.iter().cloned()),
+            ),
+            unidentifiable: i.undetermined.clone(),
         }
     }
 }
@@ -845,6 +865,8 @@ struct ResultJson {
     sensitivity_solves: usize,
     stop_reason: String,
     converged: bool,
+    /// Free parameters the data do not determine (see `identifiability`).
+    undetermined: Vec<&'static str>,
     seconds: f64,
     resumed: bool,
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -969,6 +991,10 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         sensitivity_solves: r.sensitivity_solves,
         stop_reason: r.stop_reason.to_string(),
         converged: r.stop_reason.is_converged(),
+        undetermined: r
+            .identifiability
+            .as_ref()
+            .map_or_else(Vec::new, |i| i.undetermined.clone()),
         seconds: r.seconds,
         resumed: o.resumed,
         warnings: o.warnings.clone(),

@@ -218,6 +218,11 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
     })
 }
 
+/// Exit status of a run that met a convergence criterion where the data leave some free
+/// parameters undetermined (a stall and the iteration limit exit with 1, an interruption
+/// with 130).
+pub const EXIT_UNDETERMINED: i32 = 3;
+
 /// Runs the identification, writes the report and prints the table.
 ///
 /// # Errors
@@ -244,6 +249,19 @@ pub fn run(args: &Args) -> Result<()> {
                 f.history.display().to_string(),
             )
         });
+        if let indentify_identify::StopReason::Undetermined { met, params } = &r.stop_reason {
+            // the exit status of an undetermined stop (3), distinct from the iteration
+            // limit's and a stall's (1)
+            eprintln!(
+                "error: the identification of `{}` stopped ({met}) at a point where the data \
+                 do not determine {}. What to do: {}. The result is in `{result}` and the \
+                 history in `{history}`.",
+                o.config,
+                params.join("; "),
+                indentify_identify::StopReason::UNDETERMINED_ADVICE
+            );
+            std::process::exit(EXIT_UNDETERMINED);
+        }
         if r.stop_reason == indentify_identify::StopReason::Interrupted {
             tracing::warn!(
                 "interrupted after iteration {}: the result so far is in `{result}` and the \
@@ -277,8 +295,12 @@ pub fn summary(o: &IdentifyOutcome) -> String {
         rows[0].extend(["truth".to_string(), "rel. error".to_string()]);
     }
     let disc = o.discretization.as_ref();
+    let id = result.identifiability.as_ref();
+    if id.is_some() {
+        rows[0].push("std. dev.".to_string());
+    }
     if disc.is_some() {
-        rows[0].extend(["std. dev.".to_string(), "disc. shift".to_string()]);
+        rows[0].push("disc. shift".to_string());
     }
     for (k, p) in result.params.iter().enumerate() {
         let mut row = vec![p.name.to_string(), p.unit.to_string(), p.start.to_string()];
@@ -302,8 +324,16 @@ pub fn summary(o: &IdentifyOutcome) -> String {
                 String::new()
             });
         }
+        let undetermined = id.is_some_and(|i| i.is_undetermined(p.name));
+        if id.is_some() {
+            // an undetermined parameter never shows a number for its deviation
+            row.push(if undetermined {
+                "undetermined".to_string()
+            } else {
+                o.std_dev(p.name).map_or(String::new(), |s| sig(s, 3))
+            });
+        }
         if let Some(d) = disc {
-            row.push(o.std_dev(p.name).map_or(String::new(), |s| sig(s, 3)));
             row.push(match (p.free, d.shift[k]) {
                 (false, _) => String::new(),
                 (true, Some(s)) => format!(
@@ -354,6 +384,22 @@ pub fn summary(o: &IdentifyOutcome) -> String {
     }
     if let Some(i) = &result.identifiability {
         text.push_str(&format!("  {}\n", identifiability_line(i)));
+        if let Some(w) = i.weakest_direction() {
+            text.push_str(&format!("  weakest direction: {w}\n"));
+        }
+        if !i.undetermined.is_empty() {
+            let list: Vec<String> = i
+                .undetermined
+                .iter()
+                .zip(&i.reasons)
+                .map(|(n, why)| format!("{n}: {why}"))
+                .collect();
+            text.push_str(&format!(
+                "  UNDETERMINED by these data: {}\n  what to do: {}\n",
+                list.join("; "),
+                indentify_identify::StopReason::UNDETERMINED_ADVICE
+            ));
+        }
     }
     if let Some(d) = disc {
         let rel: Vec<String> = result
@@ -400,41 +446,45 @@ pub fn summary(o: &IdentifyOutcome) -> String {
     text
 }
 
-/// `relative std. dev. E 1e-9, eta 2e-9; correlation E-eta -0.87; condition number 12`.
+/// `identifiability: relative std. dev. E 1e-9, eta 2e-9; correlation E-eta -0.87;
+/// singular values 1.2e3, 4.5e1; condition number 1.105e1` (undetermined parameters show
+/// no deviation and no correlation; a condition number beyond 1e16 shows as `singular`).
 fn identifiability_line(i: &Identifiability) -> String {
     let sd: Vec<String> = i
         .names
         .iter()
         .zip(&i.rel_std_dev)
-        .filter(|(n, _)| !i.unidentifiable.contains(n))
-        .map(|(n, s)| format!("{n} {s:.1e}"))
+        .map(|(n, s)| {
+            if i.is_undetermined(n) || !s.is_finite() {
+                format!("{n} undetermined")
+            } else {
+                format!("{n} {s:.1e}")
+            }
+        })
         .collect();
     let mut corr = Vec::new();
     for a in 0..i.names.len() {
         for b in a + 1..i.names.len() {
-            if [a, b]
-                .iter()
-                .any(|&k| i.unidentifiable.contains(&i.names[k]))
-            {
+            let c = i.correlation[a][b];
+            if [a, b].iter().any(|&k| i.is_undetermined(i.names[k])) || !c.is_finite() {
                 continue;
             }
-            corr.push(format!(
-                "{}-{} {:.3}",
-                i.names[a], i.names[b], i.correlation[a][b]
-            ));
+            corr.push(format!("{}-{} {:.3}", i.names[a], i.names[b], c));
         }
     }
     let mut s = format!("identifiability: relative std. dev. {}", sd.join(", "));
     if !corr.is_empty() {
         s.push_str(&format!("; correlation {}", corr.join(", ")));
     }
-    if !i.unidentifiable.is_empty() {
-        s.push_str(&format!(
-            "; NOT identifiable from these data (no effect on the force): {} (hold them, or \
-             narrow their bounds)",
-            i.unidentifiable.join(", ")
-        ));
-    }
-    s.push_str(&format!("; condition number {:.3e}", i.condition_number));
+    let sv: Vec<String> = i
+        .singular_values
+        .iter()
+        .map(|v| format!("{v:.2e}"))
+        .collect();
+    s.push_str(&format!(
+        "; singular values of S {}; condition number {}",
+        sv.join(", "),
+        i.condition_text()
+    ));
     s
 }

@@ -126,6 +126,7 @@ pub fn nano_report() -> Report {
         ],
         warnings: Vec::new(),
         discretization: None,
+        identifiability: None,
     }
 }
 
