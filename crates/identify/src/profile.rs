@@ -77,7 +77,7 @@ pub struct ProfileSettings {
     /// Step in the scaled variable; `None`: half the Gauss-Newton standard deviation of the
     /// scaled variable, clamped to `[1e-4, 0.25]` (0.1 when it is not finite).
     pub step: Option<f64>,
-    /// A side stops once `J_k - J*` exceeds this many thresholds (4: about twice the
+    /// A side stops once `J_k - J*` exceeds this many thresholds (2: about 1.4 times the
     /// interval's half-width for a quadratic profile).
     pub stop_factor: f64,
 }
@@ -87,7 +87,7 @@ impl Default for ProfileSettings {
         ProfileSettings {
             points_per_side: 8,
             step: None,
-            stop_factor: 4.0,
+            stop_factor: 2.0,
         }
     }
 }

@@ -28,7 +28,7 @@ pub struct ProfileFigure {
     pub optimum: f64,
     /// The interval's ends (vertical dashed lines).
     pub interval: (f64, f64),
-    /// Logarithmic value axis.
+    /// Logarithmic value axis (used when the values span more than a decade).
     pub log_x: bool,
 }
 
@@ -47,9 +47,9 @@ pub struct CostMapFigure {
     pub y: Vec<f64>,
     /// `J` at `(x[i], y[j])` as `cost[j * x.len() + i]` (non-finite: a failed solve, grey).
     pub cost: Vec<f64>,
-    /// Logarithmic horizontal axis.
+    /// Logarithmic horizontal axis (used when the values span more than a decade).
     pub log_x: bool,
-    /// Logarithmic vertical axis.
+    /// Logarithmic vertical axis (likewise).
     pub log_y: bool,
     /// Points to mark (x, y, label), e.g. the optimum.
     pub marks: Vec<(f64, f64, String)>,
@@ -233,7 +233,8 @@ impl ProfileFigure {
                     .map_err(|e| e.to_string())?;
             }};
         }
-        if self.log_x && x0 > 0.0 {
+        // a log axis over less than a decade has no labelled ticks: linear then
+        if self.log_x && x0 > 0.0 && x1 / x0 > 10.0 {
             body!(
                 chart
                     .build_cartesian_2d((x0..x1).log_scale(), bottom..top)
@@ -404,8 +405,10 @@ impl CostMapFigure {
             e.push(last);
             e
         };
-        let log_x = self.log_x && self.x.iter().all(|v| *v > 0.0);
-        let log_y = self.log_y && self.y.iter().all(|v| *v > 0.0);
+        // a log axis over less than a decade has no labelled ticks: linear then
+        let decade = |v: &[f64]| v.iter().all(|v| *v > 0.0) && v[v.len() - 1] / v[0] > 10.0;
+        let log_x = self.log_x && decade(&self.x);
+        let log_y = self.log_y && decade(&self.y);
         let ex = edges(&self.x, log_x);
         let ey = edges(&self.y, log_y);
         let (w, _) = root.dim_in_pixel();

@@ -25,6 +25,7 @@ pub mod config;
 pub mod data;
 pub mod discretization;
 pub mod error;
+pub mod explore;
 pub mod figures;
 pub mod format;
 pub mod fuzzing;
