@@ -22,6 +22,7 @@ pub mod atomic;
 pub mod batch;
 pub mod check;
 pub mod config;
+pub mod costmap;
 pub mod data;
 pub mod discretization;
 pub mod error;
