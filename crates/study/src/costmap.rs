@@ -236,7 +236,12 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
             let values = (0..n)
                 .map(|i| {
                     let y = y_lo + (y_hi - y_lo) * i as f64 / (n - 1) as f64;
-                    f.to_physical(y).clamp(f.lower, f.upper)
+                    if (y - y0).abs() <= 1e-12 * (1.0 + y0.abs()) {
+                        // the centre itself, not its round trip through the scaling
+                        c0
+                    } else {
+                        f.to_physical(y).clamp(f.lower, f.upper)
+                    }
                 })
                 .collect();
             Ok((values, f))

@@ -31,6 +31,33 @@ pub struct StartsOptions {
 }
 
 impl StartsOptions {
+    /// Checks the ranges (before any solve).
+    ///
+    /// # Errors
+    /// [`ErrorKind::Config`] naming `--starts` and its range, or the tolerance.
+    pub fn check(&self) -> Result<()> {
+        if !(1..=ms::MAX_STARTS).contains(&self.n) {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "--starts {} is not allowed: expected a number of starts in [1, {}]",
+                    self.n,
+                    ms::MAX_STARTS
+                ),
+            ));
+        }
+        if !(self.tol > 0.0 && self.tol.is_finite()) {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "the clustering tolerance {} is not allowed: expected a finite value > 0",
+                    self.tol
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// `n` starts from `seed`, the default tolerance.
     pub fn new(n: usize, seed: u64) -> StartsOptions {
         StartsOptions {
@@ -121,15 +148,7 @@ pub fn multistart(
     let wall = std::time::Instant::now();
     let param = Parameterization::new(problem.law, &config.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
-    if !(opts.tol > 0.0 && opts.tol.is_finite()) {
-        return Err(Error::msg(
-            ErrorKind::Config,
-            format!(
-                "the clustering tolerance {} is not allowed: expected a finite value > 0",
-                opts.tol
-            ),
-        ));
-    }
+    opts.check()?;
     let starts = ms::latin_hypercube(&param, opts.n, opts.seed)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!("--starts: {e}")))?;
     // each run computes its own identifiability summary when asked (one sensitivity

@@ -398,6 +398,9 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
 pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<IdentifyOutcome> {
     let wall = Instant::now();
     let resolved = resolve(opts)?;
+    if let Some(starts) = &opts.starts {
+        starts.check()?;
+    }
     let paths = match &opts.out {
         Some(out) => Some(check_report_dir(out, opts.resume, opts.force)?),
         None => None,
