@@ -63,8 +63,8 @@
 pub mod data;
 pub mod identifiability;
 pub mod linalg;
-pub mod noise;
 pub mod multistart;
+pub mod noise;
 pub mod optimize;
 pub mod params;
 pub mod problem;

@@ -133,13 +133,8 @@ pub fn cluster(
     runs: &[Result<IdentifyResult, IdentifyError>],
     tol: f64,
 ) -> Clusters {
-    let scaled = |c: &[f64]| -> Vec<f64> {
-        param
-            .free
-            .iter()
-            .map(|f| f.to_scaled(c[f.index]))
-            .collect()
-    };
+    let scaled =
+        |c: &[f64]| -> Vec<f64> { param.free.iter().map(|f| f.to_scaled(c[f.index])).collect() };
     let mut order: Vec<(usize, &IdentifyResult)> = Vec::new();
     let mut failed = Vec::new();
     for (i, r) in runs.iter().enumerate() {

@@ -426,8 +426,16 @@ mod tests {
         );
         // chord between y - 1 = 0.5 (0.25) and 0.75 (0.5625): crossing at 0.5 + 0.25 * 0.4
         let half = 0.5 + 0.25 * (0.5 - 0.25) / (0.5625 - 0.25);
-        assert!((p.upper.value() - (1.0 + half)).abs() < 1e-12, "{:?}", p.upper);
-        assert!((p.lower.value() - (1.0 - half)).abs() < 1e-12, "{:?}", p.lower);
+        assert!(
+            (p.upper.value() - (1.0 + half)).abs() < 1e-12,
+            "{:?}",
+            p.upper
+        );
+        assert!(
+            (p.lower.value() - (1.0 - half)).abs() < 1e-12,
+            "{:?}",
+            p.lower
+        );
         assert!((half - thr.sqrt()).abs() < 0.02);
         assert_eq!(p.points.len(), 13);
         assert!(p.points.windows(2).all(|w| w[0].value < w[1].value));

@@ -451,17 +451,17 @@ impl CostMapFigure {
                     .y_label_formatter(&|v| fmt_tick(*v))
                     .draw()
                     .map_err(|e| e.to_string())?;
-                let cells = (0..ny).flat_map(|j| {
-                    (0..nx).map(move |i| (i, j))
-                }).map(|(i, j)| {
-                    let v = lg[j * nx + i];
-                    let color = if v.is_finite() {
-                        viridis((v - lo) / (hi - lo)).filled()
-                    } else {
-                        RGBColor(200, 200, 200).filled()
-                    };
-                    Rectangle::new([(ex[i], ey[j]), (ex[i + 1], ey[j + 1])], color)
-                });
+                let cells = (0..ny)
+                    .flat_map(|j| (0..nx).map(move |i| (i, j)))
+                    .map(|(i, j)| {
+                        let v = lg[j * nx + i];
+                        let color = if v.is_finite() {
+                            viridis((v - lo) / (hi - lo)).filled()
+                        } else {
+                            RGBColor(200, 200, 200).filled()
+                        };
+                        Rectangle::new([(ex[i], ey[j]), (ex[i + 1], ey[j + 1])], color)
+                    });
                 c.draw_series(cells).map_err(|e| e.to_string())?;
                 for (_, (a, b)) in &segments {
                     c.draw_series(LineSeries::new(
@@ -617,7 +617,10 @@ mod tests {
         assert_eq!(&png[1..4], b"PNG");
         let mut bad = map.clone();
         bad.cost.pop();
-        assert!(matches!(bad.svg(FigureSize::default()), Err(ReportError::Length { .. })));
+        assert!(matches!(
+            bad.svg(FigureSize::default()),
+            Err(ReportError::Length { .. })
+        ));
         let prof = ProfileFigure {
             name: "K".into(),
             unit: "MPa s^(1/m)".into(),
@@ -628,10 +631,17 @@ mod tests {
             interval: (1.3, 2.8),
             log_x: true,
         };
-        assert!(prof.svg(FigureSize::default()).unwrap().contains("profile likelihood of K"));
+        assert!(
+            prof.svg(FigureSize::default())
+                .unwrap()
+                .contains("profile likelihood of K")
+        );
         assert_eq!(&prof.png(FigureSize::default()).unwrap()[1..4], b"PNG");
         let mut empty = prof.clone();
         empty.statistic = vec![f64::NAN; 3];
-        assert!(matches!(empty.svg(FigureSize::default()), Err(ReportError::Empty { .. })));
+        assert!(matches!(
+            empty.svg(FigureSize::default()),
+            Err(ReportError::Empty { .. })
+        ));
     }
 }

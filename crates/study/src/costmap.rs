@@ -218,7 +218,12 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
         .enumerate()
         .map(|(axis, &k)| {
             let f = &param.free[k];
-            let span = opts.span.get(axis).or(opts.span.first()).copied().unwrap_or(0.5);
+            let span = opts
+                .span
+                .get(axis)
+                .or(opts.span.first())
+                .copied()
+                .unwrap_or(0.5);
             let (lo, hi) = f.scaled_bounds();
             let c0 = centre[f.index];
             if !(c0 >= f.lower && c0 <= f.upper) {
@@ -327,7 +332,13 @@ fn write(
     let json = serde_json::to_string_pretty(map)
         .map_err(|e| Error::new(ErrorKind::Io, anyhow::anyhow!(e)))?;
     put("map.json", (json + "\n").into_bytes())?;
-    let unit = |u: &str| if u == "-" { String::new() } else { format!(" ({u})") };
+    let unit = |u: &str| {
+        if u == "-" {
+            String::new()
+        } else {
+            format!(" ({u})")
+        }
+    };
     let [ca, cb] = map.centre_pair;
     let fig = indentify_report::CostMapFigure {
         title: format!(
@@ -335,10 +346,7 @@ fn write(
             map.names[0],
             map.names[1],
             map.through.describe(),
-            map.config
-                .rsplit('/')
-                .next()
-                .unwrap_or(map.config.as_str())
+            map.config.rsplit('/').next().unwrap_or(map.config.as_str())
         ),
         x_label: format!("{}{}", map.names[0], unit(map.units[0])),
         y_label: format!("{}{}", map.names[1], unit(map.units[1])),

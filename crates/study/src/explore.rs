@@ -465,9 +465,10 @@ pub fn profiles_table(profiles: &[Profile]) -> String {
     let mut s = format!(
         "profile likelihood: 95% intervals where 2 (J_profile - J*) / s^2 <= {CHI2_1_95:.3}, \
          s^2 = 2 J* / (n - p){}\n{}",
-        profiles
-            .first()
-            .map_or(String::new(), |p| format!(" (J* = {:.4e} N^2, rise allowed {:.4e} N^2)", p.cost, p.threshold)),
+        profiles.first().map_or(String::new(), |p| format!(
+            " (J* = {:.4e} N^2, rise allowed {:.4e} N^2)",
+            p.cost, p.threshold
+        )),
         table(&rows, "  ")
     );
     for p in profiles {

@@ -1193,4 +1193,3 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         fit: paths.fit.display().to_string(),
     }
 }
-

@@ -143,7 +143,10 @@ fn cost_map_is_thread_independent_and_matches_direct_evaluation() {
     assert_eq!(one.x.len(), 5);
     // the middle point is the truth, exact data: J at round-off of J_ref-scale forces
     let mid = one.cost[2 * 5 + 2];
-    assert!(mid < 1e-12 * one.cost.iter().copied().fold(0.0, f64::max), "{mid}");
+    assert!(
+        mid < 1e-12 * one.cost.iter().copied().fold(0.0, f64::max),
+        "{mid}"
+    );
     assert_eq!((one.grid_min.0, one.grid_min.1), (20000.0, 30000.0));
     // grid in ln E: ratios exp(0.15) between neighbours
     assert!((one.x[1] / one.x[0] - 0.15f64.exp()).abs() < 1e-12);
@@ -166,7 +169,10 @@ fn bad_map_and_start_options_are_clear_errors() {
     let e = err(&map_opts(&["E", "nu"], 5));
     assert!(e.contains("`nu` is held"), "{e}");
     let e = err(&map_opts(&["E", "K"], 5));
-    assert!(e.contains("no parameter `K`") && e.contains("E, nu, eta"), "{e}");
+    assert!(
+        e.contains("no parameter `K`") && e.contains("E, nu, eta"),
+        "{e}"
+    );
     let e = err(&map_opts(&["eta", "eta"], 5));
     assert!(e.contains("twice"), "{e}");
     let e = err(&map_opts(&["E", "eta"], 2));

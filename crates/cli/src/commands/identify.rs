@@ -8,11 +8,11 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use indentify_identify::{Identifiability, IterationRecord};
 use indentify_identify::profile::ProfileSettings;
+use indentify_identify::{Identifiability, IterationRecord};
 use indentify_study::ConfigSource;
-use indentify_study::explore::StartsOptions;
 use indentify_study::config::{MethodName, Overrides, fixed_item, name_value};
+use indentify_study::explore::StartsOptions;
 use indentify_study::format::{sig, table};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome, Observer, RunInfo};
 

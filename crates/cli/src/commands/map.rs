@@ -18,7 +18,13 @@ pub struct Args {
     pub config: Option<PathBuf>,
 
     /// The two free parameters to map, horizontal first, e.g. `--pair K,m`.
-    #[arg(long, value_name = "A,B", value_delimiter = ',', num_args = 1, required = true)]
+    #[arg(
+        long,
+        value_name = "A,B",
+        value_delimiter = ',',
+        num_args = 1,
+        required = true
+    )]
     pub pair: Vec<String>,
 
     /// Points per side of the grid, in [3, 401].
@@ -27,7 +33,12 @@ pub struct Args {
 
     /// Half-width of the grid in the scaled variables (ln c for log-scaled parameters): one
     /// value for both or two comma-separated; default 0.5 (a factor e^0.5 = 1.65 each way).
-    #[arg(long, value_name = "S[,S]", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "S[,S]",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     pub span: Vec<f64>,
 
     /// Centre of the slice: `fit` (identify first, with the configuration's method and start),
@@ -45,7 +56,12 @@ pub struct Args {
     pub data: Option<PathBuf>,
 
     /// Synthesized data only: multiplicative noise F (1 + a xi), xi uniform in [-1, 1].
-    #[arg(long, value_name = "A", conflicts_with = "data", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "A",
+        conflicts_with = "data",
+        allow_negative_numbers = true
+    )]
     pub noise: Option<f64>,
 
     /// Seed of the noise (SplitMix64).
