@@ -115,6 +115,7 @@ enum Command {
                             indentify identify examples/r1-maxwell.ron --start E=60000,eta=10000 --out out/start2\n  \
                             indentify identify examples/r1-maxwell.ron --noise 0.1 --seed 2\n  \
                             indentify identify my-test.ron --data curve.csv --free E,eta --fixed nu=0.3 --method lbfgsb\n  \
+                            indentify identify examples/r1-maxwell.ron --noise 0.02 --starts 8 --seed 1 --profiles\n  \
                             indentify identify examples/r2-norton-hoff.ron --max-iter 5 --out out/r2 && indentify identify examples/r2-norton-hoff.ron --out out/r2 --resume")]
     Identify(commands::identify::Args),
     /// Identify every indent of a manifest in parallel (a map); shards, Slurm arrays, merge.
@@ -136,6 +137,24 @@ enum Command {
                             indentify batch merge /scratch/map"
     )]
     Batch(commands::batch::Args),
+    /// The cost J over a 2D slice of two free parameters (grid in parallel): CSV, JSON, contour figure.
+    #[command(
+        after_help = "The slice passes through the fit (--through fit, the default: the \
+                            configuration is identified first), the configuration's law values \
+                            (--through law) or the identification's start (--through start); \
+                            the other parameters are held at the centre's values. The grid has \
+                            --grid points per side, evenly spaced in the scaled variables (ln c \
+                            for log-scaled parameters) over +-span around the centre, clipped to \
+                            the bounds. Writes DIR/map.csv (one line per point: the two values \
+                            and J), DIR/map.json (grid, J, centre, lowest point, threads, wall \
+                            time) and DIR/map.svg/png (log10 J as colors and contour lines, axes \
+                            in physical units, the centre marked). Grid points are independent \
+                            forward solves: the map does not depend on the number of threads.\n\n\
+                            Examples:\n  \
+                            indentify map examples/r1-maxwell.ron --pair E,eta --grid 41\n  \
+                            indentify map examples/r2-norton-hoff.ron --pair K,m --span 1.0,0.4 --through law --out out/km"
+    )]
+    Map(commands::map::Args),
 }
 
 fn main() -> ExitCode {
@@ -149,6 +168,7 @@ fn main() -> ExitCode {
         Command::GradientCheck(args) => commands::gradient_check::run(args),
         Command::Identify(args) => commands::identify::run(args),
         Command::Batch(args) => commands::batch::run(args),
+        Command::Map(args) => commands::map::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

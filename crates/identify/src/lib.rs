@@ -15,6 +15,10 @@
 //!   BFGS with Armijo backtracking (the paper's algorithm), L-BFGS with More-Thuente,
 //!   L-BFGS-B (bounds, feature `lbfgsb`), Levenberg-Marquardt on the sensitivity
 //!   Jacobian; stopping rules, iteration history through an observer callback.
+//! - [`multistart`]: seeded Latin-hypercube starts in the scaled box and the clustering
+//!   of the runs' end points into distinct local minima.
+//! - [`profile`]: profile-likelihood chains (constrained re-fits stepping away from the
+//!   optimum) and their chi-square intervals.
 //! - [`identifiability`]: singular values and directions of the scaled sensitivity
 //!   matrix, Gauss-Newton standard deviations, correlations, the parameters the data do
 //!   not determine (a converged run with such parameters ends with
@@ -61,10 +65,12 @@
 pub mod data;
 pub mod identifiability;
 pub mod linalg;
+pub mod multistart;
 pub mod noise;
 pub mod optimize;
 pub mod params;
 pub mod problem;
+pub mod profile;
 
 mod argmin_glue;
 mod lm;

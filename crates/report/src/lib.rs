@@ -7,6 +7,9 @@
 //! the curves carry a [`DisplayUnit`] saying how to show them (nm and mN for a
 //! nano-indentation, mm and N for a macroscopic test: see [`Curves::with_auto_units`]).
 //!
+//! The cost around a fit has its own figures: [`ProfileFigure`] (profile likelihoods)
+//! and [`CostMapFigure`] (2D cost maps with contour lines).
+//!
 //! Figures are drawn with plotters and the DejaVu Sans font embedded in the binary, so
 //! PNGs render on machines without system fonts.
 //!
@@ -72,6 +75,7 @@
 //! ```
 
 mod error;
+mod explore;
 mod fit;
 mod map;
 mod markdown;
@@ -80,6 +84,7 @@ mod plot;
 mod units;
 
 pub use error::ReportError;
+pub use explore::{CostMapFigure, ProfileFigure, contour_segments};
 pub use fit::FitQuality;
 pub use map::{MapData, MapFigure};
 pub use model::{

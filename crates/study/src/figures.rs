@@ -39,6 +39,8 @@ pub struct Inputs<'a> {
     pub warnings: &'a [String],
     /// The discretization error of the fit, if estimated.
     pub discretization: Option<indentify_report::DiscretizationSummary>,
+    /// Sections appended to report.md (Markdown, e.g. multi-start and profiles).
+    pub extra_markdown: String,
 }
 
 /// The files written.
@@ -250,7 +252,12 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
     }
     report.figures = links;
     let markdown = dir.join("report.md");
-    crate::atomic::write(&markdown, report.to_markdown())
+    let mut md = report.to_markdown();
+    if !inputs.extra_markdown.is_empty() {
+        md.push('\n');
+        md.push_str(&inputs.extra_markdown);
+    }
+    crate::atomic::write(&markdown, md)
         .with_context(|| format!("cannot write `{}`", markdown.display()))?;
     let json = dir.join("report.json");
     let text = report.to_json().context("cannot represent the report")?;

@@ -62,6 +62,12 @@ pub struct IdentifyOptions {
     /// halved time steps and report the force change and the parameter shift it implies
     /// ([`crate::discretization`]); does not change the fit. Default true.
     pub refine: bool,
+    /// Multi-start (`--starts N --seed S`): N Latin-hypercube starts run in parallel, the
+    /// best reported, the minima listed ([`crate::explore`]). `None`: the one start of the
+    /// configuration.
+    pub starts: Option<crate::explore::StartsOptions>,
+    /// Profile-likelihood intervals of every free parameter after the fit (`--profiles`).
+    pub profiles: Option<indentify_identify::profile::ProfileSettings>,
 }
 
 /// The default [`IdentifyOptions::memory_budget`]: 1 GiB.
@@ -90,6 +96,8 @@ impl IdentifyOptions {
             checkpoint: None,
             memory_budget: DEFAULT_MEMORY_BUDGET,
             refine: true,
+            starts: None,
+            profiles: None,
         }
     }
 }
@@ -193,6 +201,10 @@ pub struct IdentifyOutcome {
     /// The discretization error of the fit (`None` with `refine: false`, or when the
     /// refined run failed: then a warning says why).
     pub discretization: Option<Discretization>,
+    /// The multi-start summary (with [`IdentifyOptions::starts`]).
+    pub multistart: Option<crate::explore::MultiStartOutcome>,
+    /// The profile likelihoods (with [`IdentifyOptions::profiles`]).
+    pub profiles: Option<Vec<indentify_identify::profile::Profile>>,
 }
 
 impl IdentifyOutcome {
@@ -225,19 +237,29 @@ struct Data {
     truth: Option<Vec<f64>>,
 }
 
-/// Runs the identification described by `opts`, reporting progress to `observer`.
-///
-/// A run that stops without converging (iteration limit, stall, interruption) is `Ok`:
-/// its [`IdentifyOutcome::converged`] says so, and its report is written.
+/// A configuration resolved before any solve: its law, the identification settings.
+pub struct Resolved {
+    /// The configuration's name.
+    pub name: String,
+    /// The configuration, `--set` overrides applied.
+    pub cfg: Config,
+    /// The law.
+    pub law: &'static dyn Law,
+    /// The `law` section's values (law order).
+    pub law_values: Vec<f64>,
+    /// The parameter names (law order).
+    pub names: Vec<&'static str>,
+    /// The identification settings, command-line overrides applied.
+    pub id_cfg: IdentifyConfig,
+}
+
+/// Loads the configuration of `opts` and resolves its identification settings.
 ///
 /// # Errors
-/// Invalid configuration, settings or data ([`ErrorKind::Config`], [`ErrorKind::Data`])
-/// before any solve and before any file is written; an unwritable or occupied report
-/// directory ([`ErrorKind::Io`]); a start that cannot be solved ([`ErrorKind::Solver`]).
-pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<IdentifyOutcome> {
-    let wall = Instant::now();
+/// [`ErrorKind::Config`] for an invalid configuration, settings, start or noise.
+pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     let name = opts.config.name();
-    let mut cfg = opts.config.load(&opts.sets)?;
+    let cfg = opts.config.load(&opts.sets)?;
     let (law, law_values) = cfg.law.build().kind(ErrorKind::Config)?;
     let names = param_names(law);
     let mut id_cfg = IdentifySection::resolve(cfg.identify.as_ref(), &cfg.law, &opts.overrides)
@@ -261,10 +283,67 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
             ),
         ));
     }
-    let paths = match &opts.out {
-        Some(out) => Some(check_report_dir(out, opts.resume, opts.force)?),
-        None => None,
-    };
+    Ok(Resolved {
+        name,
+        cfg,
+        law,
+        law_values,
+        names,
+        id_cfg,
+    })
+}
+
+/// Everything an identification needs, set up: the [`Problem`] (model, schedule, data)
+/// and the settings. Shared by [`run`], the cost map ([`crate::costmap`]) and the test
+/// design ([`crate::design`]).
+pub struct Setup {
+    /// The configuration's name.
+    pub name: String,
+    /// The configuration.
+    pub cfg: Config,
+    /// The law.
+    pub law: &'static dyn Law,
+    /// The `law` section's values.
+    pub law_values: Vec<f64>,
+    /// Parameter names.
+    pub names: Vec<&'static str>,
+    /// Identification settings.
+    pub id_cfg: IdentifyConfig,
+    /// The identification problem.
+    pub problem: Problem,
+    /// The direct solver's options (checkpointing decided).
+    pub solver_opts: SolverOptions,
+    /// The specimen's mesher.
+    pub mesher: crate::config::Mesher,
+    /// The measured record, if any.
+    pub measured: Option<Measured>,
+    /// Validity warnings.
+    pub warnings: Vec<String>,
+    data: Data,
+}
+
+impl Setup {
+    /// Where the data come from, described.
+    pub fn data_description(&self) -> &str {
+        &self.data.describe
+    }
+}
+
+/// Reads the data and builds the problem of a resolved configuration.
+///
+/// # Errors
+/// [`ErrorKind::Data`] for data that cannot be read or compared, [`ErrorKind::Config`] for
+/// a specimen or history that cannot be set up, [`ErrorKind::Solver`] when synthesizing
+/// the data fails.
+pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
+    let Resolved {
+        name,
+        mut cfg,
+        law,
+        law_values,
+        names,
+        id_cfg,
+    } = resolved;
     if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {
         // the data path replaces the configuration's record, read with its preprocessing
         d.file = absolute(path);
@@ -291,6 +370,66 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     )
     .with_context(|| format!("cannot compare the data with `{name}`"))
     .kind(ErrorKind::Data)?;
+    Ok(Setup {
+        name,
+        cfg,
+        law,
+        law_values,
+        names,
+        id_cfg,
+        problem,
+        solver_opts,
+        mesher,
+        measured,
+        warnings,
+        data,
+    })
+}
+
+/// Runs the identification described by `opts`, reporting progress to `observer`.
+///
+/// A run that stops without converging (iteration limit, stall, interruption) is `Ok`:
+/// its [`IdentifyOutcome::converged`] says so, and its report is written.
+///
+/// # Errors
+/// Invalid configuration, settings or data ([`ErrorKind::Config`], [`ErrorKind::Data`])
+/// before any solve and before any file is written; an unwritable or occupied report
+/// directory ([`ErrorKind::Io`]); a start that cannot be solved ([`ErrorKind::Solver`]).
+pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<IdentifyOutcome> {
+    let wall = Instant::now();
+    let resolved = resolve(opts)?;
+    if let Some(starts) = &opts.starts {
+        starts.check()?;
+    }
+    let paths = match &opts.out {
+        Some(out) => Some(check_report_dir(out, opts.resume, opts.force)?),
+        None => None,
+    };
+    if opts.starts.is_some() && opts.resume {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            "--starts cannot be combined with --resume: a multi-start has no single history to \
+             continue",
+        ));
+    }
+    let Setup {
+        name,
+        cfg,
+        law,
+        names,
+        mut id_cfg,
+        problem,
+        solver_opts,
+        mesher,
+        measured,
+        warnings,
+        data,
+        ..
+    } = setup(resolved, opts)?;
+    if opts.profiles.is_some() {
+        // the profiles' threshold needs s^2 from the identifiability summary
+        id_cfg.identifiability = true;
+    }
 
     // the history, once every input is known good
     let (mut history, resume_from) = match &paths {
@@ -321,14 +460,31 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         data: data.describe.clone(),
         out: opts.out.clone(),
     });
-    let result = optimize(
-        &problem,
-        &id_cfg,
-        resume_from.as_ref(),
-        history.as_mut(),
-        observer,
-    )
-    .map_err(|e| {
+    let (result, multistart) = match &opts.starts {
+        Some(starts) => {
+            let (summary, best) = crate::explore::multistart(&problem, &id_cfg, starts)
+                .map_err(|e| e.context(format!("the multi-start of `{name}` failed")))?;
+            // the best run's history
+            for r in &best.history {
+                if let Some(h) = history.as_mut() {
+                    h.record(r).kind(ErrorKind::Io)?;
+                }
+                observer.iteration(r);
+            }
+            (Ok(best), Some(summary))
+        }
+        None => (
+            optimize(
+                &problem,
+                &id_cfg,
+                resume_from.as_ref(),
+                history.as_mut(),
+                observer,
+            ),
+            None,
+        ),
+    };
+    let result = result.map_err(|e| {
         let kept = match (&history, &paths) {
             (Some(h), Some(p)) if h.lines > 0 => format!(
                 "; the history so far ({} lines) is in `{}`",
@@ -358,7 +514,24 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         warnings,
         wall_seconds: 0.0,
         discretization: None,
+        multistart,
+        profiles: None,
     };
+    if let Some(settings) = &opts.profiles {
+        if opts.cancel.is_raised() {
+            tracing::warn!("warning: interrupted: no profiles");
+        } else {
+            let wall = Instant::now();
+            let profiles = crate::explore::profiles(&problem, &id_cfg, &outcome.result, settings)
+                .map_err(|e| e.context(format!("the profiles of `{name}` failed")))?;
+            tracing::info!(
+                "  profiles: {} re-fits in {:.1} s",
+                profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),
+                wall.elapsed().as_secs_f64()
+            );
+            outcome.profiles = Some(profiles);
+        }
+    }
     if opts.refine && !opts.cancel.is_raised() {
         let free: Vec<bool> = outcome.result.params.iter().map(|p| p.free).collect();
         let computed = disc::compute(&disc::Inputs {
@@ -703,6 +876,25 @@ fn write_report(
         return Ok(files);
     }
     let history_records = crate::history::read_all(&paths.history, outcome.names.len());
+    let mut extra_markdown = String::new();
+    let mut extra_figures = Vec::new();
+    if let Some(m) = &outcome.multistart {
+        extra_markdown.push_str(&m.markdown());
+    }
+    if let Some(p) = &outcome.profiles {
+        let (links, written) = match crate::explore::write_profile_figures(&paths.dir, p) {
+            Ok(w) => w,
+            Err(e) => {
+                tracing::warn!("warning: no profile figures: {e:#}");
+                (Vec::new(), Vec::new())
+            }
+        };
+        extra_figures = written;
+        if !extra_markdown.is_empty() {
+            extra_markdown.push('\n');
+        }
+        extra_markdown.push_str(&crate::explore::profiles_markdown(p, &links));
+    }
     let (file, test) = match measured {
         Some(m) => (
             m.path.display().to_string(),
@@ -737,10 +929,14 @@ fn write_report(
                     seconds: d.seconds,
                 }
             }),
+            extra_markdown,
         },
     );
     match written {
-        Ok(w) => files.report = Some((w.markdown, w.json, w.figures)),
+        Ok(mut w) => {
+            w.figures.extend(extra_figures);
+            files.report = Some((w.markdown, w.json, w.figures));
+        }
         Err(e) => {
             tracing::warn!(
                 "warning: no report.md, report.json or figures: {e:#} (result.json, \
@@ -876,6 +1072,10 @@ struct ResultJson {
     identifiability: Option<IdentifiabilityJson>,
     #[serde(skip_serializing_if = "Option::is_none")]
     discretization: Option<DiscretizationJson>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    multistart: Option<crate::explore::MultiStartOutcome>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    profiles: Option<Vec<crate::explore::ProfileJson>>,
     history: String,
     fit: String,
 }
@@ -1010,6 +1210,11 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
             .discretization
             .as_ref()
             .map(|d| DiscretizationJson::new(o, d)),
+        multistart: o.multistart.clone(),
+        profiles: o
+            .profiles
+            .as_ref()
+            .map(|p| p.iter().map(crate::explore::ProfileJson::from).collect()),
         history: paths.history.display().to_string(),
         fit: paths.fit.display().to_string(),
     }

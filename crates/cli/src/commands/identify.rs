@@ -8,9 +8,11 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
+use indentify_identify::profile::ProfileSettings;
 use indentify_identify::{Identifiability, IterationRecord};
 use indentify_study::ConfigSource;
 use indentify_study::config::{MethodName, Overrides, fixed_item, name_value};
+use indentify_study::explore::StartsOptions;
 use indentify_study::format::{sig, table};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome, Observer, RunInfo};
 
@@ -82,9 +84,27 @@ pub struct Args {
     )]
     pub noise: Option<f64>,
 
-    /// Seed of the noise generator (SplitMix64).
-    #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
-    pub seed: u64,
+    /// Seed of the noise generator and of the multi-start's Latin hypercube (SplitMix64;
+    /// default 1). Needs --noise or --starts.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+
+    /// Multi-start: N starts drawn by Latin-hypercube sampling of the scaled box of the
+    /// free parameters (ln c for log-scaled ones; finite bounds needed), run in parallel on
+    /// all cores, end points within 0.01 in every scaled variable clustered into one
+    /// minimum; the best is reported, the distinct minima are listed (console, report.md,
+    /// result.json `multistart`). N in [1, 10000].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10000), conflicts_with = "resume")]
+    pub starts: Option<u32>,
+
+    /// Profile-likelihood 95% intervals of every free parameter after the fit: each
+    /// parameter held at values stepping away from the optimum (half a Gauss-Newton std.
+    /// dev. per step, at most 8 per side), the others re-fitted from the neighbouring point;
+    /// the interval is where 2 (J - J*) / s^2 <= 3.841 with s^2 = 2 J* / (n - p). Chains of
+    /// different parameters and sides run in parallel. Console, report.md, result.json
+    /// `profiles`, figures profile_<name>.svg/png.
+    #[arg(long)]
+    pub profiles: bool,
 
     /// Skip the discretization error (by default the forward problem is re-run at the
     /// optimum on a 2x refined mesh with halved time steps, and the force change and the
@@ -184,6 +204,9 @@ impl Observer for Console {
 /// # Errors
 /// A malformed `--fixed` or `--start` item.
 pub fn options(args: &Args) -> Result<IdentifyOptions> {
+    if args.seed.is_some() && args.noise.is_none() && args.starts.is_none() {
+        bail!("--seed needs --noise or --starts (it seeds the noise and the multi-start's starts)");
+    }
     Ok(IdentifyOptions {
         config: args
             .config
@@ -209,12 +232,16 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
         },
         resume: args.resume,
         force: args.force,
-        noise: args.noise.map(|a| (a, args.seed)),
+        noise: args.noise.map(|a| (a, args.seed.unwrap_or(1))),
         figures: true,
         cancel: crate::interrupt::cancel_on_ctrl_c(),
         checkpoint: args.checkpoint.map(|n| n as usize),
         memory_budget: args.memory_budget.saturating_mul(1 << 20),
         refine: !args.no_refine,
+        starts: args
+            .starts
+            .map(|n| StartsOptions::new(n as usize, args.seed.unwrap_or(1))),
+        profiles: args.profiles.then(ProfileSettings::default),
     })
 }
 
@@ -240,6 +267,12 @@ pub fn run(args: &Args) -> Result<()> {
     drop(console.progress.take());
     let o = outcome?;
     print::print_text(&summary(&o))?;
+    if let Some(m) = &o.multistart {
+        print::print_text(&m.table())?;
+    }
+    if let Some(p) = &o.profiles {
+        print::print_text(&indentify_study::explore::profiles_table(p))?;
+    }
     let r = &o.result;
     if !o.converged() {
         let files = o.files.as_ref();

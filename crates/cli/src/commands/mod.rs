@@ -6,4 +6,5 @@ pub mod gradient;
 pub mod gradient_check;
 pub mod identify;
 pub mod init;
+pub mod map;
 pub mod simulate;

@@ -1,0 +1,257 @@
+//! Multi-start identification: seeded Latin-hypercube starts in the scaled box of the free
+//! parameters, and the clustering of the runs' end points into distinct local minima.
+//!
+//! Starts are drawn in the optimizer's scaled variables `y` ([`Parameterization`]: `ln c`
+//! for a log-scaled parameter), so a log-scaled parameter is sampled uniformly in its
+//! logarithm. For `n` starts, each free parameter's scaled interval `[y_lo, y_hi]` is cut
+//! into `n` equal strata; start `i` takes stratum `pi_k(i)` of parameter `k` (`pi_k` a
+//! random permutation) at a uniform position inside it: every stratum of every parameter
+//! is used exactly once (a Latin hypercube, McKay, Beckman and Conover 1979). The draws come
+//! from [`SplitMix64`] seeded with the user's seed, parameter by parameter (first the
+//! Fisher-Yates permutation, then the `n` offsets), so a seed gives the same starts on every
+//! machine and thread count.
+//!
+//! The runs themselves are independent ([`run_start`]); a front end may run them in
+//! parallel (the `study` crate does, with rayon) and hand them back in start order to
+//! [`cluster`], whose result does not depend on the order they finished in.
+
+use crate::IdentifyError;
+use crate::noise::SplitMix64;
+use crate::optimize::{IdentifyConfig, IdentifyResult, identify, with_starts};
+use crate::params::Parameterization;
+use crate::problem::Problem;
+
+/// The default clustering tolerance: end points whose scaled variables differ by at most
+/// this (infinity norm; 0.01 = 1% on a log-scaled parameter) are the same minimum.
+pub const DEFAULT_CLUSTER_TOL: f64 = 1e-2;
+
+/// Largest number of starts [`latin_hypercube`] accepts.
+pub const MAX_STARTS: usize = 10_000;
+
+/// `n` Latin-hypercube starts (values of the free parameters, physical units, law order)
+/// within the bounds of `param`, from `seed`.
+///
+/// # Errors
+/// [`IdentifyError::InvalidOption`] for `n` outside `[1, MAX_STARTS]`;
+/// [`IdentifyError::InvalidSpec`] for a free parameter whose scaled bounds are not finite
+/// (an infinite bound, or a zero lower bound of a log-scaled parameter).
+pub fn latin_hypercube(
+    param: &Parameterization,
+    n: usize,
+    seed: u64,
+) -> Result<Vec<Vec<f64>>, IdentifyError> {
+    if !(1..=MAX_STARTS).contains(&n) {
+        return Err(IdentifyError::InvalidOption {
+            field: "starts",
+            value: n.to_string(),
+            allowed: "an integer in [1, 10000]",
+        });
+    }
+    let mut rng = SplitMix64::new(seed);
+    let mut starts = vec![Vec::with_capacity(param.free.len()); n];
+    for f in &param.free {
+        let (lo, hi) = f.scaled_bounds();
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(IdentifyError::InvalidSpec {
+                name: f.name.to_string(),
+                why: format!(
+                    "multi-start draws starts within the bounds, and [{}, {}] is not a finite \
+                     interval of the scaled variable: give finite bounds (a lower bound > 0 for \
+                     a log-scaled parameter)",
+                    f.lower, f.upper
+                ),
+            });
+        }
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+            perm.swap(i, j);
+        }
+        for (start, &stratum) in starts.iter_mut().zip(&perm) {
+            let u = (stratum as f64 + rng.next_f64()) / n as f64;
+            let c = f.to_physical(lo + u * (hi - lo));
+            // round-off of exp/ln must not put a start outside its own box
+            start.push(c.clamp(f.lower, f.upper));
+        }
+    }
+    Ok(starts)
+}
+
+/// One run of a multi-start: [`identify`] from `start` (the free parameters' values, law
+/// order), the rest of `config` shared, no observer.
+///
+/// # Errors
+/// As [`identify`]; [`IdentifyError::InvalidSpec`] for a start of the wrong length.
+pub fn run_start(
+    problem: &Problem,
+    config: &IdentifyConfig,
+    start: &[f64],
+) -> Result<IdentifyResult, IdentifyError> {
+    let n_free = config.params.iter().filter(|p| p.free).count();
+    if start.len() != n_free {
+        return Err(IdentifyError::InvalidSpec {
+            name: "start".into(),
+            why: format!("{} values for {n_free} free parameters", start.len()),
+        });
+    }
+    identify(problem, &with_starts(config, start), &mut |_| {})
+}
+
+/// A distinct local minimum: the runs that ended within the tolerance of its best point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Minimum {
+    /// The best end point of the cluster (full law vector, physical units).
+    pub c: Vec<f64>,
+    /// `J` there (N^2).
+    pub cost: f64,
+    /// The run that reached it (index into the starts).
+    pub best_start: usize,
+    /// Every start whose run ended in this cluster, increasing.
+    pub starts: Vec<usize>,
+    /// How many of them met a convergence criterion.
+    pub converged: usize,
+    /// Free parameters at a bound at the best point.
+    pub at_bound: Vec<&'static str>,
+}
+
+/// The end points of a multi-start grouped into minima.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clusters {
+    /// Minima, lowest cost first.
+    pub minima: Vec<Minimum>,
+    /// Runs that failed (start index and message).
+    pub failed: Vec<(usize, String)>,
+    /// The clustering tolerance (scaled variables, infinity norm).
+    pub tol: f64,
+}
+
+/// Groups the runs' end points: runs are taken by increasing final cost (ties by start
+/// index); each joins the first minimum whose best point lies within `tol` of its end point
+/// in every scaled variable, or founds a new one. Failed runs are listed apart.
+pub fn cluster(
+    param: &Parameterization,
+    runs: &[Result<IdentifyResult, IdentifyError>],
+    tol: f64,
+) -> Clusters {
+    let scaled =
+        |c: &[f64]| -> Vec<f64> { param.free.iter().map(|f| f.to_scaled(c[f.index])).collect() };
+    let mut order: Vec<(usize, &IdentifyResult)> = Vec::new();
+    let mut failed = Vec::new();
+    for (i, r) in runs.iter().enumerate() {
+        match r {
+            Ok(r) if r.cost.is_finite() => order.push((i, r)),
+            Ok(r) => failed.push((i, format!("final cost {}", r.cost))),
+            Err(e) => failed.push((i, e.to_string())),
+        }
+    }
+    order.sort_by(|a, b| a.1.cost.total_cmp(&b.1.cost).then(a.0.cmp(&b.0)));
+    let mut minima: Vec<(Vec<f64>, Minimum)> = Vec::new();
+    for (i, r) in order {
+        let y = scaled(&r.c);
+        let converged = usize::from(r.stop_reason.is_converged());
+        let home = minima.iter_mut().find(|(yb, _)| {
+            yb.iter()
+                .zip(&y)
+                .all(|(a, b)| (a - b).abs() <= tol || a == b)
+        });
+        match home {
+            Some((_, m)) => {
+                m.starts.push(i);
+                m.converged += converged;
+            }
+            None => {
+                let at_bound = r
+                    .params
+                    .iter()
+                    .filter(|p| p.free && (p.at_lower || p.at_upper))
+                    .map(|p| p.name)
+                    .collect();
+                minima.push((
+                    y,
+                    Minimum {
+                        c: r.c.clone(),
+                        cost: r.cost,
+                        best_start: i,
+                        starts: vec![i],
+                        converged,
+                        at_bound,
+                    },
+                ));
+            }
+        }
+    }
+    let minima = minima
+        .into_iter()
+        .map(|(_, mut m)| {
+            m.starts.sort_unstable();
+            m
+        })
+        .collect();
+    Clusters {
+        minima,
+        failed,
+        tol,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{ParamSpec, Scaling};
+
+    fn param() -> Parameterization {
+        let law = indentify_laws::law_by_name("maxwell").unwrap();
+        Parameterization::new(
+            law,
+            &[
+                ParamSpec::free("E", 4000.0, 1e3, 1e6),
+                ParamSpec::fixed("nu", 0.3),
+                ParamSpec::free("eta", 7e4, 1e3, 1e7).with_scaling(Scaling::Bounds),
+            ],
+        )
+        .unwrap()
+    }
+
+    /// The starts shall be a Latin hypercube of the scaled box: each of the n strata of
+    /// each parameter used once, the same for the same seed, different for another.
+    #[test]
+    fn latin_hypercube_fills_every_stratum_once() {
+        let p = param();
+        let n = 17;
+        let s = latin_hypercube(&p, n, 7).unwrap();
+        assert_eq!(s.len(), n);
+        for (k, f) in p.free.iter().enumerate() {
+            let (lo, hi) = f.scaled_bounds();
+            let mut strata: Vec<usize> = s
+                .iter()
+                .map(|v| {
+                    assert!(v[k] >= f.lower && v[k] <= f.upper);
+                    ((f.to_scaled(v[k]) - lo) / (hi - lo) * n as f64).floor() as usize
+                })
+                .collect();
+            strata.sort_unstable();
+            assert_eq!(strata, (0..n).collect::<Vec<_>>(), "parameter {}", f.name);
+        }
+        assert_eq!(s, latin_hypercube(&p, n, 7).unwrap());
+        assert_ne!(s, latin_hypercube(&p, n, 8).unwrap());
+    }
+
+    #[test]
+    fn bad_starts_are_errors_naming_the_option() {
+        let p = param();
+        let e = latin_hypercube(&p, 0, 1).unwrap_err().to_string();
+        assert!(e.contains("starts") && e.contains("[1, 10000]"), "{e}");
+        let law = indentify_laws::law_by_name("maxwell").unwrap();
+        let open = Parameterization::new(
+            law,
+            &[
+                ParamSpec::free("E", 4000.0, 0.0, 1e6),
+                ParamSpec::fixed("nu", 0.3),
+                ParamSpec::fixed("eta", 7e4),
+            ],
+        )
+        .unwrap();
+        let e = latin_hypercube(&open, 3, 1).unwrap_err().to_string();
+        assert!(e.contains("`E`") && e.contains("finite"), "{e}");
+    }
+}
