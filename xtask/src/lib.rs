@@ -2,6 +2,8 @@
 //! document writer ([`doc`]) and a small SVG plotter ([`svg`]), shared by the binary and
 //! the snapshot test.
 
+pub mod calculix;
 pub mod doc;
+pub mod mesh_study;
 pub mod paper;
 pub mod svg;

@@ -18,9 +18,11 @@ fn main() -> Result<()> {
         Some("make-map") => map::run(&args[1..]),
         Some("fuzz-configs") => fuzz_configs(&args[1..]),
         Some("slurm-check") => slurm::run(&args[1..]),
+        Some("calculix") => calculix(&args[1..]),
+        Some("mesh-study") => mesh_study(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--decks-only]   (CalculiX referee of normal contact; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 2|3] [--set path=value ...] [--auto N:K:G,...]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)"
             );
             bail!("unknown or missing command")
         }
@@ -186,6 +188,145 @@ fn fuzz_configs(args: &[String]) -> Result<()> {
     );
     if c.panics > 0 || c.non_finite > 0 {
         bail!("{} panics and {} non-finite forces", c.panics, c.non_finite);
+    }
+    Ok(())
+}
+
+/// `cargo xtask calculix`: CalculiX decks of R0, R1, R2 (sY = 500 and 0) with our mesh and
+/// a rigid cone in surface-to-surface contact, run by `ccx`, compared with our `Normal`
+/// contact (xtask::calculix).
+fn calculix(args: &[String]) -> Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let mut o = xtask::calculix::RunOptions {
+        out: root.join("validation/calculix"),
+        root,
+        cases: xtask::calculix::CASES
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect(),
+        frictions: vec![0.0, 0.1, 0.2],
+        kinematics: vec![false, true],
+        deck: xtask::calculix::DeckOptions::default(),
+        decks_only: false,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_default();
+        match a.as_str() {
+            "--out" => o.out = val().into(),
+            "--cases" => o.cases = val().split(',').map(str::to_string).collect(),
+            "--friction" => {
+                o.frictions = val()
+                    .split(',')
+                    .map(|x| {
+                        x.parse::<f64>()
+                            .ok()
+                            .filter(|m| m.is_finite() && *m >= 0.0)
+                            .ok_or_else(|| {
+                                anyhow::anyhow!("--friction: `{x}` is not a coefficient >= 0")
+                            })
+                    })
+                    .collect::<Result<_>>()?;
+            }
+            "--kinematics" => {
+                o.kinematics = val()
+                    .split(',')
+                    .map(|x| match x {
+                        "small" => Ok(false),
+                        "nlgeom" => Ok(true),
+                        _ => bail!("--kinematics: `{x}` is not small or nlgeom"),
+                    })
+                    .collect::<Result<_>>()?;
+            }
+            "--penalty" => {
+                let v = val();
+                o.deck.penalty = v
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|k| k.is_finite() && *k > 0.0)
+                    .ok_or_else(|| {
+                        anyhow::anyhow!("--penalty: `{v}` is not a slope > 0 (MPa/mm)")
+                    })?;
+                o.deck.stick_slope = o.deck.penalty / 10.0;
+            }
+            "--decks-only" => o.decks_only = true,
+            other => bail!("unknown option {other}"),
+        }
+    }
+    let table = xtask::calculix::run(&o)?;
+    println!("{table}");
+    Ok(())
+}
+
+/// `cargo xtask mesh-study`: the force of R2 and of the real `Auto()` examples against
+/// their meshes and steps refined 2x and 4x, and candidate `Auto()` options
+/// (xtask::mesh_study; docs/discretization.md).
+fn mesh_study(args: &[String]) -> Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let mut configs = vec![
+        "examples/r2-norton-hoff.ron".to_string(),
+        "examples/real/anon-nh.ron".to_string(),
+        "examples/real/ht-nh.ron".to_string(),
+    ];
+    let mut levels = 3;
+    let mut sets: Vec<String> = Vec::new();
+    let mut candidates = vec![
+        indentify_contact::punch::AutoOptions {
+            elements_in_contact: 12,
+            size_factor: 48.0,
+            grading: 1.5,
+        },
+        indentify_contact::punch::AutoOptions {
+            elements_in_contact: 16,
+            size_factor: 48.0,
+            grading: 1.5,
+        },
+        indentify_contact::punch::AutoOptions {
+            elements_in_contact: 16,
+            size_factor: 48.0,
+            grading: 1.3,
+        },
+    ];
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_default();
+        match a.as_str() {
+            "--configs" => configs = val().split(',').map(str::to_string).collect(),
+            "--levels" => levels = val().parse()?,
+            "--set" => sets.push(val()),
+            "--auto" => {
+                candidates = val()
+                    .split(',')
+                    .filter(|x| !x.is_empty())
+                    .map(|x| {
+                        let p: Vec<&str> = x.split(':').collect();
+                        match p.as_slice() {
+                            [n, k, g] => Ok(indentify_contact::punch::AutoOptions {
+                                elements_in_contact: n.parse()?,
+                                size_factor: k.parse()?,
+                                grading: g.parse()?,
+                            }),
+                            _ => bail!(
+                                "--auto: `{x}` is not elements_in_contact:size_factor:grading"
+                            ),
+                        }
+                    })
+                    .collect::<Result<_>>()?;
+            }
+            other => bail!("unknown option {other}"),
+        }
+    }
+    for c in &configs {
+        let path = root.join(c);
+        let cfg = indentify_study::config::load(&path, &sets)?;
+        let st = xtask::mesh_study::study(&cfg, c, levels, &candidates)?;
+        println!("{}", xtask::mesh_study::render(&st));
     }
     Ok(())
 }

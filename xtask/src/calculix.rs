@@ -1,0 +1,727 @@
+//! CalculiX referee for normal contact (issue 12): input decks of the reference problems
+//! R0, R1 and R2 on our own mesh (CAX8, node for node), a rigid cone as surface-to-surface
+//! penalty contact, the reaction-force parser of the `.dat` file, and the comparison with
+//! our `Normal` contact. `cargo xtask calculix` runs them (not part of CI: it needs `ccx`).
+//!
+//! The material models (CalculiX 2.20, read in its source):
+//! - elastic: `*ELASTIC` (isotropic, linear; St. Venant-Kirchhoff with `NLGEOM`);
+//! - Maxwell and Norton-Hoff, small strain: the additive infinitesimal-strain
+//!   viscoplastic model "elastic anisotropy with isotropic viscoplasticity"
+//!   (`umat_aniso_plas.f`, material name `ANISO_PLAS...`, `*USER MATERIAL` with 15
+//!   constants) given isotropic elastic constants. Its return map solves
+//!   `|s| = sqrt(2/3) (r0 + (sqrt(2/3) dg / (A dt))^(1/n))` with `dg` the increment of
+//!   the plastic multiplier along `s/|s|`, i.e. backward Euler of
+//!   `eps_dot_eq = A <sigma_eq - r0>^n`, `eps_dot_p = (3/2) eps_dot_eq s / sigma_eq`:
+//!   our Norton-Hoff (`eps_dot_vp = (3/2) <(sigma_eq - sY)/K>^m s/sigma_eq`) with
+//!   `A = K^-m`, `n = m`, `r0 = sY`, and our Maxwell (`eps_dot_v = s/eta`) with
+//!   `n = 1`, `A = 2/(3 eta)`, `r0 = 0`;
+//! - the same with `NLGEOM` (finite strain): `*ELASTIC`, `*PLASTIC` (a constant yield
+//!   stress sY) and `*CREEP, LAW=NORTON` (`A`, `n`, 0), CalculiX's multiplicative
+//!   (Simo 1988) viscoplasticity of `incplas.f`: the overstress `q = sigma_eq - sY` of the
+//!   Kirchhoff stress drives `eps_dot_eq = A q^n`; elasticity is hyperelastic (neo-Hooke
+//!   deviatoric part, `K (J^2 - 1)/2` volumetric).
+
+use std::fmt::Write as _;
+
+use anyhow::{Result, bail};
+use indentify_contact::{Punch, Schedule};
+use indentify_mesh::Mesh;
+
+/// The specimen's material as CalculiX is told it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Linear isotropic elasticity.
+    Elastic {
+        /// Young's modulus (MPa).
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+    },
+    /// Elasticity in series with `eps_dot_eq = a <sigma_eq - sy>^n` (deviatoric flow).
+    Viscoplastic {
+        /// Young's modulus (MPa).
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+        /// Norton coefficient `A` (MPa^-n / s).
+        a: f64,
+        /// Norton exponent.
+        n: f64,
+        /// Yield stress (MPa), 0 for none.
+        sy: f64,
+    },
+}
+
+impl Material {
+    /// Our Maxwell law `[E, nu, eta]` as CalculiX's Norton creep with `n = 1`.
+    pub fn maxwell(e: f64, nu: f64, eta: f64) -> Material {
+        Material::Viscoplastic {
+            e,
+            nu,
+            a: 2.0 / (3.0 * eta),
+            n: 1.0,
+            sy: 0.0,
+        }
+    }
+
+    /// Our Norton-Hoff law `[E, nu, K, m, sY]`: `A = K^-m`, `n = m`.
+    pub fn norton_hoff(e: f64, nu: f64, k: f64, m: f64, sy: f64) -> Material {
+        Material::Viscoplastic {
+            e,
+            nu,
+            a: k.powf(-m),
+            n: m,
+            sy,
+        }
+    }
+
+    /// The material of a law named as in `indentify_laws` with its parameters.
+    ///
+    /// # Errors
+    /// A law CalculiX cannot express here.
+    pub fn from_law(name: &str, c: &[f64]) -> Result<Material> {
+        Ok(match (name, c) {
+            ("elastic", [e, nu]) => Material::Elastic { e: *e, nu: *nu },
+            ("maxwell", [e, nu, eta]) => Material::maxwell(*e, *nu, *eta),
+            ("norton-hoff", [e, nu, k, m, sy]) => Material::norton_hoff(*e, *nu, *k, *m, *sy),
+            _ => bail!(
+                "law `{name}` with {} parameters has no CalculiX deck",
+                c.len()
+            ),
+        })
+    }
+}
+
+/// Options of a deck.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeckOptions {
+    /// Geometrically nonlinear (finite strain) analysis.
+    pub nlgeom: bool,
+    /// Coulomb friction coefficient (0: frictionless, no `*FRICTION` card).
+    pub friction: f64,
+    /// Slope of the linear pressure-overclosure law (MPa/mm).
+    pub penalty: f64,
+    /// Stick slope of the friction law (MPa/mm), used when `friction > 0`.
+    pub stick_slope: f64,
+    /// Radius up to which the rigid cone is meshed (mm).
+    pub punch_radius: f64,
+    /// Faces of the rigid cone's flank.
+    pub punch_segments: usize,
+}
+
+impl Default for DeckOptions {
+    fn default() -> DeckOptions {
+        DeckOptions {
+            nlgeom: false,
+            friction: 0.0,
+            penalty: 1e9,
+            stick_slope: 1e8,
+            punch_radius: 0.6,
+            punch_segments: 60,
+        }
+    }
+}
+
+/// The top faces of the specimen: `(element, local edge 0..4)` whose two corners lie on
+/// `z = 0` (the edge `k` joins corners `k` and `k + 1 mod 4`; CalculiX face `S(k+1)`).
+pub fn top_faces(mesh: &Mesh) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for (e, el) in mesh.elements.iter().enumerate() {
+        for k in 0..4 {
+            let (a, b) = (el[k], el[(k + 1) % 4]);
+            if mesh.nodes[a][1] == 0.0 && mesh.nodes[b][1] == 0.0 {
+                out.push((e, k));
+            }
+        }
+    }
+    out
+}
+
+/// The uniform time step of `schedule`, or an error if its steps are not uniform.
+///
+/// # Errors
+/// Steps differing by more than 1e-9 relative.
+pub fn uniform_step(schedule: &Schedule) -> Result<f64> {
+    let t = &schedule.t;
+    if t.len() < 2 {
+        bail!("the schedule has no step");
+    }
+    let dt = t[1] - t[0];
+    for w in t.windows(2) {
+        if ((w[1] - w[0]) - dt).abs() > 1e-9 * dt {
+            bail!(
+                "the CalculiX decks use fixed increments: the schedule's steps differ ({} s and {} s)",
+                dt,
+                w[1] - w[0]
+            );
+        }
+    }
+    Ok(dt)
+}
+
+/// The depth history's corners: `(t, depth)` where the rate changes, with the first and
+/// last points (the amplitude table of the deck).
+pub fn corners(schedule: &Schedule) -> Vec<(f64, f64)> {
+    let (t, h) = (&schedule.t, &schedule.depth);
+    let mut out = vec![(t[0], h[0])];
+    for i in 1..t.len() - 1 {
+        let r0 = (h[i] - h[i - 1]) / (t[i] - t[i - 1]);
+        let r1 = (h[i + 1] - h[i]) / (t[i + 1] - t[i]);
+        if (r1 - r0).abs() > 1e-9 * (r0.abs() + r1.abs() + 1e-300) {
+            out.push((t[i], h[i]));
+        }
+    }
+    out.push((t[t.len() - 1], h[h.len() - 1]));
+    out
+}
+
+/// The CalculiX input deck of `mesh` under the rigid cone of `punch` driven by
+/// `schedule` (depth into the body, the tip starting on the surface at the axis).
+///
+/// Node `i` and element `e` of `mesh` are CalculiX's `i + 1` and `e + 1` (CAX8, the same
+/// node order); the cone is a strip of CAX4 elements whose lower faces are the flank,
+/// every node of it prescribed (a rigid body by kinematics, its reaction the punch force).
+///
+/// # Errors
+/// A punch other than a cone, a non-uniform schedule.
+pub fn deck(
+    title: &str,
+    mesh: &Mesh,
+    punch: &Punch,
+    material: &Material,
+    schedule: &Schedule,
+    o: &DeckOptions,
+) -> Result<String> {
+    let Punch::Cone { half_angle_deg } = punch else {
+        bail!(
+            "the CalculiX decks model a cone; {} is not one",
+            punch.describe()
+        )
+    };
+    let cot = 1.0 / half_angle_deg.to_radians().tan();
+    let dt = uniform_step(schedule)?;
+    let t_end = schedule.t[schedule.t.len() - 1];
+    let h_ref = schedule.depth.iter().copied().fold(0.0, f64::max);
+    if h_ref <= 0.0 {
+        bail!("the schedule never presses the punch in");
+    }
+    let mut s = String::new();
+    let w = &mut s;
+    writeln!(w, "** {title}")?;
+    writeln!(
+        w,
+        "** generated by `cargo xtask calculix` (xtask/src/calculix.rs); units N, mm, s, MPa"
+    )?;
+    writeln!(
+        w,
+        "** axisymmetric: x = r, y = z; CalculiX's CAX elements model a 2-degree wedge: full force = 180 x RF"
+    )?;
+    // nodes
+    writeln!(w, "*NODE, NSET=NSPEC")?;
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        writeln!(w, "{}, {:.12e}, {:.12e}, 0.0", i + 1, p[0], p[1])?;
+    }
+    let n0 = mesh.nodes.len();
+    let np = o.punch_segments;
+    let thickness = 0.05;
+    writeln!(w, "*NODE, NSET=PUNCH")?;
+    for j in 0..=np {
+        let r = o.punch_radius * j as f64 / np as f64;
+        writeln!(w, "{}, {:.12e}, {:.12e}, 0.0", n0 + 1 + j, r, r * cot)?;
+        writeln!(
+            w,
+            "{}, {:.12e}, {:.12e}, 0.0",
+            n0 + np + 2 + j,
+            r,
+            r * cot + thickness
+        )?;
+    }
+    writeln!(w, "*ELEMENT, TYPE=CAX8, ELSET=ESPEC")?;
+    for (e, el) in mesh.elements.iter().enumerate() {
+        write!(w, "{}", e + 1)?;
+        for n in el {
+            write!(w, ", {}", n + 1)?;
+        }
+        writeln!(w)?;
+    }
+    let e0 = mesh.elements.len();
+    writeln!(w, "*ELEMENT, TYPE=CAX4, ELSET=EPUNCH")?;
+    for j in 0..np {
+        let (b0, b1) = (n0 + 1 + j, n0 + 2 + j);
+        let (t0, t1) = (n0 + np + 2 + j, n0 + np + 3 + j);
+        writeln!(w, "{}, {b0}, {b1}, {t1}, {t0}", e0 + 1 + j)?;
+    }
+    writeln!(w, "*NSET, NSET=AXIS")?;
+    write_ids(w, mesh.node_set("axis").iter().map(|n| n + 1))?;
+    writeln!(w, "*NSET, NSET=BOTTOM")?;
+    write_ids(w, mesh.node_set("bottom").iter().map(|n| n + 1))?;
+    writeln!(w, "*SURFACE, NAME=STOP, TYPE=ELEMENT")?;
+    for (e, k) in top_faces(mesh) {
+        writeln!(w, "{}, S{}", e + 1, k + 1)?;
+    }
+    writeln!(w, "*SURFACE, NAME=SPUNCH, TYPE=ELEMENT")?;
+    for j in 0..np {
+        writeln!(w, "{}, S1", e0 + 1 + j)?;
+    }
+    // materials
+    match *material {
+        Material::Elastic { e, nu } if o.nlgeom => {
+            // CalculiX's *ELASTIC with NLGEOM is St. Venant-Kirchhoff (PK2 linear in the
+            // Green strain), which softens under the compression at the cone's tip (its
+            // stress vanishes at a stretch of 1/sqrt(3)): the elastic force at 0.05 mm came
+            // out at half the small-strain one. A compressible neo-Hooke solid with the
+            // same small-strain moduli is used instead: W = C10 (I1b - 3) + (J - 1)^2 / D1,
+            // C10 = mu/2, D1 = 2/kappa.
+            let mu = e / (2.0 * (1.0 + nu));
+            let kappa = e / (3.0 * (1.0 - 2.0 * nu));
+            writeln!(w, "*MATERIAL, NAME=SPEC")?;
+            writeln!(w, "*HYPERELASTIC, NEO HOOKE")?;
+            writeln!(w, "{:.12e}, {:.12e}", mu / 2.0, 2.0 / kappa)?;
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
+        }
+        Material::Elastic { e, nu } => {
+            writeln!(w, "*MATERIAL, NAME=SPEC")?;
+            writeln!(w, "*ELASTIC")?;
+            writeln!(w, "{e:e}, {nu}")?;
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
+        }
+        Material::Viscoplastic { e, nu, a, n, sy } if o.nlgeom => {
+            writeln!(
+                w,
+                "** finite strain: CalculiX's multiplicative viscoplasticity (incplas.f)"
+            )?;
+            writeln!(w, "*MATERIAL, NAME=SPEC")?;
+            writeln!(w, "*ELASTIC")?;
+            writeln!(w, "{e:e}, {nu}")?;
+            if sy > 0.0 {
+                writeln!(w, "*PLASTIC")?;
+                writeln!(w, "{sy:e}, 0.0")?;
+            }
+            writeln!(w, "*CREEP, LAW=NORTON")?;
+            writeln!(w, "{a:.12e}, {n}, 0.0")?;
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
+        }
+        Material::Viscoplastic { e, nu, a, n, sy } => {
+            let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+            let mu = e / (2.0 * (1.0 + nu));
+            let d11 = lambda + 2.0 * mu;
+            writeln!(
+                w,
+                "** small strain: the additive viscoplastic model of umat_aniso_plas.f with isotropic constants"
+            )?;
+            writeln!(
+                w,
+                "** D1111 D1122 D2222 D1133 D2233 D3333 D1212 D1313 / D2323 r0 H_iso H_kin A n m T"
+            )?;
+            writeln!(w, "*MATERIAL, NAME=ANISO_PLAS_SPEC")?;
+            writeln!(w, "*USER MATERIAL, CONSTANTS=15")?;
+            writeln!(
+                w,
+                "{d11:.12e}, {lambda:.12e}, {d11:.12e}, {lambda:.12e}, {lambda:.12e}, {d11:.12e}, {mu:.12e}, {mu:.12e}"
+            )?;
+            writeln!(w, "{mu:.12e}, {sy:e}, 0.0, 0.0, {a:.12e}, {n}, 0.0, 0.0")?;
+            writeln!(w, "*DEPVAR")?;
+            writeln!(w, "14")?;
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=ANISO_PLAS_SPEC")?;
+        }
+    }
+    writeln!(w, "*MATERIAL, NAME=RIGID")?;
+    writeln!(w, "*ELASTIC")?;
+    writeln!(w, "1e7, 0.3")?;
+    writeln!(w, "*SOLID SECTION, ELSET=EPUNCH, MATERIAL=RIGID")?;
+    // contact
+    writeln!(w, "*SURFACE INTERACTION, NAME=SI")?;
+    writeln!(w, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR")?;
+    writeln!(w, "{:e}", o.penalty)?;
+    if o.friction > 0.0 {
+        writeln!(w, "*FRICTION")?;
+        writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
+    }
+    writeln!(w, "*CONTACT PAIR, INTERACTION=SI, TYPE=SURFACE TO SURFACE")?;
+    writeln!(w, "STOP, SPUNCH")?;
+    writeln!(w, "*AMPLITUDE, NAME=DEPTH")?;
+    for (t, h) in corners(schedule) {
+        writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
+    }
+    writeln!(w, "*BOUNDARY")?;
+    writeln!(w, "AXIS, 1, 1")?;
+    writeln!(w, "BOTTOM, 2, 2")?;
+    writeln!(w, "PUNCH, 1, 1")?;
+    writeln!(w, "*TIME POINTS, NAME=TP")?;
+    for t in &schedule.t[1..] {
+        writeln!(w, "{t:.12e}")?;
+    }
+    let n_inc = 20 * schedule.t.len();
+    if o.nlgeom {
+        writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
+    } else {
+        writeln!(w, "*STEP, INC={n_inc}")?;
+    }
+    let procedure = match material {
+        Material::Elastic { .. } => "*STATIC",
+        Material::Viscoplastic { .. } => "*VISCO",
+    };
+    // Automatic incrementation capped at the schedule's step (fixed increments, DIRECT,
+    // stop the viscoplastic runs when CalculiX's divergence check fires); the time points
+    // make every schedule time an increment's end, so the curves share our time grid
+    // (CalculiX cuts an increment where its Newton iteration needs it, nowhere else).
+    // CETOL is required by *VISCO but only used by isotropic creep with automatic
+    // incrementation's creep-strain control: 1.0 switches that control off.
+    // More Newton iterations before CalculiX declares divergence and cuts the increment
+    // (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks): the contact set of the
+    // viscoplastic runs takes many passes to settle.
+    writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
+    writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
+    if procedure == "*VISCO" {
+        writeln!(w, "{procedure}, CETOL=1.0")?;
+    } else {
+        writeln!(w, "{procedure}")?;
+    }
+    writeln!(w, "{dt:.12e}, {t_end:.12e}, {:.12e}, {dt:.12e}", dt * 1e-4)?;
+    writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
+    writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
+    writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
+    writeln!(w, "RF")?;
+    writeln!(w, "*END STEP")?;
+    Ok(s)
+}
+
+fn write_ids(w: &mut String, ids: impl Iterator<Item = usize>) -> std::fmt::Result {
+    let ids: Vec<usize> = ids.collect();
+    for chunk in ids.chunks(16) {
+        let line: Vec<String> = chunk.iter().map(usize::to_string).collect();
+        writeln!(w, "{},", line.join(", "))?;
+    }
+    Ok(())
+}
+
+/// The punch force history of a `.dat` file: `(t, F)` with `F = -180 RF_y` of the set
+/// PUNCH (CalculiX's axisymmetric reactions are those of a 2-degree wedge; the reaction
+/// on the punch is upward when it presses down, so `F > 0` in compression).
+///
+/// # Errors
+/// A total-force block without its values.
+pub fn parse_dat(text: &str) -> Result<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut lines = text.lines();
+    while let Some(line) = lines.next() {
+        let l = line.trim();
+        if !(l.starts_with("total force") && l.contains("PUNCH")) {
+            continue;
+        }
+        let t: f64 = l
+            .rsplit("time")
+            .next()
+            .map(str::trim)
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| anyhow::anyhow!("no time in `{l}`"))?;
+        let values = lines
+            .by_ref()
+            .map(str::trim)
+            .find(|s| !s.is_empty())
+            .ok_or_else(|| anyhow::anyhow!("no values after `{l}`"))?;
+        let v: Vec<f64> = values
+            .split_whitespace()
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        if v.len() < 2 {
+            bail!("cannot read the total force `{values}` after `{l}`");
+        }
+        out.push((t, -180.0 * v[1]));
+    }
+    Ok(out)
+}
+
+/// Linear interpolation of a curve `(t, F)` at `t` (`None` outside it).
+pub fn at(curve: &[(f64, f64)], t: f64) -> Option<f64> {
+    let i = curve.iter().position(|p| p.0 >= t - 1e-9)?;
+    if (curve[i].0 - t).abs() <= 1e-9 {
+        return Some(curve[i].1);
+    }
+    if i == 0 {
+        return None;
+    }
+    let (a, b) = (curve[i - 1], curve[i]);
+    Some(a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0))
+}
+
+/// One reference problem of the comparison.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// Short name (`r0`, `r1`, `r2`, `r2-sy0`).
+    pub name: &'static str,
+    /// The example configuration (relative to the workspace root).
+    pub example: &'static str,
+    /// `--set` overrides on top of `contact=Normal`.
+    pub sets: &'static [&'static str],
+}
+
+/// R0 (elastic), R1 (Maxwell), R2 (Norton-Hoff, sY = 500) and R2 with sY = 0.
+pub const CASES: [Case; 4] = [
+    Case {
+        name: "r0",
+        example: "examples/r0-elastic.ron",
+        sets: &[],
+    },
+    Case {
+        name: "r1",
+        example: "examples/r1-maxwell.ron",
+        sets: &[],
+    },
+    Case {
+        name: "r2",
+        example: "examples/r2-norton-hoff.ron",
+        sets: &[],
+    },
+    Case {
+        name: "r2-sy0",
+        example: "examples/r2-norton-hoff.ron",
+        sets: &["law.sY=0"],
+    },
+];
+
+/// The times (s) at which the forces are compared.
+pub const TIMES: [f64; 4] = [0.5, 1.0, 1.5, 2.0];
+
+/// The file stem of a run: `r2-mu0.1-nlgeom`.
+pub fn stem(case: &str, friction: f64, nlgeom: bool) -> String {
+    let mut s = case.to_string();
+    if friction > 0.0 {
+        s.push_str(&format!("-mu{friction}"));
+    }
+    if nlgeom {
+        s.push_str("-nlgeom");
+    }
+    s
+}
+
+/// A curve as CSV text (`t_s,F_N`).
+pub fn curve_csv(curve: &[(f64, f64)]) -> String {
+    let mut s = String::from("t_s,F_N\n");
+    for (t, f) in curve {
+        let _ = writeln!(s, "{t:.6},{f:.9e}");
+    }
+    s
+}
+
+/// Reads a curve written by [`curve_csv`].
+///
+/// # Errors
+/// A malformed line.
+pub fn read_curve_csv(text: &str) -> Result<Vec<(f64, f64)>> {
+    text.lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let mut it = l.split(',').map(|x| x.trim().parse::<f64>());
+            match (it.next(), it.next()) {
+                (Some(Ok(t)), Some(Ok(f))) => Ok((t, f)),
+                _ => bail!("malformed curve line `{l}`"),
+            }
+        })
+        .collect()
+}
+
+/// What `cargo xtask calculix` does.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The workspace root (examples are read from it).
+    pub root: std::path::PathBuf,
+    /// Where decks and curves go.
+    pub out: std::path::PathBuf,
+    /// The cases (names of [`CASES`]).
+    pub cases: Vec<String>,
+    /// Friction coefficients (0 = frictionless).
+    pub frictions: Vec<f64>,
+    /// Small strain, finite strain or both.
+    pub kinematics: Vec<bool>,
+    /// Deck options (friction and nlgeom are set per run).
+    pub deck: DeckOptions,
+    /// Write the decks without running `ccx`.
+    pub decks_only: bool,
+}
+
+/// A case loaded: the configuration resolved to our mesh, punch, law and schedule.
+pub struct Loaded {
+    /// The prepared model (mesh and punch) and schedule.
+    pub prepared: indentify_study::config::Prepared,
+    /// The material for CalculiX.
+    pub material: Material,
+    /// The configuration source and overrides that reproduce it with `Normal` contact.
+    pub source: (indentify_study::source::ConfigSource, Vec<String>),
+}
+
+/// Loads `case` from the workspace `root` with `contact=Normal`.
+///
+/// # Errors
+/// A configuration that cannot be read or prepared, a law without a CalculiX material.
+pub fn load(root: &std::path::Path, case: &Case) -> Result<Loaded> {
+    let source = indentify_study::source::ConfigSource::Path(root.join(case.example));
+    let mut sets = vec!["contact=Normal".to_string()];
+    sets.extend(case.sets.iter().map(|s| (*s).to_string()));
+    let cfg = source.load(&sets)?;
+    let (law, params) = cfg.law.build()?;
+    let material = Material::from_law(law.name(), &params)?;
+    let prepared = cfg.prepare(case.name)?;
+    Ok(Loaded {
+        prepared,
+        material,
+        source: (source, sets),
+    })
+}
+
+/// Runs `ccx` on `deck` in a scratch folder under `out` and returns the force curve.
+///
+/// # Errors
+/// `ccx` missing or failing, a `.dat` file without forces.
+pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<Vec<(f64, f64)>> {
+    let work = out.join(format!(".work-{stem}"));
+    std::fs::create_dir_all(&work)?;
+    std::fs::write(work.join(format!("{stem}.inp")), deck)?;
+    let status = std::process::Command::new("ccx")
+        .arg("-i")
+        .arg(stem)
+        .current_dir(&work)
+        .env("OMP_NUM_THREADS", "1")
+        .env("CCX_NPROC_EQUATION_SOLVER", "1")
+        .stdout(std::fs::File::create(work.join("ccx.log"))?)
+        .status()
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "cannot start `ccx` ({e}): install it with `apt-get install calculix-ccx`"
+            )
+        })?;
+    let dat = std::fs::read_to_string(work.join(format!("{stem}.dat"))).unwrap_or_default();
+    let curve = parse_dat(&dat)?;
+    if !status.success() || curve.is_empty() {
+        bail!(
+            "ccx failed on {stem} ({status}, {} increments written); see {}",
+            curve.len(),
+            work.join("ccx.log").display()
+        );
+    }
+    std::fs::remove_dir_all(&work)?;
+    Ok(curve)
+}
+
+/// Our force curve of a loaded case (`Normal` contact, small strain).
+///
+/// # Errors
+/// The simulation's errors.
+pub fn ours(loaded: &Loaded) -> Result<Vec<(f64, f64)>> {
+    let mut o = indentify_study::simulate::SimulateOptions::new(loaded.source.0.clone());
+    o.sets = loaded.source.1.clone();
+    let outcome = indentify_study::simulate::run(&o)?;
+    if let Some(f) = outcome.failure {
+        bail!("our run stopped early: {f}");
+    }
+    Ok(outcome.rows.iter().map(|r| (r.t, r.f)).collect())
+}
+
+/// Writes the decks, runs `ccx` (unless `decks_only`) and our solver, writes the curves
+/// (`STEM.csv`: CalculiX; `CASE-ours.csv`: ours) and returns the comparison as a Markdown
+/// table: `F_ours / F_ccx - 1` at [`TIMES`] for the small-strain runs (friction: pending
+/// until our `Normal(friction: mu)` exists; the table gives CalculiX's forces and their
+/// ratio to its frictionless run), CalculiX's finite/small-strain ratio for the `NLGEOM`
+/// runs.
+///
+/// # Errors
+/// An unknown case, a deck or run that fails.
+pub fn run(o: &RunOptions) -> Result<String> {
+    std::fs::create_dir_all(&o.out)?;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
+        "| run | t = 0.5 s | t = 1 s | t = 1.5 s | t = 2 s | what |\n|---|---|---|---|---|---|"
+    );
+    for name in &o.cases {
+        let case = CASES.iter().find(|c| c.name == name).ok_or_else(|| {
+            anyhow::anyhow!("unknown case `{name}`: expected r0, r1, r2 or r2-sy0")
+        })?;
+        let loaded = load(&o.root, case)?;
+        let mesh = &loaded.prepared.model.mesh;
+        let punch = &loaded.prepared.model.punch;
+        let ours_curve = if o.decks_only {
+            None
+        } else {
+            let t0 = std::time::Instant::now();
+            let c = ours(&loaded)?;
+            eprintln!("{}: ours in {:.1} s", case.name, t0.elapsed().as_secs_f64());
+            std::fs::write(o.out.join(format!("{}-ours.csv", case.name)), curve_csv(&c))?;
+            Some(c)
+        };
+        let mut small_frictionless: Option<Vec<(f64, f64)>> = None;
+        for &nlgeom in &o.kinematics {
+            for &mu in &o.frictions {
+                let stem = stem(case.name, mu, nlgeom);
+                let opts = DeckOptions {
+                    nlgeom,
+                    friction: mu,
+                    ..o.deck
+                };
+                let text = deck(
+                    &format!("{} ({}), {stem}", case.name, case.example),
+                    mesh,
+                    punch,
+                    &loaded.material,
+                    &loaded.prepared.schedule,
+                    &opts,
+                )?;
+                std::fs::write(o.out.join(format!("{stem}.inp")), &text)?;
+                if o.decks_only {
+                    continue;
+                }
+                let t0 = std::time::Instant::now();
+                let curve = match run_ccx(&o.out, &stem, &text) {
+                    Ok(c) => c,
+                    Err(e) => {
+                        eprintln!("{stem}: {e:#}");
+                        let _ = writeln!(table, "| {stem} | - | - | - | - | ccx failed: {e} |");
+                        continue;
+                    }
+                };
+                eprintln!(
+                    "{stem}: ccx in {:.1} s, {} increments",
+                    t0.elapsed().as_secs_f64(),
+                    curve.len()
+                );
+                std::fs::write(o.out.join(format!("{stem}.csv")), curve_csv(&curve))?;
+                let (reference, what) = if !nlgeom && mu == 0.0 {
+                    small_frictionless = Some(curve.clone());
+                    (ours_curve.clone(), "F_ours / F_ccx - 1")
+                } else if !nlgeom {
+                    (
+                        small_frictionless.clone(),
+                        "F_ccx / F_ccx(frictionless) - 1 (ours: pending friction)",
+                    )
+                } else {
+                    (
+                        small_frictionless.clone(),
+                        "F_ccx(NLGEOM) / F_ccx(small) - 1",
+                    )
+                };
+                let _ = write!(table, "| {stem} |");
+                for t in TIMES {
+                    match (at(&curve, t), reference.as_ref().and_then(|r| at(r, t))) {
+                        (Some(f), Some(r)) => {
+                            let ratio = if mu == 0.0 && !nlgeom {
+                                r / f - 1.0
+                            } else {
+                                f / r - 1.0
+                            };
+                            let _ = write!(table, " {f:.2} N ({:+.2}%) |", 100.0 * ratio);
+                        }
+                        (Some(f), None) => {
+                            let _ = write!(table, " {f:.2} N |");
+                        }
+                        _ => {
+                            let _ = write!(table, " - |");
+                        }
+                    }
+                }
+                let _ = writeln!(table, " {what} |");
+            }
+        }
+    }
+    Ok(table)
+}

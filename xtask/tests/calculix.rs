@@ -1,0 +1,146 @@
+//! The CalculiX deck generator and `.dat` parser (without `ccx`): the materials against our
+//! laws' own flow rules, the deck's mesh, surfaces and amplitude, the force parser.
+
+use indentify_contact::{Punch, Schedule, Segment};
+use indentify_laws::{Law, Maxwell, NortonHoff, Vec4};
+use indentify_mesh::CylinderMesher;
+use xtask::calculix::{self, DeckOptions, Material};
+
+/// CalculiX's creep rate in uniaxial stress: `eps_dot_zz = A <sigma - r0>^n` (the
+/// equivalent rate equals the axial one in uniaxial stress).
+fn ccx_uniaxial_rate(m: &Material, sigma: f64) -> f64 {
+    match *m {
+        Material::Viscoplastic { a, n, sy, .. } => a * (sigma - sy).max(0.0).powf(n),
+        Material::Elastic { .. } => 0.0,
+    }
+}
+
+#[test]
+fn creep_constants_reproduce_our_flow_rules() {
+    // our laws' flow g(sigma) in uniaxial stress along z (Mandel [rr, zz, tt, sqrt2 rz])
+    for sigma in [50.0, 700.0, 1900.0] {
+        let s = Vec4([0.0, sigma, 0.0, 0.0]);
+        let c = [20000.0, 0.3, 30000.0];
+        let ours = Maxwell.flow(&c, &s).0[1];
+        let m = Material::from_law("maxwell", &c).unwrap();
+        let rel = ccx_uniaxial_rate(&m, sigma) / ours - 1.0;
+        assert!(rel.abs() < 1e-12, "Maxwell at {sigma} MPa: {rel}");
+        for sy in [0.0, 500.0] {
+            let c = [1e5, 0.3, 1500.0, 5.0, sy];
+            let ours = NortonHoff.flow(&c, &s).0[1];
+            let m = Material::from_law("norton-hoff", &c).unwrap();
+            let theirs = ccx_uniaxial_rate(&m, sigma);
+            if sigma <= sy {
+                assert_eq!(ours, 0.0);
+                assert_eq!(theirs, 0.0);
+            } else {
+                let rel = theirs / ours - 1.0;
+                assert!(
+                    rel.abs() < 1e-12,
+                    "Norton-Hoff sY = {sy} at {sigma} MPa: {rel}"
+                );
+            }
+        }
+    }
+    assert!(Material::from_law("norton-hoff", &[1.0, 0.3]).is_err());
+}
+
+fn small_problem() -> (indentify_mesh::Mesh, Schedule) {
+    let mesh = CylinderMesher {
+        radius: 2.0,
+        height: 2.0,
+        nr: 3,
+        nz: 2,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    }
+    .build()
+    .unwrap();
+    let seg = |depth, steps| Segment {
+        duration: 1.0,
+        depth,
+        steps,
+    };
+    let schedule = Schedule::from_segments(&[seg(0.1, 4), seg(0.1, 4), seg(0.0, 4)]).unwrap();
+    (mesh, schedule)
+}
+
+#[test]
+fn deck_holds_our_mesh_node_for_node() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 500.0);
+    let o = DeckOptions {
+        punch_segments: 4,
+        ..DeckOptions::default()
+    };
+    let deck = calculix::deck("test", &mesh, &punch, &m, &schedule, &o).unwrap();
+    // every node of ours, numbered from 1, with its coordinates
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        let line = format!("{}, {:.12e}, {:.12e}, 0.0", i + 1, p[0], p[1]);
+        assert!(deck.contains(&line), "node {i} missing: {line}");
+    }
+    // every element with our node order (CAX8 and our Q8 share it)
+    for (e, el) in mesh.elements.iter().enumerate() {
+        let ids: Vec<String> = el.iter().map(|n| (n + 1).to_string()).collect();
+        assert!(deck.contains(&format!("\n{}, {}\n", e + 1, ids.join(", "))));
+    }
+    // the top surface: one face per element column, on z = 0
+    let faces = calculix::top_faces(&mesh);
+    assert_eq!(faces.len(), 3);
+    for (e, k) in &faces {
+        let el = mesh.elements[*e];
+        assert_eq!(mesh.nodes[el[*k]][1], 0.0);
+        assert_eq!(mesh.nodes[el[(*k + 1) % 4]][1], 0.0);
+    }
+    // the small-strain viscoplastic material: A = K^-m, n = m, r0 = sY
+    assert!(deck.contains("*MATERIAL, NAME=ANISO_PLAS_SPEC"));
+    assert!(deck.contains(&format!(
+        "{:e}, 0.0, 0.0, {:.12e}, 5, 0.0",
+        500.0,
+        1500f64.powf(-5.0)
+    )));
+    // the trapezoid's corners as amplitude, the punch driven to -h_max
+    let amp = deck.split("*AMPLITUDE, NAME=DEPTH\n").nth(1).unwrap();
+    let rows: Vec<&str> = amp.lines().take_while(|l| !l.starts_with('*')).collect();
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    assert!(deck.contains("PUNCH, 2, 2, -1.000000000000e-1"));
+    assert!(!deck.contains("NLGEOM"));
+    assert!(!deck.contains("*FRICTION"));
+    // finite strain and friction variants
+    let nl = DeckOptions {
+        nlgeom: true,
+        friction: 0.2,
+        ..o
+    };
+    let deck = calculix::deck("test", &mesh, &punch, &m, &schedule, &nl).unwrap();
+    assert!(deck.contains("*STEP, NLGEOM"));
+    assert!(deck.contains("*CREEP, LAW=NORTON") && deck.contains("*PLASTIC"));
+    assert!(deck.contains("*FRICTION\n0.2, "));
+    // a sphere is refused with a message naming it
+    let e = calculix::deck(
+        "t",
+        &mesh,
+        &Punch::Sphere { radius: 1.0 },
+        &m,
+        &schedule,
+        &o,
+    );
+    assert!(e.unwrap_err().to_string().contains("cone"));
+}
+
+#[test]
+fn dat_parser_reads_the_punch_force_of_the_full_circle() {
+    let dat = "\n total force (fx,fy,fz) for set PUNCH and time  0.5000000E+00\n\n        \
+               1.0E-02 -5.000000E-01  0.0E+00\n\n total force (fx,fy,fz) for set PUNCH and time  \
+               0.1000000E+01\n\n        2.0E-02 -2.000000E+00  0.0E+00\n";
+    let c = calculix::parse_dat(dat).unwrap();
+    assert_eq!(c, vec![(0.5, 90.0), (1.0, 360.0)]);
+    assert_eq!(calculix::at(&c, 0.75), Some(225.0));
+    assert_eq!(calculix::at(&c, 2.0), None);
+    let csv = calculix::curve_csv(&c);
+    assert_eq!(calculix::read_curve_csv(&csv).unwrap(), c);
+    assert!(calculix::parse_dat(" total force (fx,fy,fz) for set PUNCH and time 1.0\n").is_err());
+}
