@@ -1051,9 +1051,8 @@ impl DirectSolver {
                 for k in 0..nc {
                     // (a sticking node under tension first turns to slip: its release is
                     // decided slipping, by the friction check below)
-                    let sticking = with_friction
-                        && slip[k] == 0
-                        && model.dofs.equation(zdof(k) - 1).is_some();
+                    let sticking =
+                        with_friction && slip[k] == 0 && model.dofs.equation(zdof(k) - 1).is_some();
                     let v = if active[k] {
                         let lam = lambda_of(k);
                         if lam < -ltol && !sticking {

@@ -148,7 +148,9 @@ impl<'de> Deserialize<'de> for ContactKind {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
         let repr = ContactRepr::deserialize(d).map_err(|_| {
-            D::Error::custom(format!("`contact` is not allowed: expected {CONTACT_SPELLINGS}"))
+            D::Error::custom(format!(
+                "`contact` is not allowed: expected {CONTACT_SPELLINGS}"
+            ))
         })?;
         match repr {
             ContactRepr::Name(s) => ContactKind::parse(&s).map_err(D::Error::custom),

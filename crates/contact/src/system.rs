@@ -302,10 +302,8 @@ impl ConstrainedSystem {
         let n = self.constrained.len();
         let m = self.constrained.iter().filter(|&&c| c).count();
         // capacitance: reusable tangent, and the columns stay a small multiple of K's factor
-        let capacitance = self.k_key.is_some()
-            && m <= MAX_CAPACITANCE
-            && m * n <= 20_000_000
-            && !self.friction();
+        let capacitance =
+            self.k_key.is_some() && m <= MAX_CAPACITANCE && m * n <= 20_000_000 && !self.friction();
         self.pcg = false;
         if capacitance {
             if !self.frames.is_empty() {
@@ -383,8 +381,8 @@ impl ConstrainedSystem {
         for (k, &i) in self.slip_idx.iter().enumerate() {
             let f = self.frames[i];
             for l in 0..ns {
-                a[k * ns + l] =
-                    self.slip_row(model, &f, &self.slip_z[l], false) + if k == l { 1.0 } else { 0.0 };
+                a[k * ns + l] = self.slip_row(model, &f, &self.slip_z[l], false)
+                    + if k == l { 1.0 } else { 0.0 };
             }
         }
         let mut piv = vec![0usize; ns];

@@ -62,12 +62,18 @@ fn check_coulomb(model: &Model, traj: &Trajectory, mu: f64) -> (usize, usize) {
             let p0 = model.project(k, u0, depth0);
             assert!(p.gap.abs() <= 1e-12, "step {i} node {k}: gap {}", p.gap);
             assert!(lam >= -1e-9 * s.force.abs(), "step {i} node {k}: {lam}");
-            let f = [traj_force(model, traj, i, node, 0), traj_force(model, traj, i, node, 1)];
+            let f = [
+                traj_force(model, traj, i, node, 0),
+                traj_force(model, traj, i, node, 1),
+            ];
             let tau = f[0] * p.t[0] + f[1] * p.t[1];
             let tol = 1e-8 * s.force.abs();
             if st == 0 {
                 n_stick += 1;
-                assert!(tau.abs() <= mu * lam + tol, "step {i} node {k}: {tau} vs {lam}");
+                assert!(
+                    tau.abs() <= mu * lam + tol,
+                    "step {i} node {k}: {tau} vs {lam}"
+                );
                 assert!((p.s - p0.s).abs() <= 1e-11, "step {i} node {k} slid");
             } else {
                 n_slip += 1;
@@ -77,7 +83,10 @@ fn check_coulomb(model: &Model, traj: &Trajectory, mu: f64) -> (usize, usize) {
                     "step {i} node {k}: tau {tau}, mu lambda {}",
                     mu * lam
                 );
-                assert!(sigma * (p.s - p0.s) >= -1e-11, "step {i} node {k} slid back");
+                assert!(
+                    sigma * (p.s - p0.s) >= -1e-11,
+                    "step {i} node {k} slid back"
+                );
             }
         }
     }
@@ -113,7 +122,10 @@ fn newton_converges_quadratically_with_friction() {
         let r = solver.last_residuals();
         println!("{}: residuals of the last step {r:?}", law.name());
         let last = traj.steps.last().unwrap();
-        println!("mu = {mu}, stick (0) / slip (+-1) in the last step: {:?}", last.slip);
+        println!(
+            "mu = {mu}, stick (0) / slip (+-1) in the last step: {:?}",
+            last.slip
+        );
         assert!(last.active.len() >= 4);
         assert!(last.slip.iter().any(|&s| s != 0), "no slipping node");
         // consecutive passes with the same sets (contact and stick/slip), after the first
@@ -121,7 +133,12 @@ fn newton_converges_quadratically_with_friction() {
         let mut checked = 0;
         for w in r.windows(2).skip(1) {
             if w[0].1 == w[1].1 && w[1].0 > 1e-13 && w[0].0 < 1e-2 {
-                assert!(w[1].0 <= 10.0 * w[0].0 * w[0].0, "{:e} -> {:e}", w[0].0, w[1].0);
+                assert!(
+                    w[1].0 <= 10.0 * w[0].0 * w[0].0,
+                    "{:e} -> {:e}",
+                    w[0].0,
+                    w[1].0
+                );
                 checked += 1;
             }
         }
@@ -230,9 +247,21 @@ fn bad_friction_is_refused() {
             ContactKind::NormalFriction { friction: mu },
         )
         .unwrap_err();
-        assert!(matches!(e, ContactError::Input { field: "contact.friction", .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                ContactError::Input {
+                    field: "contact.friction",
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
-    assert_eq!(ContactKind::parse("Vertical").unwrap(), ContactKind::Vertical);
+    assert_eq!(
+        ContactKind::parse("Vertical").unwrap(),
+        ContactKind::Vertical
+    );
     assert_eq!(ContactKind::parse("Normal").unwrap(), ContactKind::Normal);
     assert_eq!(
         ContactKind::parse("Normal(friction: 0.25)").unwrap(),
@@ -242,4 +271,46 @@ fn bad_friction_is_refused() {
     assert!(e.to_string().contains("-1"), "{e}");
     let e = ContactKind::parse("Sideways").unwrap_err();
     assert!(e.to_string().contains("Normal(friction: mu)"), "{e}");
+}
+
+/// Study (ignored; prints, asserts nothing timed): the cost of R2 (DESIGN.md §5, reference
+/// mesh, cone 68 deg, 30 steps per segment) with friction mu = 0.2 against frictionless
+/// normal contact, run back to back, alternating, three times each.
+/// `cargo test -p indentify-contact --release --test friction -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn r2_cost_with_friction() {
+    let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).unwrap();
+    let (law, c) = norton();
+    let cone = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let models: Vec<(&str, Model)> = [("normal", ContactKind::Normal), ("mu = 0.2", friction(0.2))]
+        .into_iter()
+        .map(|(n, k)| {
+            let mesh = CylinderMesher::REFERENCE.build().unwrap();
+            (n, Model::with_contact(mesh, cone.clone(), k).unwrap())
+        })
+        .collect();
+    let mut best = [f64::INFINITY; 2];
+    for _ in 0..3 {
+        for (j, (name, m)) in models.iter().enumerate() {
+            let mut solver = DirectSolver::new(m).unwrap();
+            let t0 = std::time::Instant::now();
+            let t = solver
+                .run(m, &law, &c, &schedule, &SolverOptions::default())
+                .unwrap();
+            let s = t0.elapsed().as_secs_f64();
+            best[j] = best[j].min(s);
+            println!(
+                "{name}: {:.3} s, {} steps, {} iterations, peak {:.2} N, {}",
+                s,
+                t.steps.len(),
+                t.total_iterations(),
+                t.steps.iter().map(|s| s.force).fold(0.0, f64::max),
+                t.timing
+            );
+        }
+    }
+    println!("best of 3: friction / normal = {:.2}", best[1] / best[0]);
 }

@@ -2,7 +2,9 @@
 //! and R2 (DESIGN.md §5) with vertical and with frictionless normal contact hash to the
 //! values recorded before friction was added (commit f148430), bit for bit.
 
-use indentify_contact::{ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_contact::{
+    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
@@ -40,8 +42,12 @@ fn reference_problems_are_unchanged() {
     let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
     let mut got = Vec::new();
     for kind in [ContactKind::Vertical, ContactKind::Normal] {
-        let model = Model::with_contact(CylinderMesher::REFERENCE.build().unwrap(), cone.clone(), kind)
-            .unwrap();
+        let model = Model::with_contact(
+            CylinderMesher::REFERENCE.build().unwrap(),
+            cone.clone(),
+            kind,
+        )
+        .unwrap();
         for (law, c) in [
             (&Elastic as &dyn Law, &r0),
             (&Maxwell, &r1),
