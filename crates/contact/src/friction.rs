@@ -86,6 +86,7 @@ pub(crate) fn tangential_residual(p: &Projection, f: [f64; 2], status: Status, m
 /// its status is inadmissible (`violation` > 0, relative to `scale`), `None` otherwise.
 /// `ltol` (N) and `stol` (mm) are the tolerances on the Coulomb cone and on the slip
 /// direction.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn check(
     p: &Projection,
     f: [f64; 2],
