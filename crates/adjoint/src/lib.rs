@@ -72,6 +72,13 @@ pub enum AdjointError {
     /// Setting up the linear system failed.
     #[error(transparent)]
     Fe(#[from] indentify_fe::FeError),
+    /// The model's contact has Coulomb friction, whose adjoint is not implemented.
+    #[error(
+        "`contact.friction` = {0} is not supported by the adjoint and the sensitivities yet: \
+         gradients need contact: Normal or Vertical (friction makes each step depend on the \
+         previous stick points and the tangent unsymmetric; see docs/validation-contact.md §7)"
+    )]
+    Friction(f64),
 }
 
 /// Result of an adjoint sweep.
@@ -217,6 +224,7 @@ impl Adjoint {
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
+        refuse_friction(model)?;
         check_inputs(law, c, traj, dj_df.len())?;
         // every sweep from a full assembly sum: the gradient depends on its inputs alone
         self.system.forget_assembly();
@@ -260,6 +268,7 @@ impl Adjoint {
         let f0 = self.system.factorizations();
         self.system.forget_assembly();
         let n = traj.steps.len();
+        refuse_friction(model)?;
         if dj_df.len() != n {
             return Err(AdjointError::Length {
                 expected: n,
@@ -397,6 +406,7 @@ impl Adjoint {
     ) -> Result<Sensitivities, AdjointError> {
         let start = std::time::Instant::now();
         let n = traj.steps.len();
+        refuse_friction(model)?;
         check_inputs(law, c, traj, n)?;
         self.system.forget_assembly();
         let s = law.compliance(c);
@@ -477,6 +487,14 @@ impl Sweep {
             *g -= acc;
         }
         self.grad
+    }
+}
+
+/// [`AdjointError::Friction`] for a model with Coulomb friction.
+fn refuse_friction(model: &Model) -> Result<(), AdjointError> {
+    match model.contact.friction() {
+        0.0 => Ok(()),
+        mu => Err(AdjointError::Friction(mu)),
     }
 }
 

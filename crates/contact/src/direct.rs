@@ -29,6 +29,7 @@ use indentify_laws::{Law, Mat4, Vec4};
 use indentify_mesh::Mesh;
 
 use crate::ContactError;
+use crate::friction::{self, Status};
 use crate::history::Schedule;
 use crate::normal::{ContactKind, Projection, Surface};
 use crate::punch::Punch;
@@ -125,9 +126,10 @@ impl Model {
         contact: ContactKind,
     ) -> Result<Model, ContactError> {
         punch.validate()?;
+        contact.validate()?;
         let surface = match contact {
             ContactKind::Vertical => None,
-            ContactKind::Normal => Some(Surface::new(&punch)?),
+            ContactKind::Normal | ContactKind::NormalFriction { .. } => Some(Surface::new(&punch)?),
         };
         let candidates = mesh.node_set("top").to_vec();
         if candidates.len() < 3 || candidates.len() % 2 == 0 {
@@ -229,6 +231,8 @@ impl Model {
             } else {
                 0.0
             },
+            stick: false,
+            slip: 0.0,
         })
     }
 
@@ -255,6 +259,10 @@ pub struct StepRecord {
     pub active: Vec<u32>,
     /// Nodal reactions `lambda_k` of the active candidates (N), same order as `active`.
     pub lambda: Vec<f64>,
+    /// Coulomb friction: the stick/slip status of the active candidates, same order as
+    /// `active` (0 sticks, +-1 slips along +-t; [`crate::friction`]); empty without
+    /// friction.
+    pub slip: Vec<Status>,
     /// Global Newton iterations (linear solves) of this step.
     pub iterations: u32,
     /// Active-set changes during this step.
@@ -437,6 +445,11 @@ struct State {
     order: usize,
     /// Punch depth of the state (mm).
     depth: f64,
+    /// Coulomb friction (empty without): the arc coordinate of every candidate's closest
+    /// point at this state (the stick points of the next step) and the stick/slip status
+    /// of every candidate (meaningful for the active ones).
+    xi: Vec<f64>,
+    slip: Vec<Status>,
 }
 
 /// One past step of a [`State`] (`du` empty where it is never read).
@@ -469,6 +482,17 @@ impl State {
             }),
             order: 1,
             depth: depth0,
+            xi: if model.contact.friction() > 0.0 {
+                let u0 = vec![0.0; model.disc.n_dofs()];
+                (0..nc).map(|k| model.project(k, &u0, depth0).s).collect()
+            } else {
+                Vec::new()
+            },
+            slip: if model.contact.friction() > 0.0 {
+                vec![0; nc]
+            } else {
+                Vec::new()
+            },
         }
     }
 }
@@ -493,6 +517,7 @@ impl Checkpoint {
             + 8 * self.state.past.iter().map(|p| p.du.len()).sum::<usize>()
             + 32 * self.state.sigma.len()
             + 17 * self.state.active.len()
+            + 9 * self.state.xi.len()
     }
 }
 
@@ -852,7 +877,10 @@ impl DirectSolver {
         let last = &state.past[0];
         let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         let zdof = |k: usize| 2 * model.candidates[k] + 1;
-        let normal = model.contact == ContactKind::Normal;
+        let normal = model.contact.is_normal();
+        let mu = model.contact.friction();
+        let with_friction = mu > 0.0;
+        let mut slip = state.slip.clone();
         if normal {
             for k in 0..nc {
                 let n = model.candidates[k];
@@ -862,6 +890,9 @@ impl DirectSolver {
                 ];
                 if !active[k] && model.project_at(k, x, depth).gap < 0.0 {
                     active[k] = true;
+                    if with_friction {
+                        slip[k] = 0;
+                    }
                 }
             }
         } else {
@@ -914,7 +945,7 @@ impl DirectSolver {
                 *x += predict(d, i);
             }
         }
-        let mut seen: Vec<Vec<bool>> = vec![active.clone()];
+        let mut seen: Vec<(Vec<bool>, Vec<Status>)> = vec![(active.clone(), slip.clone())];
         let mut changes = 0u32;
         let mut iterations = 0u32;
         let mut constrained = vec![false; n_eq];
@@ -972,7 +1003,7 @@ impl DirectSolver {
                     }
                 }
             }
-            if normal {
+            if normal && !with_friction {
                 for k in (0..nc).filter(|&k| active[k]) {
                     if model.dofs.equation(zdof(k) - 1).is_some() {
                         let (f, t) = (f_node(k), proj[k].t);
@@ -980,10 +1011,22 @@ impl DirectSolver {
                     }
                 }
             }
+            if with_friction {
+                for k in (0..nc).filter(|&k| active[k] && slip[k] != 0) {
+                    if model.dofs.equation(zdof(k) - 1).is_some() {
+                        let r = friction::tangential_residual(&proj[k], f_node(k), slip[k], mu);
+                        res = res.max(r.abs());
+                    }
+                }
+            }
             let targets_met = if normal {
-                (0..nc)
-                    .filter(|&k| active[k])
-                    .all(|k| proj[k].gap.abs() <= 1e-13 * (1.0 + depth.abs()))
+                (0..nc).filter(|&k| active[k]).all(|k| {
+                    proj[k].gap.abs() <= 1e-13 * (1.0 + depth.abs())
+                        && (!with_friction
+                            || slip[k] != 0
+                            || model.dofs.equation(zdof(k) - 1).is_none()
+                            || (proj[k].s - state.xi[k]).abs() <= 1e-13 * (1.0 + depth.abs()))
+                })
             } else {
                 (0..nc).filter(|&k| active[k]).all(|k| {
                     let target = model.candidate_profile[k] - depth;
@@ -1006,9 +1049,13 @@ impl DirectSolver {
                 let mut worst: Option<(usize, f64)> = None;
                 let mut violations = Vec::new();
                 for k in 0..nc {
+                    // (a sticking node under tension first turns to slip: its release is
+                    // decided slipping, by the friction check below)
+                    let sticking =
+                        with_friction && slip[k] == 0 && model.dofs.equation(zdof(k) - 1).is_some();
                     let v = if active[k] {
                         let lam = lambda_of(k);
-                        if lam < -ltol {
+                        if lam < -ltol && !sticking {
                             -lam / force.abs().max(1e-300)
                         } else {
                             0.0
@@ -1032,7 +1079,33 @@ impl DirectSolver {
                         }
                     }
                 }
-                if violations.is_empty() && converged {
+                // the stick/slip partition, checked once the contact set holds
+                let mut slip_flips: Vec<(usize, Status, f64)> = Vec::new();
+                if with_friction && violations.is_empty() {
+                    // a borderline node (slip increment ~ 0, tangential force ~ mu lambda)
+                    // satisfies both statuses to the solver's precision: these wider
+                    // tolerances keep it from cycling between them
+                    let stol = 1e3 * gtol;
+                    let ctol = 1e2 * ltol;
+                    for k in (0..nc).filter(|&k| active[k]) {
+                        if model.dofs.equation(zdof(k) - 1).is_none() {
+                            continue;
+                        }
+                        if let Some((st, v)) = friction::check(
+                            &proj[k],
+                            f_node(k),
+                            state.xi[k],
+                            slip[k],
+                            mu,
+                            ctol,
+                            stol,
+                            force.abs().max(1e-300),
+                        ) {
+                            slip_flips.push((k, st, v));
+                        }
+                    }
+                }
+                if violations.is_empty() && slip_flips.is_empty() && converged {
                     if let Some(k) = (0..proj.len()).find(|&k| active[k] && proj[k].beyond_end) {
                         return Err(StepFailure::Geometry(beyond_end_message(model, k, &u)));
                     }
@@ -1046,6 +1119,9 @@ impl DirectSolver {
                             let n = model.candidates[k as usize];
                             model.mesh.nodes[n][0] + u[2 * n]
                         });
+                    }
+                    if with_friction {
+                        rec.slip = rec.active.iter().map(|&k| slip[k as usize]).collect();
                     }
                     let f_scale = state.f_scale.max(fmax);
                     let du: Vec<f64> = u.iter().zip(&state.u).map(|(a, b)| a - b).collect();
@@ -1081,9 +1157,16 @@ impl DirectSolver {
                         past: [Increment { du, dt, rate }, p0, p1],
                         order,
                         depth,
+                        xi: if with_friction {
+                            proj.iter().map(|p| p.s).collect()
+                        } else {
+                            Vec::new()
+                        },
+                        slip,
                     };
                     return Ok((next, rec));
                 }
+                let any_change = !violations.is_empty() || !slip_flips.is_empty();
                 if !violations.is_empty() {
                     let flip: Vec<usize> = if single_change {
                         vec![worst.map_or(0, |w| w.0)]
@@ -1092,15 +1175,36 @@ impl DirectSolver {
                     };
                     for k in flip {
                         active[k] = !active[k];
+                        if with_friction && active[k] {
+                            // a node entering contact starts sticking
+                            slip[k] = 0;
+                        }
                     }
+                } else if !slip_flips.is_empty() {
+                    let flip: Vec<(usize, Status, f64)> = if single_change {
+                        slip_flips
+                            .iter()
+                            .copied()
+                            .max_by(|a, b| a.2.total_cmp(&b.2))
+                            .into_iter()
+                            .collect()
+                    } else {
+                        slip_flips
+                    };
+                    for (k, st, _) in flip {
+                        slip[k] = st;
+                    }
+                }
+                if any_change {
                     changes += 1;
-                    if seen.contains(&active) {
+                    let key = (active.clone(), slip.clone());
+                    if seen.contains(&key) {
                         if single_change {
                             return Err(StepFailure::Cycling { changes });
                         }
                         single_change = true;
                     }
-                    seen.push(active.clone());
+                    seen.push(key);
                 }
             }
             if iterations as usize >= opts.max_iterations {
@@ -1117,11 +1221,17 @@ impl DirectSolver {
             self.system.set_active(model, &active);
             if normal {
                 frames.clear();
-                frames.extend(
-                    (0..nc)
-                        .filter(|&k| active[k])
-                        .filter_map(|k| model.frame(k, &proj[k], lambda_of(k))),
-                );
+                if with_friction {
+                    frames.extend((0..nc).filter(|&k| active[k]).filter_map(|k| {
+                        friction::frame(model, k, &proj[k], f_node(k), slip[k], mu)
+                    }));
+                } else {
+                    frames.extend(
+                        (0..nc)
+                            .filter(|&k| active[k])
+                            .filter_map(|k| model.frame(k, &proj[k], lambda_of(k))),
+                    );
+                }
                 self.system.set_frames(&frames);
             }
             // reusable tangents factorize (or reuse) exactly; others prepare inexact solves
@@ -1139,6 +1249,12 @@ impl DirectSolver {
                         } else {
                             model.candidate_profile[k] - depth - u[zdof(k)]
                         };
+                    }
+                    if with_friction && slip[k] == 0 {
+                        // a sticking node: Newton on the arc coordinate, s(x) = xi
+                        if let Some(e) = model.dofs.equation(zdof(k) - 1) {
+                            self.aux[e] = friction::stick_increment(&proj[k], state.xi[k]);
+                        }
                     }
                 }
             }
@@ -1195,6 +1311,7 @@ impl DirectSolver {
             contact_radius: idx.last().map_or(0.0, |&k| model.candidate_r(k as usize)),
             active: idx,
             lambda,
+            slip: Vec::new(),
             iterations,
             active_set_changes: changes,
             on_schedule: true,

@@ -7,6 +7,7 @@
 //! nothing of adjoints, costs or optimizers.
 
 pub mod direct;
+pub mod friction;
 pub mod history;
 pub mod normal;
 pub mod punch;

@@ -15,10 +15,14 @@ use serde::{Deserialize, Serialize};
 use crate::ContactError;
 use crate::punch::Punch;
 
-/// Direction of the frictionless contact constraint.
+/// Direction of the contact constraint, and Coulomb friction.
 ///
-/// Config: `contact: Vertical` (the default) or `contact: Normal`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// Config: `contact: Vertical` (the default), `contact: Normal` (frictionless) or
+/// `contact: Normal(friction: 0.2)` (Coulomb friction coefficient `mu >= 0`, finite;
+/// `Normal(friction: 0.0)` is `Normal`). With `--set`: `--set contact=Normal`,
+/// `--set "contact=Normal(friction: 0.2)"`, and `--set contact.friction=0.3` once the
+/// configuration has a friction.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum ContactKind {
     /// The paper's small-strain contact (DESIGN.md §1): the gap of a top node is taken at
     /// its reference radius, `g_k = phi(r_k) - U - u_z,k`, and its reaction is vertical.
@@ -33,6 +37,163 @@ pub enum ContactKind {
     /// node (`u_r = 0` by symmetry) keeps the vertical gap and reaction (the tip's normal
     /// by symmetry, also at a cone apex).
     Normal,
+    /// [`ContactKind::Normal`] with Coulomb friction of coefficient `friction` (> 0; 0 is
+    /// [`ContactKind::Normal`]): an active node either sticks (its closest point keeps the
+    /// arc coordinate it had at the last converged step: the tangential dof is prescribed)
+    /// or slips with the tangential traction `friction x lambda` opposing its slip
+    /// (crate::friction, docs/validation-contact.md §7).
+    NormalFriction {
+        /// Coulomb coefficient `mu` (finite, >= 0).
+        friction: f64,
+    },
+}
+
+impl ContactKind {
+    /// The contact kind with normal gaps and friction `mu` (`Normal` for `mu = 0`).
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `contact.friction` for a negative, NaN or infinite
+    /// `mu`.
+    pub fn normal_with_friction(mu: f64) -> Result<ContactKind, ContactError> {
+        check_friction(mu)?;
+        Ok(if mu == 0.0 {
+            ContactKind::Normal
+        } else {
+            ContactKind::NormalFriction { friction: mu }
+        })
+    }
+
+    /// The Coulomb coefficient (0 without friction).
+    pub fn friction(&self) -> f64 {
+        match self {
+            ContactKind::NormalFriction { friction } => *friction,
+            _ => 0.0,
+        }
+    }
+
+    /// Whether gaps are measured along the punch's normal (`Normal`, with or without
+    /// friction).
+    pub fn is_normal(&self) -> bool {
+        !matches!(self, ContactKind::Vertical)
+    }
+
+    /// Checks the friction coefficient.
+    ///
+    /// # Errors
+    /// As [`ContactKind::normal_with_friction`].
+    pub fn validate(&self) -> Result<(), ContactError> {
+        check_friction(self.friction())
+    }
+}
+
+fn check_friction(mu: f64) -> Result<(), ContactError> {
+    if mu.is_finite() && mu >= 0.0 {
+        Ok(())
+    } else {
+        Err(ContactError::Input {
+            field: "contact.friction",
+            value: format!("{mu}"),
+            allowed: "a finite Coulomb coefficient >= 0 (e.g. Normal(friction: 0.1); \
+                      0 is frictionless)"
+                .into(),
+        })
+    }
+}
+
+/// The accepted spellings (RON and the JSON of `--set`): a name, `Vertical` or `Normal`,
+/// optionally as the text `Normal(friction: mu)`, or the struct variant
+/// `Normal(friction: mu)` (RON) / `{"Normal": {"friction": mu}}` (JSON). Read through
+/// serde's untagged content, which keeps the variant's name in both formats.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ContactRepr {
+    Name(String),
+    Variant(std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>),
+}
+
+const CONTACT_SPELLINGS: &str = "Vertical, Normal or Normal(friction: mu) with mu >= 0";
+
+impl ContactKind {
+    /// Parses `Vertical`, `Normal` or `Normal(friction: mu)` (spaces allowed).
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `contact` (unknown spelling) or `contact.friction`
+    /// (a negative, NaN or infinite coefficient).
+    pub fn parse(text: &str) -> Result<ContactKind, ContactError> {
+        let compact: String = text.chars().filter(|c| !c.is_whitespace()).collect();
+        match compact.as_str() {
+            "Vertical" => return Ok(ContactKind::Vertical),
+            "Normal" => return Ok(ContactKind::Normal),
+            _ => {}
+        }
+        let mu = compact
+            .strip_prefix("Normal(friction:")
+            .and_then(|r| r.strip_suffix(')'))
+            .map(|v| v.trim_end_matches(','))
+            .ok_or_else(|| ContactError::Input {
+                field: "contact",
+                value: text.to_string(),
+                allowed: CONTACT_SPELLINGS.into(),
+            })?;
+        let mu: f64 = mu.parse().map_err(|_| ContactError::Input {
+            field: "contact.friction",
+            value: mu.to_string(),
+            allowed: "a number >= 0 (e.g. Normal(friction: 0.1))".into(),
+        })?;
+        ContactKind::normal_with_friction(mu)
+    }
+}
+
+impl<'de> Deserialize<'de> for ContactKind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let repr = ContactRepr::deserialize(d).map_err(|_| {
+            D::Error::custom(format!(
+                "`contact` is not allowed: expected {CONTACT_SPELLINGS}"
+            ))
+        })?;
+        match repr {
+            ContactRepr::Name(s) => ContactKind::parse(&s).map_err(D::Error::custom),
+            ContactRepr::Variant(map) => {
+                let mut it = map.into_iter();
+                match (it.next(), it.next()) {
+                    (Some((name, fields)), None) if name == "Normal" => {
+                        let mut mu = None;
+                        for (k, v) in fields {
+                            if k != "friction" {
+                                return Err(D::Error::custom(format!(
+                                    "`contact.{k}` is not a field of Normal: expected `friction`"
+                                )));
+                            }
+                            mu = Some(v);
+                        }
+                        let mu = mu.ok_or_else(|| {
+                            D::Error::custom("`contact: Normal(...)` needs `friction: mu`")
+                        })?;
+                        ContactKind::normal_with_friction(mu).map_err(D::Error::custom)
+                    }
+                    _ => Err(D::Error::custom(format!(
+                        "`contact` is not allowed: expected {CONTACT_SPELLINGS}"
+                    ))),
+                }
+            }
+        }
+    }
+}
+
+impl Serialize for ContactKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStructVariant;
+        match self {
+            ContactKind::Vertical => s.serialize_unit_variant("ContactKind", 0, "Vertical"),
+            ContactKind::Normal => s.serialize_unit_variant("ContactKind", 1, "Normal"),
+            ContactKind::NormalFriction { friction } => {
+                let mut v = s.serialize_struct_variant("ContactKind", 1, "Normal", 1)?;
+                v.serialize_field("friction", friction)?;
+                v.end()
+            }
+        }
+    }
 }
 
 /// A piece of the punch surface in `(r, h)`.
@@ -69,6 +230,10 @@ pub struct Projection {
     pub kappa: f64,
     /// Radius of the closest point (mm).
     pub rho: f64,
+    /// Arc coordinate of the closest point along the surface from the tip (mm; continued
+    /// along the last piece's line past its end); it moves by `t . dx / (1 + g kappa)`
+    /// when the node moves by `dx`. Friction tracks it (the stick point).
+    pub s: f64,
     /// The closest point lies beyond the last point of a tabulated profile: no surface is
     /// given there (a node in contact there is an error of the solver, never a force from
     /// an extrapolation).
@@ -93,6 +258,7 @@ impl Projection {
             m: [0.0, 1.0],
             kappa: 0.0,
             rho: 0.0,
+            s: 0.0,
             beyond_end: false,
         }
     }
@@ -118,6 +284,8 @@ impl Projection {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Surface {
     pieces: Vec<Piece>,
+    /// Arc coordinate of each piece's start.
+    starts: Vec<f64>,
     /// The chain ends at a corner (flat rim) beyond which there is no surface.
     closed_end: bool,
     /// Length of the last piece within the table (tabulated profiles).
@@ -143,11 +311,13 @@ impl Surface {
         let half_pi = std::f64::consts::FRAC_PI_2;
         let s = match punch.equivalent() {
             Punch::Cone { half_angle_deg } => Surface {
+                starts: Vec::new(),
                 pieces: vec![line([0.0, 0.0], half_pi - half_angle_deg.to_radians(), inf)],
                 closed_end: false,
                 last_len: inf,
             },
             Punch::Sphere { radius } => Surface {
+                starts: Vec::new(),
                 pieces: vec![
                     Piece::Arc {
                         c: [0.0, radius],
@@ -162,6 +332,7 @@ impl Surface {
                 last_len: inf,
             },
             Punch::Flat { radius } => Surface {
+                starts: Vec::new(),
                 pieces: vec![line([0.0, 0.0], 0.0, radius)],
                 closed_end: true,
                 last_len: radius,
@@ -174,6 +345,7 @@ impl Surface {
                 let th = half_pi - a;
                 let blend = [radius * th.sin(), radius * (1.0 - th.cos())];
                 Surface {
+                    starts: Vec::new(),
                     pieces: vec![
                         Piece::Arc {
                             c: [0.0, radius],
@@ -193,7 +365,23 @@ impl Surface {
                 unreachable!("presets are replaced by their equivalent profile")
             }
         };
-        Ok(s)
+        Ok(s.with_starts())
+    }
+
+    /// Fills the arc coordinate of each piece's start (the chain is C1 and connected).
+    fn with_starts(mut self) -> Surface {
+        let mut acc = 0.0;
+        self.starts.clear();
+        for p in &self.pieces {
+            self.starts.push(acc);
+            acc += match *p {
+                Piece::Line { len, .. } => len,
+                Piece::Arc {
+                    radius, th0, th1, ..
+                } => radius * (th1 - th0),
+            };
+        }
+        self
     }
 
     /// Segments of a tabulated profile with filleted interior vertices.
@@ -244,6 +432,7 @@ impl Surface {
         }
         Surface {
             pieces,
+            starts: Vec::new(),
             closed_end: false,
             last_len: len[n - 2] - tau[n - 2],
         }
@@ -254,7 +443,7 @@ impl Surface {
         let last = self.pieces.len() - 1;
         let mut best: Option<(f64, Projection)> = None;
         for (i, piece) in self.pieces.iter().enumerate() {
-            let (p, theta, kappa, clamped_end) = match *piece {
+            let (p, theta, kappa, clamped_end, s) = match *piece {
                 Piece::Line { a, t, len } => {
                     let mut tau = (x[0] - a[0]) * t[0] + (x[1] - a[1]) * t[1];
                     // the first piece starts on the axis: extended beyond it (only an
@@ -262,6 +451,8 @@ impl Surface {
                     if i > 0 {
                         tau = tau.max(0.0);
                     }
+                    // the arc coordinate continues along the last line past its end
+                    let s = self.starts[i] + if i == last { tau } else { tau.min(len) };
                     let mut beyond = false;
                     if tau > len {
                         tau = len;
@@ -275,6 +466,7 @@ impl Surface {
                         t[1].atan2(t[0]),
                         0.0,
                         beyond,
+                        s,
                     )
                 }
                 Piece::Arc {
@@ -298,7 +490,10 @@ impl Surface {
                     let sgn = if convex { -1.0 } else { 1.0 };
                     let p = [c[0] + sgn * radius * m[0], c[1] + sgn * radius * m[1]];
                     let kappa = if convex { 1.0 / radius } else { -1.0 / radius };
-                    (p, th, kappa, false)
+                    // along the chain the slope angle grows on a convex arc, falls on a
+                    // concave one
+                    let s = self.starts[i] + radius * if convex { th - th0 } else { th1 - th };
+                    (p, th, kappa, false, s)
                 }
             };
             let d2 = (x[0] - p[0]).powi(2) + (x[1] - p[1]).powi(2);
@@ -319,6 +514,7 @@ impl Surface {
                         m,
                         kappa,
                         rho: p[0],
+                        s,
                         beyond_end,
                     },
                 ));

@@ -82,6 +82,13 @@ pub struct ConstrainedSystem {
     cap_frames: Option<Vec<NodeFrame>>,
     cap_lu: Vec<f64>,
     cap_piv: Vec<usize>,
+    /// Friction's Woodbury correction for the factor in `chol` (direct mode): the slipping
+    /// frames' indices, the columns `z_l = S^-1 e_t,l`, and the LU factor of
+    /// `I + [w_k . z_l]`.
+    slip_idx: Vec<usize>,
+    slip_z: Vec<Vec<f64>>,
+    slip_lu: Vec<f64>,
+    slip_piv: Vec<usize>,
 }
 
 /// The local frame of an active node under normal contact: its equations, the unit
@@ -97,8 +104,17 @@ pub struct NodeFrame {
     pub t: [f64; 2],
     /// Unit normal `(m_r, m_z)`, `m = (-t_z, t_r)`.
     pub m: [f64; 2],
-    /// Stiffness added on the tangential dof (`-lambda kappa / (1 + g kappa)`).
+    /// Stiffness added on the tangential dof (`-lambda kappa / (1 + g kappa)`; with a
+    /// slipping node under friction `kappa (-lambda + mu sigma tau) / (1 + g kappa)`).
     pub d: f64,
+    /// Coulomb friction, sticking: the tangential dof is prescribed as well (`xbar` at the
+    /// `u_r` equation is the prescribed `t . x`).
+    pub stick: bool,
+    /// Coulomb friction, slipping: the coefficient `c = -mu sigma` of the tangential
+    /// equation `(t + c m) . (K x - b) + d t . x = 0` (`sigma` = +-1 the slip direction
+    /// along `t`); 0 without friction. It makes the matrix unsymmetric: solved by the
+    /// symmetric factor and a Woodbury correction of rank the number of slipping nodes.
+    pub slip: f64,
 }
 
 impl ConstrainedSystem {
@@ -133,6 +149,10 @@ impl ConstrainedSystem {
             cap_frames: None,
             cap_lu: Vec::new(),
             cap_piv: Vec::new(),
+            slip_idx: Vec::new(),
+            slip_z: Vec::new(),
+            slip_lu: Vec::new(),
+            slip_piv: Vec::new(),
         })
     }
 
@@ -237,6 +257,17 @@ impl ConstrainedSystem {
             self.frames.clear();
             self.frames.extend_from_slice(frames);
         }
+        for f in frames.iter().filter(|f| f.stick) {
+            if let Some(er) = f.er {
+                self.constrained[er] = true;
+            }
+        }
+    }
+
+    /// Whether a frame carries friction (sticking or slipping): such systems use the
+    /// direct mode (sticking dofs are prescribed, slipping ones unsymmetric).
+    fn friction(&self) -> bool {
+        self.frames.iter().any(|f| f.stick || f.slip != 0.0)
     }
 
     /// The current tangent with its constraints, as assembled for the last Newton iteration
@@ -271,7 +302,8 @@ impl ConstrainedSystem {
         let n = self.constrained.len();
         let m = self.constrained.iter().filter(|&&c| c).count();
         // capacitance: reusable tangent, and the columns stay a small multiple of K's factor
-        let capacitance = self.k_key.is_some() && m <= MAX_CAPACITANCE && m * n <= 20_000_000;
+        let capacitance =
+            self.k_key.is_some() && m <= MAX_CAPACITANCE && m * n <= 20_000_000 && !self.friction();
         self.pcg = false;
         if capacitance {
             if !self.frames.is_empty() {
@@ -295,7 +327,72 @@ impl ConstrainedSystem {
             self.factor_for = Some(self.constrained.clone());
             self.frames_factored.clone_from(&self.frames);
         }
+        self.prepare_slip(model)?;
         self.seconds[1] += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// `coef_k (K~ v)_{m_k}` over the equations `i` with `constrained[i] == prescribed`
+    /// (`K~ = Q^T K Q` without the curvature stiffness: the normal row of slipping frame
+    /// `k`).
+    fn slip_row(&self, model: &Model, f: &NodeFrame, v: &[f64], prescribed: bool) -> f64 {
+        let mut acc = 0.0;
+        if self.constrained[f.ez] == prescribed {
+            acc += self.k_rot[model.pattern.diag[f.ez]] * v[f.ez];
+        }
+        model.pattern.for_each_off_diagonal(f.ez, |i, p| {
+            if self.constrained[i] == prescribed {
+                acc += self.k_rot[p] * v[i];
+            }
+        });
+        f.slip * acc
+    }
+
+    /// Friction's Woodbury data for the factor just formed (direct mode): with `S` the
+    /// symmetric constrained matrix and `E` the unit vectors of the slipping nodes'
+    /// tangential equations, the system is `S + E W^T` on the free equations (row `k` of
+    /// `W^T` is the slipping node's `coef_k (K~ .)_{m_k}` over free equations); keep
+    /// `Z = S^-1 E` and the LU factor of `I + W^T Z`.
+    fn prepare_slip(&mut self, model: &Model) -> Result<(), FeError> {
+        self.slip_idx.clear();
+        self.slip_idx.extend(
+            self.frames
+                .iter()
+                .enumerate()
+                .filter(|(_, f)| f.slip != 0.0 && f.er.is_some())
+                .map(|(i, _)| i),
+        );
+        let ns = self.slip_idx.len();
+        if ns == 0 {
+            return Ok(());
+        }
+        let n = self.constrained.len();
+        self.slip_z.resize_with(ns, Vec::new);
+        for (l, &i) in self.slip_idx.iter().enumerate() {
+            let z = &mut self.slip_z[l];
+            z.clear();
+            z.resize(n, 0.0);
+            if let Some(er) = self.frames[i].er {
+                z[er] = 1.0;
+            }
+            self.chol.solve_in_place(z);
+        }
+        let mut a = vec![0.0; ns * ns];
+        for (k, &i) in self.slip_idx.iter().enumerate() {
+            let f = self.frames[i];
+            for l in 0..ns {
+                a[k * ns + l] = self.slip_row(model, &f, &self.slip_z[l], false)
+                    + if k == l { 1.0 } else { 0.0 };
+            }
+        }
+        let mut piv = vec![0usize; ns];
+        dense_lu(&mut a, ns, &mut piv).map_err(|k| {
+            FeError::NotPositiveDefinite(format!(
+                "the friction (slip) correction is singular at slipping node {k}"
+            ))
+        })?;
+        self.slip_lu = a;
+        self.slip_piv = piv;
         Ok(())
     }
 
@@ -321,6 +418,7 @@ impl ConstrainedSystem {
         self.base = false;
         self.columns.clear();
         self.schur_set.clear();
+        self.slip_idx.clear();
     }
 
     /// Makes the next assembly sum every element afresh instead of adding differences to
@@ -351,7 +449,11 @@ impl ConstrainedSystem {
     /// # Errors
     /// As [`ConstrainedSystem::factorize`].
     pub fn prepare_inexact(&mut self, model: &Model) -> Result<(), FeError> {
-        if self.k_key.is_some() || !self.factor_ok || self.last_pcg >= REFRESH_PCG {
+        if self.k_key.is_some()
+            || !self.factor_ok
+            || self.last_pcg >= REFRESH_PCG
+            || self.friction()
+        {
             self.last_pcg = 0;
             return self.factorize(model);
         }
@@ -548,10 +650,40 @@ impl ConstrainedSystem {
             return;
         }
         rotate_in(&self.frames, b);
-        self.dirichlet_rhs(model, b, xbar);
-        self.chol.solve_in_place(b);
+        if self.slip_idx.is_empty() {
+            self.dirichlet_rhs(model, b, xbar);
+            self.chol.solve_in_place(b);
+        } else {
+            self.solve_slip(model, b, xbar);
+        }
         rotate_out(&self.frames, b);
         self.seconds[2] += t0.elapsed().as_secs_f64();
+    }
+
+    /// The direct solve with slipping frames (`b` rotated): the slipping rows' right-hand
+    /// side `b_t + coef b_m` less their prescribed columns, the symmetric solve, and the
+    /// Woodbury correction `y = y0 - Z (I + W^T Z)^-1 W^T y0`.
+    fn solve_slip(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+        for &i in &self.slip_idx {
+            let f = self.frames[i];
+            if let Some(er) = f.er {
+                b[er] += f.slip * b[f.ez] - self.slip_row(model, &f, xbar, true);
+            }
+        }
+        self.dirichlet_rhs(model, b, xbar);
+        self.chol.solve_in_place(b);
+        let ns = self.slip_idx.len();
+        let mut h: Vec<f64> = self
+            .slip_idx
+            .iter()
+            .map(|&i| self.slip_row(model, &self.frames[i], b, false))
+            .collect();
+        dense_lu_solve(&self.slip_lu, ns, &self.slip_piv, &mut h);
+        for (l, g) in h.iter().enumerate() {
+            for (x, z) in b.iter_mut().zip(&self.slip_z[l]) {
+                *x -= g * z;
+            }
+        }
     }
 
     /// The capacitance mode with frames: the unconstrained factorization (once per
@@ -1067,6 +1199,8 @@ mod tests {
                     t: [th.cos(), th.sin()],
                     m: [-th.sin(), th.cos()],
                     d: if er.is_some() { -300.0 * k as f64 } else { 0.0 },
+                    stick: false,
+                    slip: 0.0,
                 }
             })
             .collect();

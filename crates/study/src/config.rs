@@ -34,7 +34,9 @@ pub struct Config {
     /// The rigid punch (the contact crate's own type).
     pub punch: Punch,
     /// The direction of the contact constraint: `Vertical` (the paper's formulation, the
-    /// default) or `Normal` (the displaced node's gap along the punch's normal).
+    /// default), `Normal` (the displaced node's gap along the punch's normal) or
+    /// `Normal(friction: mu)` (with Coulomb friction; on the command line
+    /// `--set "contact=Normal(friction: 0.2)"`, then `--set contact.friction=0.3`).
     #[serde(default)]
     pub contact: ContactKind,
     /// The constitutive law and its parameters.
@@ -1448,6 +1450,44 @@ mod tests {
                 half_angle_deg: 60.0
             }
         );
+    }
+
+    /// `contact` reads `Vertical`, `Normal` and `Normal(friction: mu)` in RON and through
+    /// `--set`; a negative, NaN or infinite friction is refused naming the field, the
+    /// value and what is allowed; configurations round-trip.
+    #[test]
+    fn contact_friction_parses_and_bad_values_are_refused() {
+        let c = set(r0(), "contact=Normal").unwrap();
+        assert_eq!(c.contact, ContactKind::Normal);
+        let c = set(r0(), "contact=Normal(friction: 0.2)").unwrap();
+        assert_eq!(c.contact, ContactKind::NormalFriction { friction: 0.2 });
+        let c = set(c, "contact.friction=0.3").unwrap();
+        assert_eq!(c.contact, ContactKind::NormalFriction { friction: 0.3 });
+        let text = ron::ser::to_string(&c).unwrap();
+        assert!(text.contains("Normal(friction:0.3)"), "{text}");
+        assert_eq!(parse(&text, "round-trip").unwrap(), c);
+        for bad in ["-0.1", "NaN", "inf"] {
+            let e = format!(
+                "{:#}",
+                set(r0(), &format!("contact=Normal(friction: {bad})")).unwrap_err()
+            );
+            assert!(
+                e.contains("contact.friction") && e.contains(">= 0"),
+                "{bad}: {e}"
+            );
+        }
+        let text = ron::ser::to_string(&r0()).unwrap();
+        let with = text.replace("contact:Vertical", "contact:Normal(friction:-0.5)");
+        assert_ne!(with, text);
+        let e = format!("{:#}", parse(&with, "bad.ron").unwrap_err());
+        assert!(e.contains("contact.friction") && e.contains("-0.5"), "{e}");
+        let with = text.replace("contact:Vertical", "contact:Normal(friction:0.1)");
+        assert_eq!(
+            parse(&with, "good.ron").unwrap().contact,
+            ContactKind::NormalFriction { friction: 0.1 }
+        );
+        let with = text.replace("contact:Vertical", "contact:Normal");
+        assert_eq!(parse(&with, "n.ron").unwrap().contact, ContactKind::Normal);
     }
 
     #[test]

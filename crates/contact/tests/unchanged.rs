@@ -1,0 +1,73 @@
+//! Friction leaves the frictionless paths alone: the forces and displacements of R0, R1
+//! and R2 (DESIGN.md §5) with vertical and with frictionless normal contact hash to the
+//! values recorded before friction was added (commit f148430), bit for bit.
+
+use indentify_contact::{
+    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
+use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
+use indentify_mesh::CylinderMesher;
+
+/// FNV-1a over the bits of the forces of every step and the final displacement.
+fn hash(model: &Model, law: &dyn Law, c: &[f64]) -> u64 {
+    let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).unwrap();
+    let mut solver = DirectSolver::new(model).unwrap();
+    let t = solver
+        .run(model, law, c, &schedule, &SolverOptions::default())
+        .unwrap();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for b in x.to_bits().to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for s in &t.steps {
+        eat(s.force);
+        s.lambda.iter().for_each(|&l| eat(l));
+    }
+    t.fields.last().unwrap().u.iter().for_each(|&u| eat(u));
+    h
+}
+
+/// The solver shall give R0, R1 and R2 bit for bit as before friction existed, with
+/// vertical and with frictionless normal contact.
+#[test]
+fn reference_problems_are_unchanged() {
+    let cone = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let r0 = vec![20000.0, 0.3];
+    let r1 = vec![20000.0, 0.3, 30000.0];
+    let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
+    let mut got = Vec::new();
+    for kind in [ContactKind::Vertical, ContactKind::Normal] {
+        let model = Model::with_contact(
+            CylinderMesher::REFERENCE.build().unwrap(),
+            cone.clone(),
+            kind,
+        )
+        .unwrap();
+        for (law, c) in [
+            (&Elastic as &dyn Law, &r0),
+            (&Maxwell, &r1),
+            (&NortonHoff, &r2),
+        ] {
+            got.push(hash(&model, law, c));
+        }
+    }
+    println!("hashes {got:#x?}");
+    let expected: [u64; 6] = EXPECTED;
+    assert_eq!(got, expected);
+}
+
+/// Printed by this test at commit f148430 (before friction): vertical R0, R1, R2, then
+/// frictionless normal R0, R1, R2.
+const EXPECTED: [u64; 6] = [
+    0x9debbb3f5a1c9a4a,
+    0x3cc77812abb7e8bd,
+    0x9914bd1851acf976,
+    0xe054726617e7f185,
+    0xc9c9588247eee8d3,
+    0x3eee24d92685e20a,
+];
