@@ -72,6 +72,12 @@ pub enum AdjointError {
     /// Setting up the linear system failed.
     #[error(transparent)]
     Fe(#[from] indentify_fe::FeError),
+    /// The model's kinematics has no exact adjoint (finite strain).
+    #[error(
+        "the adjoint and the sensitivities are exact for small strain only: a model with \
+         `kinematics: Finite` has no exact gradient yet (use `kinematics: Small`)"
+    )]
+    FiniteStrain,
 }
 
 /// Result of an adjoint sweep.
@@ -127,8 +133,12 @@ impl Adjoint {
     /// Prepares the workspace for `model`.
     ///
     /// # Errors
-    /// [`AdjointError::Fe`] if the symbolic analysis fails.
+    /// [`AdjointError::Fe`] if the symbolic analysis fails; [`AdjointError::FiniteStrain`]
+    /// for a finite-strain model (no wrong gradient is ever returned).
     pub fn new(model: &Model) -> Result<Adjoint, AdjointError> {
+        if model.kinematics == indentify_contact::Kinematics::Finite {
+            return Err(AdjointError::FiniteStrain);
+        }
         let nq = model.disc.n_qp();
         Ok(Adjoint {
             system: ConstrainedSystem::new(model)?,

@@ -420,7 +420,11 @@ enum StepFailure {
     /// A node in normal contact beyond the end of the punch surface: not cured by cutting.
     Geometry(String),
     /// Finite strain: an element inverted (`det F <= 0`) at Gauss point `qp`.
-    Inverted { qp: usize, det: f64, depth: f64 },
+    Inverted {
+        qp: usize,
+        det: f64,
+        depth: f64,
+    },
 }
 
 impl std::fmt::Display for StepFailure {
@@ -1004,7 +1008,9 @@ impl DirectSolver {
             let tl = std::time::Instant::now();
             self.evaluate(model, law, c, state, &u, dt, affine.as_ref(), &mut sigma)
                 .map_err(|f| match f {
-                    StepFailure::Inverted { qp, det, .. } => StepFailure::Inverted { qp, det, depth },
+                    StepFailure::Inverted { qp, det, .. } => {
+                        StepFailure::Inverted { qp, det, depth }
+                    }
                     other => other,
                 })?;
             timing.local += tl.elapsed().as_secs_f64();

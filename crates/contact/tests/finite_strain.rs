@@ -48,7 +48,13 @@ fn elastic_compression_matches_the_hencky_closed_form() {
     let (e, nu) = (1000.0, 0.3);
     let traj = DirectSolver::new(&model)
         .unwrap()
-        .run(&model, &Elastic, &[e, nu], &ramp(1.0, 0.4, 20), &SolverOptions::default())
+        .run(
+            &model,
+            &Elastic,
+            &[e, nu],
+            &ramp(1.0, 0.4, 20),
+            &SolverOptions::default(),
+        )
         .unwrap();
     for s in traj.schedule_steps() {
         let lam = 1.0 - s.depth;
@@ -240,7 +246,13 @@ fn finite_strain_needs_normal_contact() {
         .with_kinematics(Kinematics::Finite)
         .unwrap_err();
     let text = err.to_string();
-    assert!(matches!(err, ContactError::Input { field: "kinematics", .. }));
+    assert!(matches!(
+        err,
+        ContactError::Input {
+            field: "kinematics",
+            ..
+        }
+    ));
     assert!(text.contains("contact: Normal"), "{text}");
 }
 
@@ -284,4 +296,3 @@ fn an_inverted_element_is_reported() {
     assert!(text.contains("depth"), "{text}");
     assert!(text.contains("refine"), "{text}");
 }
-

@@ -134,10 +134,7 @@ impl Deformation {
                 [frr * dr, fzr * dr],
                 [frz * dz, fzz * dz],
                 [self.ftt * nr, 0.0],
-                [
-                    (frr * dz + frz * dr) / SQRT2,
-                    (fzr * dz + fzz * dr) / SQRT2,
-                ],
+                [(frr * dz + frz * dr) / SQRT2, (fzr * dz + fzz * dr) / SQRT2],
             ]
         })
     }
@@ -313,7 +310,10 @@ mod tests {
                 qf[i][j] = q[i][0] * def.f[0][j] + q[i][1] * def.f[1][j];
             }
         }
-        let rot = Deformation::from_gradient([[qf[0][0] - 1.0, qf[0][1]], [qf[1][0], qf[1][1] - 1.0]], 0.1);
+        let rot = Deformation::from_gradient(
+            [[qf[0][0] - 1.0, qf[0][1]], [qf[1][0], qf[1][1] - 1.0]],
+            0.1,
+        );
         let (c0, c1) = (def.right_cauchy_green(), rot.right_cauchy_green());
         assert!((c0 - c1).max_abs() < 1e-14);
         assert!((def.c_minus_one() + Vec4::ONE - c0).max_abs() < 1e-15);
@@ -332,7 +332,10 @@ mod tests {
             }
         }
         let expected = Vec4([qm[0][0], qm[1][1], s0.0[2], SQRT2 * qm[0][1]]);
-        assert!((s1 - expected).max_abs() < 1e-10 * s0.max_abs(), "{s1:?} vs {expected:?}");
+        assert!(
+            (s1 - expected).max_abs() < 1e-10 * s0.max_abs(),
+            "{s1:?} vs {expected:?}"
+        );
         // the isotropic Hencky law: sigma = R T R^T / J, so sigma and T share invariants
         assert!((s0.trace() * def.det() - t0.trace()).abs() < 1e-10 * t0.max_abs());
     }

@@ -110,7 +110,8 @@ impl LogStrain {
             [0.0, 0.0, 0.0, 1.0],
         ];
         let one2 = [1.0, 1.0, 0.0, 0.0];
-        let grad = |gm: f64, gs: f64| -> [f64; 4] { std::array::from_fn(|k| gm * dm[k] + gs * dvec[k]) };
+        let grad =
+            |gm: f64, gs: f64| -> [f64; 4] { std::array::from_fn(|k| gm * dm[k] + gs * dvec[k]) };
         let dg0 = grad(g0_m, g0_s);
         let dg1 = grad(g1_m, g1_s);
         let hessian = |gmm: f64, gms: f64, gss: f64, gs: f64| -> [[f64; 4]; 4] {
@@ -239,7 +240,11 @@ mod tests {
         let c1 = Vec4([2e-12, -1e-12, 3e-12, 1e-12]);
         let l = LogStrain::from_difference(&c1).unwrap();
         for j in 0..4 {
-            assert!((l.e.0[j] - 0.5 * c1.0[j]).abs() < 1e-15 * c1.0[j].abs(), "{:?}", l.e);
+            assert!(
+                (l.e.0[j] - 0.5 * c1.0[j]).abs() < 1e-15 * c1.0[j].abs(),
+                "{:?}",
+                l.e
+            );
         }
     }
 
