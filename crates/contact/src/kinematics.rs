@@ -82,7 +82,7 @@ pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
         for g in 0..QP_PER_ELEMENT {
             let q = QP_PER_ELEMENT * e + g;
             let det = Deformation::new(&disc.qp[q], &ue).det();
-            if !(det >= worst.1) {
+            if det.is_nan() || det < worst.1 {
                 worst = (q, det);
             }
         }

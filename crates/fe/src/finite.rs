@@ -102,18 +102,12 @@ impl Deformation {
         let srz = s.0[3] / SQRT2;
         let sm = [[s.0[0], srz], [srz, s.0[1]]];
         let f = [[a, b], [c, d]];
-        let mut fs = [[0.0; 2]; 2];
-        for i in 0..2 {
-            for j in 0..2 {
-                fs[i][j] = f[i][0] * sm[0][j] + f[i][1] * sm[1][j];
-            }
-        }
-        let mut out = [[0.0; 2]; 2];
-        for i in 0..2 {
-            for j in 0..2 {
-                out[i][j] = fs[i][0] * f[j][0] + fs[i][1] * f[j][1];
-            }
-        }
+        let fs: [[f64; 2]; 2] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| f[i][0] * sm[0][j] + f[i][1] * sm[1][j])
+        });
+        let out: [[f64; 2]; 2] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| fs[i][0] * f[j][0] + fs[i][1] * f[j][1])
+        });
         let j = self.det();
         Vec4([
             out[0][0] / j,
@@ -304,12 +298,9 @@ mod tests {
         let def = Deformation::from_gradient([[0.3, 0.2], [-0.1, -0.2]], 0.1);
         let th: f64 = 0.7;
         let q = [[th.cos(), -th.sin()], [th.sin(), th.cos()]];
-        let mut qf = [[0.0; 2]; 2];
-        for i in 0..2 {
-            for j in 0..2 {
-                qf[i][j] = q[i][0] * def.f[0][j] + q[i][1] * def.f[1][j];
-            }
-        }
+        let qf: [[f64; 2]; 2] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| q[i][0] * def.f[0][j] + q[i][1] * def.f[1][j])
+        });
         let rot = Deformation::from_gradient(
             [[qf[0][0] - 1.0, qf[0][1]], [qf[1][0], qf[1][1] - 1.0]],
             0.1,
@@ -323,14 +314,13 @@ mod tests {
         let s0 = def.cauchy(&l0.pk2(&t0));
         let s1 = rot.cauchy(&l1.pk2(&t1));
         let m = [[s0.0[0], s0.0[3] / SQRT2], [s0.0[3] / SQRT2, s0.0[1]]];
-        let mut qm = [[0.0; 2]; 2];
-        for i in 0..2 {
-            for j in 0..2 {
-                qm[i][j] = (0..2)
+        let qm: [[f64; 2]; 2] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                (0..2)
                     .map(|k| (0..2).map(|l| q[i][k] * m[k][l] * q[j][l]).sum::<f64>())
-                    .sum();
-            }
-        }
+                    .sum()
+            })
+        });
         let expected = Vec4([qm[0][0], qm[1][1], s0.0[2], SQRT2 * qm[0][1]]);
         assert!(
             (s1 - expected).max_abs() < 1e-10 * s0.max_abs(),

@@ -233,15 +233,15 @@ mod tests {
         }
     }
 
-    /// From `C - 1`, a strain of 1e-12 keeps its relative precision (the first-order
-    /// `E = (C - 1)/2` is exact to 1e-24 there).
+    /// From `C - 1`, a strain of 1e-12 keeps its relative precision: `E = (C - 1)/2` to
+    /// second order (1e-12 relative), where going through `C` would lose 1e-4.
     #[test]
     fn tiny_strains_keep_their_relative_precision() {
         let c1 = Vec4([2e-12, -1e-12, 3e-12, 1e-12]);
         let l = LogStrain::from_difference(&c1).unwrap();
         for j in 0..4 {
             assert!(
-                (l.e.0[j] - 0.5 * c1.0[j]).abs() < 1e-15 * c1.0[j].abs(),
+                (l.e.0[j] - 0.5 * c1.0[j]).abs() < 1e-11 * c1.0[j].abs(),
                 "{:?}",
                 l.e
             );
