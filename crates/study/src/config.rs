@@ -1463,7 +1463,7 @@ mod tests {
         assert!(e.contains("`G`") && e.contains("E, nu"), "{e}");
         let e = format!("{:#}", set(r0(), "speciman.nr=1").unwrap_err());
         assert!(
-            e.contains("history, identify, law, punch, solver, specimen"),
+            e.contains("history, identify, kinematics, law, punch, solver, specimen"),
             "{e}"
         );
         let e = format!("{:#}", set(r0(), "specimen.nr=2.5").unwrap_err());
