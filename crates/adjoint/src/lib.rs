@@ -79,6 +79,12 @@ pub enum AdjointError {
          previous stick points and the tangent unsymmetric; see docs/validation-contact.md §7)"
     )]
     Friction(f64),
+    /// The model's kinematics has no exact adjoint (finite strain).
+    #[error(
+        "the adjoint and the sensitivities are exact for small strain only: a model with \
+         `kinematics: Finite` has no exact gradient yet (use `kinematics: Small`)"
+    )]
+    FiniteStrain,
 }
 
 /// Result of an adjoint sweep.
@@ -134,8 +140,12 @@ impl Adjoint {
     /// Prepares the workspace for `model`.
     ///
     /// # Errors
-    /// [`AdjointError::Fe`] if the symbolic analysis fails.
+    /// [`AdjointError::Fe`] if the symbolic analysis fails; [`AdjointError::FiniteStrain`]
+    /// for a finite-strain model (no wrong gradient is ever returned).
     pub fn new(model: &Model) -> Result<Adjoint, AdjointError> {
+        if model.kinematics == indentify_contact::Kinematics::Finite {
+            return Err(AdjointError::FiniteStrain);
+        }
         let nq = model.disc.n_qp();
         Ok(Adjoint {
             system: ConstrainedSystem::new(model)?,

@@ -105,7 +105,7 @@ fn set_rejects_unknown_paths_listing_the_available_keys() {
             "speciman.nr=3",
             &[
                 "`speciman`",
-                "history, identify, law, punch, solver, specimen",
+                "history, identify, kinematics, law, punch, solver, specimen",
             ],
         ),
         ("specimen.nr=2.5", &["specimen.nr", "integer"]),

@@ -31,6 +31,7 @@ use indentify_mesh::Mesh;
 use crate::ContactError;
 use crate::friction::{self, Status};
 use crate::history::Schedule;
+use crate::kinematics::{self, FiniteFailure, FiniteOut, Kinematics};
 use crate::normal::{ContactKind, Projection, Surface};
 use crate::punch::Punch;
 use crate::system::{ConstrainedSystem, NodeFrame};
@@ -101,6 +102,8 @@ pub struct Model {
     pub contact: ContactKind,
     /// The punch surface of normal contact (`None` for vertical contact).
     surface: Option<Surface>,
+    /// Small or finite strain ([`Model::with_kinematics`]; small by default).
+    pub kinematics: Kinematics,
 }
 
 impl Model {
@@ -172,7 +175,30 @@ impl Model {
             punch,
             contact,
             surface,
+            kinematics: Kinematics::Small,
         })
+    }
+
+    /// This model with the kinematics `kinematics`.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] for [`Kinematics::Finite`] with vertical contact: its gap is
+    /// taken at the node's reference radius and its reaction stays vertical, which has no
+    /// meaning once the surface moves and rotates; finite strain needs `contact: Normal`.
+    pub fn with_kinematics(mut self, kinematics: Kinematics) -> Result<Model, ContactError> {
+        if kinematics == Kinematics::Finite && self.contact != ContactKind::Normal {
+            return Err(ContactError::Input {
+                field: "kinematics",
+                value: "Finite".into(),
+                allowed: "`kinematics: Finite` with `contact: Normal` only: vertical contact \
+                          takes the gap at the node's reference radius and a vertical \
+                          reaction, which finite strain's displaced and rotated surface \
+                          contradicts; set `contact: Normal` (or keep `kinematics: Small`)"
+                    .into(),
+            });
+        }
+        self.kinematics = kinematics;
+        Ok(self)
     }
 
     /// The closest point of the punch surface to candidate `k` displaced by `u` (all
@@ -401,6 +427,12 @@ enum StepFailure {
     Linear(String),
     /// A node in normal contact beyond the end of the punch surface: not cured by cutting.
     Geometry(String),
+    /// Finite strain: an element inverted (`det F <= 0`) at Gauss point `qp`.
+    Inverted {
+        qp: usize,
+        det: f64,
+        depth: f64,
+    },
 }
 
 impl std::fmt::Display for StepFailure {
@@ -422,6 +454,15 @@ impl std::fmt::Display for StepFailure {
             }
             StepFailure::Linear(m) => write!(f, "linear solve failed: {m}"),
             StepFailure::Geometry(m) => write!(f, "{m}"),
+            StepFailure::Inverted { qp, det, depth } => write!(
+                f,
+                "element {} is inverted (det F = {det:.3e} at its Gauss point {}) at the \
+                 depth {depth} mm: the mesh cannot follow the deformation under the punch; \
+                 refine it there (specimen nr and nz, or elements_in_contact) or reduce \
+                 the maximum depth",
+                qp / QP_PER_ELEMENT,
+                qp % QP_PER_ELEMENT
+            ),
         }
     }
 }
@@ -543,6 +584,10 @@ pub struct DirectSolver {
     /// Relative residual of every pass of the last step attempted, with the active-set
     /// changes made before it.
     residuals: Vec<(f64, u32)>,
+    /// Finite strain: the element tangents of the last evaluation, and the Hencky strains
+    /// of the step's initial state (empty under small strain).
+    finite_ke: Vec<[[f64; 16]; 16]>,
+    finite_e0: Vec<Vec4>,
 }
 
 impl DirectSolver {
@@ -566,6 +611,8 @@ impl DirectSolver {
             rhs: vec![0.0; n],
             aux: vec![0.0; n],
             residuals: Vec::new(),
+            finite_ke: Vec::new(),
+            finite_e0: Vec::new(),
         })
     }
 
@@ -793,6 +840,26 @@ impl DirectSolver {
         sigma_out: &mut [Vec4],
     ) -> Result<(), StepFailure> {
         let disc = &model.disc;
+        if model.kinematics == Kinematics::Finite {
+            let domain = law.elastic_domain(c, dt);
+            let out = FiniteOut {
+                sigma: sigma_out,
+                f_int: &mut self.f_int,
+                ke: &mut self.finite_ke,
+            };
+            return kinematics::evaluate(
+                disc,
+                law,
+                c,
+                dt,
+                &state.sigma,
+                &self.finite_e0,
+                u,
+                domain.as_ref(),
+                out,
+            )
+            .map_err(|f| finite_failure(f, state.depth));
+        }
         // (only affine laws use it: a nonlinear law's iterate is never compared)
         let at_start = affine.is_some() && u == state.u.as_slice();
         if at_start && affine.is_some_and(|(a, _)| *a == Mat4::IDENTITY) {
@@ -902,7 +969,21 @@ impl DirectSolver {
                 }
             }
         }
-        let affine = law.affine_update(c, dt);
+        let finite = model.kinematics == Kinematics::Finite;
+        if finite {
+            // the Hencky strains of the initial state, from which the laws' increments run
+            let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
+            self.finite_e0.resize(nq, Vec4::ZERO);
+            self.finite_ke.resize(ne, [[0.0; 16]; 16]);
+            kinematics::log_strains(&model.disc, &state.u, &mut self.finite_e0)
+                .map_err(|f| finite_failure(f, state.depth))?;
+        }
+        // finite strain: no affine update (the tangent depends on the displacement)
+        let affine = if finite {
+            None
+        } else {
+            law.affine_update(c, dt)
+        };
         // a nonlinear law starts Newton from the displacement extrapolated in time, while
         // the depth keeps its rate (within a segment): by the polynomial of degree 1 to 3
         // through the last states that predicted the last step best (in R2's settled creep
@@ -956,7 +1037,13 @@ impl DirectSolver {
         loop {
             // every pass evaluates the current iterate once, then checks or solves
             let tl = std::time::Instant::now();
-            self.evaluate(model, law, c, state, &u, dt, affine.as_ref(), &mut sigma)?;
+            self.evaluate(model, law, c, state, &u, dt, affine.as_ref(), &mut sigma)
+                .map_err(|f| match f {
+                    StepFailure::Inverted { qp, det, .. } => {
+                        StepFailure::Inverted { qp, det, depth }
+                    }
+                    other => other,
+                })?;
             timing.local += tl.elapsed().as_secs_f64();
             if normal {
                 proj.clear();
@@ -1213,6 +1300,7 @@ impl DirectSolver {
             iterations += 1;
             match &affine {
                 Some((_, cm)) => self.system.set_tangent_uniform(model, cm, (c, dt)),
+                None if finite => self.system.set_tangent_elements(model, &self.finite_ke),
                 None => {
                     let reuse = law.is_linear().then_some((c, dt));
                     self.system.set_tangent(model, &self.tangents, reuse)
@@ -1237,7 +1325,8 @@ impl DirectSolver {
             // reusable tangents factorize (or reuse) exactly; others prepare inexact solves
             self.system
                 .prepare_inexact(model)
-                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
+                .map_err(|f| distortion(model, f, &u, depth))?;
             // right-hand side: -R on free equations, prescribed increments on active ones
             self.aux.fill(0.0);
             for k in 0..nc {
@@ -1271,7 +1360,8 @@ impl DirectSolver {
                 .clamp(1e-12, 0.1);
             self.system
                 .solve_inexact(model, &mut self.rhs, &self.aux, eta)
-                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
+                .map_err(|f| distortion(model, f, &u, depth))?;
             for (d, &e) in model.dofs.eq.iter().enumerate() {
                 if e != NO_EQ {
                     u[d] += self.rhs[e as usize];
@@ -1343,6 +1433,34 @@ fn extrapolation_weights(dt: f64, h: [f64; 3], order: usize) -> [f64; 3] {
         -(lagrange[2] + lagrange[3]),
         -lagrange[3],
     ]
+}
+
+/// Under finite strain a tangent that is no longer positive definite means extreme
+/// distortion (or a loss of stability): the failure then names the most distorted element
+/// of the iterate `u` at the depth `depth` and what to do.
+fn distortion(model: &Model, f: StepFailure, u: &[f64], depth: f64) -> StepFailure {
+    match f {
+        StepFailure::Linear(m) if model.kinematics == Kinematics::Finite => {
+            let (qp, det) = kinematics::smallest_det(&model.disc, u);
+            StepFailure::Linear(format!(
+                "{m}; under finite strain: extreme distortion at the depth {depth} mm, \
+                 smallest det F = {det:.3e} in element {} (Gauss point {}): refine the mesh \
+                 under the punch (specimen nr and nz, or elements_in_contact) or reduce the \
+                 maximum depth",
+                qp / QP_PER_ELEMENT,
+                qp % QP_PER_ELEMENT
+            ))
+        }
+        other => other,
+    }
+}
+
+/// The step failure of a finite-strain evaluation at the depth `depth`.
+fn finite_failure(f: FiniteFailure, depth: f64) -> StepFailure {
+    match f {
+        FiniteFailure::Inverted { qp, det } => StepFailure::Inverted { qp, det, depth },
+        FiniteFailure::Local { qp, reason, factor } => StepFailure::Local { qp, reason, factor },
+    }
 }
 
 /// Why a node in normal contact beyond the surface's end stops the run.

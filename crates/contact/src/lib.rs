@@ -9,6 +9,7 @@
 pub mod direct;
 pub mod friction;
 pub mod history;
+pub mod kinematics;
 pub mod normal;
 pub mod punch;
 pub mod system;
@@ -18,6 +19,7 @@ pub use direct::{
     nodal_pressures,
 };
 pub use history::{Schedule, Segment, trapezoid};
+pub use kinematics::Kinematics;
 pub use normal::ContactKind;
 pub use punch::Punch;
 pub use system::{ConstrainedSystem, NodeFrame};

@@ -201,6 +201,17 @@ impl ConstrainedSystem {
         fresh
     }
 
+    /// Sets the tangent from element matrices (lower triangles; finite strain, where the
+    /// element matrices are not `sum w B^T C B`): never reused, always a full sum.
+    pub fn set_tangent_elements(&mut self, model: &Model, ke: &[[[f64; 16]; 16]]) -> bool {
+        let t0 = std::time::Instant::now();
+        self.new_key(None);
+        model.pattern.assemble_elements(ke, &mut self.k_values);
+        self.elements.forget_sum();
+        self.seconds[0] += t0.elapsed().as_secs_f64();
+        true
+    }
+
     /// As [`ConstrainedSystem::set_tangent`] with the same tangent `c_mat` at every Gauss
     /// point (an affine law), always reusable under `key = (c, dt)`.
     pub fn set_tangent_uniform(&mut self, model: &Model, c_mat: &Mat4, key: (&[f64], f64)) -> bool {

@@ -214,6 +214,16 @@ impl Pattern {
         }
     }
 
+    /// Assembles given element matrices (their lower triangles, `a >= b`) into `values`
+    /// (overwritten): the finite-strain tangent, whose element matrices are not
+    /// `sum w B^T C B` with a fixed `B` ([`crate::finite`]).
+    pub fn assemble_elements(&self, ke: &[[[f64; 16]; 16]], values: &mut [f64]) {
+        values.fill(0.0);
+        for (e, k) in ke.iter().enumerate() {
+            self.scatter_add(e, k, values);
+        }
+    }
+
     /// Adds the lower triangle (`a >= b`) of element `e`'s matrix at its pattern positions.
     #[inline]
     fn scatter_add(&self, e: usize, ke: &[[f64; 16]; 16], values: &mut [f64]) {

@@ -10,11 +10,13 @@
 
 pub mod assembly;
 pub mod dofs;
+pub mod finite;
 pub mod geometry;
 pub mod solver;
 
 pub use assembly::{ElementCache, Pattern};
 pub use dofs::DofMap;
+pub use finite::Deformation;
 pub use geometry::{Discretization, QP_PER_ELEMENT, QuadPoint};
 pub use solver::SparseCholesky;
 

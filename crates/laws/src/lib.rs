@@ -7,6 +7,7 @@
 
 pub mod elastic;
 pub mod law;
+pub mod logstrain;
 pub mod mandel;
 pub mod maxwell;
 pub mod norton_hoff;
@@ -15,6 +16,7 @@ mod testing;
 
 pub use elastic::Elastic;
 pub use law::{ElasticDomain, Law, LocalFailure, LocalUpdate, ParamInfo};
+pub use logstrain::LogStrain;
 pub use mandel::{Mat4, Vec4};
 pub use maxwell::Maxwell;
 pub use norton_hoff::NortonHoff;

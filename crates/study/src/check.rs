@@ -184,6 +184,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
     let name = args.config.name();
     let cfg = args.config.load(&args.sets)?;
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    crate::config::refuse_finite_gradient(&cfg, "`gradient-check`").kind(ErrorKind::Config)?;
     let names = param_names(law);
     let infos = law.params();
     let prepared = prepare(&cfg, &name)?;

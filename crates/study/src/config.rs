@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
-use indentify_contact::{ContactKind, Model, Punch, Schedule, Segment, SolverOptions};
+use indentify_contact::{ContactKind, Kinematics, Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
@@ -39,6 +39,11 @@ pub struct Config {
     /// `--set "contact=Normal(friction: 0.2)"`, then `--set contact.friction=0.3`).
     #[serde(default)]
     pub contact: ContactKind,
+    /// The kinematics: `Small` (the paper's, the default) or `Finite` (total-Lagrangian,
+    /// the laws in logarithmic strain space; needs `contact: Normal`; forward runs only:
+    /// `gradient`, `check` and `identify` refuse it until its adjoint is exact).
+    #[serde(default)]
+    pub kinematics: Kinematics,
     /// The constitutive law and its parameters.
     pub law: LawSpec,
     /// The depth history of the punch; omitted when `data` gives a measured record, whose
@@ -744,6 +749,7 @@ impl Reference {
                 half_angle_deg: 68.0,
             },
             contact: ContactKind::Vertical,
+            kinematics: Kinematics::Small,
             law,
             history: Some(History {
                 segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
@@ -909,6 +915,7 @@ impl Config {
             Rim::OffCorner { .. } => tracing::warn!("warning: {name}: {}", rim.describe()),
         }
         let model = Model::with_contact(mesh, self.punch.clone(), self.contact)
+            .and_then(|m| m.with_kinematics(self.kinematics))
             .with_context(|| format!("cannot build the model of `{name}`"))?;
         Ok(Prepared {
             schedule,
@@ -919,6 +926,24 @@ impl Config {
             warnings,
         })
     }
+}
+
+/// Refuses finite strain where a gradient is needed (`what`: the command): the adjoint and
+/// the forward sensitivities transpose the small-strain scheme, so under
+/// `kinematics: Finite` they would return a wrong gradient.
+///
+/// # Errors
+/// For `kinematics: Finite`, naming the field and what to do.
+pub fn refuse_finite_gradient(config: &Config, what: &str) -> Result<()> {
+    if config.kinematics == Kinematics::Finite {
+        bail!(
+            "`kinematics` = Finite is not allowed for {what}: the adjoint and the forward \
+             sensitivities are exact for `kinematics: Small` only (finite strain has no exact \
+             gradient yet, and {what} would use a wrong one); set `kinematics: Small` (or \
+             --set kinematics=Small), or run the finite-strain forward problem with `simulate`"
+        );
+    }
+    Ok(())
 }
 
 /// The context of an error of [`Config::prepare`] that lies in the measured record (not in
@@ -1496,7 +1521,7 @@ mod tests {
         assert!(e.contains("`G`") && e.contains("E, nu"), "{e}");
         let e = format!("{:#}", set(r0(), "speciman.nr=1").unwrap_err());
         assert!(
-            e.contains("history, identify, law, punch, solver, specimen"),
+            e.contains("history, identify, kinematics, law, punch, solver, specimen"),
             "{e}"
         );
         let e = format!("{:#}", set(r0(), "specimen.nr=2.5").unwrap_err());

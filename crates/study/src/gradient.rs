@@ -101,6 +101,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let name = opts.config.name();
     let mut cfg = opts.config.load(&opts.sets)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
+    crate::config::refuse_finite_gradient(&cfg, "`gradient`").kind(ErrorKind::Config)?;
     ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))
         .kind(ErrorKind::Config)?;
     if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {

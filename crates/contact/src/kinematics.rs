@@ -1,0 +1,240 @@
+//! The kinematics of the direct problem ([`Kinematics`]): the paper's small strain, or
+//! finite strain (total-Lagrangian, laws in logarithmic strain space), and the Gauss-point
+//! evaluation of the finite-strain internal force and element tangents.
+//!
+//! Under [`Kinematics::Finite`] the state stored at each Gauss point is the stress `T`
+//! conjugate to the Hencky strain `E = ln(C)/2` (Miehe, Apel & Lambrecht 2002); the law
+//! updates `T` from the increment of `E` with its small-strain code, and the element
+//! receives `S = P : T` and `dS/dE_GL = P : A : P + T : L` (`indentify_laws::LogStrain`,
+//! `indentify_fe::finite`). For the isotropic laws of this crate the Kirchhoff stress is
+//! `tau = R T R^T`, so `T` has the principal values of `J sigma`.
+
+use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
+use indentify_laws::{ElasticDomain, Law, LogStrain, Vec4};
+use serde::{Deserialize, Serialize};
+
+/// Kinematics of the direct problem.
+///
+/// Config: `kinematics: Small` (the default) or `kinematics: Finite` (requires
+/// `contact: Normal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Kinematics {
+    /// The paper's small strain: `eps = B u` on the reference configuration.
+    #[default]
+    Small,
+    /// Finite strain: total-Lagrangian axisymmetric Q8 with the hoop stretch
+    /// `1 + u_r/R`, the laws applied to the Hencky strain `ln(C)/2` (their small-strain
+    /// update and tangent unchanged), the consistent tangent with its material and
+    /// geometric parts. Needs normal contact (the gap at the displaced position).
+    Finite,
+}
+
+/// Why a finite-strain Gauss-point evaluation failed.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum FiniteFailure {
+    /// `det F <= 0` (or `C` not positive definite) at Gauss point `qp`.
+    Inverted { qp: usize, det: f64 },
+    /// The law's local update failed at `qp`.
+    Local {
+        qp: usize,
+        reason: String,
+        factor: f64,
+    },
+}
+
+/// Output buffers of [`evaluate`].
+pub(crate) struct FiniteOut<'a> {
+    pub sigma: &'a mut [Vec4],
+    pub f_int: &'a mut [f64],
+    pub ke: &'a mut [[[f64; 16]; 16]],
+}
+
+/// The Hencky strain of every Gauss point at displacement `u` (all dofs).
+///
+/// # Errors
+/// [`FiniteFailure::Inverted`] at the first inverted point.
+pub(crate) fn log_strains(
+    disc: &Discretization,
+    u: &[f64],
+    out: &mut [Vec4],
+) -> Result<(), FiniteFailure> {
+    for e in 0..disc.elements.len() {
+        let ue = disc.gather(e, u);
+        for g in 0..QP_PER_ELEMENT {
+            let q = QP_PER_ELEMENT * e + g;
+            let def = Deformation::new(&disc.qp[q], &ue);
+            let det = def.det();
+            let ls = (det > 0.0)
+                .then(|| LogStrain::from_difference(&def.c_minus_one()))
+                .flatten()
+                .ok_or(FiniteFailure::Inverted { qp: q, det })?;
+            out[q] = ls.e;
+        }
+    }
+    Ok(())
+}
+
+/// The Gauss point of smallest `det F` at displacement `u`, and that determinant.
+pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
+    let mut worst = (0, f64::INFINITY);
+    for e in 0..disc.elements.len() {
+        let ue = disc.gather(e, u);
+        for g in 0..QP_PER_ELEMENT {
+            let q = QP_PER_ELEMENT * e + g;
+            let det = Deformation::new(&disc.qp[q], &ue).det();
+            if det.is_nan() || det < worst.1 {
+                worst = (q, det);
+            }
+        }
+    }
+    worst
+}
+
+/// Local updates from the state (`t0`, Hencky strains `e0`) to displacement `u`: the
+/// stresses `T` into `out.sigma`, the internal force into `out.f_int` (overwritten) and
+/// the element tangents (lower triangles) into `out.ke`.
+///
+/// # Errors
+/// The first inverted Gauss point or failed local update.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn evaluate(
+    disc: &Discretization,
+    law: &dyn Law,
+    c: &[f64],
+    dt: f64,
+    t0: &[Vec4],
+    e0: &[Vec4],
+    u: &[f64],
+    domain: Option<&ElasticDomain>,
+    out: FiniteOut<'_>,
+) -> Result<(), FiniteFailure> {
+    out.f_int.fill(0.0);
+    for e in 0..disc.elements.len() {
+        let dofs = disc.element_dofs(e);
+        let ue = dofs.map(|d| u[d]);
+        let mut fe = [0.0; 16];
+        let ke = &mut out.ke[e];
+        *ke = [[0.0; 16]; 16];
+        for g in 0..QP_PER_ELEMENT {
+            let q = QP_PER_ELEMENT * e + g;
+            let qp = &disc.qp[q];
+            let def = Deformation::new(qp, &ue);
+            let det = def.det();
+            let ls = (det > 0.0)
+                .then(|| LogStrain::from_difference(&def.c_minus_one()))
+                .flatten()
+                .ok_or(FiniteFailure::Inverted { qp: q, det })?;
+            let de = ls.e - e0[q];
+            let (t, a) = match domain.and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
+            {
+                Some(x) => x,
+                None => {
+                    let up = law
+                        .update(c, &t0[q], &de, dt)
+                        .map_err(|f| FiniteFailure::Local {
+                            qp: q,
+                            reason: f.reason,
+                            factor: f.suggested_dt_factor,
+                        })?;
+                    (up.sigma, up.tangent)
+                }
+            };
+            let s = ls.pk2(&t);
+            let b = def.b_l(qp);
+            Deformation::add_bt(&b, &s, qp.w, &mut fe);
+            let dm = ls.material_tangent(&a, &t);
+            Deformation::add_tangent(qp, &b, &dm, &s, qp.w, ke);
+            out.sigma[q] = t;
+        }
+        for (d, v) in dofs.iter().zip(fe) {
+            out.f_int[*d] += v;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indentify_laws::{Elastic, NortonHoff};
+    use indentify_mesh::CylinderMesher;
+
+    /// The assembled element tangents are the derivative of the internal force through the
+    /// laws' local updates (Norton-Hoff from a stressed state, elasticity), at small and
+    /// large deformations: central differences along a random direction.
+    #[test]
+    fn element_tangents_are_the_derivative_of_the_internal_force() {
+        let mesh = CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 2,
+            nz: 2,
+            grading_r: 1.2,
+            grading_z: 1.2,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&mesh);
+        let (nq, ne, nd) = (disc.n_qp(), disc.elements.len(), disc.n_dofs());
+        let cases: [(&dyn Law, Vec<f64>); 2] = [
+            (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 0.0]),
+            (&Elastic, vec![1e5, 0.3]),
+        ];
+        for amp in [1e-4, 0.2] {
+            for (law, c) in &cases {
+                let u0: Vec<f64> = (0..nd)
+                    .map(|k| amp * 0.5 * (((k * 7 + 3) % 11) as f64 / 11.0 - 0.5))
+                    .collect();
+                let u1: Vec<f64> = u0
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| v + amp * 0.3 * (((k * 5 + 1) % 13) as f64 / 13.0 - 0.5))
+                    .collect();
+                let dir: Vec<f64> = (0..nd)
+                    .map(|k| ((k * 3 + 2) % 7) as f64 / 7.0 - 0.5)
+                    .collect();
+                let mut e0 = vec![Vec4::ZERO; nq];
+                log_strains(&disc, &u0, &mut e0).unwrap();
+                // a stressed initial state
+                let t0: Vec<Vec4> = e0.iter().map(|e| *e * 5e4).collect();
+                let run = |u: &[f64]| {
+                    let mut sigma = vec![Vec4::ZERO; nq];
+                    let mut f = vec![0.0; nd];
+                    let mut ke = vec![[[0.0; 16]; 16]; ne];
+                    let out = FiniteOut {
+                        sigma: &mut sigma,
+                        f_int: &mut f,
+                        ke: &mut ke,
+                    };
+                    evaluate(&disc, *law, c, 0.1, &t0, &e0, u, None, out).unwrap();
+                    (f, ke)
+                };
+                let (_, ke) = run(&u1);
+                let h = 1e-7 * amp.max(1e-2);
+                let up: Vec<f64> = u1.iter().zip(&dir).map(|(a, d)| a + h * d).collect();
+                let um: Vec<f64> = u1.iter().zip(&dir).map(|(a, d)| a - h * d).collect();
+                let (fp, fm) = (run(&up).0, run(&um).0);
+                let mut kd = vec![0.0; nd];
+                for (e, k) in ke.iter().enumerate() {
+                    let dofs = disc.element_dofs(e);
+                    for p in 0..16 {
+                        for q in 0..16 {
+                            let v = if p >= q { k[p][q] } else { k[q][p] };
+                            kd[dofs[p]] += v * dir[dofs[q]];
+                        }
+                    }
+                }
+                let scale = kd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for i in 0..nd {
+                    let fd = (fp[i] - fm[i]) / (2.0 * h);
+                    assert!(
+                        (fd - kd[i]).abs() < 1e-6 * scale,
+                        "{} amp {amp}: dof {i}: {fd} vs {}",
+                        law.name(),
+                        kd[i]
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,126 @@
+//! The `kinematics` field: `--set kinematics=Finite` runs the finite-strain forward problem
+//! with normal contact, is refused with vertical contact, and `gradient`, `gradient-check`
+//! and `identify` refuse it (no gradient that is not exact).
+
+use indentify_study::ConfigSource;
+use indentify_study::simulate::{self, SimulateOptions};
+
+fn r1() -> ConfigSource {
+    ConfigSource::Text {
+        text: indentify_study::templates::template(indentify_study::config::Reference::R1Maxwell),
+        name: "r1".into(),
+    }
+}
+
+fn coarse(extra: &[&str]) -> Vec<String> {
+    let mut v: Vec<String> = ["specimen.nr=6", "specimen.nz=6"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    v.extend(extra.iter().map(|s| s.to_string()));
+    v
+}
+
+#[test]
+fn finite_strain_runs_with_normal_contact_and_moves_the_force() {
+    let peak = |sets: &[&str]| {
+        let mut opts = SimulateOptions::new(r1());
+        opts.sets = coarse(sets);
+        let o = simulate::run(&opts).unwrap();
+        assert!(o.failure.is_none());
+        o.trajectory.forces().iter().copied().fold(0.0, f64::max)
+    };
+    let small = peak(&["contact=Normal"]);
+    let finite = peak(&["contact=Normal", "kinematics=Finite"]);
+    println!("R1 (6 x 6): small {small} N, finite {finite} N");
+    assert!(finite.is_finite() && finite > 0.0);
+    assert!(finite != small);
+    assert!((finite / small - 1.0).abs() < 0.2, "{small} vs {finite}");
+}
+
+#[test]
+fn finite_strain_with_vertical_contact_is_refused() {
+    let mut opts = SimulateOptions::new(r1());
+    opts.sets = coarse(&["kinematics=Finite"]);
+    let err = format!("{:?}", simulate::run(&opts).unwrap_err());
+    assert!(err.contains("kinematics"), "{err}");
+    assert!(err.contains("contact: Normal"), "{err}");
+}
+
+#[test]
+fn gradients_are_refused_under_finite_strain() {
+    let sets = coarse(&["contact=Normal", "kinematics=Finite"]);
+    let mut g = indentify_study::gradient::GradientOptions::new(r1(), None);
+    g.sets = sets.clone();
+    let err = format!("{:#}", indentify_study::gradient::run(&g).unwrap_err());
+    assert!(
+        err.contains("kinematics` = Finite is not allowed for `gradient`"),
+        "{err}"
+    );
+    let mut c = indentify_study::check::CheckOptions::new(r1());
+    c.sets = sets.clone();
+    let err = format!("{:#}", indentify_study::check::run(&c).unwrap_err());
+    assert!(err.contains("`gradient-check`"), "{err}");
+    let mut i = indentify_study::identify::IdentifyOptions::new(r1());
+    i.sets = sets;
+    let err = format!(
+        "{:#}",
+        indentify_study::identify::run(&i, &mut ()).unwrap_err()
+    );
+    assert!(err.contains("`identify`"), "{err}");
+}
+
+/// The finite/small force ratios on R1 and R2 (sY = 0 and 500) at the reference mesh with
+/// normal contact, and the forward run times back to back (a study, not a check: run with
+/// `cargo test -p indentify-study --test kinematics -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn finite_over_small_ratios_on_the_reference_problems() {
+    use indentify_study::config::Reference;
+    for (reference, extra) in [
+        (Reference::R0Elastic, vec![]),
+        (Reference::R1Maxwell, vec![]),
+        (Reference::R2NortonHoff, vec!["law.sY=0"]),
+        (Reference::R2NortonHoff, vec![]),
+    ] {
+        let source = || ConfigSource::Text {
+            text: indentify_study::templates::template(reference),
+            name: "ref".into(),
+        };
+        let run = |kin: &str| {
+            let mut opts = SimulateOptions::new(source());
+            opts.sets = extra.iter().map(|s| s.to_string()).collect();
+            opts.sets.push("contact=Normal".into());
+            opts.sets.push(format!("kinematics={kin}"));
+            let t0 = std::time::Instant::now();
+            let o = simulate::run(&opts).unwrap();
+            let secs = t0.elapsed().as_secs_f64();
+            assert!(o.failure.is_none());
+            let traj = o.trajectory;
+            let pts: Vec<(f64, f64)> = traj.schedule_steps().map(|s| (s.t, s.force)).collect();
+            (pts, secs)
+        };
+        let (small, ts) = run("Small");
+        let (finite, tf) = run("Finite");
+        let at = |pts: &[(f64, f64)], t: f64| {
+            pts.iter()
+                .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
+                .map(|p| p.1)
+                .unwrap()
+        };
+        let ratios: Vec<String> = [0.2, 0.5, 1.0, 1.5, 2.0]
+            .iter()
+            .map(|&t| {
+                format!(
+                    "t={t}: {:+.1}%",
+                    100.0 * (at(&finite, t) / at(&small, t) - 1.0)
+                )
+            })
+            .collect();
+        println!(
+            "{reference:?} {extra:?}: {}; time small {ts:.2} s, finite {tf:.2} s (x{:.2})",
+            ratios.join(", "),
+            tf / ts
+        );
+    }
+}
