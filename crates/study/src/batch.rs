@@ -597,6 +597,8 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         // every worker holds one run: the budget is shared between them
         memory_budget: opts.memory_budget / opts.workers().max(1),
         refine: false,
+        // the indents are the parallel work: one thread each
+        jobs: Some(1),
     };
     let mut status = IndentStatus {
         id: indent.id.clone(),
