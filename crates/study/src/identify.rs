@@ -440,8 +440,15 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     Ok(outcome)
 }
 
+/// The noise seed of test `k` (from 0) of a joint fit: `seed` for the first test, then
+/// `seed + k * 0x9E3779B97F4A7C15` (wrapping), so that neighbouring seeds of a study do
+/// not share realizations between their tests.
+pub fn test_seed(seed: u64, k: usize) -> u64 {
+    seed.wrapping_add((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
 /// [`run`] of a joint configuration (`tests: [...]`): every test prepared, its data
-/// loaded (synthesized with noise seed `seed + k` for test `k` from 0), weighted, and the
+/// loaded (synthesized with the noise seed [`test_seed`] for test `k`), weighted, and the
 /// shared parameters fitted to all of them at once.
 #[allow(clippy::too_many_arguments)]
 fn run_joint(
@@ -489,7 +496,7 @@ fn run_joint(
         let prepared = prepare(&sub, &sub_name)?;
         let mut solver_opts = sub.solver.options(false);
         let sub_opts = IdentifyOptions {
-            noise: opts.noise.map(|(a, seed)| (a, seed.wrapping_add(k as u64))),
+            noise: opts.noise.map(|(a, seed)| (a, test_seed(seed, k))),
             ..opts.clone()
         };
         let data = load_data(
