@@ -83,7 +83,7 @@ pub use optimize::{
     StopCriteria, StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
-pub use problem::{Evaluator, Problem};
+pub use problem::{Evaluator, Problem, Test};
 
 use indentify_adjoint::AdjointError;
 use indentify_contact::ContactError;

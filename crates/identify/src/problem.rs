@@ -1,57 +1,69 @@
-//! The identification problem (model, law, schedule, target forces, weights) and the
-//! [`Evaluator`]: the cost `J`, its adjoint gradient and the sensitivity Jacobian at a
-//! parameter point, with a one-point cache keyed on the exact parameter bits so that one
-//! forward solve and at most one adjoint sweep serve every request at that point.
+//! The identification problem (a law and one or more tests: model, schedule, target
+//! forces, weights) and the [`Evaluator`]: the cost `J = sum_k J_k`, its adjoint gradient
+//! and the sensitivity Jacobian at a parameter point, with a one-point cache keyed on the
+//! exact parameter bits so that one forward solve and at most one adjoint sweep per test
+//! serve every request at that point; the tests of a joint problem are solved in parallel
+//! (rayon) and combined in test order.
 
 use std::collections::HashSet;
+use std::sync::Arc;
 use std::time::Instant;
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
 use indentify_laws::Law;
+use rayon::prelude::*;
 
 use crate::IdentifyError;
 use crate::data::ForceRecord;
 
-/// Everything fixed during an identification: the direct problem (model, law, depth
-/// schedule, solver options) and the data it is compared with.
+/// One test of an identification: the direct problem (model, depth schedule, solver
+/// options) and the data it is compared with, weighted.
 ///
-/// The cost (DESIGN.md §2, paper eq. 16) is
-/// `J(c) = 1/2 sum_{i=0..I} w_i (F_i(c) - F_i^exp)^2` over the schedule times `t_i`
+/// Its cost (DESIGN.md §2, paper eq. 16) is
+/// `J_k(c) = 1/2 sum_{i=0..I} w_i (F_i(c) - F_i^exp)^2` over the schedule times `t_i`
 /// (index 0 is the stress-free initial state, `F_0 = 0`); `F^exp` is the record
-/// interpolated at `t_i`.
+/// interpolated at `t_i`; `w_i` = the point weight times the test's [`Test::weight`].
 #[derive(Debug)]
-pub struct Problem {
+pub struct Test {
     /// The direct problem's model (mesh, punch, ...).
     pub model: Model,
-    /// The constitutive law whose parameters are identified.
-    pub law: &'static dyn Law,
     /// Depth history driving the simulation (the measured `U^exp(t)`).
     pub schedule: Schedule,
     /// Options of the direct solver (fields are always recorded: the adjoint needs them).
     pub solver_options: SolverOptions,
     /// `F_i^exp` at the schedule times (N), `schedule.t.len()` entries.
     pub target: Vec<f64>,
-    /// Weights `w_i >= 0`, `schedule.t.len()` entries.
+    /// Weights `w_i >= 0` (the test weight included), `schedule.t.len()` entries.
     pub weights: Vec<f64>,
+    /// The test's weight `w_k > 0` in the joint cost (1 for a single test).
+    pub weight: f64,
 }
 
-impl Problem {
-    /// Builds the problem; `record` is interpolated onto the schedule's times; `weights`
-    /// default to 1 (one per schedule time, index 0 included).
+impl Test {
+    /// Builds a test; `record` is interpolated onto the schedule's times; the point
+    /// `weights` default to 1 (one per schedule time, index 0 included) and are multiplied
+    /// by the test's `weight`.
     ///
     /// # Errors
     /// [`IdentifyError::RecordDoesNotCover`] when the record does not span the schedule;
     /// [`IdentifyError::InvalidWeights`] for a wrong length, a negative or non-finite
-    /// weight, or all weights zero.
+    /// weight, all weights zero, or a test weight that is not finite and > 0.
     pub fn new(
         model: Model,
-        law: &'static dyn Law,
         schedule: Schedule,
         record: &ForceRecord,
         weights: Option<Vec<f64>>,
         solver_options: SolverOptions,
-    ) -> Result<Problem, IdentifyError> {
+        weight: f64,
+    ) -> Result<Test, IdentifyError> {
+        if !(weight.is_finite() && weight > 0.0) {
+            return Err(IdentifyError::InvalidWeights {
+                why: format!(
+                    "the test weight {weight} is not allowed: expected a finite value > 0"
+                ),
+            });
+        }
         let target = record.at_times(&schedule.t)?;
         let n = schedule.t.len();
         let weights = weights.unwrap_or_else(|| vec![1.0; n]);
@@ -73,41 +85,49 @@ impl Problem {
                 why: "all weights are zero".into(),
             });
         }
+        let weights = if weight == 1.0 {
+            weights
+        } else {
+            weights.iter().map(|w| w * weight).collect()
+        };
         // with checkpoints, the states are saved every `checkpoint_every` steps and the
         // gradient replays the segments (bounded memory); otherwise every step's fields
         let solver_options = SolverOptions {
             record_fields: solver_options.checkpoint_every == 0,
             ..solver_options
         };
-        Ok(Problem {
+        Ok(Test {
             model,
-            law,
             schedule,
             solver_options,
             target,
             weights,
+            weight,
         })
     }
 
-    /// Number of data points that count (non-zero weight).
-    pub fn n_data(&self) -> usize {
-        self.weights.iter().filter(|&&w| w > 0.0).count()
+    /// The default weight of a test in a joint fit, `1 / (n F_max^2)` with `n` the number
+    /// of its data points (schedule times with a non-zero point weight) and `F_max` the
+    /// largest `|F^exp|` among them: each test then contributes about equally to `J`
+    /// whatever its number of points and its force scale (`J_k / w_k` is of the order of
+    /// `n F_max^2` times the squared relative misfit). 1 for a record of zero force.
+    ///
+    /// `record` is interpolated onto `schedule` as in [`Test::new`].
+    ///
+    /// # Errors
+    /// [`IdentifyError::RecordDoesNotCover`] when the record does not span the schedule.
+    pub fn default_weight(schedule: &Schedule, record: &ForceRecord) -> Result<f64, IdentifyError> {
+        let target = record.at_times(&schedule.t)?;
+        let f_max = target.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+        let n = target.len();
+        Ok(if f_max > 0.0 && n > 0 {
+            1.0 / (n as f64 * f_max * f_max)
+        } else {
+            1.0
+        })
     }
 
-    /// `J_ref = 1/2 sum w_i (F_i^exp)^2`: the cost of predicting zero force, the scale that
-    /// the optimizers divide `J` by (so `sqrt(2 J / J_ref)` is a relative RMS misfit).
-    pub fn reference_cost(&self) -> f64 {
-        let j: f64 = 0.5
-            * self
-                .weights
-                .iter()
-                .zip(&self.target)
-                .map(|(w, f)| w * f * f)
-                .sum::<f64>();
-        if j > 0.0 { j } else { 1.0 }
-    }
-
-    /// `J` of forces at the schedule times.
+    /// `J_k` of forces at the schedule times.
     pub fn cost_of(&self, forces: &[f64]) -> f64 {
         0.5 * forces
             .iter()
@@ -134,6 +154,161 @@ impl Problem {
     }
 }
 
+/// Everything fixed during an identification: the law whose parameters are identified and
+/// one or more tests ([`Test`]) sharing them.
+///
+/// The cost (DESIGN.md §2, paper eq. 16) is `J(c) = sum_k J_k(c)`, the sum of the tests'
+/// weighted least-squares misfits. The data of all tests are laid end to end, test after
+/// test, in [`Problem::target`] and [`Problem::weights`] (and the forces and Jacobian rows
+/// of [`Evaluator`]): `J = 1/2 sum_i w_i (F_i - F_i^exp)^2` over that concatenation, so
+/// the optimizers, Levenberg-Marquardt's stacked residuals and the identifiability see one
+/// long record. A single test ([`Problem::new`]) has weight 1 and is exactly the
+/// one-curve problem.
+#[derive(Debug)]
+pub struct Problem {
+    /// The constitutive law whose parameters are identified.
+    pub law: &'static dyn Law,
+    /// The tests, in order (at least one).
+    pub tests: Vec<Test>,
+    /// `F_i^exp` of every test, laid end to end (N).
+    pub target: Vec<f64>,
+    /// The weights `w_i` (test weights included), laid end to end.
+    pub weights: Vec<f64>,
+    /// The pool the tests are solved on ([`Problem::set_threads`]); `None`: the current
+    /// rayon pool (by default the global one, all cores).
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+impl Problem {
+    /// Builds a one-test problem; `record` is interpolated onto the schedule's times;
+    /// `weights` default to 1 (one per schedule time, index 0 included).
+    ///
+    /// # Errors
+    /// [`IdentifyError::RecordDoesNotCover`] when the record does not span the schedule;
+    /// [`IdentifyError::InvalidWeights`] for a wrong length, a negative or non-finite
+    /// weight, or all weights zero.
+    pub fn new(
+        model: Model,
+        law: &'static dyn Law,
+        schedule: Schedule,
+        record: &ForceRecord,
+        weights: Option<Vec<f64>>,
+        solver_options: SolverOptions,
+    ) -> Result<Problem, IdentifyError> {
+        let test = Test::new(model, schedule, record, weights, solver_options, 1.0)?;
+        Problem::joint(law, vec![test])
+    }
+
+    /// A joint problem: `tests` share the parameters of `law`; `J = sum_k J_k`.
+    ///
+    /// # Errors
+    /// [`IdentifyError::InvalidSpec`] (field `tests`) for an empty list.
+    pub fn joint(law: &'static dyn Law, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
+        if tests.is_empty() {
+            return Err(IdentifyError::InvalidSpec {
+                name: "tests".into(),
+                why: "the list of tests is empty: expected at least one test".into(),
+            });
+        }
+        let target = tests
+            .iter()
+            .flat_map(|t| t.target.iter().copied())
+            .collect();
+        let weights = tests
+            .iter()
+            .flat_map(|t| t.weights.iter().copied())
+            .collect();
+        Ok(Problem {
+            law,
+            tests,
+            target,
+            weights,
+            pool: None,
+        })
+    }
+
+    /// Solves the tests on a pool of `threads` threads of its own (instead of the current
+    /// rayon pool). The results do not depend on it, only the time.
+    ///
+    /// # Errors
+    /// [`IdentifyError::InvalidOption`] (`jobs`) for 0 threads or a pool that cannot be
+    /// built.
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), IdentifyError> {
+        if threads == 0 {
+            return Err(IdentifyError::InvalidOption {
+                field: "jobs",
+                value: "0".into(),
+                allowed: "a number of threads >= 1",
+            });
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| IdentifyError::InvalidOption {
+                field: "jobs",
+                value: format!("{threads} ({e})"),
+                allowed: "a number of threads the system can start",
+            })?;
+        self.pool = Some(Arc::new(pool));
+        Ok(())
+    }
+
+    /// The first test's model (the only one of a one-test problem).
+    pub fn model(&self) -> &Model {
+        &self.tests[0].model
+    }
+
+    /// The first test's schedule (the only one of a one-test problem).
+    pub fn schedule(&self) -> &Schedule {
+        &self.tests[0].schedule
+    }
+
+    /// The first test's solver options (the only ones of a one-test problem).
+    pub fn solver_options(&self) -> &SolverOptions {
+        &self.tests[0].solver_options
+    }
+
+    /// The range of test `k`'s rows in the concatenated data.
+    pub fn rows_of(&self, k: usize) -> std::ops::Range<usize> {
+        let start: usize = self.tests[..k].iter().map(|t| t.target.len()).sum();
+        start..start + self.tests[k].target.len()
+    }
+
+    /// Number of data points that count (non-zero weight), all tests.
+    pub fn n_data(&self) -> usize {
+        self.weights.iter().filter(|&&w| w > 0.0).count()
+    }
+
+    /// `J_ref = 1/2 sum w_i (F_i^exp)^2`: the cost of predicting zero force, the scale that
+    /// the optimizers divide `J` by (so `sqrt(2 J / J_ref)` is a relative RMS misfit).
+    pub fn reference_cost(&self) -> f64 {
+        let j: f64 = 0.5
+            * self
+                .weights
+                .iter()
+                .zip(&self.target)
+                .map(|(w, f)| w * f * f)
+                .sum::<f64>();
+        if j > 0.0 { j } else { 1.0 }
+    }
+
+    /// `J` of forces at the schedule times (all tests laid end to end).
+    pub fn cost_of(&self, forces: &[f64]) -> f64 {
+        0.5 * forces
+            .iter()
+            .zip(&self.target)
+            .zip(&self.weights)
+            .map(|((f, d), w)| w * (f - d).powi(2))
+            .sum::<f64>()
+    }
+
+    /// `dJ/dF` per trajectory step of the first test (the only one of a one-test
+    /// problem); [`Test::dj_df`] for the others.
+    pub fn dj_df(&self, traj: &Trajectory) -> Vec<f64> {
+        self.tests[0].dj_df(traj)
+    }
+}
+
 /// Counters of the expensive operations an [`Evaluator`] performed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
@@ -152,29 +327,50 @@ pub struct Counts {
     pub distinct_points: usize,
 }
 
-/// What the cache holds for the last parameter point.
-#[derive(Debug)]
-struct Entry {
-    key: Vec<u64>,
-    cost: f64,
+/// What the cache holds of one test at the last parameter point.
+#[derive(Debug, Default)]
+struct TestEntry {
     forces: Option<Vec<f64>>,
     traj: Option<Trajectory>,
     gradient: Option<Vec<f64>>,
     jacobian: Option<Vec<Vec<f64>>>,
 }
 
-/// The cost/gradient oracle of one [`Problem`]: owns the forward and adjoint
-/// workspaces and caches the last point (its trajectory, `J`, `dJ/dc`, `dF/dc`).
+/// What the cache holds for the last parameter point.
+#[derive(Debug)]
+struct Entry {
+    key: Vec<u64>,
+    cost: f64,
+    /// Every test's forces end to end (`None` when a forward solve failed).
+    forces: Option<Vec<f64>>,
+    tests: Vec<TestEntry>,
+    gradient: Option<Vec<f64>>,
+    jacobian: Option<Vec<Vec<f64>>>,
+}
+
+/// The forward and adjoint workspaces of one test.
+#[derive(Debug)]
+struct Work {
+    solver: DirectSolver,
+    adjoint: Adjoint,
+}
+
+/// The cost/gradient oracle of one [`Problem`]: owns each test's forward and adjoint
+/// workspaces and caches the last point (its trajectories, `J`, `dJ/dc`, `dF/dc`).
 ///
 /// A request at the same point (the same bits of every parameter) is served from the
 /// cache, so a line search's cost call, the optimizer's gradient call after it and a
-/// report's force call cost one forward solve and one adjoint sweep in total.
+/// report's force call cost one forward solve and one adjoint sweep per test in total.
 /// Each request at a new point replaces the entry.
+///
+/// The tests of a joint problem are solved in parallel on the current rayon pool (each
+/// test's forward run, adjoint sweep and sensitivities are independent); their costs,
+/// gradients and Jacobian rows are combined in test order, never in completion order,
+/// so every result is bit-identical whatever the number of threads.
 #[derive(Debug)]
 pub struct Evaluator<'p> {
     problem: &'p Problem,
-    solver: DirectSolver,
-    adjoint: Adjoint,
+    work: Vec<Work>,
     entry: Option<Entry>,
     counts: Counts,
     best: Option<(f64, Vec<f64>)>,
@@ -186,25 +382,53 @@ fn key_of(c: &[f64]) -> Vec<u64> {
     c.iter().map(|v| v.to_bits()).collect()
 }
 
+/// `f` on every (workspace, test, cache entry) triple, in parallel when there are several
+/// tests; the results in test order.
+fn per_test<T: Send>(
+    pool: Option<&rayon::ThreadPool>,
+    work: &mut [Work],
+    tests: &[Test],
+    entries: &mut [TestEntry],
+    f: impl Fn(&mut Work, &Test, &mut TestEntry) -> T + Sync + Send,
+) -> Vec<T> {
+    if tests.len() == 1 {
+        return vec![f(&mut work[0], &tests[0], &mut entries[0])];
+    }
+    let mut all = move || {
+        work.par_iter_mut()
+            .zip(tests.par_iter())
+            .zip(entries.par_iter_mut())
+            .map(|((w, t), e)| f(w, t, e))
+            .collect()
+    };
+    match pool {
+        Some(p) => p.install(all),
+        None => all(),
+    }
+}
+
 impl<'p> Evaluator<'p> {
-    /// Workspaces for `problem` (one symbolic analysis each for the forward and the adjoint).
+    /// Workspaces for `problem` (one symbolic analysis each for the forward and the
+    /// adjoint of every test).
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] / [`IdentifyError::Adjoint`] if the analysis fails.
     pub fn new(problem: &'p Problem) -> Result<Evaluator<'p>, IdentifyError> {
-        let solver =
-            DirectSolver::new(&problem.model).map_err(|source| IdentifyError::Forward {
+        let mut work = Vec::with_capacity(problem.tests.len());
+        for t in &problem.tests {
+            let solver = DirectSolver::new(&t.model).map_err(|source| IdentifyError::Forward {
                 params: vec![],
                 source,
             })?;
-        let adjoint = Adjoint::new(&problem.model).map_err(|source| IdentifyError::Adjoint {
-            params: vec![],
-            source,
-        })?;
+            let adjoint = Adjoint::new(&t.model).map_err(|source| IdentifyError::Adjoint {
+                params: vec![],
+                source,
+            })?;
+            work.push(Work { solver, adjoint });
+        }
         Ok(Evaluator {
             problem,
-            solver,
-            adjoint,
+            work,
             entry: None,
             counts: Counts::default(),
             best: None,
@@ -218,7 +442,8 @@ impl<'p> Evaluator<'p> {
         self.problem
     }
 
-    /// Counters so far.
+    /// Counters so far (a forward solve, adjoint sweep or sensitivity pass of a joint
+    /// problem counts once per test).
     pub fn counts(&self) -> Counts {
         self.counts
     }
@@ -233,8 +458,8 @@ impl<'p> Evaluator<'p> {
         self.best.as_ref().map(|(j, c)| (*j, c.as_slice()))
     }
 
-    /// Makes sure the cache holds point `c` with its trajectory (one forward solve unless
-    /// already there). A failed forward solve caches `J = +inf`.
+    /// Makes sure the cache holds point `c` with its trajectories (one forward solve per
+    /// test unless already there). A failed forward solve caches `J = +inf`.
     fn ensure(&mut self, c: &[f64], need_traj: bool) -> Result<&mut Entry, IdentifyError> {
         let key = key_of(c);
         if self.seen.insert(key.clone()) {
@@ -243,51 +468,77 @@ impl<'p> Evaluator<'p> {
         let hit = self
             .entry
             .as_ref()
-            .is_some_and(|e| e.key == key && (!need_traj || e.traj.is_some()));
+            .is_some_and(|e| e.key == key && (!need_traj || e.forces.is_some()));
         if hit {
             self.counts.cache_hits += 1;
         } else {
-            self.counts.forward += 1;
             let p = self.problem;
-            let run = self
-                .solver
-                .run(&p.model, p.law, c, &p.schedule, &p.solver_options);
-            let entry = match run {
-                Ok(traj) => {
-                    let forces = traj.forces();
-                    let cost = p.cost_of(&forces);
-                    if cost.is_finite() && self.best.as_ref().is_none_or(|(b, _)| cost < *b) {
-                        self.best = Some((cost, c.to_vec()));
+            let n = p.tests.len();
+            self.counts.forward += n;
+            self.entry = None;
+            let mut tests: Vec<TestEntry> = (0..n).map(|_| TestEntry::default()).collect();
+            let runs = per_test(
+                p.pool.as_deref(),
+                &mut self.work,
+                &p.tests,
+                &mut tests,
+                |w, t, _| {
+                    w.solver
+                        .run(&t.model, p.law, c, &t.schedule, &t.solver_options)
+                },
+            );
+            let mut failed = None;
+            let mut error = None;
+            for (k, run) in runs.into_iter().enumerate() {
+                match run {
+                    Ok(traj) => {
+                        tests[k].forces = Some(traj.forces());
+                        tests[k].traj = Some(traj);
                     }
-                    Entry {
-                        key,
-                        cost,
-                        forces: Some(forces),
-                        traj: Some(traj),
-                        gradient: None,
-                        jacobian: None,
+                    Err(source) => {
+                        let step_failed = matches!(source, ContactError::StepFailed { .. });
+                        if step_failed {
+                            self.counts.forward_failed += 1;
+                        }
+                        if step_failed && !need_traj {
+                            failed.get_or_insert(k);
+                        } else if error.is_none() {
+                            error = Some(source);
+                        }
                     }
                 }
-                Err(ContactError::StepFailed { .. }) if !need_traj => {
-                    self.counts.forward_failed += 1;
-                    Entry {
-                        key,
-                        cost: f64::INFINITY,
-                        forces: None,
-                        traj: None,
-                        gradient: None,
-                        jacobian: None,
-                    }
+            }
+            if let Some(source) = error {
+                return Err(IdentifyError::Forward {
+                    params: c.to_vec(),
+                    source,
+                });
+            }
+            let entry = if failed.is_some() {
+                Entry {
+                    key,
+                    cost: f64::INFINITY,
+                    forces: None,
+                    tests,
+                    gradient: None,
+                    jacobian: None,
                 }
-                Err(source) => {
-                    if matches!(source, ContactError::StepFailed { .. }) {
-                        self.counts.forward_failed += 1;
-                    }
-                    self.entry = None;
-                    return Err(IdentifyError::Forward {
-                        params: c.to_vec(),
-                        source,
-                    });
+            } else {
+                let forces: Vec<f64> = tests
+                    .iter()
+                    .flat_map(|e| e.forces.iter().flatten().copied())
+                    .collect();
+                let cost = p.cost_of(&forces);
+                if cost.is_finite() && self.best.as_ref().is_none_or(|(b, _)| cost < *b) {
+                    self.best = Some((cost, c.to_vec()));
+                }
+                Entry {
+                    key,
+                    cost,
+                    forces: Some(forces),
+                    tests,
+                    gradient: None,
+                    jacobian: None,
                 }
             };
             self.entry = Some(entry);
@@ -298,8 +549,8 @@ impl<'p> Evaluator<'p> {
         }
     }
 
-    /// `J(c)`; `+inf` when the direct problem fails even after step cutting (so that a
-    /// line search backs off).
+    /// `J(c)`; `+inf` when the direct problem of a test fails even after step cutting (so
+    /// that a line search backs off).
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] for inadmissible parameters.
@@ -307,7 +558,8 @@ impl<'p> Evaluator<'p> {
         Ok(self.ensure(c, false)?.cost)
     }
 
-    /// Forces `F_i(c)` at the schedule times (index 0 = initial state).
+    /// Forces `F_i(c)` at the schedule times (index 0 = initial state), every test's laid
+    /// end to end in test order ([`Problem::rows_of`]).
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
@@ -316,18 +568,37 @@ impl<'p> Evaluator<'p> {
         Ok(e.forces.clone().unwrap_or_default())
     }
 
-    /// The recorded trajectory at `c`.
+    /// The recorded trajectory of the first test at `c` (the only one of a one-test
+    /// problem); [`Evaluator::trajectory_of`] for the others.
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
     pub fn trajectory(&mut self, c: &[f64]) -> Result<&Trajectory, IdentifyError> {
+        self.trajectory_of(0, c)
+    }
+
+    /// The recorded trajectory of test `k` at `c`.
+    ///
+    /// # Errors
+    /// [`IdentifyError::Forward`] when the direct problem fails;
+    /// [`IdentifyError::InvalidSpec`] for a test index out of range.
+    pub fn trajectory_of(&mut self, k: usize, c: &[f64]) -> Result<&Trajectory, IdentifyError> {
+        let n = self.problem.tests.len();
+        if k >= n {
+            return Err(IdentifyError::InvalidSpec {
+                name: "test".into(),
+                why: format!("test index {k} is out of range: the problem has {n} tests"),
+            });
+        }
         let e = self.ensure(c, true)?;
-        e.traj
+        e.tests[k]
+            .traj
             .as_ref()
             .ok_or_else(|| IdentifyError::Optimizer("trajectory missing".into()))
     }
 
-    /// `J(c)` and the full physical gradient `dJ/dc` (law order) by the adjoint.
+    /// `J(c)` and the full physical gradient `dJ/dc` (law order) by the adjoint: the sum of
+    /// the tests' adjoint gradients, in test order.
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails, [`IdentifyError::Adjoint`]
@@ -342,38 +613,62 @@ impl<'p> Evaluator<'p> {
         if let Some(r) = has_grad {
             return Ok(r);
         }
-        self.counts.adjoint += 1;
+        self.counts.adjoint += p.tests.len();
         let Some(e) = self.entry.as_mut() else {
             return Err(IdentifyError::Optimizer("cache entry vanished".into()));
         };
-        let Some(traj) = e.traj.as_ref() else {
-            return Err(IdentifyError::Optimizer("trajectory missing".into()));
-        };
-        let rho = p.dj_df(traj);
-        let g = if p.solver_options.checkpoint_every > 0 {
-            self.adjoint.gradient_replayed(
-                &p.model,
-                p.law,
-                c,
-                traj,
-                &rho,
-                &mut self.solver,
-                &p.schedule,
-                &p.solver_options,
-            )
-        } else {
-            self.adjoint.gradient(&p.model, p.law, c, traj, &rho)
+        let grads = per_test(
+            p.pool.as_deref(),
+            &mut self.work,
+            &p.tests,
+            &mut e.tests,
+            |w, t, te| {
+                if let Some(g) = &te.gradient {
+                    return Ok(g.clone());
+                }
+                let Some(traj) = te.traj.as_ref() else {
+                    return Err(IdentifyError::Optimizer("trajectory missing".into()));
+                };
+                let rho = t.dj_df(traj);
+                let g = if t.solver_options.checkpoint_every > 0 {
+                    w.adjoint.gradient_replayed(
+                        &t.model,
+                        p.law,
+                        c,
+                        traj,
+                        &rho,
+                        &mut w.solver,
+                        &t.schedule,
+                        &t.solver_options,
+                    )
+                } else {
+                    w.adjoint.gradient(&t.model, p.law, c, traj, &rho)
+                }
+                .map_err(|source| IdentifyError::Adjoint {
+                    params: c.to_vec(),
+                    source,
+                })?;
+                te.gradient = Some(g.dj_dc.clone());
+                Ok(g.dj_dc)
+            },
+        );
+        // summed in test order (bit-identical for any number of threads)
+        let mut total: Option<Vec<f64>> = None;
+        for g in grads {
+            let g = g?;
+            match total.as_mut() {
+                None => total = Some(g),
+                Some(t) => t.iter_mut().zip(&g).for_each(|(a, b)| *a += b),
+            }
         }
-        .map_err(|source| IdentifyError::Adjoint {
-            params: c.to_vec(),
-            source,
-        })?;
-        e.gradient = Some(g.dj_dc.clone());
-        Ok((e.cost, g.dj_dc))
+        let g = total.unwrap_or_default();
+        e.gradient = Some(g.clone());
+        Ok((e.cost, g))
     }
 
-    /// The Jacobian `dF_i/dc_k` at the schedule times (row 0, the initial state, is 0), all
-    /// law parameters, by forward sensitivities.
+    /// The Jacobian `dF_i/dc_k` at the schedule times (row 0 of each test, its initial
+    /// state, is 0), all law parameters, by forward sensitivities; the tests' rows laid end
+    /// to end in test order ([`Problem::rows_of`]).
     ///
     /// # Errors
     /// As [`Evaluator::cost_and_gradient`].
@@ -384,45 +679,62 @@ impl<'p> Evaluator<'p> {
         if let Some(j) = cached {
             return Ok(j);
         }
-        self.counts.sensitivities += 1;
+        self.counts.sensitivities += p.tests.len();
         let Some(e) = self.entry.as_mut() else {
             return Err(IdentifyError::Optimizer("cache entry vanished".into()));
         };
-        let Some(traj) = e.traj.as_ref() else {
-            return Err(IdentifyError::Optimizer("trajectory missing".into()));
-        };
-        // the forward sensitivities need every step's fields: a checkpointed trajectory
-        // is recorded again in full for them (the memory of one unbounded run)
-        let full;
-        let traj = if traj.fields.len() == traj.steps.len() + 1 {
-            traj
-        } else {
-            let opts = SolverOptions {
-                record_fields: true,
-                checkpoint_every: 0,
-                ..p.solver_options.clone()
-            };
-            full = self
-                .solver
-                .run(&p.model, p.law, c, &p.schedule, &opts)
-                .map_err(|source| IdentifyError::Forward {
-                    params: c.to_vec(),
-                    source,
-                })?;
-            &full
-        };
-        let sens = self
-            .adjoint
-            .sensitivities(&p.model, p.law, c, traj)
-            .map_err(|source| IdentifyError::Adjoint {
-                params: c.to_vec(),
-                source,
-            })?;
-        let mut jac = vec![vec![0.0; np]; p.schedule.t.len()];
-        for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
-            if s.on_schedule {
-                jac[s.schedule_index].clone_from(row);
-            }
+        let jacs = per_test(
+            p.pool.as_deref(),
+            &mut self.work,
+            &p.tests,
+            &mut e.tests,
+            |w, t, te| {
+                if let Some(j) = &te.jacobian {
+                    return Ok(j.clone());
+                }
+                let Some(traj) = te.traj.as_ref() else {
+                    return Err(IdentifyError::Optimizer("trajectory missing".into()));
+                };
+                // the forward sensitivities need every step's fields: a checkpointed trajectory
+                // is recorded again in full for them (the memory of one unbounded run)
+                let full;
+                let traj = if traj.fields.len() == traj.steps.len() + 1 {
+                    traj
+                } else {
+                    let opts = SolverOptions {
+                        record_fields: true,
+                        checkpoint_every: 0,
+                        ..t.solver_options.clone()
+                    };
+                    full = w
+                        .solver
+                        .run(&t.model, p.law, c, &t.schedule, &opts)
+                        .map_err(|source| IdentifyError::Forward {
+                            params: c.to_vec(),
+                            source,
+                        })?;
+                    &full
+                };
+                let sens = w
+                    .adjoint
+                    .sensitivities(&t.model, p.law, c, traj)
+                    .map_err(|source| IdentifyError::Adjoint {
+                        params: c.to_vec(),
+                        source,
+                    })?;
+                let mut jac = vec![vec![0.0; np]; t.schedule.t.len()];
+                for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
+                    if s.on_schedule {
+                        jac[s.schedule_index].clone_from(row);
+                    }
+                }
+                te.jacobian = Some(jac.clone());
+                Ok(jac)
+            },
+        );
+        let mut jac = Vec::with_capacity(p.target.len());
+        for j in jacs {
+            jac.extend(j?);
         }
         e.jacobian = Some(jac.clone());
         Ok(jac)

@@ -143,7 +143,7 @@ fn one_forward_and_one_adjoint_per_point() {
     assert_eq!(j, j2);
     assert_eq!(j, j3);
     assert_eq!(g, g2);
-    assert_eq!(f.len(), p.schedule.t.len());
+    assert_eq!(f.len(), p.schedule().t.len());
     let n = ev.counts();
     assert_eq!((n.forward, n.adjoint), (1, 1), "{n:?}");
     // a different bit pattern is a different point

@@ -599,6 +599,8 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         refine: false,
         starts: None,
         profiles: None,
+        // the indents are the parallel work: one thread each
+        jobs: Some(1),
     };
     let mut status = IndentStatus {
         id: indent.id.clone(),

@@ -56,6 +56,9 @@ pub struct CheckOptions {
     pub tol: f64,
     /// Also difference at relative steps [`SCAN_STEPS`].
     pub scan: bool,
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on; required
+    /// for one, refused for a one-test configuration.
+    pub test: Option<usize>,
 }
 
 impl CheckOptions {
@@ -68,6 +71,7 @@ impl CheckOptions {
             rel_step: 1e-5,
             tol: 1e-6,
             scan: false,
+            test: None,
         }
     }
 }
@@ -182,7 +186,11 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let name = args.config.name();
-    let cfg = args.config.load(&args.sets)?;
+    let cfg = args
+        .config
+        .load(&args.sets)?
+        .one_test(args.test, "gradient-check", &name)
+        .kind(ErrorKind::Config)?;
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
     crate::config::refuse_finite_gradient(&cfg, "`gradient-check`").kind(ErrorKind::Config)?;
     let names = param_names(law);
@@ -273,7 +281,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
     let problem = Problem::new(model, law, schedule, &record, None, opts.clone())
         .with_context(|| format!("cannot compare `{data_name}` with `{name}`"))
         .kind(ErrorKind::Data)?;
-    let model = &problem.model;
+    let model = &problem.model();
 
     // adjoint and sensitivities at the check point
     let start = Instant::now();
@@ -282,7 +290,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         model,
         law,
         &point,
-        &problem.schedule,
+        &problem.schedule(),
         &opts,
         &name,
     )
@@ -312,7 +320,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             model,
             law,
             c,
-            &problem.schedule,
+            &problem.schedule(),
             &fd_opts,
             &name,
         )
@@ -386,7 +394,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         sensitivity_seconds: sens.seconds,
         fd_seconds,
         fd_forward_solves: solves,
-        schedule_times: problem.schedule.t.len(),
+        schedule_times: problem.schedule().t.len(),
         data_name,
         synthesized,
         failures,

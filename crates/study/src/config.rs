@@ -60,10 +60,47 @@ pub struct Config {
     /// What `indentify identify` identifies and how (optional; see [`IdentifySection`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identify: Option<IdentifySection>,
+    /// A joint fit: several tests sharing the law's parameters, each with its own
+    /// `history` or `data` and optionally its own `specimen`, `punch`, `contact` and
+    /// `weight` (the top-level specimen, punch and contact are the defaults). With
+    /// `tests`, the top level has neither `history` nor `data`. See [`TestSpec`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tests: Option<Vec<TestSpec>>,
     /// The folder relative to which `data.file` is found (the configuration file's own);
     /// not part of the file.
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
+}
+
+/// One test of a joint fit (`tests: [...]`): what differs from the top level. A test
+/// gives exactly one of `history` and `data`; `specimen`, `punch` and `contact` default to
+/// the top-level ones; `weight` (its factor `w_k` in `J = sum_k w_k J_k`) defaults to
+/// `1 / (n_k F_max,k^2)` (`n_k` data points, largest data force `F_max,k`), so that every
+/// test counts about equally whatever its force scale and number of points.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "test")]
+pub struct TestSpec {
+    /// A label for reports (default `test K`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The specimen of this test (default: the top-level one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specimen: Option<Specimen>,
+    /// The punch of this test (default: the top-level one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub punch: Option<Punch>,
+    /// The contact direction of this test (default: the top-level one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactKind>,
+    /// The depth history of this test (or `data`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub history: Option<History>,
+    /// The measured record of this test (or `history`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data: Option<DataSection>,
+    /// Its weight `w_k > 0` in the joint cost (default `1 / (n_k F_max,k^2)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
 }
 
 /// A measured record: the file, its format and test, and its preprocessing (the records
@@ -757,6 +794,7 @@ impl Reference {
             data: None,
             solver: SolverConfig::default(),
             identify: Some(self.identify_section()),
+            tests: None,
             base_dir: None,
         }
     }
@@ -812,6 +850,9 @@ impl Config {
     /// # Errors
     /// The first invalid input, naming its field, value and what is allowed.
     pub fn validate(&self) -> Result<()> {
+        if let Some(tests) = &self.tests {
+            return self.validate_joint(tests);
+        }
         self.specimen.validate()?;
         self.punch.validate()?;
         self.law.build()?;
@@ -852,6 +893,132 @@ impl Config {
             id.validate(&self.law)?;
         }
         Ok(())
+    }
+
+    /// [`Config::validate`] of a joint configuration: a non-empty list, no top-level
+    /// `history` or `data`, every test valid as a one-test configuration, weights finite
+    /// and > 0.
+    fn validate_joint(&self, tests: &[TestSpec]) -> Result<()> {
+        if tests.is_empty() {
+            bail!(
+                "`tests` is empty: expected a list of at least one test, each with its own \
+                 `history` or `data`, e.g. tests: [(history: (segments: [...])), ...]; or \
+                 remove `tests` and give `history` or `data` at the top level"
+            );
+        }
+        for (field, given) in [
+            ("history", self.history.is_some()),
+            ("data", self.data.is_some()),
+        ] {
+            if given {
+                bail!(
+                    "both `tests` and a top-level `{field}` are given, which is ambiguous: with \
+                     `tests`, each test gives its own `history` or `data` \
+                     (tests[K].{field}); move the top-level `{field}` into the tests or remove \
+                     `tests`"
+                );
+            }
+        }
+        for (k, t) in tests.iter().enumerate() {
+            if let Some(w) = t.weight {
+                if !(w.is_finite() && w > 0.0) {
+                    bail!(
+                        "tests[{k}].weight = {w} is not allowed: expected a finite number > 0 \
+                         (or no weight: the default 1/(n F_max^2) makes every test count \
+                         equally)"
+                    );
+                }
+            }
+            if t.history.is_none() && t.data.is_none() {
+                bail!(
+                    "tests[{k}] has neither `history` nor `data`: expected its depth history \
+                     (history: (segments: [...])) or a measured record (data: (file: \"...\"))"
+                );
+            }
+            if t.history.is_some() && t.data.is_some() {
+                bail!(
+                    "tests[{k}] has both `history` and `data`: with a measured record its depth \
+                     drives the simulation; remove one of them"
+                );
+            }
+            self.test_config(k)?
+                .validate()
+                .with_context(|| format!("in tests[{k}]"))?;
+        }
+        if let Some(id) = &self.identify {
+            id.validate(&self.law)?;
+        }
+        Ok(())
+    }
+
+    /// The number of tests: the length of `tests`, or 1.
+    pub fn n_tests(&self) -> usize {
+        self.tests.as_ref().map_or(1, Vec::len)
+    }
+
+    /// Test `k` (from 0) of a joint configuration as a one-test configuration: its own
+    /// history or data, specimen, punch and contact (defaulting to the top-level ones),
+    /// the shared law, solver and identify sections.
+    ///
+    /// # Errors
+    /// A configuration without `tests`, or `k` out of range.
+    pub fn test_config(&self, k: usize) -> Result<Config> {
+        let tests = self
+            .tests
+            .as_ref()
+            .ok_or_else(|| anyhow!("the configuration has no `tests`"))?;
+        let t = tests.get(k).ok_or_else(|| {
+            anyhow!(
+                "there is no tests[{k}]: the configuration has {} tests (tests[0] to tests[{}])",
+                tests.len(),
+                tests.len().saturating_sub(1)
+            )
+        })?;
+        Ok(Config {
+            specimen: t.specimen.clone().unwrap_or_else(|| self.specimen.clone()),
+            punch: t.punch.clone().unwrap_or_else(|| self.punch.clone()),
+            contact: t.contact.unwrap_or(self.contact),
+            kinematics: self.kinematics,
+            law: self.law.clone(),
+            history: t.history.clone(),
+            data: t.data.clone(),
+            solver: self.solver.clone(),
+            identify: self.identify.clone(),
+            tests: None,
+            base_dir: self.base_dir.clone(),
+        })
+    }
+
+    /// The label of test `k` (from 0): its `name`, or `test K+1`.
+    pub fn test_name(&self, k: usize) -> String {
+        self.tests
+            .as_ref()
+            .and_then(|t| t.get(k))
+            .and_then(|t| t.name.clone())
+            .unwrap_or_else(|| format!("test {}", k + 1))
+    }
+
+    /// The one-test configuration a command that runs one test works on: `self` without
+    /// `tests` (and no `test` asked), or test `test` (from 1) of a joint configuration.
+    ///
+    /// # Errors
+    /// A joint configuration without `test` (naming `--test` and the range), a `test` out
+    /// of range, or a `test` asked of a configuration without `tests`.
+    pub fn one_test(self, test: Option<usize>, command: &str, name: &str) -> Result<Config> {
+        match (self.tests.as_ref().map(Vec::len), test) {
+            (None, None) => Ok(self),
+            (None, Some(k)) => {
+                bail!("--test {k} is not allowed: `{name}` has no `tests` list (it is one test)")
+            }
+            (Some(n), None) => bail!(
+                "`{name}` is a joint configuration of {n} tests (`tests`): `{command}` works on \
+                 one test at a time; choose it with --test K (1 to {n})"
+            ),
+            (Some(n), Some(k)) if k == 0 || k > n => {
+                bail!("--test {k} is not allowed: `{name}` has {n} tests, numbered 1 to {n}")
+            }
+            (Some(_), Some(k)) => self.test_config(k - 1),
+        }
     }
 
     /// The discrete time schedule of the prescribed history (`history`).

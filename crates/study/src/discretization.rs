@@ -195,12 +195,12 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
     let (mesh, _, _) = fine_mesher
         .build_for(&config.punch)
         .context("cannot build the refined mesh")?;
-    let elements = (problem.model.mesh.elements.len(), mesh.elements.len());
+    let elements = (problem.model().mesh.elements.len(), mesh.elements.len());
     let model = Model::with_contact(mesh, config.punch.clone(), config.contact)
         .and_then(|m| m.with_kinematics(config.kinematics))
         .context("cannot build the refined model")?;
-    let (schedule, steps) = refine_schedule(config.history.as_ref(), &problem.schedule)?;
-    let n = problem.schedule.t.len();
+    let (schedule, steps) = refine_schedule(config.history.as_ref(), &problem.schedule())?;
+    let n = problem.schedule().t.len();
     if schedule.t.len() != 2 * n - 1 {
         bail!(
             "the refined schedule has {} times, expected {}",

@@ -33,6 +33,9 @@ pub struct GradientOptions {
     pub data: Option<PathBuf>,
     /// Record no fields, save the state every N schedule steps and replay (bounded memory).
     pub checkpoint: Option<usize>,
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on; required
+    /// for one, refused for a one-test configuration.
+    pub test: Option<usize>,
 }
 
 impl GradientOptions {
@@ -43,6 +46,7 @@ impl GradientOptions {
             sets: Vec::new(),
             data,
             checkpoint: None,
+            test: None,
         }
     }
 }
@@ -99,7 +103,11 @@ pub struct GradientOutcome {
 /// non-finite gradient.
 pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let name = opts.config.name();
-    let mut cfg = opts.config.load(&opts.sets)?;
+    let mut cfg = opts
+        .config
+        .load(&opts.sets)?
+        .one_test(opts.test, "gradient", &name)
+        .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
     crate::config::refuse_finite_gradient(&cfg, "`gradient`").kind(ErrorKind::Config)?;
     ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))
@@ -145,7 +153,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     )
     .with_context(|| format!("cannot compare `{}` with `{name}`", curve.name))
     .kind(ErrorKind::Data)?;
-    let model = &problem.model;
+    let model = &problem.model();
 
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let start = Instant::now();
@@ -154,7 +162,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         model,
         law,
         &params,
-        &problem.schedule,
+        &problem.schedule(),
         &solver_opts,
         &name,
     )
@@ -171,7 +179,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             &traj,
             &rho,
             &mut solver,
-            &problem.schedule,
+            &problem.schedule(),
             &solver_opts,
         )
     } else {
@@ -203,7 +211,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         forward_seconds,
         adjoint_seconds: grad.seconds,
         steps: traj.steps.len(),
-        schedule_times: problem.schedule.t.len(),
+        schedule_times: problem.schedule().t.len(),
         factorizations: grad.factorizations,
         forward_factorizations: traj.timing.factorizations,
         recorded_bytes: traj.recorded_bytes(),

@@ -68,6 +68,9 @@ pub struct IdentifyOptions {
     pub starts: Option<crate::explore::StartsOptions>,
     /// Profile-likelihood intervals of every free parameter after the fit (`--profiles`).
     pub profiles: Option<indentify_identify::profile::ProfileSettings>,
+    /// Threads solving the tests of a joint fit in parallel (`None`: the current rayon
+    /// pool, all cores by default). The results do not depend on it.
+    pub jobs: Option<usize>,
 }
 
 /// The default [`IdentifyOptions::memory_budget`]: 1 GiB.
@@ -98,6 +101,7 @@ impl IdentifyOptions {
             refine: true,
             starts: None,
             profiles: None,
+            jobs: None,
         }
     }
 }
@@ -199,12 +203,35 @@ pub struct IdentifyOutcome {
     /// Wall time of the whole pipeline (s).
     pub wall_seconds: f64,
     /// The discretization error of the fit (`None` with `refine: false`, or when the
-    /// refined run failed: then a warning says why).
+    /// refined run failed: then a warning says why; not computed for joint fits).
     pub discretization: Option<Discretization>,
     /// The multi-start summary (with [`IdentifyOptions::starts`]).
     pub multistart: Option<crate::explore::MultiStartOutcome>,
     /// The profile likelihoods (with [`IdentifyOptions::profiles`]).
     pub profiles: Option<Vec<indentify_identify::profile::Profile>>,
+    /// A joint fit's tests (empty for a one-test configuration): each test's curves and
+    /// fit quality. [`IdentifyOutcome::fit`] then holds every test's curves end to end
+    /// and [`IdentifyOutcome::quality`] the quality over all of them.
+    pub tests: Vec<TestFit>,
+}
+
+/// One test of a joint fit.
+#[derive(Clone, Debug, Serialize)]
+pub struct TestFit {
+    /// Its label (`name`, or `test K`).
+    pub name: String,
+    /// Where its data come from.
+    pub data: String,
+    /// Its weight `w_k` in `J = sum_k w_k J_k`.
+    pub weight: f64,
+    /// Whether the weight is the default `1 / (n F_max^2)`.
+    pub default_weight: bool,
+    /// Its share of the final cost, `w_k J_k` (N^2 times the weight's unit).
+    pub cost: f64,
+    /// Its curves.
+    pub fit: FitCurves,
+    /// R², RMS and largest residual of its final curve.
+    pub quality: Option<indentify_report::FitQuality>,
 }
 
 impl IdentifyOutcome {
@@ -349,6 +376,15 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
         // the data path replaces the configuration's record, read with its preprocessing
         d.file = absolute(path);
     }
+    if cfg.tests.is_some() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "`{name}` is a joint fit (a `tests` list): the cost map and the test design \
+                 take one test; choose one with `--set` on a copy holding that test"
+            ),
+        ));
+    }
     let prepared = prepare(&cfg, &name)?;
     let mut solver_opts = cfg.solver.options(false);
     let data = load_data(&prepared, opts, &name, law, &law_values, &solver_opts)?;
@@ -412,6 +448,34 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
             "--starts cannot be combined with --resume: a multi-start has no single history to \
              continue",
         ));
+    }
+    if let Some(tests) = &resolved.cfg.tests {
+        if opts.starts.is_some() || opts.profiles.is_some() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                "--starts and --profiles take a one-test configuration: they do not run on a \
+                 joint fit (a `tests` list) yet",
+            ));
+        }
+        let n_tests = tests.len();
+        let Resolved {
+            cfg,
+            law,
+            law_values,
+            id_cfg,
+            ..
+        } = resolved;
+        return run_joint(
+            opts,
+            observer,
+            &cfg,
+            n_tests,
+            law,
+            &law_values,
+            id_cfg,
+            paths,
+            wall,
+        );
     }
     let Setup {
         name,
@@ -517,6 +581,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         discretization: None,
         multistart,
         profiles: None,
+        tests: Vec::new(),
     };
     if let Some(settings) = &opts.profiles {
         if opts.cancel.is_raised() {
@@ -571,6 +636,335 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// The noise seed of test `k` (from 0) of a joint fit: `seed` for the first test, then
+/// `seed + k * 0x9E3779B97F4A7C15` (wrapping), so that neighbouring seeds of a study do
+/// not share realizations between their tests.
+pub fn test_seed(seed: u64, k: usize) -> u64 {
+    seed.wrapping_add((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// [`run`] of a joint configuration (`tests: [...]`): every test prepared, its data
+/// loaded (synthesized with the noise seed [`test_seed`] for test `k`), weighted, and the
+/// shared parameters fitted to all of them at once.
+#[allow(clippy::too_many_arguments)]
+fn run_joint(
+    opts: &IdentifyOptions,
+    observer: &mut dyn Observer,
+    cfg: &Config,
+    n_tests: usize,
+    law: &'static dyn Law,
+    law_values: &[f64],
+    id_cfg: IdentifyConfig,
+    paths: Option<Paths>,
+    wall: Instant,
+) -> Result<IdentifyOutcome> {
+    let name = opts.config.name();
+    let names = param_names(law);
+    if opts.data.is_some() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "--data replaces the record of a one-test configuration, and `{name}` is a \
+                 joint configuration of {n_tests} tests: give each test's record in \
+                 tests[K].data"
+            ),
+        ));
+    }
+    let mut tests = Vec::with_capacity(n_tests);
+    let mut infos = Vec::with_capacity(n_tests);
+    let mut warnings = Vec::new();
+    for k in 0..n_tests {
+        let sub = cfg
+            .test_config(k)
+            .with_context(|| format!("in tests[{k}] of `{name}`"))
+            .kind(ErrorKind::Config)?;
+        let label = cfg.test_name(k);
+        let sub_name = format!("{name} [{label}]");
+        if opts.noise.is_some() && sub.data.is_some() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "noise perturbs synthesized data only, and tests[{k}] of `{name}` fits a \
+                     measured record (its `data` section)"
+                ),
+            ));
+        }
+        let prepared = prepare(&sub, &sub_name)?;
+        let mut solver_opts = sub.solver.options(false);
+        let sub_opts = IdentifyOptions {
+            noise: opts.noise.map(|(a, seed)| (a, test_seed(seed, k))),
+            ..opts.clone()
+        };
+        let data = load_data(
+            &prepared,
+            &sub_opts,
+            &sub_name,
+            law,
+            law_values,
+            &solver_opts,
+        )?;
+        solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
+        let Prepared {
+            schedule,
+            model,
+            measured,
+            warnings: w,
+            ..
+        } = prepared;
+        warnings.extend(w);
+        let given = cfg.tests.as_ref().and_then(|t| t[k].weight);
+        let weight = match given {
+            Some(w) => w,
+            None => indentify_identify::Test::default_weight(&schedule, &data.record)
+                .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
+                .kind(ErrorKind::Data)?,
+        };
+        let test = indentify_identify::Test::new(
+            model,
+            schedule,
+            &data.record,
+            None,
+            solver_opts.clone(),
+            weight,
+        )
+        .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
+        .kind(ErrorKind::Data)?;
+        tests.push(test);
+        infos.push((label, data, measured, given.is_none(), solver_opts));
+    }
+    let mut problem =
+        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    if let Some(j) = opts.jobs {
+        problem
+            .set_threads(j)
+            .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    }
+    let describe = infos
+        .iter()
+        .map(|(label, d, ..)| format!("{label}: {}", d.describe))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let truth = infos.first().and_then(|(_, d, ..)| d.truth.clone());
+    let (mut history, resume_from) = match &paths {
+        Some(p) if opts.resume => {
+            let (w, last) = HistoryWriter::resume(&p.history, &names).kind(ErrorKind::Io)?;
+            (Some(w), Some(last))
+        }
+        Some(p) => (
+            Some(HistoryWriter::create(&p.history, &names).kind(ErrorKind::Io)?),
+            None,
+        ),
+        None => (None, None),
+    };
+    observer.started(&RunInfo {
+        config: name.clone(),
+        law: law.name(),
+        names: names.clone(),
+        free: id_cfg.params.iter().map(|p| p.free).collect(),
+        held: id_cfg
+            .params
+            .iter()
+            .filter(|p| !p.free)
+            .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
+            .collect(),
+        method: id_cfg.method.name(),
+        max_iterations: id_cfg.stop.max_iterations,
+        resumed_at: resume_from.as_ref().map(|r| r.iteration),
+        data: format!("{n_tests} tests fitted jointly ({describe})"),
+        out: opts.out.clone(),
+    });
+    let result = optimize(
+        &problem,
+        &id_cfg,
+        resume_from.as_ref(),
+        history.as_mut(),
+        observer,
+    )
+    .map_err(|e| e.context(format!("the joint identification of `{name}` failed")))?;
+    // each test's curves at the start and at the result (the result's forces are known)
+    let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
+    let mut fits = Vec::with_capacity(n_tests);
+    for (k, (test, (label, data, _, default_weight, solver_opts))) in
+        problem.tests.iter().zip(&infos).enumerate()
+    {
+        let rows = problem.rows_of(k);
+        let quiet = SolverOptions {
+            record_fields: false,
+            ..solver_opts.clone()
+        };
+        let mut solver = DirectSolver::new(&test.model).kind(ErrorKind::Solver)?;
+        let f_start = forward(
+            &mut solver,
+            &test.model,
+            law,
+            &start_params,
+            &test.schedule,
+            &quiet,
+            &format!("{name} [{label}]"),
+        )
+        .kind(ErrorKind::Solver)?
+        .forces();
+        let f_final = result
+            .forces
+            .get(rows.clone())
+            .map(<[f64]>::to_vec)
+            .unwrap_or_default();
+        let fit = FitCurves {
+            t: test.schedule.t.clone(),
+            h: test.schedule.depth.clone(),
+            f_data: test.target.clone(),
+            f_start,
+            f_final,
+        };
+        fits.push(TestFit {
+            name: label.clone(),
+            data: data.describe.clone(),
+            weight: test.weight,
+            default_weight: *default_weight,
+            cost: test.cost_of(&fit.f_final),
+            quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
+            fit,
+        });
+    }
+    let mut all = FitCurves {
+        t: Vec::new(),
+        h: Vec::new(),
+        f_data: Vec::new(),
+        f_start: Vec::new(),
+        f_final: Vec::new(),
+    };
+    for f in &fits {
+        all.t.extend(&f.fit.t);
+        all.h.extend(&f.fit.h);
+        all.f_data.extend(&f.fit.f_data);
+        all.f_start.extend(&f.fit.f_start);
+        all.f_final.extend(&f.fit.f_final);
+    }
+    if opts.refine {
+        tracing::info!(
+            "  the discretization error (--refine) is estimated for one-test configurations \
+             only: not computed for this joint fit (run one test with --set or its own \
+             configuration)"
+        );
+    }
+    let mut outcome = IdentifyOutcome {
+        config: name.clone(),
+        law: law.name(),
+        names,
+        quality: indentify_report::FitQuality::compute(&all.f_data, &all.f_final).ok(),
+        result,
+        truth,
+        data: format!("{n_tests} tests: {describe}"),
+        multistart: None,
+        profiles: None,
+        test: None,
+        fit: all,
+        files: None,
+        resumed: resume_from.is_some(),
+        warnings,
+        wall_seconds: 0.0,
+        discretization: None,
+        tests: fits,
+    };
+    if let Some(p) = paths {
+        outcome.files = Some(write_joint_report(&p, &outcome, opts, &infos)?);
+    }
+    outcome.wall_seconds = wall.elapsed().as_secs_f64();
+    Ok(outcome)
+}
+
+/// The report of a joint fit: result.json (with a `tests` list), fit.csv (a `test` column,
+/// every test's rows), and with figures one report folder per test, `test-K/` (report.md,
+/// report.json and the figures of that test's curves at the shared parameters).
+fn write_joint_report(
+    paths: &Paths,
+    outcome: &IdentifyOutcome,
+    opts: &IdentifyOptions,
+    infos: &[(String, Data, Option<Measured>, bool, SolverOptions)],
+) -> Result<ReportFiles> {
+    let mut text = String::from("test,t,h,F_data,F_start,F_final\n");
+    for (k, t) in outcome.tests.iter().enumerate() {
+        for line in fit_csv(&t.fit).lines().skip(1) {
+            text.push_str(&format!("{},{line}\n", k + 1));
+        }
+    }
+    crate::atomic::write(&paths.fit, text).kind(ErrorKind::Io)?;
+    let json = serde_json::to_string_pretty(&result_json(outcome, opts, paths))
+        .context("cannot represent the result")
+        .kind(ErrorKind::Io)?;
+    crate::atomic::write(&paths.result, json + "\n").kind(ErrorKind::Io)?;
+    let mut files = ReportFiles {
+        result: paths.result.clone(),
+        history: paths.history.clone(),
+        fit: paths.fit.clone(),
+        report: None,
+        report_error: None,
+    };
+    if !opts.figures {
+        return Ok(files);
+    }
+    let history_records = crate::history::read_all(&paths.history, outcome.names.len());
+    let mut all_figures = Vec::new();
+    let mut first = None;
+    for (k, (t, (_, _, measured, _, _))) in outcome.tests.iter().zip(infos).enumerate() {
+        let dir = paths.dir.join(format!("test-{}", k + 1));
+        let (file, test) = match measured {
+            Some(m) => (
+                m.path.display().to_string(),
+                m.raw.meta.test_name.clone().unwrap_or_default(),
+            ),
+            None => (t.data.clone(), String::new()),
+        };
+        let written = crate::atomic::ensure_writable_dir(&dir).and_then(|()| {
+            figures::write(
+                &dir,
+                &outcome.result,
+                &figures::Inputs {
+                    title: format!(
+                        "Joint identification of {} parameters: {}, {} of {}",
+                        outcome.law,
+                        outcome.config,
+                        t.name,
+                        outcome.tests.len()
+                    ),
+                    extra_markdown: String::new(),
+                    file,
+                    test,
+                    measured: measured.as_ref(),
+                    t: &t.fit.t,
+                    h: &t.fit.h,
+                    f_data: &t.fit.f_data,
+                    f_start: &t.fit.f_start,
+                    f_final: &t.fit.f_final,
+                    history: &history_records,
+                    warnings: &outcome.warnings,
+                    discretization: None,
+                },
+            )
+        });
+        match written {
+            Ok(w) => {
+                all_figures.extend(w.figures);
+                if first.is_none() {
+                    first = Some((w.markdown, w.json));
+                }
+            }
+            Err(e) => {
+                tracing::warn!(
+                    "warning: no report or figures for {}: {e:#} (result.json, history.csv and \
+                     fit.csv are written)",
+                    t.name
+                );
+                files.report_error = Some(format!("{e:#}"));
+            }
+        }
+    }
+    if let Some((md, json)) = first {
+        files.report = Some((md, json, all_figures));
+    }
+    Ok(files)
 }
 
 /// One warning per parameter that the discretization moves by more than its standard
@@ -823,7 +1217,7 @@ fn fit_curves(
     name: &str,
 ) -> Result<FitCurves> {
     let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
-    let mut solver = DirectSolver::new(&problem.model).kind(ErrorKind::Solver)?;
+    let mut solver = DirectSolver::new(&problem.model()).kind(ErrorKind::Solver)?;
     let quiet = SolverOptions {
         record_fields: false,
         ..opts.clone()
@@ -831,10 +1225,10 @@ fn fit_curves(
     let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
         Ok(forward(
             &mut solver,
-            &problem.model,
+            &problem.model(),
             law,
             c,
-            &problem.schedule,
+            &problem.schedule(),
             &quiet,
             name,
         )
@@ -844,8 +1238,8 @@ fn fit_curves(
     let f_start = curve_at(&start_params)?;
     let f_final = curve_at(&result.c)?;
     Ok(FitCurves {
-        t: problem.schedule.t.clone(),
-        h: problem.schedule.depth.clone(),
+        t: problem.schedule().t.clone(),
+        h: problem.schedule().depth.clone(),
         f_data: problem.target.clone(),
         f_start,
         f_final,
@@ -914,8 +1308,8 @@ fn write_report(
             file,
             test,
             measured,
-            t: &problem.schedule.t,
-            h: &problem.schedule.depth,
+            t: &problem.schedule().t,
+            h: &problem.schedule().depth,
             f_data: &problem.target,
             f_start: &outcome.fit.f_start,
             f_final: &outcome.fit.f_final,
@@ -1077,8 +1471,25 @@ struct ResultJson {
     multistart: Option<crate::explore::MultiStartOutcome>,
     #[serde(skip_serializing_if = "Option::is_none")]
     profiles: Option<Vec<crate::explore::ProfileJson>>,
+    /// A joint fit's tests, each with its weight, share of J and fit quality.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    tests: Vec<TestJson>,
     history: String,
     fit: String,
+}
+
+/// One test of a joint fit in result.json.
+#[derive(Debug, Serialize)]
+struct TestJson {
+    name: String,
+    data: String,
+    weight: f64,
+    default_weight: bool,
+    #[serde(rename = "wJ")]
+    cost: f64,
+    n: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fit_quality: Option<FitJson>,
 }
 
 /// The discretization error in result.json.
@@ -1136,6 +1547,16 @@ struct FitJson {
     rms_rel: f64,
     max_abs: f64,
     n: usize,
+}
+
+fn fit_json(q: &indentify_report::FitQuality) -> FitJson {
+    FitJson {
+        r2: q.r2,
+        rms: q.rms,
+        rms_rel: q.rms_rel,
+        max_abs: q.max_abs,
+        n: q.n,
+    }
 }
 
 /// Noise of synthesized data.
@@ -1199,13 +1620,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         seconds: r.seconds,
         resumed: o.resumed,
         warnings: o.warnings.clone(),
-        fit_quality: o.quality.as_ref().map(|q| FitJson {
-            r2: q.r2,
-            rms: q.rms,
-            rms_rel: q.rms_rel,
-            max_abs: q.max_abs,
-            n: q.n,
-        }),
+        fit_quality: o.quality.as_ref().map(fit_json),
         identifiability: r.identifiability.as_ref().map(IdentifiabilityJson::from),
         discretization: o
             .discretization
@@ -1216,6 +1631,19 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
             .profiles
             .as_ref()
             .map(|p| p.iter().map(crate::explore::ProfileJson::from).collect()),
+        tests: o
+            .tests
+            .iter()
+            .map(|t| TestJson {
+                name: t.name.clone(),
+                data: t.data.clone(),
+                weight: t.weight,
+                default_weight: t.default_weight,
+                cost: t.cost,
+                n: t.fit.t.len(),
+                fit_quality: t.quality.as_ref().map(fit_json),
+            })
+            .collect(),
         history: paths.history.display().to_string(),
         fit: paths.fit.display().to_string(),
     }

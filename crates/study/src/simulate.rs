@@ -31,6 +31,9 @@ pub struct SimulateOptions {
     /// Matrix Market (`K_step_N.mtx`, through sprs), with `equations.csv` (equation, node,
     /// component, r, z, constrained).
     pub matrix_market: Option<(PathBuf, usize)>,
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on; required
+    /// for one, refused for a one-test configuration.
+    pub test: Option<usize>,
 }
 
 impl SimulateOptions {
@@ -43,6 +46,7 @@ impl SimulateOptions {
             out: None,
             vtu: None,
             matrix_market: None,
+            test: None,
         }
     }
 }
@@ -91,7 +95,11 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     let start = Instant::now();
     let name = opts.config.name();
     crate::identify::check_noise(opts.noise)?;
-    let cfg = opts.config.load(&opts.sets)?;
+    let cfg = opts
+        .config
+        .load(&opts.sets)?
+        .one_test(opts.test, "simulate", &name)
+        .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
     let prepared = prepare(&cfg, &name)?;
     let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);

@@ -38,6 +38,10 @@ pub struct Args {
     /// `--set law.eta=25000 --set specimen.nr=10`.
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     pub sets: Vec<String>,
+
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on.
+    #[arg(long, value_name = "K")]
+    pub test: Option<usize>,
 }
 
 /// The JSON report.
@@ -72,6 +76,7 @@ pub fn run(args: &Args) -> Result<()> {
     let g = gradient::run(&GradientOptions {
         config: ConfigSource::Path(args.config.clone()),
         sets: args.sets.clone(),
+        test: args.test,
         data: args.data.clone(),
         checkpoint: args.checkpoint.map(|n| n as usize),
     })?;

@@ -44,6 +44,10 @@ pub struct Args {
     /// Override a scalar of the configuration by its dotted path (repeatable).
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     pub sets: Vec<String>,
+
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on.
+    #[arg(long, value_name = "K")]
+    pub test: Option<usize>,
 }
 
 /// Runs the check, prints the comparison, and fails if a tolerance is exceeded.
@@ -55,6 +59,7 @@ pub fn run(args: &Args) -> Result<()> {
     let r = check::run(&CheckOptions {
         config: ConfigSource::Path(args.config.clone()),
         sets: args.sets.clone(),
+        test: args.test,
         data: args.data.clone(),
         rel_step: args.rel_step,
         tol: args.tol,

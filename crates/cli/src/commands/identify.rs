@@ -70,6 +70,11 @@ pub struct Args {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub checkpoint: Option<u32>,
 
+    /// Threads solving the tests of a joint fit (`tests: [...]`) in parallel; default: all
+    /// cores. The result is bit-identical for any number.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub jobs: Option<u32>,
+
     /// Without --checkpoint, checkpoint automatically when recording every step's fields
     /// would take more than this many MB.
     #[arg(long, value_name = "MB", default_value_t = 1024)]
@@ -242,6 +247,7 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
             .starts
             .map(|n| StartsOptions::new(n as usize, args.seed.unwrap_or(1))),
         profiles: args.profiles.then(ProfileSettings::default),
+        jobs: args.jobs.map(|n| n as usize),
     })
 }
 
@@ -406,13 +412,42 @@ pub fn summary(o: &IdentifyOutcome) -> String {
     ));
     if let Some(q) = &o.quality {
         text.push_str(&format!(
-            "  fit: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest \
+            "  fit{}: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest \
              residual {:.4e} N ({} points)\n",
+            if o.tests.is_empty() {
+                String::new()
+            } else {
+                format!(" of the {} tests together", o.tests.len())
+            },
             q.r2,
             q.rms,
             100.0 * q.rms_rel,
             q.max_abs,
             q.n
+        ));
+    }
+    for t in &o.tests {
+        let q = t
+            .quality
+            .as_ref()
+            .map_or("no fit quality".to_string(), |q| {
+                format!(
+                    "R^2 = {:.6}, RMS {:.3}% of F_max ({} points)",
+                    q.r2,
+                    100.0 * q.rms_rel,
+                    q.n
+                )
+            });
+        text.push_str(&format!(
+            "    {}: {q}; weight {:.4e}{}, w J = {:.4e}\n",
+            t.name,
+            t.weight,
+            if t.default_weight {
+                " (1/(n F_max^2))"
+            } else {
+                ""
+            },
+            t.cost
         ));
     }
     if let Some(i) = &result.identifiability {

@@ -52,6 +52,10 @@ pub struct Args {
     /// --set history.segments.0.depth=0.2 --set solver.max_cuts=4`.
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     pub sets: Vec<String>,
+
+    /// The test (from 1) of a joint configuration (`tests: [...]`) to work on.
+    #[arg(long, value_name = "K")]
+    pub test: Option<usize>,
 }
 
 /// Runs the simulation and writes its outputs; a summary goes to standard error.
@@ -63,6 +67,7 @@ pub fn run(args: &Args) -> Result<()> {
     let o = simulate::run(&SimulateOptions {
         config: ConfigSource::Path(args.config.clone()),
         sets: args.sets.clone(),
+        test: args.test,
         noise: args.noise.map(|a| (a, args.seed)),
         out: args.out.clone(),
         vtu: args.vtu.clone(),

@@ -1,0 +1,239 @@
+//! Joint fits of several tests sharing one law's parameters: the joint cost, gradient and
+//! Jacobian against the separate one-test problems and against central finite
+//! differences over whole histories, recovery of Maxwell's (E, eta) from two loading rates,
+//! bit-identical results for 1 and 2 threads, and the bad-input errors.
+//!
+//! Reference: the one-test problems (J = sum_k w_k J_k, dJ/dc = sum_k w_k dJ_k/dc, the
+//! Jacobian rows stacked), central finite differences of J, and the truth that generated
+//! the exact synthetic data.
+//!
+//! ```text
+//!      cone 68 deg; test A: 0 -> 0.1 mm in 0.2 s, hold 1 s; test B: 0 -> 0.05 mm in 2 s, hold 1 s
+//!        \   /
+//!   z=0 --\-/--------------  top: contact candidates
+//!        |                |  4 x 4 mm cylinder, 6 x 6 Q8 graded 1.45
+//!  axis  |                |
+//!        +----------------+  bottom: u_z = 0
+//! ```
+//! Parameters: E = 20000 MPa, nu = 0.3 (fixed), eta = 30000 MPa s.
+
+use indentify_contact::{DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
+use indentify_identify::{
+    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, ParamSpec, Problem, Test,
+    identify,
+};
+use indentify_laws::Maxwell;
+use indentify_mesh::CylinderMesher;
+
+const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
+
+fn model() -> Model {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 6,
+        nz: 6,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    Model::new(
+        mesh,
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+    )
+    .unwrap()
+}
+
+fn schedule(load_time: f64, depth: f64) -> Schedule {
+    Schedule::from_segments(&[
+        Segment {
+            duration: load_time,
+            depth,
+            steps: 5,
+        },
+        Segment {
+            duration: 1.0,
+            depth,
+            steps: 4,
+        },
+    ])
+    .unwrap()
+}
+
+fn schedules() -> [Schedule; 2] {
+    [schedule(0.2, 0.1), schedule(2.0, 0.05)]
+}
+
+/// The exact record of the truth on `s`.
+fn record(s: &Schedule) -> ForceRecord {
+    let m = model();
+    let f = DirectSolver::new(&m)
+        .unwrap()
+        .run(&m, &Maxwell, &TRUTH, s, &SolverOptions::default())
+        .unwrap()
+        .forces();
+    ForceRecord::new(s.t.clone(), f).unwrap()
+}
+
+/// The joint problem of both tests with their default weights, and those weights.
+fn joint() -> (Problem, Vec<f64>) {
+    let mut tests = Vec::new();
+    let mut weights = Vec::new();
+    for s in schedules() {
+        let r = record(&s);
+        let w = Test::default_weight(&s, &r).unwrap();
+        weights.push(w);
+        tests.push(Test::new(model(), s, &r, None, SolverOptions::default(), w).unwrap());
+    }
+    (Problem::joint(&Maxwell, tests).unwrap(), weights)
+}
+
+fn specs(e: f64, eta: f64) -> Vec<ParamSpec> {
+    vec![
+        ParamSpec::free("E", e, 1000.0, 1e6),
+        ParamSpec::fixed("nu", 0.3),
+        ParamSpec::free("eta", eta, 1000.0, 1e7),
+    ]
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+/// The joint cost, gradient, forces and Jacobian shall be the weighted sum (and the
+/// stacking) of the separate tests' ones, and the default weight shall be 1/(n F_max^2).
+#[test]
+fn joint_problem_is_the_weighted_sum_of_its_tests() {
+    let (p, w) = joint();
+    let c = [15000.0, 0.3, 45000.0];
+    let mut ev = Evaluator::new(&p).unwrap();
+    let (j, g) = ev.cost_and_gradient(&c).unwrap();
+    let f = ev.forces(&c).unwrap();
+    let jac = ev.jacobian(&c).unwrap();
+    assert_eq!(f.len(), p.target.len());
+    assert_eq!(jac.len(), p.target.len());
+    let counts = ev.counts();
+    assert_eq!(
+        (counts.forward, counts.adjoint, counts.sensitivities),
+        (2, 2, 2)
+    );
+    let mut j_sum = 0.0;
+    let mut g_sum = [0.0; 3];
+    for (k, s) in schedules().into_iter().enumerate() {
+        let r = record(&s);
+        // the default weight from its definition
+        let n = s.t.len() as f64;
+        let f_max = r.force.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(rel(w[k], 1.0 / (n * f_max * f_max)) < 1e-12);
+        let single =
+            Problem::new(model(), &Maxwell, s, &r, None, SolverOptions::default()).unwrap();
+        let mut e1 = Evaluator::new(&single).unwrap();
+        let (jk, gk) = e1.cost_and_gradient(&c).unwrap();
+        j_sum += w[k] * jk;
+        for i in 0..3 {
+            g_sum[i] += w[k] * gk[i];
+        }
+        let rows = p.rows_of(k);
+        assert_eq!(&f[rows.clone()], e1.forces(&c).unwrap().as_slice());
+        assert_eq!(&jac[rows], e1.jacobian(&c).unwrap().as_slice());
+    }
+    assert!(rel(j, j_sum) < 1e-12, "J = {j} vs {j_sum}");
+    for i in [0, 2] {
+        assert!(
+            rel(g[i], g_sum[i]) < 1e-10,
+            "g[{i}] = {} vs {}",
+            g[i],
+            g_sum[i]
+        );
+    }
+}
+
+/// The joint gradient shall match central finite differences of the joint cost over the
+/// whole histories (relative step 1e-6; agreement 1e-5).
+#[test]
+fn joint_gradient_matches_finite_differences() {
+    let (p, _) = joint();
+    let c = [15000.0, 0.3, 45000.0];
+    let mut ev = Evaluator::new(&p).unwrap();
+    let (_, g) = ev.cost_and_gradient(&c).unwrap();
+    for i in [0, 2] {
+        let h = 1e-6 * c[i];
+        let mut cp = c;
+        let mut cm = c;
+        cp[i] += h;
+        cm[i] -= h;
+        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * h);
+        println!("dJ/dc[{i}]: adjoint {:.10e}, fd {fd:.10e}", g[i]);
+        assert!(rel(g[i], fd) < 1e-5, "dJ/dc[{i}] = {} vs fd {fd}", g[i]);
+    }
+}
+
+/// Levenberg-Marquardt and BFGS on the joint problem shall recover (E, eta) within 1e-4
+/// and give bit-identical runs on 1 and 2 threads (tests combined in test order).
+#[test]
+fn joint_fit_recovers_truth_bit_identically_on_1_and_2_threads() {
+    let (p, _) = joint();
+    for method in [Method::LevenbergMarquardt, Method::Bfgs] {
+        let mut cfg = IdentifyConfig::new(specs(8000.0, 90000.0));
+        cfg.method = method;
+        cfg.stop.max_iterations = 40;
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| identify(&p, &cfg, &mut |_| {}).unwrap())
+        };
+        let r1 = run(1);
+        let r2 = run(2);
+        println!(
+            "{method:?}: {:?} after {} it, J = {:.3e}, {}",
+            r1.c, r1.iterations, r1.cost, r1.stop_reason
+        );
+        assert!(r1.stop_reason.is_converged(), "{}", r1.stop_reason);
+        assert!(rel(r1.c[0], TRUTH[0]) < 1e-4, "E = {}", r1.c[0]);
+        assert!(rel(r1.c[2], TRUTH[2]) < 1e-4, "eta = {}", r1.c[2]);
+        let bits = |r: &indentify_identify::IdentifyResult| {
+            let mut b: Vec<u64> = r.c.iter().map(|v| v.to_bits()).collect();
+            b.push(r.cost.to_bits());
+            for h in &r.history {
+                b.push(h.cost.to_bits());
+                b.push(h.grad_norm.to_bits());
+                b.extend(h.params.iter().map(|v| v.to_bits()));
+            }
+            b.extend(r.forces.iter().map(|v| v.to_bits()));
+            if let Some(id) = &r.identifiability {
+                b.extend(id.std_dev.iter().map(|v| v.to_bits()));
+            }
+            b
+        };
+        assert_eq!(r1.iterations, r2.iterations);
+        assert_eq!(bits(&r1), bits(&r2), "{method:?}: 1 and 2 threads differ");
+    }
+}
+
+/// Bad input shall be refused with the field named: an empty list of tests, a test weight
+/// that is not finite and > 0.
+#[test]
+fn bad_joint_input_is_refused() {
+    let e = Problem::joint(&Maxwell, vec![]).unwrap_err();
+    assert!(
+        matches!(&e, IdentifyError::InvalidSpec { name, .. } if name == "tests"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("empty"), "{e}");
+    let s = schedule(0.2, 0.1);
+    let r = record(&s);
+    for w in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e = Test::new(model(), s.clone(), &r, None, SolverOptions::default(), w).unwrap_err();
+        assert!(matches!(e, IdentifyError::InvalidWeights { .. }), "{e}");
+        assert!(e.to_string().contains("> 0"), "{e}");
+    }
+    // a record that does not cover the history
+    let short = ForceRecord::new(vec![0.0, 0.5], vec![0.0, 1.0]).unwrap();
+    let e = Test::new(model(), s, &short, None, SolverOptions::default(), 1.0).unwrap_err();
+    assert!(matches!(e, IdentifyError::RecordDoesNotCover { .. }), "{e}");
+}
