@@ -118,8 +118,8 @@ pub fn run(args: &[String]) -> Result<()> {
             let within = errs.iter().all(|e| e.abs() <= 0.01);
             ok += usize::from(within);
             println!(
-                "| {} | {} ({}, {}, {}, {}) | {} | {} | {} | {} |",
-                format!("{method:?}"),
+                "| {:?} | {} ({}, {}, {}, {}) | {} | {} | {} | {} |",
+                method,
                 row,
                 start[0],
                 start[1],
@@ -139,8 +139,7 @@ pub fn run(args: &[String]) -> Result<()> {
     println!();
     for (m, ok) in &ok_counts {
         println!(
-            "- {}: {ok} of {} starts end with all four parameters within 1% of the truth.",
-            format!("{m:?}"),
+            "- {m:?}: {ok} of {} starts end with all four parameters within 1% of the truth.",
             o.starts.len()
         );
     }

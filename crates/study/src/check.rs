@@ -290,7 +290,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         model,
         law,
         &point,
-        &problem.schedule(),
+        problem.schedule(),
         &opts,
         &name,
     )
@@ -320,7 +320,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             model,
             law,
             c,
-            &problem.schedule(),
+            problem.schedule(),
             &fd_opts,
             &name,
         )

@@ -975,14 +975,14 @@ impl Config {
             )
         })?;
         Ok(Config {
-            specimen: t.specimen.clone().unwrap_or_else(|| self.specimen.clone()),
+            specimen: t.specimen.unwrap_or(self.specimen),
             punch: t.punch.clone().unwrap_or_else(|| self.punch.clone()),
             contact: t.contact.unwrap_or(self.contact),
             kinematics: self.kinematics,
-            law: self.law.clone(),
+            law: self.law,
             history: t.history.clone(),
             data: t.data.clone(),
-            solver: self.solver.clone(),
+            solver: self.solver,
             identify: self.identify.clone(),
             tests: None,
             base_dir: self.base_dir.clone(),

@@ -199,7 +199,7 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
     let model = Model::with_contact(mesh, config.punch.clone(), config.contact)
         .and_then(|m| m.with_kinematics(config.kinematics))
         .context("cannot build the refined model")?;
-    let (schedule, steps) = refine_schedule(config.history.as_ref(), &problem.schedule())?;
+    let (schedule, steps) = refine_schedule(config.history.as_ref(), problem.schedule())?;
     let n = problem.schedule().t.len();
     if schedule.t.len() != 2 * n - 1 {
         bail!(

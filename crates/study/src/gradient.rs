@@ -162,7 +162,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         model,
         law,
         &params,
-        &problem.schedule(),
+        problem.schedule(),
         &solver_opts,
         &name,
     )
@@ -179,7 +179,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             &traj,
             &rho,
             &mut solver,
-            &problem.schedule(),
+            problem.schedule(),
             &solver_opts,
         )
     } else {

@@ -1217,7 +1217,7 @@ fn fit_curves(
     name: &str,
 ) -> Result<FitCurves> {
     let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
-    let mut solver = DirectSolver::new(&problem.model()).kind(ErrorKind::Solver)?;
+    let mut solver = DirectSolver::new(problem.model()).kind(ErrorKind::Solver)?;
     let quiet = SolverOptions {
         record_fields: false,
         ..opts.clone()
@@ -1225,10 +1225,10 @@ fn fit_curves(
     let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
         Ok(forward(
             &mut solver,
-            &problem.model(),
+            problem.model(),
             law,
             c,
-            &problem.schedule(),
+            problem.schedule(),
             &quiet,
             name,
         )

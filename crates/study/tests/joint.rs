@@ -147,12 +147,11 @@ fn simulate_runs_one_test_of_a_joint_configuration() {
     o.test = Some(2);
     let joint = simulate::run(&o).unwrap();
     let single = simulate::run(&SimulateOptions::new(ConfigSource::Text {
-        text: format!(
-            "(specimen: Cylinder(radius: 4.0, height: 4.0, nr: 4, nz: 4, grading_r: 1.3, \
+        text: "(specimen: Cylinder(radius: 4.0, height: 4.0, nr: 4, nz: 4, grading_r: 1.3, \
              grading_z: 1.3), punch: Cone(half_angle_deg: 70.3), law: Maxwell(E: 20000.0, \
              nu: 0.3, eta: 30000.0), history: (segments: [(duration: 2.0, depth: 0.05, \
              steps: 3)]))"
-        ),
+            .to_string(),
         name: "single.ron".into(),
     }))
     .unwrap();
