@@ -142,3 +142,35 @@ fn optional_parts_may_be_missing() {
     r.history.iter_mut().for_each(|h| h.cost = 2.0);
     r.figure_png(Figure::Convergence, SMALL).unwrap();
 }
+
+/// The force figures carry the identified values, the fit's numbers and the source in
+/// their header; force-time has a residual panel; the start curve's swatch is dashed.
+#[test]
+fn force_figures_state_the_result_and_the_residuals() {
+    let r = common::nano_report();
+    let free: Vec<_> = r.parameters.iter().filter(|p| !p.fixed).collect();
+    assert!(!free.is_empty());
+    for figure in [Figure::ForceDepth, Figure::ForceTime] {
+        let svg = r.figure_svg(figure, SMALL).unwrap();
+        assert!(svg.contains("identified: "), "{figure:?} lacks the values");
+        for p in &free {
+            assert!(
+                svg.contains(&format!("{} = ", p.name)),
+                "{figure:?} lacks {}",
+                p.name
+            );
+        }
+        assert!(svg.contains("RMS residual"), "{figure:?} lacks the RMS");
+        assert!(svg.contains("stroke-dasharray") || svg.matches("<polyline").count() > 3);
+    }
+    let svg = r.figure_svg(Figure::ForceTime, SMALL).unwrap();
+    assert!(
+        svg.contains("fit - data [mN]"),
+        "force-time lacks the residual panel"
+    );
+    let svg = r.figure_svg(Figure::ForceDepth, SMALL).unwrap();
+    assert!(
+        !svg.contains("fit - data"),
+        "force-depth has no residual panel"
+    );
+}
