@@ -497,33 +497,11 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
 
     // the history, once every input is known good
-    let (mut history, resume_from) = match &paths {
-        Some(p) if opts.resume => {
-            let (w, last) = HistoryWriter::resume(&p.history, &names).kind(ErrorKind::Io)?;
-            (Some(w), Some(last))
-        }
-        Some(p) => (
-            Some(HistoryWriter::create(&p.history, &names).kind(ErrorKind::Io)?),
-            None,
-        ),
-        None => (None, None),
-    };
+    let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &names)?;
     observer.started(&RunInfo {
-        config: name.clone(),
-        law: law.name(),
-        names: names.clone(),
-        free: id_cfg.params.iter().map(|p| p.free).collect(),
-        held: id_cfg
-            .params
-            .iter()
-            .filter(|p| !p.free)
-            .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
-            .collect(),
-        method: id_cfg.method.name(),
-        max_iterations: id_cfg.stop.max_iterations,
         resumed_at: resume_from.as_ref().map(|r| r.iteration),
         data: data.describe.clone(),
-        out: opts.out.clone(),
+        ..run_info(&name, law, &names, &id_cfg, opts)
     });
     let (result, multistart) = match &opts.starts {
         Some(starts) => {
@@ -747,33 +725,11 @@ fn run_joint(
         .collect::<Vec<_>>()
         .join("; ");
     let truth = infos.first().and_then(|(_, d, ..)| d.truth.clone());
-    let (mut history, resume_from) = match &paths {
-        Some(p) if opts.resume => {
-            let (w, last) = HistoryWriter::resume(&p.history, &names).kind(ErrorKind::Io)?;
-            (Some(w), Some(last))
-        }
-        Some(p) => (
-            Some(HistoryWriter::create(&p.history, &names).kind(ErrorKind::Io)?),
-            None,
-        ),
-        None => (None, None),
-    };
+    let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &names)?;
     observer.started(&RunInfo {
-        config: name.clone(),
-        law: law.name(),
-        names: names.clone(),
-        free: id_cfg.params.iter().map(|p| p.free).collect(),
-        held: id_cfg
-            .params
-            .iter()
-            .filter(|p| !p.free)
-            .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
-            .collect(),
-        method: id_cfg.method.name(),
-        max_iterations: id_cfg.stop.max_iterations,
         resumed_at: resume_from.as_ref().map(|r| r.iteration),
         data: format!("{n_tests} tests fitted jointly ({describe})"),
-        out: opts.out.clone(),
+        ..run_info(&name, law, &names, &id_cfg, opts)
     });
     let result = optimize(
         &problem,
@@ -1036,6 +992,54 @@ fn checkpoint_interval(opts: &IdentifyOptions, prepared: &Prepared) -> Result<us
         crate::format::bytes(opts.memory_budget)
     );
     Ok(n)
+}
+
+/// The history file of a run with a report folder: created, or reopened with its last
+/// iteration under `--resume`.
+fn open_history(
+    paths: Option<&Paths>,
+    resume: bool,
+    names: &[&str],
+) -> Result<(Option<HistoryWriter>, Option<IterationRecord>)> {
+    Ok(match paths {
+        Some(p) if resume => {
+            let (w, last) = HistoryWriter::resume(&p.history, names).kind(ErrorKind::Io)?;
+            (Some(w), Some(last))
+        }
+        Some(p) => (
+            Some(HistoryWriter::create(&p.history, names).kind(ErrorKind::Io)?),
+            None,
+        ),
+        None => (None, None),
+    })
+}
+
+/// What the observer is told at the start of a run (the data and the resumed iteration
+/// are the caller's).
+fn run_info(
+    name: &str,
+    law: &'static dyn Law,
+    names: &[&'static str],
+    id_cfg: &IdentifyConfig,
+    opts: &IdentifyOptions,
+) -> RunInfo {
+    RunInfo {
+        config: name.to_string(),
+        law: law.name(),
+        names: names.to_vec(),
+        free: id_cfg.params.iter().map(|p| p.free).collect(),
+        held: id_cfg
+            .params
+            .iter()
+            .filter(|p| !p.free)
+            .map(|p| format!("{} = {}", p.name, p.value.unwrap_or(f64::NAN)))
+            .collect(),
+        method: id_cfg.method.name(),
+        max_iterations: id_cfg.stop.max_iterations,
+        resumed_at: None,
+        data: String::new(),
+        out: opts.out.clone(),
+    }
 }
 
 /// The files of a report directory.
