@@ -8,6 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::ReportError;
+use crate::map::viridis;
 use crate::plot::{FigureSize, encode_png, ensure_font};
 use crate::units::fmt_tick;
 
@@ -536,29 +537,6 @@ impl CostMapFigure {
             .map_err(|e| e.to_string())?;
         Ok(())
     }
-}
-
-/// The viridis color map at `t` in [0, 1] (piecewise linear through 6 of its colors).
-fn viridis(t: f64) -> RGBColor {
-    const STOPS: [(u8, u8, u8); 6] = [
-        (68, 1, 84),
-        (65, 68, 135),
-        (42, 120, 142),
-        (34, 168, 132),
-        (122, 209, 81),
-        (253, 231, 37),
-    ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let s = t * (STOPS.len() - 1) as f64;
-    let k = (s.floor() as usize).min(STOPS.len() - 2);
-    let f = s - k as f64;
-    let mix = |a: u8, b: u8| (a as f64 + f * (b as f64 - a as f64)).round() as u8;
-    let (a, b) = (STOPS[k], STOPS[k + 1]);
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
 #[cfg(test)]

@@ -268,7 +268,7 @@ fn draw_err(figure: MapFigure, e: impl std::fmt::Display) -> ReportError {
 }
 
 /// The viridis color map at `t` in [0, 1] (piecewise linear through 6 of its colors).
-fn viridis(t: f64) -> RGBColor {
+pub(crate) fn viridis(t: f64) -> RGBColor {
     const STOPS: [(u8, u8, u8); 6] = [
         (68, 1, 84),
         (65, 68, 135),
