@@ -129,12 +129,7 @@ impl Test {
 
     /// `J_k` of forces at the schedule times.
     pub fn cost_of(&self, forces: &[f64]) -> f64 {
-        0.5 * forces
-            .iter()
-            .zip(&self.target)
-            .zip(&self.weights)
-            .map(|((f, d), w)| w * (f - d).powi(2))
-            .sum::<f64>()
+        weighted_half_squares(forces, &self.target, &self.weights)
     }
 
     /// `dJ/dF` per trajectory step: `w_j (F_i - F_j^exp)` for a step ending on schedule
@@ -294,12 +289,7 @@ impl Problem {
 
     /// `J` of forces at the schedule times (all tests laid end to end).
     pub fn cost_of(&self, forces: &[f64]) -> f64 {
-        0.5 * forces
-            .iter()
-            .zip(&self.target)
-            .zip(&self.weights)
-            .map(|((f, d), w)| w * (f - d).powi(2))
-            .sum::<f64>()
+        weighted_half_squares(forces, &self.target, &self.weights)
     }
 
     /// `dJ/dF` per trajectory step of the first test (the only one of a one-test
@@ -307,6 +297,16 @@ impl Problem {
     pub fn dj_df(&self, traj: &Trajectory) -> Vec<f64> {
         self.tests[0].dj_df(traj)
     }
+}
+
+/// `1/2 sum_i w_i (F_i - F_exp,i)^2`: the cost of one test and of a joint problem.
+fn weighted_half_squares(forces: &[f64], target: &[f64], weights: &[f64]) -> f64 {
+    0.5 * forces
+        .iter()
+        .zip(target)
+        .zip(weights)
+        .map(|((f, d), w)| w * (f - d).powi(2))
+        .sum::<f64>()
 }
 
 /// Counters of the expensive operations an [`Evaluator`] performed.
