@@ -241,7 +241,7 @@ fn finite_strain_needs_normal_contact() {
     }
     .build()
     .unwrap();
-    let err = Model::new(mesh, Punch::Flat { radius: 3.0 })
+    let err = Model::new(mesh.clone(), Punch::Flat { radius: 3.0 })
         .unwrap()
         .with_kinematics(Kinematics::Finite)
         .unwrap_err();
@@ -254,6 +254,17 @@ fn finite_strain_needs_normal_contact() {
         }
     ));
     assert!(text.contains("contact: Normal"), "{text}");
+    // friction under finite strain is not built, and the refusal says so
+    let friction = ContactKind::NormalFriction { friction: 0.2 };
+    let text = Model::with_contact(mesh, Punch::Flat { radius: 3.0 }, friction)
+        .unwrap()
+        .with_kinematics(Kinematics::Finite)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("friction under finite strain is not built"),
+        "{text}"
+    );
 }
 
 /// An element squashed towards inversion stops the run (inverted, or its tangent no longer
