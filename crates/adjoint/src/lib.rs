@@ -22,8 +22,15 @@
 //! become `m . V = rho m_z` on them plus the source `rho d t_z` on the tangential dofs
 //! (`D` couples the tangential motion to the vertical force), so that the same transposed
 //! recursion holds (docs/validation-contact.md).
+//!
+//! Finite strain ([`indentify_contact::Kinematics::Finite`]): the same recursion with the
+//! Gauss-point law in log-strain space and `B` replaced by the step's
+//! `G_i = P(C(u_i)) B_L(u_i)`, the stiffness by the forward's consistent tangent
+//! (material and geometric parts), and `dF_i` by the variation of the internal force
+//! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
 
 pub mod check;
+mod finite;
 
 use indentify_contact::{
     ConstrainedSystem, DirectSolver, Model, NodeFrame, Schedule, SolverOptions, StepFields,
@@ -79,12 +86,6 @@ pub enum AdjointError {
          previous stick points and the tangent unsymmetric; see docs/validation-contact.md §7)"
     )]
     Friction(f64),
-    /// The model's kinematics has no exact adjoint (finite strain).
-    #[error(
-        "the adjoint and the sensitivities are exact for small strain only: a model with \
-         `kinematics: Finite` has no exact gradient yet (use `kinematics: Small`)"
-    )]
-    FiniteStrain,
 }
 
 /// Result of an adjoint sweep.
@@ -134,18 +135,18 @@ pub struct Adjoint {
     xbar: Vec<f64>,
     /// Frames of the current step's active nodes (normal contact; empty otherwise).
     frames: Vec<NodeFrame>,
+    /// The step's finite-strain operators (`Kinematics::Finite` only).
+    finite: Option<finite::FiniteStep>,
 }
 
 impl Adjoint {
     /// Prepares the workspace for `model`.
     ///
     /// # Errors
-    /// [`AdjointError::Fe`] if the symbolic analysis fails; [`AdjointError::FiniteStrain`]
-    /// for a finite-strain model (no wrong gradient is ever returned).
+    /// [`AdjointError::Fe`] if the symbolic analysis fails.
     pub fn new(model: &Model) -> Result<Adjoint, AdjointError> {
-        if model.kinematics == indentify_contact::Kinematics::Finite {
-            return Err(AdjointError::FiniteStrain);
-        }
+        let finite = (model.kinematics == indentify_contact::Kinematics::Finite)
+            .then(|| finite::FiniteStep::new(model));
         let nq = model.disc.n_qp();
         Ok(Adjoint {
             system: ConstrainedSystem::new(model)?,
@@ -157,6 +158,7 @@ impl Adjoint {
             eq: vec![0.0; model.dofs.n_eq],
             xbar: vec![0.0; model.dofs.n_eq],
             frames: Vec::new(),
+            finite,
         })
     }
 
@@ -179,7 +181,17 @@ impl Adjoint {
             t: rec.t,
             reason,
         };
-        if law.is_linear() {
+        if let Some(fs) = self.finite.as_mut() {
+            // finite strain: the law's tangents in log space, the element tangents at u1
+            for (t, s) in self.tangents.iter_mut().zip(sigma1) {
+                *t = law
+                    .tangent(c, s, rec.dt)
+                    .map_err(|f| fail(f.reason.clone()))?;
+            }
+            fs.prepare(model, u1, sigma1, &self.tangents)
+                .map_err(fail)?;
+            self.system.set_tangent_elements(model, &fs.ke);
+        } else if law.is_linear() {
             // the tangent does not depend on the state: one evaluation serves every point
             let ct = law
                 .tangent(c, &Vec4::ZERO, rec.dt)
@@ -210,6 +222,22 @@ impl Adjoint {
     fn expand(&mut self, model: &Model) {
         for (d, &e) in model.dofs.eq.iter().enumerate() {
             self.full[d] = if e == NO_EQ { 0.0 } else { self.eq[e as usize] };
+        }
+    }
+
+    /// `self.full = sum_g w B^T field_b` (`G_i` in place of `B` under finite strain).
+    fn force_of_field_b(&mut self, model: &Model) {
+        match &self.finite {
+            None => model.disc.internal_force(&self.field_b, &mut self.full),
+            Some(fs) => fs.force(model, &self.field_b, &mut self.full),
+        }
+    }
+
+    /// `self.strain = B self.full` (`G_i` in place of `B` under finite strain).
+    fn strains_of_full(&mut self, model: &Model) {
+        match &self.finite {
+            None => model.disc.strains(&self.full, &mut self.strain),
+            Some(fs) => fs.strains(model, &self.full, &mut self.strain),
         }
     }
 
@@ -353,7 +381,7 @@ impl Adjoint {
             let sm = s.mul_vec(&self.field_a[q]);
             self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
         }
-        model.disc.internal_force(&self.field_b, &mut self.full);
+        self.force_of_field_b(model);
         self.restrict(model);
         // V = dJ/dF_i on the active contact dofs (normal contact: m . V = rho m_z, and the
         // source rho d t_z along t on the tangential dofs)
@@ -378,7 +406,7 @@ impl Adjoint {
         self.eq = eq;
         self.xbar.fill(0.0);
         self.expand(model);
-        model.disc.strains(&self.full, &mut self.strain);
+        self.strains_of_full(model);
         // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i with
         // R_i = dS/dc (s1 - s0) + dt dg/dc(s1): the dS/dc part is accumulated as
         // M = sum w mu (x) (s1 - s0) and contracted with dS/dc once at the end
@@ -437,21 +465,30 @@ impl Adjoint {
                         - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
                     self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
                 }
-                model.disc.internal_force(&self.field_b, &mut self.full);
+                self.force_of_field_b(model);
                 self.restrict(model);
                 self.xbar.fill(0.0);
                 let mut eq = std::mem::take(&mut self.eq);
                 self.system.solve_dirichlet(model, &mut eq, &self.xbar);
                 self.eq = eq;
                 self.expand(model);
-                model.disc.strains(&self.full, &mut self.strain);
+                self.strains_of_full(model);
                 for qp in 0..nq {
                     let bv = Vec4(self.strain[qp]);
                     let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
                     self.field_b[qp] = dsig;
                     y[k][qp] = s.mul_vec(&dsig) - bv;
                 }
-                model.disc.internal_force(&self.field_b, &mut self.full);
+                match &mut self.finite {
+                    None => model.disc.internal_force(&self.field_b, &mut self.full),
+                    Some(fs) => {
+                        // delta f_int = K du + sum w0 G^T C q (geometric part included)
+                        for qp in 0..nq {
+                            self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]);
+                        }
+                        fs.delta_force(model, &self.field_b, &mut self.full);
+                    }
+                }
                 df[i][k] = -rec
                     .active
                     .iter()

@@ -1,0 +1,243 @@
+//! Adjoint gradients and forward sensitivities under finite strain
+//! (`Kinematics::Finite`: total-Lagrangian Q8, laws in Hencky strain, normal contact)
+//! against central finite differences, over whole load-hold-unload histories with the
+//! contact zone growing and shrinking, for elastic, Maxwell and Norton-Hoff (sY = 0 and
+//! > 0), cone and sphere.
+//!
+//! References: central differences of the direct solver's own whole-history cost
+//! (independent of the adjoint code), and the forward-sensitivity Jacobian `J^T rho` (the
+//! same step operators, not transposed). Mesh: 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45
+//! towards axis and top; trapezoid 0 -> 0.1 mm -> hold -> 0, 6 steps per segment: strains
+//! under the tip of order 0.3, where finite and small strain differ by 5-40%.
+
+use indentify_adjoint::Adjoint;
+use indentify_adjoint::check::{central_difference, relative_difference};
+use indentify_contact::{
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
+use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
+use indentify_mesh::CylinderMesher;
+
+fn model(punch: Punch) -> Model {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 8,
+        nz: 8,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    Model::with_contact(mesh, punch, ContactKind::Normal)
+        .unwrap()
+        .with_kinematics(Kinematics::Finite)
+        .unwrap()
+}
+
+fn cone() -> Punch {
+    Punch::Cone {
+        half_angle_deg: 68.0,
+    }
+}
+
+fn sphere() -> Punch {
+    Punch::Sphere { radius: 1.0 }
+}
+
+/// Adjoint vs central differences (1e-6), vs `J^T rho` (1e-10), and the checkpointed
+/// adjoint vs the recorded one (1e-10), for the first `checked` parameters (a parameter
+/// on its bound, sY = 0, has no central difference). Returns the worst relative
+/// differences (fd, sensitivities).
+fn check_gradient(
+    punch: Punch,
+    law: &dyn Law,
+    truth: &[f64],
+    c: &[f64],
+    checked: usize,
+) -> (f64, f64) {
+    let model = model(punch);
+    let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+    let opts = SolverOptions {
+        residual_tol: 1e-12,
+        ..Default::default()
+    };
+    let mut solver = DirectSolver::new(&model).unwrap();
+    let data: Vec<f64> = solver
+        .run(&model, law, truth, &sched, &opts)
+        .unwrap()
+        .forces();
+    let mut cost = |p: &[f64]| -> Result<f64, String> {
+        let t = solver
+            .run(&model, law, p, &sched, &opts)
+            .map_err(|e| e.to_string())?;
+        Ok(0.5
+            * t.forces()
+                .iter()
+                .zip(&data)
+                .map(|(f, d)| (f - d).powi(2))
+                .sum::<f64>())
+    };
+    let fd: Vec<f64> = (0..checked)
+        .map(|k| central_difference(&mut cost, c, k, 1e-5).unwrap())
+        .collect();
+    let mut solver = DirectSolver::new(&model).unwrap();
+    let traj = solver.run(&model, law, c, &sched, &opts).unwrap();
+    // the contact zone grows, holds and is lost
+    let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
+    let most = *sizes.iter().max().unwrap();
+    assert!(most >= 3 && *sizes.last().unwrap() < most, "{sizes:?}");
+    let rho: Vec<f64> = traj
+        .steps
+        .iter()
+        .map(|s| {
+            if s.on_schedule {
+                s.force - data[s.schedule_index]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut adj = Adjoint::new(&model).unwrap();
+    let g = adj.gradient(&model, law, c, &traj, &rho).unwrap();
+    let sens = adj.sensitivities(&model, law, c, &traj).unwrap();
+    let jt = sens.transpose_mul(&rho);
+    // the same gradient from a checkpointed run replayed segment by segment
+    let ck_opts = SolverOptions {
+        record_fields: false,
+        checkpoint_every: 5,
+        ..opts.clone()
+    };
+    let ck = solver.run(&model, law, c, &sched, &ck_opts).unwrap();
+    let g_ck = adj
+        .gradient_replayed(&model, law, c, &ck, &rho, &mut solver, &sched, &ck_opts)
+        .unwrap();
+    let (mut worst_fd, mut worst_sens) = (0.0f64, 0.0f64);
+    for k in 0..checked {
+        let name = law.params()[k].name;
+        let (rf, rs) = (
+            relative_difference(g.dj_dc[k], fd[k]),
+            relative_difference(g.dj_dc[k], jt[k]),
+        );
+        println!(
+            "{} {name}: adjoint={:.12e} fd={:.12e} sens={:.12e} | rel fd {rf:.1e} sens {rs:.1e}",
+            law.name(),
+            g.dj_dc[k],
+            fd[k],
+            jt[k],
+        );
+        assert!(rf < 1e-6, "{name}: adjoint {} vs fd {}", g.dj_dc[k], fd[k]);
+        assert!(
+            rs < 1e-10,
+            "{name}: adjoint {} vs J^T rho {}",
+            g.dj_dc[k],
+            jt[k]
+        );
+        assert!(
+            relative_difference(g.dj_dc[k], g_ck.dj_dc[k]) < 1e-10,
+            "{name}: recorded {} vs replayed {}",
+            g.dj_dc[k],
+            g_ck.dj_dc[k]
+        );
+        worst_fd = worst_fd.max(rf);
+        worst_sens = worst_sens.max(rs);
+    }
+    (worst_fd, worst_sens)
+}
+
+/// The finite-strain adjoint shall differentiate an elastic cost (cone and sphere).
+#[test]
+fn elastic_cone_and_sphere() {
+    for punch in [cone(), sphere()] {
+        check_gradient(punch, &Elastic, &[20000.0, 0.3], &[17000.0, 0.27], 2);
+    }
+}
+
+/// The finite-strain adjoint shall differentiate a Maxwell cost (cone and sphere).
+#[test]
+fn maxwell_cone_and_sphere() {
+    for punch in [cone(), sphere()] {
+        check_gradient(
+            punch,
+            &Maxwell,
+            &[20000.0, 0.3, 30000.0],
+            &[15000.0, 0.28, 45000.0],
+            3,
+        );
+    }
+}
+
+/// The finite-strain adjoint shall differentiate a Norton-Hoff cost with yield (sY > 0),
+/// cone and sphere.
+#[test]
+fn norton_hoff_with_yield_cone_and_sphere() {
+    for punch in [cone(), sphere()] {
+        check_gradient(
+            punch,
+            &NortonHoff,
+            &[1e5, 0.3, 1500.0, 5.0, 500.0],
+            &[1.2e5, 0.31, 1300.0, 4.0, 420.0],
+            5,
+        );
+    }
+}
+
+/// The finite-strain adjoint shall differentiate a Norton-Hoff cost without yield
+/// (sY = 0), cone and sphere.
+#[test]
+fn norton_hoff_without_yield_cone_and_sphere() {
+    for punch in [cone(), sphere()] {
+        check_gradient(
+            punch,
+            &NortonHoff,
+            &[1e5, 0.3, 1500.0, 5.0, 0.0],
+            &[1.2e5, 0.31, 1300.0, 4.0, 0.0],
+            4,
+        );
+    }
+}
+
+/// Stress scaling under finite strain: multiplying every stress-like parameter (E and eta
+/// for Maxwell; E, K and sY for Norton-Hoff) by a factor multiplies `T`, hence
+/// `S = P(C) T` and every force, by it at fixed displacements and active sets, so the
+/// sensitivities shall satisfy `sum_k c_k dF_i/dc_k = F_i` at every step to round-off.
+#[test]
+fn stress_scaling_identity_under_finite_strain() {
+    let cases: [(&dyn Law, Vec<f64>, Vec<usize>); 2] = [
+        (&Maxwell, vec![20000.0, 0.3, 30000.0], vec![0, 2]),
+        (
+            &NortonHoff,
+            vec![1e5, 0.3, 1500.0, 5.0, 500.0],
+            vec![0, 2, 4],
+        ),
+    ];
+    for punch in [cone(), sphere()] {
+        let model = model(punch);
+        let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+        let opts = SolverOptions {
+            residual_tol: 1e-12,
+            ..Default::default()
+        };
+        for (law, c, stress_like) in &cases {
+            let traj = DirectSolver::new(&model)
+                .unwrap()
+                .run(&model, *law, c, &sched, &opts)
+                .unwrap();
+            let sens = Adjoint::new(&model)
+                .unwrap()
+                .sensitivities(&model, *law, c, &traj)
+                .unwrap();
+            let fmax = traj.steps.iter().map(|s| s.force.abs()).fold(0.0, f64::max);
+            let mut worst: f64 = 0.0;
+            for (rec, row) in traj.steps.iter().zip(&sens.df_dc) {
+                let lhs: f64 = stress_like.iter().map(|&k| c[k] * row[k]).sum();
+                worst = worst.max((lhs - rec.force).abs() / fmax);
+            }
+            println!(
+                "{}: max |sum c_k dF/dc_k - F| / F_max = {worst:.2e}",
+                law.name()
+            );
+            assert!(worst < 1e-9, "{}: {worst}", law.name());
+        }
+    }
+}
