@@ -192,7 +192,6 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         .one_test(args.test, "gradient-check", &name)
         .kind(ErrorKind::Config)?;
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
-    crate::config::refuse_finite_gradient(&cfg, "`gradient-check`").kind(ErrorKind::Config)?;
     let names = param_names(law);
     let infos = law.params();
     let prepared = prepare(&cfg, &name)?;

@@ -1095,24 +1095,6 @@ impl Config {
     }
 }
 
-/// Refuses finite strain where a gradient is needed (`what`: the command): the adjoint and
-/// the forward sensitivities transpose the small-strain scheme, so under
-/// `kinematics: Finite` they would return a wrong gradient.
-///
-/// # Errors
-/// For `kinematics: Finite`, naming the field and what to do.
-pub fn refuse_finite_gradient(config: &Config, what: &str) -> Result<()> {
-    if config.kinematics == Kinematics::Finite {
-        bail!(
-            "`kinematics` = Finite is not allowed for {what}: the adjoint and the forward \
-             sensitivities are exact for `kinematics: Small` only (finite strain has no exact \
-             gradient yet, and {what} would use a wrong one); set `kinematics: Small` (or \
-             --set kinematics=Small), or run the finite-strain forward problem with `simulate`"
-        );
-    }
-    Ok(())
-}
-
 /// The context of an error of [`Config::prepare`] that lies in the measured record (not in
 /// the configuration): front ends classify it as a data error.
 #[derive(Debug)]

@@ -109,7 +109,6 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         .one_test(opts.test, "gradient", &name)
         .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
-    crate::config::refuse_finite_gradient(&cfg, "`gradient`").kind(ErrorKind::Config)?;
     ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))
         .kind(ErrorKind::Config)?;
     if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {

@@ -288,7 +288,6 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     let name = opts.config.name();
     let cfg = opts.config.load(&opts.sets)?;
     let (law, law_values) = cfg.law.build().kind(ErrorKind::Config)?;
-    crate::config::refuse_finite_gradient(&cfg, "`identify`").kind(ErrorKind::Config)?;
     let names = param_names(law);
     let mut id_cfg = IdentifySection::resolve(cfg.identify.as_ref(), &cfg.law, &opts.overrides)
         .with_context(|| format!("invalid identification settings for `{name}`"))
