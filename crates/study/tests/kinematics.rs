@@ -84,6 +84,37 @@ fn gradients_under_finite_strain_match_finite_differences() {
     );
 }
 
+/// `gradient-check` under finite strain on a measured history: the Berkovich record of
+/// `examples/real/anon-nh.ron` (Norton-Hoff with yield, automatic specimen, Berkovich
+/// punch) resampled to 20 points drives the depth; the forces are synthesized and the point
+/// perturbed, as `indentify gradient-check` does without `--data`: adjoint vs central
+/// differences (1e-6) and vs `J^T rho` (1e-8) for E, nu, K, m, sY.
+#[test]
+fn finite_strain_gradients_on_a_measured_history_match_finite_differences() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/real/anon-nh.ron");
+    let mut c = indentify_study::check::CheckOptions::new(ConfigSource::Path(path));
+    c.sets = [
+        "data.preprocessing.resample.n=20",
+        "contact=Normal",
+        "kinematics=Finite",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let report = indentify_study::check::run(&c).unwrap();
+    for p in &report.checks {
+        println!(
+            "anon-nh finite {}: adjoint {:.10e} fd {:.10e} | rel fd {:.1e} sens {:.1e}",
+            p.name, p.adjoint, p.fd, p.rel_diff_fd, p.rel_diff_sensitivity
+        );
+        assert!(p.rel_diff_fd < 1e-6, "{}: {p:?}", p.name);
+        assert!(p.rel_diff_sensitivity < 1e-8, "{}: {p:?}", p.name);
+    }
+    assert_eq!(report.checks.len(), 5);
+    assert!(report.passed, "{:?}", report.failures);
+}
+
 /// The finite/small force ratios on R1 and R2 (sY = 0 and 500) at the reference mesh with
 /// normal contact, and the forward run times back to back (a study, not a check: run with
 /// `cargo test -p indentify-study --test kinematics -- --ignored --nocapture`).
