@@ -91,8 +91,8 @@ fn gradients_under_finite_strain_match_finite_differences() {
 /// differences (1e-6) and vs `J^T rho` (1e-8) for E, nu, K, m, sY.
 #[test]
 fn finite_strain_gradients_on_a_measured_history_match_finite_differences() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/real/anon-nh.ron");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/real/anon-nh.ron");
     let mut c = indentify_study::check::CheckOptions::new(ConfigSource::Path(path));
     c.sets = [
         "data.preprocessing.resample.n=20",
