@@ -1418,6 +1418,97 @@ mod tests {
         check(&x, "inexact");
     }
 
+    /// The transposed solve of the adjoint with friction is the transpose of the solve:
+    /// `g . x(b, xbar) = V . b + pi . xbar` for any `g`, `b` and sticking values `xbar`
+    /// (`(V, pi)` from [`ConstrainedSystem::solve_transposed`] of `g`), with sticking and
+    /// slipping (both directions, on a curved frame with `d != 0`) nodes and the axis
+    /// node; and it differs from the symmetric solve (the slipping rows matter).
+    #[test]
+    fn transposed_solve_is_the_adjoint_of_the_solve() {
+        let model = small_model(6, 5);
+        let c = [20000.0, 0.3];
+        let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
+        let tangents = vec![t; model.disc.qp.len()];
+        let n = model.dofs.n_eq;
+        let nc = model.candidates.len();
+        let active: Vec<bool> = (0..nc).map(|k| k < 5).collect();
+        // axis, stick, slip +, slip -, stick
+        let frames: Vec<NodeFrame> = (0..5)
+            .map(|k| {
+                let node = model.candidates[k];
+                let er = model.dofs.equation(2 * node);
+                let th = if er.is_some() {
+                    0.2 + 0.1 * k as f64
+                } else {
+                    0.0
+                };
+                let slip = match k {
+                    2 => -0.2,
+                    3 => 0.1,
+                    _ => 0.0,
+                };
+                NodeFrame {
+                    er,
+                    ez: model.dofs.equation(2 * node + 1).unwrap(),
+                    t: [th.cos(), th.sin()],
+                    m: [-th.sin(), th.cos()],
+                    d: if slip != 0.0 { -200.0 * k as f64 } else { 0.0 },
+                    stick: er.is_some() && slip == 0.0,
+                    slip,
+                }
+            })
+            .collect();
+        assert!(frames[0].er.is_none() && frames[1].stick && frames[4].stick);
+        let mut sys = ConstrainedSystem::new(&model).unwrap();
+        sys.set_tangent(&model, &tangents, None);
+        sys.set_active(&model, &active);
+        sys.set_frames(&frames);
+        sys.factorize(&model).unwrap();
+        let vec_of = |seed: usize| -> Vec<f64> {
+            (0..n)
+                .map(|i| (((i + seed) * 7919) % 101) as f64 / 50.0 - 1.0)
+                .collect()
+        };
+        let g = vec_of(3);
+        let mut v = g.clone();
+        let pi = sys.solve_transposed(&model, &mut v);
+        let mut plain = g.clone();
+        sys.solve_dirichlet(&model, &mut plain, &vec![0.0; n]);
+        let diff = v
+            .iter()
+            .zip(&plain)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            diff > 1e-6,
+            "the slipping rows change the transposed solve: {diff}"
+        );
+        for seed in [11, 29] {
+            let b = vec_of(seed);
+            let mut xbar = vec![0.0; n];
+            for (k, f) in frames.iter().enumerate() {
+                if let (true, Some(er)) = (f.stick, f.er) {
+                    xbar[er] = 1e-3 * (k as f64 + 1.0);
+                }
+            }
+            let mut x = b.clone();
+            sys.solve_dirichlet(&model, &mut x, &xbar);
+            let lhs: f64 = g.iter().zip(&x).map(|(a, b)| a * b).sum();
+            let mut rhs: f64 = v.iter().zip(&b).map(|(a, b)| a * b).sum();
+            for (f, p) in frames.iter().zip(&pi) {
+                if let (true, Some(er)) = (f.stick, f.er) {
+                    rhs += p * xbar[er];
+                } else {
+                    assert_eq!(*p, 0.0);
+                }
+            }
+            let scale: f64 = g.iter().zip(&x).map(|(a, b)| (a * b).abs()).sum();
+            assert!(
+                (lhs - rhs).abs() <= 1e-12 * scale,
+                "g . x = {lhs} vs V . b + pi . xbar = {rhs}"
+            );
+        }
+    }
+
     /// Inexact solves preconditioned by an earlier tangent's factor reach the requested
     /// residual with the prescribed values exact, and factorize when CG cannot converge
     /// in time; the result is the direct solve's to the tolerance.
