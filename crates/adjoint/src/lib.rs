@@ -28,9 +28,14 @@
 //! `G_i = P(C(u_i)) B_L(u_i)`, the stiffness by the forward's consistent tangent
 //! (material and geometric parts), and `dF_i` by the variation of the internal force
 //! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
+//!
+//! Coulomb friction ([`indentify_contact::ContactKind::NormalFriction`]): the module
+//! `friction` (stick/slip partition held; sticking nodes tie this step to the previous
+//! one, slipping rows make the step's matrix unsymmetric; docs/validation-contact.md §7).
 
 pub mod check;
 mod finite;
+mod friction;
 
 use indentify_contact::{
     ConstrainedSystem, DirectSolver, Model, NodeFrame, Schedule, SolverOptions, StepFields,
@@ -79,13 +84,6 @@ pub enum AdjointError {
     /// Setting up the linear system failed.
     #[error(transparent)]
     Fe(#[from] indentify_fe::FeError),
-    /// The model's contact has Coulomb friction, whose adjoint is not implemented.
-    #[error(
-        "`contact.friction` = {0} is not supported by the adjoint and the sensitivities yet: \
-         gradients need contact: Normal or Vertical (friction makes each step depend on the \
-         previous stick points and the tangent unsymmetric; see docs/validation-contact.md §7)"
-    )]
-    Friction(f64),
 }
 
 /// Result of an adjoint sweep.
@@ -211,7 +209,11 @@ impl Adjoint {
             active[k as usize] = true;
         }
         self.system.set_active(model, &active);
-        self.frames = model.frames(&rec.active, &rec.lambda, u1, rec.depth);
+        self.frames = if model.contact.friction() > 0.0 {
+            self.friction_frames(model, rec, sigma1, u1)
+        } else {
+            model.frames(&rec.active, &rec.lambda, u1, rec.depth)
+        };
         self.system.set_frames(&self.frames);
         self.system
             .factorize(model)
@@ -262,7 +264,6 @@ impl Adjoint {
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
-        refuse_friction(model)?;
         check_inputs(law, c, traj, dj_df.len())?;
         // every sweep from a full assembly sum: the gradient depends on its inputs alone
         self.system.forget_assembly();
@@ -306,7 +307,6 @@ impl Adjoint {
         let f0 = self.system.factorizations();
         self.system.forget_assembly();
         let n = traj.steps.len();
-        refuse_friction(model)?;
         if dj_df.len() != n {
             return Err(AdjointError::Length {
                 expected: n,
@@ -368,6 +368,9 @@ impl Adjoint {
         rho: f64,
         i: usize,
     ) -> Result<(), AdjointError> {
+        if model.contact.friction() > 0.0 {
+            return self.sweep_step_friction(model, law, c, sweep, rec, f0, f1, rho, i);
+        }
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data and no contact, mu_i = 0: nothing to do
         if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() {
@@ -442,9 +445,11 @@ impl Adjoint {
         c: &[f64],
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
+        if model.contact.friction() > 0.0 {
+            return self.sensitivities_friction(model, law, c, traj);
+        }
         let start = std::time::Instant::now();
         let n = traj.steps.len();
-        refuse_friction(model)?;
         check_inputs(law, c, traj, n)?;
         self.system.forget_assembly();
         let s = law.compliance(c);
@@ -509,6 +514,9 @@ struct Sweep {
     grad: Vec<f64>,
     m_acc: Mat4,
     mu_zero: bool,
+    /// Friction: the cotangents of the sticking nodes' prescribed tangential values of
+    /// the step after the current one, times its `1 + g kappa` (candidate, value).
+    stick: Vec<(usize, f64)>,
 }
 
 impl Sweep {
@@ -518,6 +526,7 @@ impl Sweep {
             grad: vec![0.0; c.len()],
             m_acc: Mat4::ZERO,
             mu_zero: true,
+            stick: Vec::new(),
         }
     }
 
@@ -534,14 +543,6 @@ impl Sweep {
             *g -= acc;
         }
         self.grad
-    }
-}
-
-/// [`AdjointError::Friction`] for a model with Coulomb friction.
-fn refuse_friction(model: &Model) -> Result<(), AdjointError> {
-    match model.contact.friction() {
-        0.0 => Ok(()),
-        mu => Err(AdjointError::Friction(mu)),
     }
 }
 

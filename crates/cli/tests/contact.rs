@@ -1,6 +1,6 @@
 //! `contact: Normal` from the command line: the configuration field and its `--set`, a
-//! different force than the paper's vertical contact, an exact gradient, and a clear error
-//! for an unknown kind.
+//! different force than the paper's vertical contact, an exact gradient (frictionless and
+//! with Coulomb friction), and a clear error for an unknown kind.
 
 mod common;
 
@@ -49,4 +49,35 @@ fn normal_contact_is_selected_by_set_and_its_gradient_is_exact() {
 
     let bad = indentify(&coarse(&["check", &r1, "--set", "contact=Sideways"]));
     assert_rejected(&bad, &["Sideways"], "unknown contact kind");
+}
+
+/// `gradient-check` with Coulomb friction (`contact=Normal(friction: 0.1)`) on R1's
+/// reference mesh, few steps: the adjoint (sticking and slipping nodes, the transposed
+/// unsymmetric system) agrees with central differences and with the sensitivities.
+#[test]
+fn gradient_check_passes_with_friction() {
+    let r1 = example("r1-maxwell.ron");
+    let mut args: Vec<String> = [
+        "-q",
+        "gradient-check",
+        &r1,
+        "--set",
+        "contact=Normal(friction: 0.1)",
+        "--json",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for k in 0..3 {
+        args.push("--set".into());
+        args.push(format!("history.segments.{k}.steps=5"));
+    }
+    let o = indentify(&args);
+    assert_ok(&o);
+    let j = json(&o);
+    assert_eq!(j["passed"], true, "{}", stdout(&o));
+    for c in j["checks"].as_array().unwrap() {
+        let rd = c["rel_diff_fd"].as_f64().unwrap();
+        assert!(rd < 1e-6, "{c}");
+    }
 }

@@ -2,7 +2,9 @@
 //! and R2 (Norton-Hoff) of DESIGN.md §5: 20 x 20 Q8, cone 68 deg, trapezoid 30 steps per
 //! segment, with the paper's vertical contact; R1 and R2 also with normal contact
 //! (`*_normal`, [`ContactKind::Normal`]), run right after their vertical twins so that the
-//! ratio is measured back to back. `cargo bench -p indentify-contact`.
+//! ratio is measured back to back; and with Coulomb friction mu = 0.1 (`*_friction`,
+//! [`ContactKind::NormalFriction`]) right after the frictionless normal twin.
+//! `cargo bench -p indentify-contact`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use indentify_contact::{
@@ -26,15 +28,18 @@ fn reference_model(contact: ContactKind) -> Model {
 fn bench_forward(c: &mut Criterion) {
     let vertical = reference_model(ContactKind::Vertical);
     let normal = reference_model(ContactKind::Normal);
+    let friction = reference_model(ContactKind::normal_with_friction(0.1).expect("friction"));
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
     let r1 = vec![20000.0, 0.3, 30000.0];
     let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
-    let cases: [(&str, &dyn Law, Vec<f64>, &Model); 5] = [
+    let cases: [(&str, &dyn Law, Vec<f64>, &Model); 7] = [
         ("r0_elastic", &Elastic, vec![20000.0, 0.3], &vertical),
         ("r1_maxwell", &Maxwell, r1.clone(), &vertical),
-        ("r1_maxwell_normal", &Maxwell, r1, &normal),
+        ("r1_maxwell_normal", &Maxwell, r1.clone(), &normal),
+        ("r1_maxwell_friction", &Maxwell, r1, &friction),
         ("r2_norton_hoff", &NortonHoff, r2.clone(), &vertical),
-        ("r2_norton_hoff_normal", &NortonHoff, r2, &normal),
+        ("r2_norton_hoff_normal", &NortonHoff, r2.clone(), &normal),
+        ("r2_norton_hoff_friction", &NortonHoff, r2, &friction),
     ];
     let mut group = c.benchmark_group("forward");
     group.sample_size(10);

@@ -232,6 +232,37 @@ impl Model {
             .collect()
     }
 
+    /// The frames of the active candidates of a converged step with Coulomb friction
+    /// (empty without normal contact): as [`Model::frames`], with each node's stick/slip
+    /// status `slip` (same order as `active`, [`StepRecord::slip`]) and the internal
+    /// force `f_int` (all dofs, N) of the converged state, from which the reactions and
+    /// the slipping nodes' curvature stiffness `kappa (-lambda + mu sigma tau) / (1 + g
+    /// kappa)` are formed as in the forward Newton iteration. The adjoint and the
+    /// sensitivities with friction transpose the system these frames define.
+    pub fn friction_frames(
+        &self,
+        active: &[u32],
+        slip: &[Status],
+        f_int: &[f64],
+        u: &[f64],
+        depth: f64,
+    ) -> Vec<NodeFrame> {
+        if self.surface.is_none() {
+            return Vec::new();
+        }
+        let mu = self.contact.friction();
+        active
+            .iter()
+            .zip(slip)
+            .filter_map(|(&k, &st)| {
+                let k = k as usize;
+                let n = self.candidates[k];
+                let p = self.project(k, u, depth).in_contact();
+                crate::friction::frame(self, k, &p, [f_int[2 * n], f_int[2 * n + 1]], st, mu)
+            })
+            .collect()
+    }
+
     /// The frame of candidate `k` with projection `p` and normal reaction `lambda`.
     fn frame(&self, k: usize, p: &Projection, lambda: f64) -> Option<NodeFrame> {
         let node = self.candidates[k];

@@ -697,6 +697,97 @@ impl ConstrainedSystem {
         }
     }
 
+    /// The transposed solve of the adjoint (docs/validation-contact.md §7): the transpose
+    /// of [`ConstrainedSystem::solve_dirichlet`]'s map `(b, xbar) -> x` applied to a
+    /// cotangent `g` of `x`. On entry `b` holds `g` (physical equation vector); on exit it
+    /// holds the cotangent of the right-hand side `b` (physical), and the returned vector
+    /// holds, per frame (same order as [`ConstrainedSystem::set_frames`]), the cotangent of
+    /// the prescribed tangential value `xbar` of a sticking node (0 for other frames).
+    ///
+    /// With the rotated `K^ = Q^T K Q + D`, `F` the free and `P` the prescribed equations,
+    /// `A = S + E W^T` the forward's matrix on `F` (slipping rows `(t + c m) . K~ + d t`):
+    /// `w = A^-T g~_F` by the same Cholesky factor of `S` and the Woodbury correction with
+    /// the roles of `E` and `W` swapped, `A^-T r = S^-1 (r - W (I + W^T Z)^-T Z^T r)`
+    /// (one more triangular solve; `Z = S^-1 E` as in the forward); the cotangent of `b` is
+    /// `Q w^` with `w^ = w` on `F` and `c_k w_t,k` in slipping node `k`'s normal slot, and
+    /// that of `xbar` is `(g~ - K^ w^)_P`. Without slipping frames `A` is symmetric and
+    /// this is the symmetric solve with zero prescribed values.
+    ///
+    /// # Panics
+    /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
+    pub fn solve_transposed(&mut self, model: &Model, b: &mut [f64]) -> Vec<f64> {
+        let t0 = std::time::Instant::now();
+        let mut stick = vec![0.0; self.frames.len()];
+        if self.capacitance || !self.friction() {
+            // symmetric, no sticking dof: the cotangent of b is the solve with xbar = 0
+            let zero = vec![0.0; b.len()];
+            let (cap, frames_empty) = (self.capacitance, self.frames.is_empty());
+            if cap {
+                if frames_empty {
+                    self.solve_capacitance(b, &zero);
+                } else {
+                    self.solve_capacitance_frames(b, &zero);
+                }
+            } else {
+                rotate_in(&self.frames, b);
+                self.dirichlet_rhs(model, b, &zero);
+                self.chol.solve_in_place(b);
+                rotate_out(&self.frames, b);
+            }
+            self.seconds[2] += t0.elapsed().as_secs_f64();
+            return stick;
+        }
+        rotate_in(&self.frames, b);
+        let g = b.to_vec();
+        for (x, &c) in b.iter_mut().zip(&self.constrained) {
+            if c {
+                *x = 0.0;
+            }
+        }
+        let ns = self.slip_idx.len();
+        if ns > 0 {
+            // h = Z^T r, (I + W^T Z)^T v = h, r <- r - W v
+            let mut h: Vec<f64> = self.slip_z.iter().map(|z| dot(z, b)).collect();
+            dense_lu_solve_transposed(&self.slip_lu, ns, &self.slip_piv, &mut h);
+            for (l, &i) in self.slip_idx.iter().enumerate() {
+                let f = self.frames[i];
+                let v = h[l] * f.slip;
+                if v == 0.0 {
+                    continue;
+                }
+                if !self.constrained[f.ez] {
+                    b[f.ez] -= v * self.k_rot[model.pattern.diag[f.ez]];
+                }
+                let (k_rot, constrained) = (&self.k_rot, &self.constrained);
+                model.pattern.for_each_off_diagonal(f.ez, |i, p| {
+                    if !constrained[i] {
+                        b[i] -= v * k_rot[p];
+                    }
+                });
+            }
+        }
+        self.chol.solve_in_place(b);
+        for &i in &self.slip_idx {
+            let f = self.frames[i];
+            if let Some(er) = f.er {
+                b[f.ez] = f.slip * b[er];
+            }
+        }
+        // the cotangents of the sticking nodes' prescribed tangential values
+        for (s, f) in stick.iter_mut().zip(&self.frames) {
+            if let (true, Some(er)) = (f.stick, f.er) {
+                let mut kw = self.k_rot[model.pattern.diag[er]] * b[er];
+                model
+                    .pattern
+                    .for_each_off_diagonal(er, |i, p| kw += self.k_rot[p] * b[i]);
+                *s = g[er] - kw;
+            }
+        }
+        rotate_out(&self.frames, b);
+        self.seconds[2] += t0.elapsed().as_secs_f64();
+        stick
+    }
+
     /// The capacitance mode with frames: the unconstrained factorization (once per
     /// tangent), the columns `z = K^-1 e` of both dofs of every active node, and the LU
     /// factor of the small system of [`ConstrainedSystem::solve_capacitance_frames`].
@@ -1002,6 +1093,30 @@ fn dense_lu_solve(lu: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     }
 }
 
+/// Solves `A^T x = b` with the factor `P A = L U` of [`dense_lu`] in place.
+fn dense_lu_solve_transposed(lu: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
+    // U^T y = b
+    for i in 0..n {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= lu[k * n + i] * b[k];
+        }
+        b[i] = v / lu[i * n + i];
+    }
+    // L^T v = y (unit diagonal)
+    for i in (0..n).rev() {
+        let mut v = b[i];
+        for k in i + 1..n {
+            v -= lu[k * n + i] * b[k];
+        }
+        b[i] = v;
+    }
+    // x = P^T v
+    for k in (0..n).rev() {
+        b.swap(k, piv[k]);
+    }
+}
+
 /// `x_c = v(c)` on the constrained equations `c`.
 fn impose(x: &mut [f64], constrained: &[bool], v: impl Fn(usize) -> f64) {
     for (e, (xi, &c)) in x.iter_mut().zip(constrained).enumerate() {
@@ -1301,6 +1416,97 @@ mod tests {
         let its = inexact.solve_inexact(&model, &mut x, &xbar, 1e-13).unwrap();
         assert!(its > 0);
         check(&x, "inexact");
+    }
+
+    /// The transposed solve of the adjoint with friction is the transpose of the solve:
+    /// `g . x(b, xbar) = V . b + pi . xbar` for any `g`, `b` and sticking values `xbar`
+    /// (`(V, pi)` from [`ConstrainedSystem::solve_transposed`] of `g`), with sticking and
+    /// slipping (both directions, on a curved frame with `d != 0`) nodes and the axis
+    /// node; and it differs from the symmetric solve (the slipping rows matter).
+    #[test]
+    fn transposed_solve_is_the_adjoint_of_the_solve() {
+        let model = small_model(6, 5);
+        let c = [20000.0, 0.3];
+        let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
+        let tangents = vec![t; model.disc.qp.len()];
+        let n = model.dofs.n_eq;
+        let nc = model.candidates.len();
+        let active: Vec<bool> = (0..nc).map(|k| k < 5).collect();
+        // axis, stick, slip +, slip -, stick
+        let frames: Vec<NodeFrame> = (0..5)
+            .map(|k| {
+                let node = model.candidates[k];
+                let er = model.dofs.equation(2 * node);
+                let th = if er.is_some() {
+                    0.2 + 0.1 * k as f64
+                } else {
+                    0.0
+                };
+                let slip = match k {
+                    2 => -0.2,
+                    3 => 0.1,
+                    _ => 0.0,
+                };
+                NodeFrame {
+                    er,
+                    ez: model.dofs.equation(2 * node + 1).unwrap(),
+                    t: [th.cos(), th.sin()],
+                    m: [-th.sin(), th.cos()],
+                    d: if slip != 0.0 { -200.0 * k as f64 } else { 0.0 },
+                    stick: er.is_some() && slip == 0.0,
+                    slip,
+                }
+            })
+            .collect();
+        assert!(frames[0].er.is_none() && frames[1].stick && frames[4].stick);
+        let mut sys = ConstrainedSystem::new(&model).unwrap();
+        sys.set_tangent(&model, &tangents, None);
+        sys.set_active(&model, &active);
+        sys.set_frames(&frames);
+        sys.factorize(&model).unwrap();
+        let vec_of = |seed: usize| -> Vec<f64> {
+            (0..n)
+                .map(|i| (((i + seed) * 7919) % 101) as f64 / 50.0 - 1.0)
+                .collect()
+        };
+        let g = vec_of(3);
+        let mut v = g.clone();
+        let pi = sys.solve_transposed(&model, &mut v);
+        let mut plain = g.clone();
+        sys.solve_dirichlet(&model, &mut plain, &vec![0.0; n]);
+        let diff = v
+            .iter()
+            .zip(&plain)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            diff > 1e-6,
+            "the slipping rows change the transposed solve: {diff}"
+        );
+        for seed in [11, 29] {
+            let b = vec_of(seed);
+            let mut xbar = vec![0.0; n];
+            for (k, f) in frames.iter().enumerate() {
+                if let (true, Some(er)) = (f.stick, f.er) {
+                    xbar[er] = 1e-3 * (k as f64 + 1.0);
+                }
+            }
+            let mut x = b.clone();
+            sys.solve_dirichlet(&model, &mut x, &xbar);
+            let lhs: f64 = g.iter().zip(&x).map(|(a, b)| a * b).sum();
+            let mut rhs: f64 = v.iter().zip(&b).map(|(a, b)| a * b).sum();
+            for (f, p) in frames.iter().zip(&pi) {
+                if let (true, Some(er)) = (f.stick, f.er) {
+                    rhs += p * xbar[er];
+                } else {
+                    assert_eq!(*p, 0.0);
+                }
+            }
+            let scale: f64 = g.iter().zip(&x).map(|(a, b)| (a * b).abs()).sum();
+            assert!(
+                (lhs - rhs).abs() <= 1e-12 * scale,
+                "g . x = {lhs} vs V . b + pi . xbar = {rhs}"
+            );
+        }
     }
 
     /// Inexact solves preconditioned by an earlier tangent's factor reach the requested

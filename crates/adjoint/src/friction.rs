@@ -1,0 +1,258 @@
+//! The exact adjoint and forward sensitivities with Coulomb friction
+//! ([`indentify_contact::ContactKind::NormalFriction`]), small strain, the contact set and
+//! the stick/slip partition held at their converged values (docs/validation-contact.md
+//! §7).
+//!
+//! Step `i` linearized, in the frames `(t, m)` of its active nodes (`z = Q^T du`):
+//! `m . du = 0` on every active node; a sticking node ties its closest point to the
+//! previous step's, `t_i . du_i = (1 + g_i kappa_i) t_{i-1} . du_{i-1} / (1 + g_{i-1}
+//! kappa_{i-1})` (the prescribed value `p_i` of its tangential slot: the previous step's
+//! displacement enters the step); a slipping node's row is `(t + c m) . (K du + B* C q) +
+//! d t . du = 0` with `c = -mu sigma` (unsymmetric: `A = S + E W^T` on the free slots);
+//! `dsigma = C (B du + q)`, `dF = -e_A . B* dsigma` as without friction. The **forward
+//! sensitivities** solve this with the step's frames and the stick values from the
+//! previous step's `du`. The **adjoint** transposes it: with the step's outgoing
+//! functional `rho dF + <mu_{i+1}, y> + l_i . du` (`l_i` the load of step `i + 1`'s
+//! sticking nodes on this step's tangential motion),
+//!
+//! ```text
+//! g   = B* [(C S - I) mu_{i+1} - rho C B e_A] + l_i
+//! V   = Q w^,  w = A^-T (Q^T g)_F,  w^ = w on F, c_k w_t,k on slipping normal slots
+//! pi  = (Q^T g - K^ w^)_P   at the sticking tangential slots (cotangent of p_i)
+//! mu_i = C (S mu_{i+1} - B (V + rho e_A)),  dJ/dc -= <mu_i, R_i>
+//! l_{i-1} = sum_k pi_k (1 + g_i kappa_i) / (1 + g_{i-1} kappa_{i-1}) t_{i-1,k}
+//! ```
+//!
+//! ([`ConstrainedSystem::solve_transposed`](indentify_contact::ConstrainedSystem::solve_transposed)
+//! for `w` and `pi`).
+
+use indentify_contact::{Model, StepFields, StepRecord, Trajectory};
+use indentify_laws::{Law, Vec4};
+
+use crate::{Adjoint, AdjointError, Sensitivities, Sweep, check_inputs};
+
+/// `1 + g kappa` of candidate `k`'s closest point at displacement `u` and depth `depth`
+/// (`active`: measured as a node in contact), with its tangent: the closest point moves by
+/// `t . du / (1 + g kappa)`.
+fn arc_rate(model: &Model, k: usize, u: &[f64], depth: f64, active: bool) -> (f64, [f64; 2]) {
+    let p = model.project(k, u, depth);
+    let p = if active { p.in_contact() } else { p };
+    (1.0 + p.gap * p.kappa, p.t)
+}
+
+impl Adjoint {
+    /// The frames of step `rec` with friction, from the converged stresses `sigma1` (their
+    /// internal force gives the reactions) and displacement `u1`.
+    pub(crate) fn friction_frames(
+        &mut self,
+        model: &Model,
+        rec: &StepRecord,
+        sigma1: &[Vec4],
+        u1: &[f64],
+    ) -> Vec<indentify_contact::NodeFrame> {
+        model.disc.internal_force(sigma1, &mut self.full);
+        model.friction_frames(&rec.active, &rec.slip, &self.full, u1, rec.depth)
+    }
+
+    /// The active candidates of `rec` paired with their frames in `self.frames` (index
+    /// into `frames` per active candidate).
+    fn frame_of_active(
+        &self,
+        model: &Model,
+        rec: &StepRecord,
+        i: usize,
+    ) -> Result<Vec<usize>, AdjointError> {
+        let mut out = Vec::with_capacity(rec.active.len());
+        for (j, &k) in rec.active.iter().enumerate() {
+            let ez = model.dofs.equation(2 * model.candidates[k as usize] + 1);
+            match self.frames.get(j) {
+                Some(f) if Some(f.ez) == ez => out.push(j),
+                _ => {
+                    return Err(AdjointError::Step {
+                        step: i,
+                        t: rec.t,
+                        reason: format!("active candidate {k} has no contact frame"),
+                    });
+                }
+            }
+        }
+        if rec.slip.len() != rec.active.len() {
+            return Err(AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: format!(
+                    "the step records {} stick/slip statuses for {} active nodes",
+                    rec.slip.len(),
+                    rec.active.len()
+                ),
+            });
+        }
+        Ok(out)
+    }
+
+    /// One step of the reversed-time sweep with friction: `self.field_a` holds `mu_{i+1}`
+    /// on entry and `mu_i` on exit; `sweep.stick` holds step `i + 1`'s sticking loads on
+    /// entry and step `i`'s on exit.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn sweep_step_friction(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        sweep: &mut Sweep,
+        rec: &StepRecord,
+        f0: &StepFields,
+        f1: &StepFields,
+        rho: f64,
+        i: usize,
+    ) -> Result<(), AdjointError> {
+        let (sig0, sig1) = (&f0.sigma, &f1.sigma);
+        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() && sweep.stick.is_empty() {
+            return Ok(());
+        }
+        sweep.mu_zero = false;
+        self.prepare_step(model, law, c, rec, sig1, &f1.u, i)?;
+        let pairs = self.frame_of_active(model, rec, i)?;
+        let s = sweep.s;
+        // e_A: 1 on the vertical dof of every active node
+        self.full.fill(0.0);
+        for &k in &rec.active {
+            self.full[2 * model.candidates[k as usize] + 1] = 1.0;
+        }
+        model.disc.strains(&self.full, &mut self.strain);
+        // g = B* [(C S - I) mu_{i+1} - rho C B e_A]
+        for q in 0..self.field_b.len() {
+            let sm = s.mul_vec(&self.field_a[q]) - Vec4(self.strain[q]) * rho;
+            self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+        }
+        model.disc.internal_force(&self.field_b, &mut self.full);
+        // + l_i: the sticking loads of step i + 1 on this step's tangential motion
+        let active_now = |k: usize| rec.active.binary_search(&(k as u32)).is_ok();
+        for (k, pi) in std::mem::take(&mut sweep.stick) {
+            let (rate, t) = arc_rate(model, k, &f1.u, rec.depth, active_now(k));
+            let n = model.candidates[k];
+            self.full[2 * n] += pi / rate * t[0];
+            self.full[2 * n + 1] += pi / rate * t[1];
+        }
+        self.restrict(model);
+        let mut eq = std::mem::take(&mut self.eq);
+        let pi = self.system.solve_transposed(model, &mut eq);
+        self.eq = eq;
+        // this step's sticking nodes load the previous step
+        for (j, &k) in rec.active.iter().enumerate() {
+            let fj = pairs[j];
+            if self.frames[fj].stick && pi[fj] != 0.0 {
+                let (rate, _) = arc_rate(model, k as usize, &f1.u, rec.depth, true);
+                sweep.stick.push((k as usize, pi[fj] * rate));
+            }
+        }
+        // V' = V + rho e_A
+        self.expand(model);
+        for &k in &rec.active {
+            self.full[2 * model.candidates[k as usize] + 1] += rho;
+        }
+        model.disc.strains(&self.full, &mut self.strain);
+        for q in 0..self.field_b.len() {
+            let sm = s.mul_vec(&self.field_a[q]);
+            let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
+            self.field_b[q] = mu;
+            let wmu = mu * model.disc.qp[q].w;
+            let ds = sig1[q] - sig0[q];
+            for a in 0..4 {
+                for b in 0..4 {
+                    sweep.m_acc.0[a][b] += wmu[a] * ds[b];
+                }
+            }
+            if sig1[q].max_abs() > 0.0 {
+                for (k, g) in sweep.grad.iter_mut().enumerate() {
+                    *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
+                }
+            }
+        }
+        std::mem::swap(&mut self.field_a, &mut self.field_b);
+        Ok(())
+    }
+
+    /// Forward sensitivities with friction (see the module's documentation).
+    pub(crate) fn sensitivities_friction(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+    ) -> Result<Sensitivities, AdjointError> {
+        let start = std::time::Instant::now();
+        let n = traj.steps.len();
+        check_inputs(law, c, traj, n)?;
+        self.system.forget_assembly();
+        let s = law.compliance(c);
+        let np = c.len();
+        let nq = model.disc.n_qp();
+        let nd = model.disc.n_dofs();
+        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        // du of the previous step, per parameter (all dofs; 0 before the first step)
+        let mut du_prev = vec![vec![0.0; nd]; np];
+        let mut df = vec![vec![0.0; np]; n];
+        let mut q_field = vec![Vec4::ZERO; nq];
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let f1 = &traj.fields[i + 1];
+            self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
+            let pairs = self.frame_of_active(model, rec, i)?;
+            // sticking nodes: t_i . du_i = coef t_{i-1} . du_{i-1}
+            let mut stick: Vec<(usize, usize, f64, [f64; 2])> = Vec::new();
+            if i > 0 {
+                let prev = &traj.steps[i - 1];
+                let u0 = &traj.fields[i].u;
+                for (j, &k) in rec.active.iter().enumerate() {
+                    let f = self.frames[pairs[j]];
+                    if let (true, Some(er)) = (f.stick, f.er) {
+                        let k = k as usize;
+                        let was_active = prev.active.binary_search(&(k as u32)).is_ok();
+                        let (rate0, t0) = arc_rate(model, k, u0, prev.depth, was_active);
+                        let (rate1, _) = arc_rate(model, k, &f1.u, rec.depth, true);
+                        stick.push((er, model.candidates[k], rate1 / rate0, t0));
+                    }
+                }
+            }
+            let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
+            for k in 0..np {
+                for qp in 0..nq {
+                    q_field[qp] = y[k][qp]
+                        - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
+                    self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
+                }
+                model.disc.internal_force(&self.field_b, &mut self.full);
+                self.restrict(model);
+                self.xbar.fill(0.0);
+                for &(er, node, coef, t0) in &stick {
+                    let d = &du_prev[k];
+                    self.xbar[er] = coef * (t0[0] * d[2 * node] + t0[1] * d[2 * node + 1]);
+                }
+                let mut eq = std::mem::take(&mut self.eq);
+                self.system.solve_dirichlet(model, &mut eq, &self.xbar);
+                self.eq = eq;
+                self.expand(model);
+                du_prev[k].copy_from_slice(&self.full);
+                model.disc.strains(&self.full, &mut self.strain);
+                for qp in 0..nq {
+                    let bv = Vec4(self.strain[qp]);
+                    let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
+                    self.field_b[qp] = dsig;
+                    y[k][qp] = s.mul_vec(&dsig) - bv;
+                }
+                model.disc.internal_force(&self.field_b, &mut self.full);
+                df[i][k] = -rec
+                    .active
+                    .iter()
+                    .map(|&a| self.full[2 * model.candidates[a as usize] + 1])
+                    .sum::<f64>();
+            }
+            self.xbar.fill(0.0);
+        }
+        Ok(Sensitivities {
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}
