@@ -186,29 +186,7 @@ impl Model {
     /// taken at the node's reference radius and its reaction stays vertical, which has no
     /// meaning once the surface moves and rotates; finite strain needs `contact: Normal`.
     pub fn with_kinematics(mut self, kinematics: Kinematics) -> Result<Model, ContactError> {
-        if kinematics == Kinematics::Finite
-            && matches!(self.contact, ContactKind::NormalFriction { .. })
-        {
-            return Err(ContactError::Input {
-                field: "kinematics",
-                value: "Finite".into(),
-                allowed: "`kinematics: Finite` with frictionless contact only: Coulomb friction \
-                          under finite strain is not built; set `contact: Normal` (or keep \
-                          `kinematics: Small`)"
-                    .into(),
-            });
-        }
-        if kinematics == Kinematics::Finite && self.contact != ContactKind::Normal {
-            return Err(ContactError::Input {
-                field: "kinematics",
-                value: "Finite".into(),
-                allowed: "`kinematics: Finite` with `contact: Normal` only: vertical contact \
-                          takes the gap at the node's reference radius and a vertical \
-                          reaction, which finite strain's displaced and rotated surface \
-                          contradicts; set `contact: Normal` (or keep `kinematics: Small`)"
-                    .into(),
-            });
-        }
+        kinematics.check_contact(self.contact)?;
         self.kinematics = kinematics;
         Ok(self)
     }

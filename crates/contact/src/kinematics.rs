@@ -13,6 +13,8 @@ use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
 use indentify_laws::{ElasticDomain, Law, LogStrain, Vec4};
 use serde::{Deserialize, Serialize};
 
+use crate::{ContactError, ContactKind};
+
 /// Kinematics of the direct problem.
 ///
 /// Config: `kinematics: Small` (the default) or `kinematics: Finite` (requires
@@ -27,6 +29,38 @@ pub enum Kinematics {
     /// update and tangent unchanged), the consistent tangent with its material and
     /// geometric parts. Needs normal contact (the gap at the displaced position).
     Finite,
+}
+
+impl Kinematics {
+    /// Checks that `contact` supports these kinematics: finite strain needs frictionless
+    /// `Normal` contact (the gap of the displaced node along the punch's normal).
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `kinematics`, with what is allowed.
+    pub fn check_contact(self, contact: ContactKind) -> Result<(), ContactError> {
+        if self == Kinematics::Finite && matches!(contact, ContactKind::NormalFriction { .. }) {
+            return Err(ContactError::Input {
+                field: "kinematics",
+                value: "Finite".into(),
+                allowed: "`kinematics: Finite` with frictionless contact only: Coulomb friction \
+                      under finite strain is not built; set `contact: Normal` (or keep \
+                      `kinematics: Small`)"
+                    .into(),
+            });
+        }
+        if self == Kinematics::Finite && contact != ContactKind::Normal {
+            return Err(ContactError::Input {
+                field: "kinematics",
+                value: "Finite".into(),
+                allowed: "`kinematics: Finite` with `contact: Normal` only: vertical contact \
+                      takes the gap at the node's reference radius and a vertical \
+                      reaction, which finite strain's displaced and rotated surface \
+                      contradicts; set `contact: Normal` (or keep `kinematics: Small`)"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
 }
 
 /// Why a finite-strain Gauss-point evaluation failed.

@@ -33,15 +33,18 @@ pub struct Config {
     pub specimen: Specimen,
     /// The rigid punch (the contact crate's own type).
     pub punch: Punch,
-    /// The direction of the contact constraint: `Vertical` (the paper's formulation, the
-    /// default), `Normal` (the displaced node's gap along the punch's normal) or
+    /// The direction of the contact constraint: `Vertical` (the paper's formulation),
+    /// `Normal` (the displaced node's gap along the punch's normal) or
     /// `Normal(friction: mu)` (with Coulomb friction; on the command line
     /// `--set "contact=Normal(friction: 0.2)"`, then `--set contact.friction=0.3`).
+    /// Left out, it is `Vertical` for a depth `history` and `Normal` for measured data
+    /// (see [`Config::resolve_model_defaults`]; the loaders apply it).
     #[serde(default)]
     pub contact: ContactKind,
-    /// The kinematics: `Small` (the paper's, the default) or `Finite` (total-Lagrangian,
-    /// the laws in logarithmic strain space; needs `contact: Normal`; forward runs only:
-    /// `gradient`, `check` and `identify` refuse it until its adjoint is exact).
+    /// The kinematics: `Small` (the paper's) or `Finite` (total-Lagrangian, the laws in
+    /// logarithmic strain space; needs frictionless `contact: Normal`). Left out, it is
+    /// `Small` for a depth `history` and `Finite` for measured data whose contact is
+    /// frictionless `Normal` ([`Config::resolve_model_defaults`]).
     #[serde(default)]
     pub kinematics: Kinematics,
     /// The constitutive law and its parameters.
@@ -888,6 +891,7 @@ impl Config {
                  the simulation; remove `history` (or `data`)"
             ),
         }
+        self.kinematics.check_contact(self.contact)?;
         self.solver.validate()?;
         if let Some(id) = &self.identify {
             id.validate(&self.law)?;
@@ -949,6 +953,60 @@ impl Config {
             id.validate(&self.law)?;
         }
         Ok(())
+    }
+
+    /// Whether the data are measured records: a top-level `data` section, or one in a test.
+    pub fn is_measured(&self) -> bool {
+        self.data.is_some()
+            || self
+                .tests
+                .as_ref()
+                .is_some_and(|t| t.iter().any(|t| t.data.is_some()))
+    }
+
+    /// Fills the model's fields that the configuration does not state (`stated`):
+    ///
+    /// - with a depth `history` (the reference problems, the paper's tables), the paper's
+    ///   model: `contact: Vertical`, `kinematics: Small` (the serde defaults, kept);
+    /// - with measured data ([`Config::is_measured`]), the physical model:
+    ///   `contact: Normal` (frictionless, the gap along the punch's normal in the current
+    ///   configuration) and `kinematics: Finite`, which together describe the material
+    ///   under a real indenter (docs/validation-finite-strain.md); the kinematics stays
+    ///   `Small` if a stated contact (top level or a test's) is not frictionless `Normal`,
+    ///   which finite strain does not support.
+    ///
+    /// Friction stays opt-in: no default coefficient is supported by the shipped data.
+    pub fn resolve_model_defaults(&mut self, stated: StatedModel) {
+        if !self.is_measured() {
+            return;
+        }
+        if !stated.contact {
+            self.contact = ContactKind::Normal;
+        }
+        if !stated.kinematics {
+            let frictionless_normal = std::iter::once(self.contact)
+                .chain(self.tests.iter().flatten().filter_map(|t| t.contact))
+                .all(|c| c == ContactKind::Normal);
+            self.kinematics = if frictionless_normal {
+                Kinematics::Finite
+            } else {
+                Kinematics::Small
+            };
+        }
+    }
+
+    /// The model in words: `normal contact, finite strain (the default for measured data)`.
+    pub fn describe_model(&self) -> String {
+        let contact = match self.contact {
+            ContactKind::Vertical => "vertical contact (the paper's)".to_string(),
+            ContactKind::Normal => "frictionless normal contact".to_string(),
+            other => format!("normal contact with Coulomb friction {}", other.friction()),
+        };
+        let kinematics = match self.kinematics {
+            Kinematics::Small => "small strain",
+            Kinematics::Finite => "finite strain",
+        };
+        format!("{contact}, {kinematics}")
     }
 
     /// The number of tests: the length of `tests`, or 1.
@@ -1233,7 +1291,9 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Config> {
 /// As [`load`].
 pub fn load_str(src: &str, name: &str, sets: &[String]) -> Result<Config> {
     let config = parse(src, name)?;
-    let config = apply_sets(config, sets)?;
+    let stated = StatedModel::of_ron(src).with_sets(sets);
+    let mut config = apply_sets(config, sets)?;
+    config.resolve_model_defaults(stated);
     let via = if sets.is_empty() {
         String::new()
     } else {
@@ -1243,6 +1303,70 @@ pub fn load_str(src: &str, name: &str, sets: &[String]) -> Result<Config> {
         .validate()
         .with_context(|| format!("invalid configuration `{name}`{via}"))?;
     Ok(config)
+}
+
+/// Which of the model's fields (`contact`, `kinematics`) a configuration states; the others
+/// take the defaults of [`Config::resolve_model_defaults`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StatedModel {
+    /// `contact` is given (in the file or by `--set`).
+    pub contact: bool,
+    /// `kinematics` is given.
+    pub kinematics: bool,
+}
+
+/// The model's keys of a RON configuration, the other fields skipped.
+#[derive(Deserialize)]
+#[serde(rename = "config")]
+struct ModelKeys {
+    #[serde(default)]
+    contact: Option<serde::de::IgnoredAny>,
+    #[serde(default)]
+    kinematics: Option<serde::de::IgnoredAny>,
+}
+
+impl StatedModel {
+    /// Both fields stated: the configuration is taken as it is.
+    pub const ALL: StatedModel = StatedModel {
+        contact: true,
+        kinematics: true,
+    };
+
+    /// The fields the RON text `src` gives at its top level (none if it does not parse:
+    /// the parse error is reported by [`parse`]).
+    pub fn of_ron(src: &str) -> StatedModel {
+        ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+            .from_str::<ModelKeys>(src)
+            .map(|k| StatedModel {
+                contact: k.contact.is_some(),
+                kinematics: k.kinematics.is_some(),
+            })
+            .unwrap_or_default()
+    }
+
+    /// The fields a value (a Python dict's structure) gives at its top level.
+    pub fn of_value(value: &Value) -> StatedModel {
+        StatedModel {
+            contact: value.get("contact").is_some(),
+            kinematics: value.get("kinematics").is_some(),
+        }
+    }
+
+    /// These plus the fields `--set` overrides (`contact=...`, `contact.friction=...`,
+    /// `kinematics=...`).
+    pub fn with_sets(self, sets: &[String]) -> StatedModel {
+        let sets_field = |field: &str| {
+            sets.iter().any(|s| {
+                let key = s.split_once('=').map_or(s.as_str(), |(k, _)| k).trim();
+                key == field || key.starts_with(&format!("{field}."))
+            })
+        };
+        StatedModel {
+            contact: self.contact || sets_field("contact"),
+            kinematics: self.kinematics || sets_field("kinematics"),
+        }
+    }
 }
 
 /// Whether `src` writes the specimen in the form before `Cylinder`/`Auto` existed.
@@ -1774,5 +1898,72 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("law.nu = 0.5") && e.contains("(-1, 0.5)"), "{e}");
+    }
+
+    /// A measured-data configuration (the file need not exist: nothing is read) with the
+    /// model lines `extra` at the top level.
+    fn measured(extra: &str) -> String {
+        format!(
+            "(specimen: Auto(), punch: Berkovich(), {extra} \
+             law: Maxwell(E: 2000.0, nu: 0.3, eta: 100000.0), data: (file: \"x.txt\"))"
+        )
+    }
+
+    #[test]
+    fn measured_data_take_the_physical_model_unless_stated() {
+        let model = |src: &str, sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            let c = load_str(src, "m.ron", &sets).unwrap();
+            (c.contact, c.kinematics)
+        };
+        use ContactKind::{Normal, Vertical};
+        use Kinematics::{Finite, Small};
+        // a depth history keeps the paper's model
+        assert_eq!(model(&r0_text(), &[]), (Vertical, Small));
+        assert_eq!(model(&measured(""), &[]), (Normal, Finite));
+        assert_eq!(
+            model(&measured("contact: Vertical,"), &[]),
+            (Vertical, Small)
+        );
+        assert_eq!(model(&measured("kinematics: Small,"), &[]), (Normal, Small));
+        assert_eq!(model(&measured("contact: Normal,"), &[]), (Normal, Finite));
+        assert_eq!(
+            model(&measured(""), &["contact=Vertical"]),
+            (Vertical, Small)
+        );
+        assert_eq!(model(&measured(""), &["kinematics=Small"]), (Normal, Small));
+        // friction is opt-in, and finite strain does not take it: small strain then
+        let (c, k) = model(&measured(""), &["contact=Normal(friction: 0.1)"]);
+        assert_eq!((c.friction(), k), (0.1, Small));
+        // a stated finite strain with vertical contact is refused, not changed
+        let e = load_str(
+            &measured("contact: Vertical, kinematics: Finite,"),
+            "m.ron",
+            &[],
+        )
+        .unwrap_err();
+        assert!(format!("{e:#}").contains("Normal"), "{e:#}");
+        // the value form (a Python dict) follows the same rule
+        let value = serde_json::to_value(parse(&measured(""), "m.ron").unwrap()).unwrap();
+        let mut without = value.clone();
+        let obj = without.as_object_mut().unwrap();
+        obj.remove("contact");
+        obj.remove("kinematics");
+        assert_eq!(StatedModel::of_value(&without), StatedModel::default());
+        assert_eq!(StatedModel::of_value(&value), StatedModel::ALL);
+        let from_value = crate::ConfigSource::Value {
+            value: without,
+            name: "dict".into(),
+        }
+        .load(&[])
+        .unwrap();
+        assert_eq!(
+            (from_value.contact, from_value.kinematics),
+            (Normal, Finite)
+        );
+        assert_eq!(
+            from_value.describe_model(),
+            "frictionless normal contact, finite strain"
+        );
     }
 }

@@ -60,7 +60,9 @@ impl ConfigSource {
                 let cfg: Config = serde_json::from_value(value.clone())
                     .map_err(|e| anyhow::anyhow!("{e}"))
                     .with_context(|| format!("cannot read the configuration `{name}`"))?;
-                let cfg = config::apply_sets(cfg, sets)?;
+                let stated = config::StatedModel::of_value(value).with_sets(sets);
+                let mut cfg = config::apply_sets(cfg, sets)?;
+                cfg.resolve_model_defaults(stated);
                 cfg.validate()
                     .with_context(|| format!("invalid configuration `{name}`"))?;
                 Ok::<_, anyhow::Error>(cfg)

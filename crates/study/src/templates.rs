@@ -115,6 +115,9 @@ pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
     };
     cfg.punch = d.punch.clone();
     cfg.history = None;
+    // measured data: the physical model (Config::resolve_model_defaults), written out
+    cfg.contact = indentify_contact::ContactKind::Normal;
+    cfg.kinematics = indentify_contact::Kinematics::Finite;
     cfg.data = Some(DataSection {
         file: d.file.clone(),
         format: indentify_records::Format::Auto,
@@ -275,11 +278,18 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
     );
     let punch = serde_json::to_value(&cfg.punch).unwrap_or(Value::Null);
     out.push_str(&format!("    punch: {},\n", ron_inline(&punch)));
+    out.push_str(
+        "    // The model. Contact: Vertical (the paper's: gap at the reference radius, vertical\n\
+         \x20   // reaction), Normal (gap of the displaced node along the punch's normal, frictionless)\n\
+         \x20   // or Normal(friction: 0.1) (Coulomb; docs/validation-contact.md). Kinematics: Small (the\n\
+         \x20   // paper's) or Finite (logarithmic strain, needs frictionless Normal contact;\n\
+         \x20   // docs/validation-finite-strain.md). Left out: Vertical and Small for a depth history,\n\
+         \x20   // Normal and Finite for measured data.\n",
+    );
     out.push_str(&format!(
-        "    contact: {:?}, // Vertical: the paper's (gap at the reference radius, vertical \
-         reaction); Normal: gap of the displaced node along the punch's normal, frictionless \
-         (docs/validation-contact.md)\n",
-        cfg.contact
+        "    contact: {},\n    kinematics: {:?},\n",
+        ron_contact(cfg.contact),
+        cfg.kinematics
     ));
 
     let forms: Vec<String> = Reference::ALL
@@ -564,6 +574,16 @@ fn num(v: f64) -> String {
 }
 
 /// One-line RON of a serialized value: `Cone(half_angle_deg: 68.0)`, `[0.0, 1.0]`.
+/// The contact kind as a configuration writes it.
+fn ron_contact(c: indentify_contact::ContactKind) -> String {
+    use indentify_contact::ContactKind;
+    match c {
+        ContactKind::Vertical => "Vertical".into(),
+        ContactKind::Normal => "Normal".into(),
+        ContactKind::NormalFriction { friction } => format!("Normal(friction: {})", num(friction)),
+    }
+}
+
 fn ron_inline(v: &Value) -> String {
     let fields = |map: &serde_json::Map<String, Value>| {
         map.iter()

@@ -50,6 +50,15 @@ pub fn run(args: &Args) -> Result<()> {
             .parse::<f64>()
             .unwrap_or(0.0)
     );
+    tracing::info!(
+        "  model: {}{}",
+        cfg.describe_model(),
+        if cfg.is_measured() {
+            " (measured data: unless stated, normal contact and finite strain)"
+        } else {
+            ""
+        }
+    );
     if let Some(m) = &prepared.measured {
         tracing::info!("  data: {}", m.summary());
     }
