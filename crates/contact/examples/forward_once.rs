@@ -2,8 +2,11 @@
 //! and the global iterations per segment, e.g. under `valgrind --tool=callgrind`:
 //! `cargo run --release -p indentify-contact --example forward_once -- r2 [REPEAT]`
 //! (with REPEAT > 1 it reports the fastest of REPEAT runs; `--steps` lists every step's
-//! iterations and active-set changes).
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+//! iterations and active-set changes; `--normal` takes normal contact, `--finite` finite
+//! strain with normal contact, for back-to-back ratios against `--normal`).
+use indentify_contact::{
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
@@ -19,12 +22,25 @@ fn main() {
         }
     };
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
-    let model = Model::new(
+    let finite = std::env::args().any(|a| a == "--finite");
+    let contact = if finite || std::env::args().any(|a| a == "--normal") {
+        ContactKind::Normal
+    } else {
+        ContactKind::Vertical
+    };
+    let kinematics = if finite {
+        Kinematics::Finite
+    } else {
+        Kinematics::Small
+    };
+    let model = Model::with_contact(
         mesh,
         Punch::Cone {
             half_angle_deg: 68.0,
         },
+        contact,
     )
+    .and_then(|m| m.with_kinematics(kinematics))
     .expect("reference model");
     let l_nnz = indentify_fe::SparseCholesky::analyse(&model.pattern)
         .expect("analysis")
