@@ -18,7 +18,8 @@
 //! mm on the reference mesh) are not held by the punch.
 //!
 //! The material models (CalculiX 2.20, read in its source):
-//! - elastic: `*ELASTIC` (isotropic, linear; St. Venant-Kirchhoff with `NLGEOM`);
+//! - elastic: `*ELASTIC` (isotropic, linear); with `NLGEOM` a compressible neo-Hooke
+//!   solid of the same small-strain moduli (`*ELASTIC` would be St. Venant-Kirchhoff there);
 //! - Maxwell and Norton-Hoff, small strain: the additive infinitesimal-strain
 //!   viscoplastic model "elastic anisotropy with isotropic viscoplasticity"
 //!   (`umat_aniso_plas.f`, material name `ANISO_PLAS...`, `*USER MATERIAL` with 15
@@ -671,17 +672,16 @@ pub fn load(root: &std::path::Path, case: &Case) -> Result<Loaded> {
     })
 }
 
+/// A force history `(t, F)` (s, N).
+pub type Curve = Vec<(f64, f64)>;
+
 /// Runs `ccx` on `deck` in a scratch folder under `out`: the force curve and, if `ccx`
 /// stopped before the end, why (its last error line); a run that stops keeps the
 /// increments it converged.
 ///
 /// # Errors
 /// `ccx` missing, a `.dat` file without forces.
-pub fn run_ccx(
-    out: &std::path::Path,
-    stem: &str,
-    deck: &str,
-) -> Result<(Vec<(f64, f64)>, Option<String>)> {
+pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<(Curve, Option<String>)> {
     let work = out.join(format!(".work-{stem}"));
     std::fs::create_dir_all(&work)?;
     std::fs::write(work.join(format!("{stem}.inp")), deck)?;
@@ -709,8 +709,7 @@ pub fn run_ccx(
                 .lines(),
         )
         .map(str::trim)
-        .filter(|l| l.contains("ERROR") || l.contains("singular"))
-        .last()
+        .rfind(|l| l.contains("ERROR") || l.contains("singular"))
         .map(str::to_string);
     if curve.is_empty() {
         bail!(
