@@ -149,6 +149,9 @@ pub struct DeckOptions {
     pub punch_r_min: f64,
     /// Geometrically nonlinear (finite strain) analysis.
     pub nlgeom: bool,
+    /// The loading segment as its own `*STEP`, the rest of the history as a second one
+    /// (amplitude and time points in total time).
+    pub split_load: bool,
     /// Coulomb friction coefficient (0: frictionless, no `*FRICTION` card).
     pub friction: f64,
     /// Slope of the linear pressure-overclosure law (MPa/mm).
@@ -167,6 +170,7 @@ impl Default for DeckOptions {
             contact: ContactType::NodeToSurface,
             punch_r_min: 1e-4,
             nlgeom: false,
+            split_load: false,
             friction: 0.0,
             penalty: 1e9,
             stick_slope: 1e8,
@@ -421,7 +425,13 @@ pub fn deck(
         o.contact.keyword()
     )?;
     writeln!(w, "STOP, SPUNCH")?;
-    writeln!(w, "*AMPLITUDE, NAME=DEPTH")?;
+    // amplitude and time points in total time when the history spans several steps
+    let total = if o.split_load {
+        ", TIME=TOTAL TIME"
+    } else {
+        ""
+    };
+    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
     for (t, h) in corners(schedule) {
         writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
     }
@@ -429,42 +439,55 @@ pub fn deck(
     writeln!(w, "AXIS, 1, 1")?;
     writeln!(w, "BOTTOM, 2, 2")?;
     writeln!(w, "PUNCH, 1, 1")?;
-    writeln!(w, "*TIME POINTS, NAME=TP")?;
+    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
     for t in &schedule.t[1..] {
         writeln!(w, "{t:.12e}")?;
     }
     let n_inc = 20 * schedule.t.len();
-    if o.nlgeom {
-        writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
-    } else {
-        writeln!(w, "*STEP, INC={n_inc}")?;
-    }
     let procedure = match material {
         Material::Elastic { .. } => "*STATIC",
         Material::Viscoplastic { .. } => "*VISCO",
     };
-    // Automatic incrementation capped at the schedule's step (fixed increments, DIRECT,
-    // stop the viscoplastic runs when CalculiX's divergence check fires); the time points
-    // make every schedule time an increment's end, so the curves share our time grid
-    // (CalculiX cuts an increment where its Newton iteration needs it, nowhere else).
-    // CETOL is required by *VISCO but only used by isotropic creep with automatic
-    // incrementation's creep-strain control: 1.0 switches that control off.
-    // More Newton iterations before CalculiX declares divergence and cuts the increment
-    // (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks): the contact set of the
-    // viscoplastic runs takes many passes to settle.
-    writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
-    writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
-    if procedure == "*VISCO" {
-        writeln!(w, "{procedure}, CETOL=1.0")?;
-    } else {
-        writeln!(w, "{procedure}")?;
+    // One step, or (split_load) the loading segment and the rest as two steps: a step
+    // starts without extrapolating the previous increment's velocity, which at the
+    // corner of the trapezoid drove the NLGEOM runs' tip nodes off (§3.1 of
+    // docs/validation-finite-strain.md).
+    let steps: Vec<f64> = match corners(schedule).get(1) {
+        Some(&(t1, _)) if o.split_load && t1 < t_end => vec![t1, t_end - t1],
+        _ => vec![t_end],
+    };
+    for duration in steps {
+        if o.nlgeom {
+            writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
+        } else {
+            writeln!(w, "*STEP, INC={n_inc}")?;
+        }
+        // Automatic incrementation capped at the schedule's step (fixed increments,
+        // DIRECT, stop the viscoplastic runs when CalculiX's divergence check fires); the
+        // time points make every schedule time an increment's end, so the curves share
+        // our time grid (CalculiX cuts an increment where its Newton iteration needs it,
+        // nowhere else). CETOL is required by *VISCO but only used by isotropic creep
+        // with automatic incrementation's creep-strain control: 1.0 switches that
+        // control off. More Newton iterations before CalculiX declares divergence and
+        // cuts the increment (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks).
+        writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
+        writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
+        if procedure == "*VISCO" {
+            writeln!(w, "{procedure}, CETOL=1.0")?;
+        } else {
+            writeln!(w, "{procedure}")?;
+        }
+        writeln!(
+            w,
+            "{dt:.12e}, {duration:.12e}, {:.12e}, {dt:.12e}",
+            dt * 1e-4
+        )?;
+        writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
+        writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
+        writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
+        writeln!(w, "RF")?;
+        writeln!(w, "*END STEP")?;
     }
-    writeln!(w, "{dt:.12e}, {t_end:.12e}, {:.12e}, {dt:.12e}", dt * 1e-4)?;
-    writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
-    writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
-    writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
-    writeln!(w, "RF")?;
-    writeln!(w, "*END STEP")?;
     Ok(s)
 }
 

@@ -289,3 +289,39 @@ fn table_rows_compare_ours_or_the_frictionless_reference() {
         "{row}"
     );
 }
+
+#[test]
+fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 0.0);
+    let one = DeckOptions {
+        punch_segments: 4,
+        nlgeom: true,
+        ..DeckOptions::default()
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &one).unwrap();
+    assert_eq!(deck.matches("*STEP, NLGEOM").count(), 1);
+    assert!(!deck.contains("TOTAL TIME"));
+    // dt = 0.25 s over the whole 3 s history
+    assert!(deck.contains("\n2.500000000000e-1, 3.000000000000e0, "));
+    let two = DeckOptions {
+        split_load: true,
+        ..one
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &two).unwrap();
+    assert_eq!(deck.matches("*STEP, NLGEOM").count(), 2);
+    assert_eq!(deck.matches("*END STEP").count(), 2);
+    assert!(deck.contains("*AMPLITUDE, NAME=DEPTH, TIME=TOTAL TIME\n"));
+    assert!(deck.contains("*TIME POINTS, NAME=TP, TIME=TOTAL TIME\n"));
+    // the loading segment (1 s), then the hold and the unloading (2 s)
+    let first = deck
+        .find("\n2.500000000000e-1, 1.000000000000e0, ")
+        .unwrap();
+    let second = deck
+        .find("\n2.500000000000e-1, 2.000000000000e0, ")
+        .unwrap();
+    assert!(first < second);
+}
