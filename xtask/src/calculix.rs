@@ -1,10 +1,25 @@
-//! CalculiX referee for normal contact (issue 12): input decks of the reference problems
-//! R0, R1 and R2 on our own mesh (CAX8, node for node), a rigid cone as surface-to-surface
-//! penalty contact, the reaction-force parser of the `.dat` file, and the comparison with
-//! our `Normal` contact. `cargo xtask calculix` runs them (not part of CI: it needs `ccx`).
+//! CalculiX referee for normal contact, friction (issue 12) and finite strain (issue 13):
+//! input decks of the reference problems R0, R1 and R2 on our own mesh (CAX8, node for
+//! node), a rigid cone in node-to-surface penalty contact (surface-to-surface optional),
+//! the reaction-force parser of the `.dat` file, and the comparison with our `Normal`
+//! contact, `Normal(friction: mu)` and `kinematics: Finite`. `cargo xtask calculix` runs
+//! them (not part of CI: it needs `ccx`).
+//!
+//! The contact (docs/validation-contact.md §9): node-to-surface penalty contact
+//! (`*CONTACT PAIR, TYPE=NODE TO SURFACE`): each slave node (the specimen's top nodes) is
+//! paired with the nearest face of the punch's flank, a spring along that face's normal
+//! with `p = K x overclosure` (`PRESSURE-OVERCLOSURE=LINEAR`, ccx's default small tension
+//! at large clearances), friction by a stick slope and Coulomb's `mu p`. Two changes keep
+//! it off the axis, where CalculiX's expansion of axisymmetric elements into 3D collapses
+//! faces: the punch's flank starts at `r = punch_r_min` (1e-4 mm, the CalculiX manual:
+//! no master face may touch the axis), and the specimen's top face on the axis is left out
+//! of the slave surface (with it, ccx stops on "matrix found to be singular" in the first
+//! increment), so its two nodes at `r < h_1` (`h_1` = the first element's width, 0.0159
+//! mm on the reference mesh) are not held by the punch.
 //!
 //! The material models (CalculiX 2.20, read in its source):
-//! - elastic: `*ELASTIC` (isotropic, linear; St. Venant-Kirchhoff with `NLGEOM`);
+//! - elastic: `*ELASTIC` (isotropic, linear); with `NLGEOM` a compressible neo-Hooke
+//!   solid of the same small-strain moduli (`*ELASTIC` would be St. Venant-Kirchhoff there);
 //! - Maxwell and Norton-Hoff, small strain: the additive infinitesimal-strain
 //!   viscoplastic model "elastic anisotropy with isotropic viscoplasticity"
 //!   (`umat_aniso_plas.f`, material name `ANISO_PLAS...`, `*USER MATERIAL` with 15
@@ -92,11 +107,51 @@ impl Material {
     }
 }
 
+/// CalculiX's contact formulation of a deck.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactType {
+    /// `TYPE=NODE TO SURFACE`: a penalty spring per slave node (the default).
+    NodeToSurface,
+    /// `TYPE=SURFACE TO SURFACE`: face-to-face penalty contact, integrated over the slave
+    /// faces (R0's earlier runs; its viscoplastic runs cycle, docs/validation-contact.md §9).
+    SurfaceToSurface,
+}
+
+impl ContactType {
+    /// The value of `TYPE=` on `*CONTACT PAIR`.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            ContactType::NodeToSurface => "NODE TO SURFACE",
+            ContactType::SurfaceToSurface => "SURFACE TO SURFACE",
+        }
+    }
+
+    /// Parses `node-to-surface` or `surface-to-surface`.
+    ///
+    /// # Errors
+    /// Any other spelling, named.
+    pub fn from_name(name: &str) -> Result<ContactType> {
+        match name {
+            "node-to-surface" => Ok(ContactType::NodeToSurface),
+            "surface-to-surface" => Ok(ContactType::SurfaceToSurface),
+            _ => bail!("--contact: `{name}` is not node-to-surface or surface-to-surface"),
+        }
+    }
+}
+
 /// Options of a deck.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DeckOptions {
+    /// The contact formulation.
+    pub contact: ContactType,
+    /// Radius at which the punch's flank starts (mm): a master face touching the axis
+    /// has no normal in CalculiX's 3D expansion.
+    pub punch_r_min: f64,
     /// Geometrically nonlinear (finite strain) analysis.
     pub nlgeom: bool,
+    /// The loading segment as its own `*STEP`, the rest of the history as a second one
+    /// (amplitude and time points in total time).
+    pub split_load: bool,
     /// Coulomb friction coefficient (0: frictionless, no `*FRICTION` card).
     pub friction: f64,
     /// Slope of the linear pressure-overclosure law (MPa/mm).
@@ -112,7 +167,10 @@ pub struct DeckOptions {
 impl Default for DeckOptions {
     fn default() -> DeckOptions {
         DeckOptions {
+            contact: ContactType::NodeToSurface,
+            punch_r_min: 1e-4,
             nlgeom: false,
+            split_load: false,
             friction: 0.0,
             penalty: 1e9,
             stick_slope: 1e8,
@@ -135,6 +193,19 @@ pub fn top_faces(mesh: &Mesh) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// The slave faces of a deck: [`top_faces`], without the face touching the axis for
+/// node-to-surface contact (its axis node makes ccx's matrix singular).
+pub fn slave_faces(mesh: &Mesh, contact: ContactType) -> Vec<(usize, usize)> {
+    top_faces(mesh)
+        .into_iter()
+        .filter(|&(e, k)| {
+            let el = mesh.elements[e];
+            contact == ContactType::SurfaceToSurface
+                || (mesh.nodes[el[k]][0] > 0.0 && mesh.nodes[el[(k + 1) % 4]][0] > 0.0)
+        })
+        .collect()
 }
 
 /// The uniform time step of `schedule`, or an error if its steps are not uniform.
@@ -225,8 +296,19 @@ pub fn deck(
     let np = o.punch_segments;
     let thickness = 0.05;
     writeln!(w, "*NODE, NSET=PUNCH")?;
+    if !(o.punch_r_min >= 0.0 && o.punch_r_min < o.punch_radius / np as f64) {
+        bail!(
+            "the punch's flank starts at r = {} mm: expected 0 <= r < {} mm (its first face)",
+            o.punch_r_min,
+            o.punch_radius / np as f64
+        );
+    }
     for j in 0..=np {
-        let r = o.punch_radius * j as f64 / np as f64;
+        let r = if j == 0 {
+            o.punch_r_min
+        } else {
+            o.punch_radius * j as f64 / np as f64
+        };
         writeln!(w, "{}, {:.12e}, {:.12e}, 0.0", n0 + 1 + j, r, r * cot)?;
         writeln!(
             w,
@@ -256,7 +338,7 @@ pub fn deck(
     writeln!(w, "*NSET, NSET=BOTTOM")?;
     write_ids(w, mesh.node_set("bottom").iter().map(|n| n + 1))?;
     writeln!(w, "*SURFACE, NAME=STOP, TYPE=ELEMENT")?;
-    for (e, k) in top_faces(mesh) {
+    for (e, k) in slave_faces(mesh, o.contact) {
         writeln!(w, "{}, S{}", e + 1, k + 1)?;
     }
     writeln!(w, "*SURFACE, NAME=SPUNCH, TYPE=ELEMENT")?;
@@ -337,9 +419,19 @@ pub fn deck(
         writeln!(w, "*FRICTION")?;
         writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
     }
-    writeln!(w, "*CONTACT PAIR, INTERACTION=SI, TYPE=SURFACE TO SURFACE")?;
+    writeln!(
+        w,
+        "*CONTACT PAIR, INTERACTION=SI, TYPE={}",
+        o.contact.keyword()
+    )?;
     writeln!(w, "STOP, SPUNCH")?;
-    writeln!(w, "*AMPLITUDE, NAME=DEPTH")?;
+    // amplitude and time points in total time when the history spans several steps
+    let total = if o.split_load {
+        ", TIME=TOTAL TIME"
+    } else {
+        ""
+    };
+    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
     for (t, h) in corners(schedule) {
         writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
     }
@@ -347,42 +439,55 @@ pub fn deck(
     writeln!(w, "AXIS, 1, 1")?;
     writeln!(w, "BOTTOM, 2, 2")?;
     writeln!(w, "PUNCH, 1, 1")?;
-    writeln!(w, "*TIME POINTS, NAME=TP")?;
+    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
     for t in &schedule.t[1..] {
         writeln!(w, "{t:.12e}")?;
     }
     let n_inc = 20 * schedule.t.len();
-    if o.nlgeom {
-        writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
-    } else {
-        writeln!(w, "*STEP, INC={n_inc}")?;
-    }
     let procedure = match material {
         Material::Elastic { .. } => "*STATIC",
         Material::Viscoplastic { .. } => "*VISCO",
     };
-    // Automatic incrementation capped at the schedule's step (fixed increments, DIRECT,
-    // stop the viscoplastic runs when CalculiX's divergence check fires); the time points
-    // make every schedule time an increment's end, so the curves share our time grid
-    // (CalculiX cuts an increment where its Newton iteration needs it, nowhere else).
-    // CETOL is required by *VISCO but only used by isotropic creep with automatic
-    // incrementation's creep-strain control: 1.0 switches that control off.
-    // More Newton iterations before CalculiX declares divergence and cuts the increment
-    // (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks): the contact set of the
-    // viscoplastic runs takes many passes to settle.
-    writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
-    writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
-    if procedure == "*VISCO" {
-        writeln!(w, "{procedure}, CETOL=1.0")?;
-    } else {
-        writeln!(w, "{procedure}")?;
+    // One step, or (split_load) the loading segment and the rest as two steps: a step
+    // starts without extrapolating the previous increment's velocity, which at the
+    // corner of the trapezoid drove the NLGEOM runs' tip nodes off (§3.1 of
+    // docs/validation-finite-strain.md).
+    let steps: Vec<f64> = match corners(schedule).get(1) {
+        Some(&(t1, _)) if o.split_load && t1 < t_end => vec![t1, t_end - t1],
+        _ => vec![t_end],
+    };
+    for duration in steps {
+        if o.nlgeom {
+            writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
+        } else {
+            writeln!(w, "*STEP, INC={n_inc}")?;
+        }
+        // Automatic incrementation capped at the schedule's step (fixed increments,
+        // DIRECT, stop the viscoplastic runs when CalculiX's divergence check fires); the
+        // time points make every schedule time an increment's end, so the curves share
+        // our time grid (CalculiX cuts an increment where its Newton iteration needs it,
+        // nowhere else). CETOL is required by *VISCO but only used by isotropic creep
+        // with automatic incrementation's creep-strain control: 1.0 switches that
+        // control off. More Newton iterations before CalculiX declares divergence and
+        // cuts the increment (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks).
+        writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
+        writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
+        if procedure == "*VISCO" {
+            writeln!(w, "{procedure}, CETOL=1.0")?;
+        } else {
+            writeln!(w, "{procedure}")?;
+        }
+        writeln!(
+            w,
+            "{dt:.12e}, {duration:.12e}, {:.12e}, {dt:.12e}",
+            dt * 1e-4
+        )?;
+        writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
+        writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
+        writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
+        writeln!(w, "RF")?;
+        writeln!(w, "*END STEP")?;
     }
-    writeln!(w, "{dt:.12e}, {t_end:.12e}, {:.12e}, {dt:.12e}", dt * 1e-4)?;
-    writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
-    writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
-    writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
-    writeln!(w, "RF")?;
-    writeln!(w, "*END STEP")?;
     Ok(s)
 }
 
@@ -537,8 +642,14 @@ pub struct RunOptions {
     pub kinematics: Vec<bool>,
     /// Deck options (friction and nlgeom are set per run).
     pub deck: DeckOptions,
-    /// Write the decks without running `ccx`.
+    /// Write the decks without running `ccx` or our solver.
     pub decks_only: bool,
+    /// Read the curves already in `out` (`STEM.csv`, `STEM-ours.csv`) instead of running
+    /// `ccx` or our solver again; missing ones are run.
+    pub reuse: bool,
+    /// Never run `ccx`: compare with the CalculiX curves already in `out` (runs without
+    /// one are listed as not run); our curves are computed (or reused).
+    pub no_ccx: bool,
 }
 
 /// A case loaded: the configuration resolved to our mesh, punch, law and schedule.
@@ -547,34 +658,53 @@ pub struct Loaded {
     pub prepared: indentify_study::config::Prepared,
     /// The material for CalculiX.
     pub material: Material,
-    /// The configuration source and overrides that reproduce it with `Normal` contact.
-    pub source: (indentify_study::source::ConfigSource, Vec<String>),
+    /// The configuration source of the case.
+    pub source: indentify_study::source::ConfigSource,
 }
 
-/// Loads `case` from the workspace `root` with `contact=Normal`.
+/// Our `--set` overrides of a run, on top of the case's own: `contact=Normal` or
+/// `contact=Normal(friction: mu)`, and `kinematics=Finite` for a finite-strain run.
+pub fn our_sets(case: &Case, friction: f64, nlgeom: bool) -> Vec<String> {
+    let mut sets = vec![if friction > 0.0 {
+        format!("contact=Normal(friction: {friction})")
+    } else {
+        "contact=Normal".to_string()
+    }];
+    if nlgeom {
+        sets.push("kinematics=Finite".to_string());
+    }
+    sets.extend(case.sets.iter().map(|s| (*s).to_string()));
+    sets
+}
+
+/// Loads `case` from the workspace `root` (frictionless `Normal` contact, small strain:
+/// the mesh, punch, law and schedule of every run of the case).
 ///
 /// # Errors
 /// A configuration that cannot be read or prepared, a law without a CalculiX material.
 pub fn load(root: &std::path::Path, case: &Case) -> Result<Loaded> {
     let source = indentify_study::source::ConfigSource::Path(root.join(case.example));
-    let mut sets = vec!["contact=Normal".to_string()];
-    sets.extend(case.sets.iter().map(|s| (*s).to_string()));
-    let cfg = source.load(&sets)?;
+    let cfg = source.load(&our_sets(case, 0.0, false))?;
     let (law, params) = cfg.law.build()?;
     let material = Material::from_law(law.name(), &params)?;
     let prepared = cfg.prepare(case.name)?;
     Ok(Loaded {
         prepared,
         material,
-        source: (source, sets),
+        source,
     })
 }
 
-/// Runs `ccx` on `deck` in a scratch folder under `out` and returns the force curve.
+/// A force history `(t, F)` (s, N).
+pub type Curve = Vec<(f64, f64)>;
+
+/// Runs `ccx` on `deck` in a scratch folder under `out`: the force curve and, if `ccx`
+/// stopped before the end, why (its last error line); a run that stops keeps the
+/// increments it converged.
 ///
 /// # Errors
-/// `ccx` missing or failing, a `.dat` file without forces.
-pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<Vec<(f64, f64)>> {
+/// `ccx` missing, a `.dat` file without forces.
+pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<(Curve, Option<String>)> {
     let work = out.join(format!(".work-{stem}"));
     std::fs::create_dir_all(&work)?;
     std::fs::write(work.join(format!("{stem}.inp")), deck)?;
@@ -593,46 +723,106 @@ pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<Vec<(f64
         })?;
     let dat = std::fs::read_to_string(work.join(format!("{stem}.dat"))).unwrap_or_default();
     let curve = parse_dat(&dat)?;
-    if !status.success() || curve.is_empty() {
+    let log = std::fs::read_to_string(work.join("ccx.log")).unwrap_or_default();
+    let error = log
+        .lines()
+        .chain(
+            std::fs::read_to_string(work.join("spooles.out"))
+                .unwrap_or_default()
+                .lines(),
+        )
+        .map(str::trim)
+        .rfind(|l| l.contains("ERROR") || l.contains("singular"))
+        .map(str::to_string);
+    if curve.is_empty() {
         bail!(
-            "ccx failed on {stem} ({status}, {} increments written); see {}",
-            curve.len(),
+            "ccx wrote no force on {stem} ({status}{}); see {}",
+            error.map(|e| format!(": {e}")).unwrap_or_default(),
             work.join("ccx.log").display()
         );
     }
-    std::fs::remove_dir_all(&work)?;
-    Ok(curve)
+    let stopped = if status.success() && error.is_none() {
+        None
+    } else {
+        Some(error.unwrap_or_else(|| format!("ccx exited with {status}")))
+    };
+    if stopped.is_none() {
+        std::fs::remove_dir_all(&work)?;
+    }
+    Ok((curve, stopped))
 }
 
-/// Our force curve of a loaded case (`Normal` contact, small strain).
+/// Our force curve of `case` for a run (friction coefficient, finite strain or not).
 ///
 /// # Errors
-/// The simulation's errors.
-pub fn ours(loaded: &Loaded) -> Result<Vec<(f64, f64)>> {
-    let mut o = indentify_study::simulate::SimulateOptions::new(loaded.source.0.clone());
-    o.sets = loaded.source.1.clone();
-    let outcome = indentify_study::simulate::run(&o)?;
+/// The simulation's errors, among them our refusal of finite strain with friction; a run
+/// that stops early.
+pub fn ours(loaded: &Loaded, case: &Case, friction: f64, nlgeom: bool) -> Result<Vec<(f64, f64)>> {
+    let mut o = indentify_study::simulate::SimulateOptions::new(loaded.source.clone());
+    o.sets = our_sets(case, friction, nlgeom);
+    // the whole chain in one message (the refusal's reason is the source of "cannot build
+    // the model")
+    let outcome = indentify_study::simulate::run(&o)
+        .map_err(|e| anyhow::anyhow!("{:#}", anyhow::Error::from(e)))?;
     if let Some(f) = outcome.failure {
         bail!("our run stopped early: {f}");
     }
     Ok(outcome.rows.iter().map(|r| (r.t, r.f)).collect())
 }
 
-/// Writes the decks, runs `ccx` (unless `decks_only`) and our solver, writes the curves
-/// (`STEM.csv`: CalculiX; `CASE-ours.csv`: ours) and returns the comparison as a Markdown
-/// table: `F_ours / F_ccx - 1` at [`TIMES`] for the small-strain runs (friction: pending
-/// until our `Normal(friction: mu)` exists; the table gives CalculiX's forces and their
-/// ratio to its frictionless run), CalculiX's finite/small-strain ratio for the `NLGEOM`
-/// runs.
+/// One row of the comparison table: at each of [`TIMES`], `ours / ccx N: ours/ccx - 1`
+/// where our curve exists; CalculiX's force and its ratio to `reference` (the
+/// frictionless CalculiX run of the same kinematics) where it does not (`why_not_ours`
+/// says why in the last column).
+pub fn table_row(
+    stem: &str,
+    ccx: &[(f64, f64)],
+    ours: Option<&[(f64, f64)]>,
+    reference: Option<&[(f64, f64)]>,
+    t_end: f64,
+    note: &str,
+) -> String {
+    let mut row = format!("| {stem} |");
+    for t in TIMES {
+        let f = at(ccx, t);
+        let cell = match (
+            f,
+            ours.and_then(|o| at(o, t)),
+            reference.and_then(|r| at(r, t)),
+        ) {
+            (Some(f), Some(o), _) => {
+                format!(" {o:.2} / {f:.2} N: **{:+.2}%** |", 100.0 * (o / f - 1.0))
+            }
+            (Some(f), None, Some(r)) => {
+                format!(" ccx {f:.2} N ({:+.2}% vs mu = 0) |", 100.0 * (f / r - 1.0))
+            }
+            (Some(f), None, None) => format!(" ccx {f:.2} N |"),
+            (None, ..) => " - |".to_string(),
+        };
+        row.push_str(&cell);
+    }
+    let last = ccx.last().map_or(0.0, |p| p.0);
+    let reached = if last >= t_end - 1e-9 {
+        "end".to_string()
+    } else {
+        format!("t = {last:.3} s")
+    };
+    let _ = write!(row, " {reached} | {note} |");
+    row
+}
+
+/// Writes the decks, runs `ccx` and our solver (or reuses their curves in `out`), writes
+/// the curves (`STEM.csv`: CalculiX; `STEM-ours.csv`: ours, e.g. `r2-mu0.1-nlgeom.csv`)
+/// and returns the comparison as a Markdown table ([`table_row`]).
 ///
 /// # Errors
-/// An unknown case, a deck or run that fails.
+/// An unknown case, a deck that cannot be written, a case that cannot be loaded.
 pub fn run(o: &RunOptions) -> Result<String> {
     std::fs::create_dir_all(&o.out)?;
     let mut table = String::new();
     let _ = writeln!(
         table,
-        "| run | t = 0.5 s | t = 1 s | t = 1.5 s | t = 2 s | what |\n|---|---|---|---|---|---|"
+        "| run | t = 0.5 s | t = 1 s | t = 1.5 s | t = 2 s | ccx reached | notes |\n|---|---|---|---|---|---|---|"
     );
     for name in &o.cases {
         let case = CASES.iter().find(|c| c.name == name).ok_or_else(|| {
@@ -641,17 +831,9 @@ pub fn run(o: &RunOptions) -> Result<String> {
         let loaded = load(&o.root, case)?;
         let mesh = &loaded.prepared.model.mesh;
         let punch = &loaded.prepared.model.punch;
-        let ours_curve = if o.decks_only {
-            None
-        } else {
-            let t0 = std::time::Instant::now();
-            let c = ours(&loaded)?;
-            eprintln!("{}: ours in {:.1} s", case.name, t0.elapsed().as_secs_f64());
-            std::fs::write(o.out.join(format!("{}-ours.csv", case.name)), curve_csv(&c))?;
-            Some(c)
-        };
-        let mut small_frictionless: Option<Vec<(f64, f64)>> = None;
+        let t_end = loaded.prepared.schedule.t.last().copied().unwrap_or(0.0);
         for &nlgeom in &o.kinematics {
+            let mut frictionless: Option<Vec<(f64, f64)>> = None;
             for &mu in &o.frictions {
                 let stem = stem(case.name, mu, nlgeom);
                 let opts = DeckOptions {
@@ -671,55 +853,85 @@ pub fn run(o: &RunOptions) -> Result<String> {
                 if o.decks_only {
                     continue;
                 }
-                let t0 = std::time::Instant::now();
-                let curve = match run_ccx(&o.out, &stem, &text) {
-                    Ok(c) => c,
-                    Err(e) => {
-                        eprintln!("{stem}: {e:#}");
-                        let _ = writeln!(table, "| {stem} | - | - | - | - | ccx failed: {e} |");
-                        continue;
-                    }
-                };
-                eprintln!(
-                    "{stem}: ccx in {:.1} s, {} increments",
-                    t0.elapsed().as_secs_f64(),
-                    curve.len()
-                );
-                std::fs::write(o.out.join(format!("{stem}.csv")), curve_csv(&curve))?;
-                let (reference, what) = if !nlgeom && mu == 0.0 {
-                    small_frictionless = Some(curve.clone());
-                    (ours_curve.clone(), "F_ours / F_ccx - 1")
-                } else if !nlgeom {
-                    (
-                        small_frictionless.clone(),
-                        "F_ccx / F_ccx(frictionless) - 1 (ours: pending friction)",
-                    )
+                let mut notes = Vec::new();
+                // ours
+                let ours_path = o.out.join(format!("{stem}-ours.csv"));
+                let ours_curve = if o.reuse && ours_path.exists() {
+                    Some(read_curve_csv(&std::fs::read_to_string(&ours_path)?)?)
                 } else {
-                    (
-                        small_frictionless.clone(),
-                        "F_ccx(NLGEOM) / F_ccx(small) - 1",
-                    )
-                };
-                let _ = write!(table, "| {stem} |");
-                for t in TIMES {
-                    match (at(&curve, t), reference.as_ref().and_then(|r| at(r, t))) {
-                        (Some(f), Some(r)) => {
-                            let ratio = if mu == 0.0 && !nlgeom {
-                                r / f - 1.0
-                            } else {
-                                f / r - 1.0
-                            };
-                            let _ = write!(table, " {f:.2} N ({:+.2}%) |", 100.0 * ratio);
+                    let t0 = std::time::Instant::now();
+                    match ours(&loaded, case, mu, nlgeom) {
+                        Ok(c) => {
+                            eprintln!("{stem}: ours in {:.1} s", t0.elapsed().as_secs_f64());
+                            std::fs::write(&ours_path, curve_csv(&c))?;
+                            Some(c)
                         }
-                        (Some(f), None) => {
-                            let _ = write!(table, " {f:.2} N |");
-                        }
-                        _ => {
-                            let _ = write!(table, " - |");
+                        Err(e) => {
+                            eprintln!("{stem}: ours: {e:#}");
+                            let root = format!("{}/", o.root.display());
+                            notes.push(format!("ours: {}", e.to_string().replace(&root, "")));
+                            None
                         }
                     }
+                };
+                // CalculiX
+                let ccx_path = o.out.join(format!("{stem}.csv"));
+                let curve = if (o.reuse || o.no_ccx) && ccx_path.exists() {
+                    read_curve_csv(&std::fs::read_to_string(&ccx_path)?)?
+                } else if o.no_ccx {
+                    let _ = writeln!(
+                        table,
+                        "| {stem} | - | - | - | - | - | ccx not run{} |",
+                        notes.iter().map(|n| format!("; {n}")).collect::<String>()
+                    );
+                    continue;
+                } else {
+                    let t0 = std::time::Instant::now();
+                    match run_ccx(&o.out, &stem, &text) {
+                        Ok((c, stopped)) => {
+                            eprintln!(
+                                "{stem}: ccx in {:.1} s, {} increments{}",
+                                t0.elapsed().as_secs_f64(),
+                                c.len(),
+                                stopped
+                                    .as_ref()
+                                    .map(|s| format!(", stopped: {s}"))
+                                    .unwrap_or_default()
+                            );
+                            if let Some(s) = stopped {
+                                notes.push(format!("ccx stopped: {s}"));
+                            }
+                            std::fs::write(&ccx_path, curve_csv(&c))?;
+                            c
+                        }
+                        Err(e) => {
+                            eprintln!("{stem}: {e:#}");
+                            let _ =
+                                writeln!(table, "| {stem} | - | - | - | - | - | ccx failed: {e} |");
+                            continue;
+                        }
+                    }
+                };
+                if mu == 0.0 {
+                    frictionless = Some(curve.clone());
                 }
-                let _ = writeln!(table, " {what} |");
+                let reference = if mu > 0.0 {
+                    frictionless.as_deref()
+                } else {
+                    None
+                };
+                let _ = writeln!(
+                    table,
+                    "{}",
+                    table_row(
+                        &stem,
+                        &curve,
+                        ours_curve.as_deref(),
+                        reference,
+                        t_end,
+                        &notes.join("; ")
+                    )
+                );
             }
         }
     }

@@ -24,7 +24,7 @@ fn main() -> Result<()> {
         Some("multi-rate") => multirate::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--decks-only]   (CalculiX referee of normal contact; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 2|3] [--set path=value ...] [--auto N:K:G,...]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 2|3] [--set path=value ...] [--auto N:K:G,...]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise)"
             );
             bail!("unknown or missing command")
         }
@@ -195,8 +195,9 @@ fn fuzz_configs(args: &[String]) -> Result<()> {
 }
 
 /// `cargo xtask calculix`: CalculiX decks of R0, R1, R2 (sY = 500 and 0) with our mesh and
-/// a rigid cone in surface-to-surface contact, run by `ccx`, compared with our `Normal`
-/// contact (xtask::calculix).
+/// a rigid cone in node-to-surface penalty contact, small strain and `NLGEOM`, frictionless
+/// and with Coulomb friction, run by `ccx`, compared with our `Normal` contact,
+/// `Normal(friction: mu)` and `kinematics: Finite` (xtask::calculix).
 fn calculix(args: &[String]) -> Result<()> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -213,6 +214,8 @@ fn calculix(args: &[String]) -> Result<()> {
         kinematics: vec![false, true],
         deck: xtask::calculix::DeckOptions::default(),
         decks_only: false,
+        reuse: false,
+        no_ccx: false,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -254,7 +257,11 @@ fn calculix(args: &[String]) -> Result<()> {
                     })?;
                 o.deck.stick_slope = o.deck.penalty / 10.0;
             }
+            "--contact" => o.deck.contact = xtask::calculix::ContactType::from_name(&val())?,
             "--decks-only" => o.decks_only = true,
+            "--reuse" => o.reuse = true,
+            "--no-ccx" => o.no_ccx = true,
+            "--split-load" => o.deck.split_load = true,
             other => bail!("unknown option {other}"),
         }
     }

@@ -1,10 +1,12 @@
 //! The CalculiX deck generator and `.dat` parser (without `ccx`): the materials against our
-//! laws' own flow rules, the deck's mesh, surfaces and amplitude, the force parser.
+//! laws' own flow rules, the deck's mesh, surfaces and amplitude, the contact formulation
+//! and the punch kept off the axis, the force parser, our side of every run (friction and
+//! finite strain through `--set`, the refusal of both together) and the comparison table.
 
-use indentify_contact::{Punch, Schedule, Segment};
+use indentify_contact::{ContactKind, Kinematics, Punch, Schedule, Segment};
 use indentify_laws::{Law, Maxwell, NortonHoff, Vec4};
 use indentify_mesh::CylinderMesher;
-use xtask::calculix::{self, DeckOptions, Material};
+use xtask::calculix::{self, ContactType, DeckOptions, Material};
 
 /// CalculiX's creep rate in uniaxial stress: `eps_dot_zz = A <sigma - r0>^n` (the
 /// equivalent rate equals the axial one in uniaxial stress).
@@ -143,4 +145,183 @@ fn dat_parser_reads_the_punch_force_of_the_full_circle() {
     let csv = calculix::curve_csv(&c);
     assert_eq!(calculix::read_curve_csv(&csv).unwrap(), c);
     assert!(calculix::parse_dat(" total force (fx,fy,fz) for set PUNCH and time 1.0\n").is_err());
+}
+
+#[test]
+fn node_to_surface_keeps_the_punch_and_the_slave_off_the_axis() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::maxwell(2e4, 0.3, 3e4);
+    let o = DeckOptions {
+        punch_segments: 4,
+        ..DeckOptions::default()
+    };
+    assert_eq!(o.contact, ContactType::NodeToSurface);
+    let deck = calculix::deck("test", &mesh, &punch, &m, &schedule, &o).unwrap();
+    assert!(deck.contains("*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE\n"));
+    // the flank's first node pair at r = 1e-4 mm on the cone (z = r cot 68 deg), not on the axis
+    let cot = 1.0 / 68f64.to_radians().tan();
+    let n0 = mesh.nodes.len();
+    let first = format!("\n{}, {:.12e}, {:.12e}, 0.0\n", n0 + 1, 1e-4, 1e-4 * cot);
+    assert!(deck.contains(&first), "{first}");
+    // the slave surface: every top face but the one on the axis (3 columns -> 2 faces)
+    let all = calculix::top_faces(&mesh);
+    let slave = calculix::slave_faces(&mesh, ContactType::NodeToSurface);
+    assert_eq!((all.len(), slave.len()), (3, 2));
+    let (e_axis, k_axis) = all
+        .iter()
+        .copied()
+        .find(|&(e, k)| {
+            let el = mesh.elements[e];
+            mesh.nodes[el[k]][0] == 0.0 || mesh.nodes[el[(k + 1) % 4]][0] == 0.0
+        })
+        .unwrap();
+    assert!(!slave.contains(&(e_axis, k_axis)));
+    let surface = deck
+        .split("*SURFACE, NAME=STOP, TYPE=ELEMENT\n")
+        .nth(1)
+        .unwrap();
+    let rows: Vec<&str> = surface
+        .lines()
+        .take_while(|l| !l.starts_with('*'))
+        .collect();
+    assert_eq!(rows.len(), 2);
+    assert!(!rows.contains(&format!("{}, S{}", e_axis + 1, k_axis + 1).as_str()));
+    // surface-to-surface keeps every face
+    let s2s = DeckOptions {
+        contact: ContactType::SurfaceToSurface,
+        ..o
+    };
+    let deck = calculix::deck("test", &mesh, &punch, &m, &schedule, &s2s).unwrap();
+    assert!(deck.contains("TYPE=SURFACE TO SURFACE\n"));
+    assert_eq!(
+        calculix::slave_faces(&mesh, ContactType::SurfaceToSurface),
+        all
+    );
+    // a flank starting beyond its first face is refused, naming the radius
+    let bad = DeckOptions {
+        punch_r_min: 1.0,
+        ..o
+    };
+    let e = calculix::deck("t", &mesh, &punch, &m, &schedule, &bad).unwrap_err();
+    assert!(e.to_string().contains("r = 1 mm"), "{e}");
+    assert_eq!(
+        ContactType::from_name("surface-to-surface").unwrap(),
+        ContactType::SurfaceToSurface
+    );
+    let e = ContactType::from_name("mortar").unwrap_err().to_string();
+    assert!(e.contains("--contact") && e.contains("mortar"), "{e}");
+}
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+#[test]
+fn our_runs_are_the_configurations_with_friction_and_finite_strain() {
+    let r2 = calculix::CASES.iter().find(|c| c.name == "r2-sy0").unwrap();
+    let sets = calculix::our_sets(r2, 0.1, true);
+    assert_eq!(
+        sets,
+        [
+            "contact=Normal(friction: 0.1)",
+            "kinematics=Finite",
+            "law.sY=0"
+        ]
+    );
+    let source = indentify_study::source::ConfigSource::Path(root().join(r2.example));
+    let cfg = source.load(&sets).unwrap();
+    assert_eq!(cfg.contact, ContactKind::NormalFriction { friction: 0.1 });
+    assert_eq!(cfg.kinematics, Kinematics::Finite);
+    let cfg = source.load(&calculix::our_sets(r2, 0.0, false)).unwrap();
+    assert_eq!(cfg.contact, ContactKind::Normal);
+    assert_eq!(cfg.kinematics, Kinematics::Small);
+    // finite strain with friction: our code refuses it (the NLGEOM friction runs are
+    // CalculiX's only), with its own reason
+    let loaded = calculix::load(&root(), r2).unwrap();
+    let e = calculix::ours(&loaded, r2, 0.2, true)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("friction") && e.contains("Finite"), "{e}");
+    // the stems name every run
+    assert_eq!(calculix::stem("r2-sy0", 0.1, true), "r2-sy0-mu0.1-nlgeom");
+    assert_eq!(calculix::stem("r1", 0.0, false), "r1");
+}
+
+#[test]
+fn table_rows_compare_ours_or_the_frictionless_reference() {
+    let ccx = vec![
+        (0.0, 0.0),
+        (0.5, 100.0),
+        (1.0, 400.0),
+        (1.5, 390.0),
+        (2.0, 380.0),
+    ];
+    let ours: Vec<(f64, f64)> = ccx.iter().map(|&(t, f)| (t, 1.01 * f)).collect();
+    let row = calculix::table_row("r1", &ccx, Some(&ours), None, 2.0, "");
+    assert_eq!(
+        row,
+        "| r1 | 101.00 / 100.00 N: **+1.00%** | 404.00 / 400.00 N: **+1.00%** | \
+         393.90 / 390.00 N: **+1.00%** | 383.80 / 380.00 N: **+1.00%** | end |  |"
+    );
+    // no curve of ours: CalculiX against its frictionless run; a run that stopped at 1.2 s
+    let stopped: Vec<(f64, f64)> = ccx[..3]
+        .iter()
+        .copied()
+        .chain([(1.2, 396.0)])
+        .map(|(t, f)| (t, 1.02 * f))
+        .collect();
+    let row = calculix::table_row(
+        "r1-mu0.1-nlgeom",
+        &stopped,
+        None,
+        Some(&ccx),
+        3.0,
+        "ours: refused",
+    );
+    assert!(
+        row.starts_with("| r1-mu0.1-nlgeom | ccx 102.00 N (+2.00% vs mu = 0) | ccx 408.00 N (+2.00% vs mu = 0) | - | - | t = 1.200 s | ours: refused |"),
+        "{row}"
+    );
+}
+
+#[test]
+fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 0.0);
+    let one = DeckOptions {
+        punch_segments: 4,
+        nlgeom: true,
+        ..DeckOptions::default()
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &one).unwrap();
+    assert_eq!(deck.matches("*STEP, NLGEOM").count(), 1);
+    assert!(!deck.contains("TOTAL TIME"));
+    // dt = 0.25 s over the whole 3 s history
+    assert!(deck.contains("\n2.500000000000e-1, 3.000000000000e0, "));
+    let two = DeckOptions {
+        split_load: true,
+        ..one
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &two).unwrap();
+    assert_eq!(deck.matches("*STEP, NLGEOM").count(), 2);
+    assert_eq!(deck.matches("*END STEP").count(), 2);
+    assert!(deck.contains("*AMPLITUDE, NAME=DEPTH, TIME=TOTAL TIME\n"));
+    assert!(deck.contains("*TIME POINTS, NAME=TP, TIME=TOTAL TIME\n"));
+    // the loading segment (1 s), then the hold and the unloading (2 s)
+    let first = deck
+        .find("\n2.500000000000e-1, 1.000000000000e0, ")
+        .unwrap();
+    let second = deck
+        .find("\n2.500000000000e-1, 2.000000000000e0, ")
+        .unwrap();
+    assert!(first < second);
 }
