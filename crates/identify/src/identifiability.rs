@@ -578,7 +578,7 @@ impl Identifiability {
         if sd_y.iter().any(|v| !v.is_finite()) {
             return f64::NEG_INFINITY;
         }
-        if sd_y.iter().any(|&v| v == 0.0) {
+        if sd_y.contains(&0.0) {
             return f64::INFINITY;
         }
         let cov = DMatrix::from_fn(p, p, |a, b| {
