@@ -307,6 +307,7 @@ fn identify(
             }
         },
         max_iterations,
+        noise: None,
     };
     let cancel = opts.cancel.clone();
     let mut observer = PyObserver {

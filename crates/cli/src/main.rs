@@ -155,6 +155,25 @@ enum Command {
                             indentify map examples/r2-norton-hoff.ron --pair K,m --span 1.0,0.4 --through law --out out/km"
     )]
     Map(commands::map::Args),
+    /// Rank candidate test protocols by the standard deviations they would give (before testing).
+    #[command(
+        after_help = "The configuration's `design` section states the noise (Relative(f): \
+                            standard deviation f x |F|; Absolute(s): s in N) and lists \
+                            candidates, each one test or several fitted jointly (entries as in \
+                            a joint fit's `tests`). At the configuration's `law` values and for \
+                            the free parameters of its `identify` section, each candidate's \
+                            forward sensitivities give the covariance of its least-squares fit \
+                            under that noise: the candidates are ranked by ln det of the \
+                            information matrix (D-optimal) and by the largest relative standard \
+                            deviation (worst parameter), and the parameters a candidate leaves \
+                            undetermined are listed. Candidates run in parallel; the table does \
+                            not depend on the number of threads. Writes DIR/design.json and \
+                            DIR/design.md.\n\n\
+                            Examples:\n  \
+                            indentify design examples/r2-design.ron\n  \
+                            indentify design examples/r2-design.ron --free K,m,sY --out out/design"
+    )]
+    Design(commands::design::Args),
 }
 
 fn main() -> ExitCode {
@@ -169,6 +188,7 @@ fn main() -> ExitCode {
         Command::Identify(args) => commands::identify::run(args),
         Command::Batch(args) => commands::batch::run(args),
         Command::Map(args) => commands::map::run(args),
+        Command::Design(args) => commands::design::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -76,7 +76,7 @@ mod argmin_glue;
 mod lm;
 
 pub use data::ForceRecord;
-pub use identifiability::Identifiability;
+pub use identifiability::{Identifiability, NoiseModel};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
     Cancel, IdentifyConfig, IdentifyResult, IterationRecord, Method, MultiStart, ParamOutcome,

@@ -27,7 +27,7 @@ use argmin::solver::quasinewton::{BFGS, LBFGS};
 
 use crate::IdentifyError;
 use crate::argmin_glue::{ArgminObjective, Monitored};
-use crate::identifiability::{Column, Identifiability};
+use crate::identifiability::{Column, Forces, Identifiability, NoiseModel};
 use crate::linalg::{norm_inf, norm2};
 use crate::params::{ParamSpec, Parameterization};
 use crate::problem::{Evaluator, Problem};
@@ -123,6 +123,9 @@ pub struct IdentifyConfig {
     pub initial_step: f64,
     /// Compute the [`Identifiability`] summary at the end (one sensitivity solve).
     pub identifiability: bool,
+    /// What the summary's standard deviations assume about the force noise (default: one
+    /// variance for every weighted residual, the classical Gauss-Newton formula).
+    pub noise: NoiseModel,
     /// Raised from another thread (a signal handler, a user interface), it ends the run
     /// after the iteration in progress with [`StopReason::Interrupted`].
     pub cancel: Cancel,
@@ -160,11 +163,13 @@ impl IdentifyConfig {
             stop: StopCriteria::default(),
             initial_step: 0.5,
             identifiability: true,
+            noise: NoiseModel::Residual,
             cancel: Cancel::default(),
         }
     }
 
     fn validate(&self) -> Result<(), IdentifyError> {
+        self.noise.validate()?;
         let s = &self.stop;
         let check = |ok: bool, field: &'static str, value: f64, allowed: &'static str| {
             if ok {
@@ -768,13 +773,25 @@ fn run(
     let param = &objective.param;
     let identifiability = if config.identifiability {
         let mut ev = objective.eval.borrow_mut();
+        let fitted = ev.forces(&last.params).ok();
         ev.jacobian(&last.params).ok().map(|jac| {
             let columns: Vec<Column> = param
                 .free
                 .iter()
                 .map(|f| Column::of(f, last.params[f.index]))
                 .collect();
-            Identifiability::from_columns(&jac, &problem.weights, last.cost, &last.params, &columns)
+            Identifiability::with_noise(
+                &jac,
+                &problem.weights,
+                last.cost,
+                &last.params,
+                &columns,
+                config.noise,
+                fitted.as_deref().map(|f| Forces {
+                    fitted: f,
+                    measured: &problem.target,
+                }),
+            )
         })
     } else {
         None

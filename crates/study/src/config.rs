@@ -22,7 +22,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 pub use identify::{
-    IdentifySection, MethodName, Overrides, ParamSetting, ScalingName, fixed_item, name_value,
+    IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName, fixed_item,
+    name_value,
 };
 
 /// A whole simulation: what `indentify simulate` reads.
@@ -69,6 +70,10 @@ pub struct Config {
     /// `tests`, the top level has neither `history` nor `data`. See [`TestSpec`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tests: Option<Vec<TestSpec>>,
+    /// Candidate protocols that `indentify design` ranks (see
+    /// [`crate::design::DesignSection`]); ignored by the other commands.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design: Option<crate::design::DesignSection>,
     /// The folder relative to which `data.file` is found (the configuration file's own);
     /// not part of the file.
     #[serde(skip)]
@@ -798,6 +803,7 @@ impl Reference {
             solver: SolverConfig::default(),
             identify: Some(self.identify_section()),
             tests: None,
+            design: None,
             base_dir: None,
         }
     }
@@ -853,6 +859,9 @@ impl Config {
     /// # Errors
     /// The first invalid input, naming its field, value and what is allowed.
     pub fn validate(&self) -> Result<()> {
+        if let Some(d) = &self.design {
+            d.validate()?;
+        }
         if let Some(tests) = &self.tests {
             return self.validate_joint(tests);
         }
@@ -1043,6 +1052,7 @@ impl Config {
             solver: self.solver,
             identify: self.identify.clone(),
             tests: None,
+            design: None,
             base_dir: self.base_dir.clone(),
         })
     }

@@ -258,7 +258,7 @@ impl IdentifyOutcome {
 }
 
 /// Where the data come from.
-struct Data {
+pub(crate) struct Data {
     record: ForceRecord,
     describe: String,
     truth: Option<Vec<f64>>,
@@ -615,11 +615,20 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     Ok(outcome)
 }
 
-/// The noise seed of test `k` (from 0) of a joint fit: `seed` for the first test, then
-/// `seed + k * 0x9E3779B97F4A7C15` (wrapping), so that neighbouring seeds of a study do
-/// not share realizations between their tests.
+/// The noise seed of test `k` (from 0) of a joint fit: `seed` for the first test (a
+/// one-test configuration's own), and for test `k >= 1` the first output of
+/// `SplitMix64::new(seed ^ (k * 0xD1B54A32D192ED03))`, a hash that puts each test's draws
+/// at an unrelated place of the generator's cycle.
+///
+/// (Before, test `k` used `seed + k * 0x9E3779B97F4A7C15`: SplitMix64 advances its state by
+/// that same constant, so test `k`'s draws were test 0's shifted by `k` points and the
+/// tests' noises were copies of each other, one point apart.)
 pub fn test_seed(seed: u64, k: usize) -> u64 {
-    seed.wrapping_add((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+    if k == 0 {
+        return seed;
+    }
+    indentify_identify::SplitMix64::new(seed ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03))
+        .next_u64()
 }
 
 /// [`run`] of a joint configuration (`tests: [...]`): every test prepared, its data
@@ -649,75 +658,7 @@ fn run_joint(
             ),
         ));
     }
-    let mut tests = Vec::with_capacity(n_tests);
-    let mut infos = Vec::with_capacity(n_tests);
-    let mut warnings = Vec::new();
-    for k in 0..n_tests {
-        let sub = cfg
-            .test_config(k)
-            .with_context(|| format!("in tests[{k}] of `{name}`"))
-            .kind(ErrorKind::Config)?;
-        let label = cfg.test_name(k);
-        let sub_name = format!("{name} [{label}]");
-        if opts.noise.is_some() && sub.data.is_some() {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "noise perturbs synthesized data only, and tests[{k}] of `{name}` fits a \
-                     measured record (its `data` section)"
-                ),
-            ));
-        }
-        let prepared = prepare(&sub, &sub_name)?;
-        let mut solver_opts = sub.solver.options(false);
-        let sub_opts = IdentifyOptions {
-            noise: opts.noise.map(|(a, seed)| (a, test_seed(seed, k))),
-            ..opts.clone()
-        };
-        let data = load_data(
-            &prepared,
-            &sub_opts,
-            &sub_name,
-            law,
-            law_values,
-            &solver_opts,
-        )?;
-        solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
-        let Prepared {
-            schedule,
-            model,
-            measured,
-            warnings: w,
-            ..
-        } = prepared;
-        warnings.extend(w);
-        let given = cfg.tests.as_ref().and_then(|t| t[k].weight);
-        let weight = match given {
-            Some(w) => w,
-            None => indentify_identify::Test::default_weight(&schedule, &data.record)
-                .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
-                .kind(ErrorKind::Data)?,
-        };
-        let test = indentify_identify::Test::new(
-            model,
-            schedule,
-            &data.record,
-            None,
-            solver_opts.clone(),
-            weight,
-        )
-        .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
-        .kind(ErrorKind::Data)?;
-        tests.push(test);
-        infos.push((label, data, measured, given.is_none(), solver_opts));
-    }
-    let mut problem =
-        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
-    if let Some(j) = opts.jobs {
-        problem
-            .set_threads(j)
-            .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
-    }
+    let (problem, infos, warnings) = joint_problem(opts, cfg, &name, law, law_values)?;
     let describe = infos
         .iter()
         .map(|(label, d, ..)| format!("{label}: {}", d.describe))
@@ -828,6 +769,121 @@ fn run_joint(
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// The identification [`Problem`] of `opts`' configuration (one test or a joint `tests`
+/// list; data loaded or synthesized as [`run`] does) and the `law` values, without
+/// fitting: for benchmarks and studies that evaluate the cost themselves.
+///
+/// # Errors
+/// As [`run`] before any fit.
+pub fn problem(opts: &IdentifyOptions) -> Result<(Problem, Vec<f64>)> {
+    let resolved = resolve(opts)?;
+    if resolved.cfg.tests.is_some() {
+        let name = resolved.name.clone();
+        let (problem, ..) = joint_problem(
+            opts,
+            &resolved.cfg,
+            &name,
+            resolved.law,
+            &resolved.law_values,
+        )?;
+        Ok((problem, resolved.law_values))
+    } else {
+        let values = resolved.law_values.clone();
+        let s = setup(resolved, opts)?;
+        Ok((s.problem, values))
+    }
+}
+
+/// What [`joint_problem`] keeps of each test besides its [`indentify_identify::Test`]:
+/// label, data, measured record, whether its weight is the default, solver options.
+pub(crate) type JointInfo = (String, Data, Option<Measured>, bool, SolverOptions);
+
+/// The [`Problem`] of a joint configuration (`cfg.tests`): every test prepared, its data
+/// loaded (synthesized at `law_values` with the noise seed [`test_seed`] for test `k`
+/// when it has no record) and weighted; solved on `opts.jobs` threads when given.
+///
+/// # Errors
+/// As [`run`] before any fit.
+pub(crate) fn joint_problem(
+    opts: &IdentifyOptions,
+    cfg: &Config,
+    name: &str,
+    law: &'static dyn Law,
+    law_values: &[f64],
+) -> Result<(Problem, Vec<JointInfo>, Vec<String>)> {
+    let n_tests = cfg.n_tests();
+    let mut tests = Vec::with_capacity(n_tests);
+    let mut infos = Vec::with_capacity(n_tests);
+    let mut warnings = Vec::new();
+    for k in 0..n_tests {
+        let sub = cfg
+            .test_config(k)
+            .with_context(|| format!("in tests[{k}] of `{name}`"))
+            .kind(ErrorKind::Config)?;
+        let label = cfg.test_name(k);
+        let sub_name = format!("{name} [{label}]");
+        if opts.noise.is_some() && sub.data.is_some() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "noise perturbs synthesized data only, and tests[{k}] of `{name}` fits a \
+                     measured record (its `data` section)"
+                ),
+            ));
+        }
+        let prepared = prepare(&sub, &sub_name)?;
+        let mut solver_opts = sub.solver.options(false);
+        let sub_opts = IdentifyOptions {
+            noise: opts.noise.map(|(a, seed)| (a, test_seed(seed, k))),
+            ..opts.clone()
+        };
+        let data = load_data(
+            &prepared,
+            &sub_opts,
+            &sub_name,
+            law,
+            law_values,
+            &solver_opts,
+        )?;
+        solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
+        let Prepared {
+            schedule,
+            model,
+            measured,
+            warnings: w,
+            ..
+        } = prepared;
+        warnings.extend(w);
+        let given = cfg.tests.as_ref().and_then(|t| t[k].weight);
+        let weight = match given {
+            Some(w) => w,
+            None => indentify_identify::Test::default_weight(&schedule, &data.record)
+                .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
+                .kind(ErrorKind::Data)?,
+        };
+        let test = indentify_identify::Test::new(
+            model,
+            schedule,
+            &data.record,
+            None,
+            solver_opts.clone(),
+            weight,
+        )
+        .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
+        .kind(ErrorKind::Data)?;
+        tests.push(test);
+        infos.push((label, data, measured, given.is_none(), solver_opts));
+    }
+    let mut problem =
+        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    if let Some(j) = opts.jobs {
+        problem
+            .set_threads(j)
+            .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    }
+    Ok((problem, infos, warnings))
 }
 
 /// The report of a joint fit: result.json (with a `tests` list), fit.csv (a `test` column,
@@ -1409,6 +1465,10 @@ struct IdentifiabilityJson {
     undetermined_reasons: Named<String>,
     /// The older name of `undetermined`.
     unidentifiable: Vec<&'static str>,
+    /// What the deviations assume about the noise (absent: one variance for every
+    /// weighted residual, `sigma2`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    noise: Option<String>,
 }
 
 impl From<&Identifiability> for IdentifiabilityJson {
@@ -1433,6 +1493,8 @@ impl From<&Identifiability> for IdentifiabilityJson {
                     .zip(i.reasons.iter().cloned()),
             ),
             unidentifiable: i.undetermined.clone(),
+            noise: (i.noise != indentify_identify::NoiseModel::Residual)
+                .then(|| i.noise.describe(i.noise_level)),
         }
     }
 }

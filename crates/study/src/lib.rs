@@ -24,6 +24,7 @@ pub mod check;
 pub mod config;
 pub mod costmap;
 pub mod data;
+pub mod design;
 pub mod discretization;
 pub mod error;
 pub mod explore;

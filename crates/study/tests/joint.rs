@@ -165,3 +165,32 @@ fn simulate_runs_one_test_of_a_joint_configuration() {
             .collect::<Vec<_>>()
     );
 }
+
+/// The noise of the tests of a joint fit shall be independent draws: no draw of one test's
+/// stream appears among another's (with the old `seed + k * 0x9E3779B97F4A7C15`, test k's
+/// draws were test 0's shifted by k points, since SplitMix64 advances by that constant).
+#[test]
+fn tests_of_a_joint_fit_get_unrelated_noise_streams() {
+    use indentify_identify::multiplicative_noise;
+    let ones = vec![1.0; 300];
+    for seed in [1u64, 2, 3, 17, 1 << 40] {
+        assert_eq!(identify::test_seed(seed, 0), seed);
+        let streams: Vec<Vec<u64>> = (0..4)
+            .map(|k| {
+                multiplicative_noise(&ones, 0.02, identify::test_seed(seed, k))
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect()
+            })
+            .collect();
+        for a in 0..4 {
+            for b in a + 1..4 {
+                let shared = streams[a].iter().filter(|x| streams[b].contains(x)).count();
+                assert_eq!(
+                    shared, 0,
+                    "seed {seed}: tests {a} and {b} share {shared} draws"
+                );
+            }
+        }
+    }
+}

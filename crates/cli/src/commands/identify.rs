@@ -234,6 +234,7 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
                 .collect::<Result<_>>()?,
             method: args.method,
             max_iterations: args.max_iter,
+            noise: None,
         },
         resume: args.resume,
         force: args.force,
@@ -554,5 +555,11 @@ fn identifiability_line(i: &Identifiability) -> String {
         sv.join(", "),
         i.condition_text()
     ));
+    if i.noise != indentify_identify::NoiseModel::Residual {
+        s.push_str(&format!(
+            "; deviations assume {}",
+            i.noise.describe(i.noise_level)
+        ));
+    }
     s
 }

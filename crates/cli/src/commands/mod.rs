@@ -2,6 +2,7 @@
 
 pub mod batch;
 pub mod check;
+pub mod design;
 pub mod gradient;
 pub mod gradient_check;
 pub mod identify;

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    IdentifyConfig, Method, ParamSpec, Parameterization, Scaling, StopCriteria,
+    IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization, Scaling, StopCriteria,
 };
 use indentify_laws::Law;
 use serde::{Deserialize, Serialize};
@@ -43,6 +43,62 @@ pub struct IdentifySection {
     /// Compute the identifiability summary at the end (one sensitivity solve).
     #[serde(default = "default_true")]
     pub identifiability: bool,
+    /// What the standard deviations assume about the force noise (see [`NoiseSetting`]);
+    /// default `Residual`.
+    #[serde(default, skip_serializing_if = "NoiseSetting::is_residual")]
+    pub noise: NoiseSetting,
+}
+
+/// The noise model of the standard deviations (`identify.noise`), as written in
+/// configurations; see `indentify_identify::NoiseModel`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum NoiseSetting {
+    /// One variance for every weighted residual, `2J/(n-p)` (the classical Gauss-Newton
+    /// deviations).
+    #[default]
+    Residual,
+    /// Multiplicative noise: the standard deviation of each force is this fraction of the
+    /// force (uniform noise `F (1 + a xi)`, xi in [-1, 1], has `a / sqrt(3)`).
+    Relative(f64),
+    /// Multiplicative noise of a level estimated from the residuals.
+    RelativeEstimated,
+    /// Additive noise of this standard deviation (N).
+    Absolute(f64),
+}
+
+impl NoiseSetting {
+    fn is_residual(&self) -> bool {
+        *self == NoiseSetting::Residual
+    }
+
+    /// The library's model.
+    pub fn model(self) -> NoiseModel {
+        match self {
+            NoiseSetting::Residual => NoiseModel::Residual,
+            NoiseSetting::Relative(v) => NoiseModel::Relative(v),
+            NoiseSetting::RelativeEstimated => NoiseModel::RelativeEstimated,
+            NoiseSetting::Absolute(v) => NoiseModel::Absolute(v),
+        }
+    }
+
+    /// Checks a stated level (finite, > 0), naming `field`.
+    ///
+    /// # Errors
+    /// A level that is not a finite number > 0.
+    pub fn check(self, field: &str) -> Result<()> {
+        match self {
+            NoiseSetting::Relative(v) | NoiseSetting::Absolute(v)
+                if !(v.is_finite() && v > 0.0) =>
+            {
+                bail!(
+                    "{field} = {self:?} is not allowed: the noise level must be a finite number > 0 \
+                     (Relative(f): standard deviation f x |F|, e.g. Relative(0.01) for 1%; \
+                     Absolute(s): standard deviation s in N; or RelativeEstimated, Residual)"
+                )
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 fn default_memory() -> usize {
@@ -66,6 +122,7 @@ impl Default for IdentifySection {
             initial_step: default_initial_step(),
             stop: StopSection::default(),
             identifiability: true,
+            noise: NoiseSetting::Residual,
         }
     }
 }
@@ -248,6 +305,8 @@ pub struct Overrides {
     pub method: Option<MethodName>,
     /// `--max-iter`.
     pub max_iterations: Option<usize>,
+    /// The noise model of the deviations (replaces `identify.noise`).
+    pub noise: Option<NoiseSetting>,
 }
 
 /// Parses `name=value` (`flag` names the option in messages).
@@ -459,6 +518,13 @@ impl IdentifySection {
             stop,
             initial_step: s.initial_step,
             identifiability: s.identifiability,
+            noise: match overrides.noise {
+                Some(n) => {
+                    n.check("the noise model")?;
+                    n.model()
+                }
+                None => s.noise.model(),
+            },
             cancel: Default::default(),
         })
     }
@@ -469,6 +535,7 @@ impl IdentifySection {
         let field = |name: &str, v: String, allowed: &str| {
             anyhow!("identify.{name} = {v} is not allowed: expected {allowed}")
         };
+        self.noise.check("identify.noise")?;
         if !(1..=100).contains(&self.memory) {
             return Err(field(
                 "memory",
@@ -562,6 +629,7 @@ mod tests {
             starts: vec![("nu".into(), 0.25)],
             method: Some(MethodName::Lbfgs),
             max_iterations: Some(7),
+            noise: None,
         };
         let cfg = IdentifySection::resolve(None, &maxwell(), &ov).unwrap();
         assert_eq!(free_names(&cfg), ["E", "nu"]);

@@ -1,0 +1,124 @@
+//! `cargo xtask joint-cost`: the cost of one joint cost + gradient evaluation (forward
+//! runs and adjoint sweeps of every test) of `examples/r2-multi-rate.ron` on N threads
+//! (default 2) against each of its tests alone, measured back to back (rounds alternate
+//! the joint problem and the single tests, each evaluation at a new parameter point so that
+//! nothing comes from the cache); prints the median wall times and the ratio of the joint
+//! evaluation to the slowest single test (issue 14's target: at most 1.2).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use indentify_identify::{Evaluator, Problem};
+use indentify_study::ConfigSource;
+use indentify_study::identify::{self, IdentifyOptions};
+
+/// `cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]`.
+pub fn run(args: &[String]) -> Result<()> {
+    let mut rounds = 5usize;
+    let mut threads = 2usize;
+    let mut config = PathBuf::from("examples/r2-multi-rate.ron");
+    let mut sets = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_default();
+        match a.as_str() {
+            "--rounds" => rounds = val().parse()?,
+            "--threads" => threads = val().parse()?,
+            "--config" => config = PathBuf::from(val()),
+            "--set" => sets.push(val()),
+            other => bail!("unknown option {other}"),
+        }
+    }
+    if rounds == 0 || threads == 0 {
+        bail!("--rounds and --threads take a number >= 1");
+    }
+    let mut opts = IdentifyOptions::new(ConfigSource::Path(config.clone()));
+    opts.sets = sets.clone();
+    let (mut joint, c0) = identify::problem(&opts)?;
+    joint.set_threads(threads)?;
+    let n = joint.tests.len();
+    let cfg = ConfigSource::Path(config.clone()).load(&sets)?;
+    let mut singles: Vec<Problem> = Vec::with_capacity(n);
+    for k in 0..n {
+        let one = cfg.test_config(k)?;
+        let value = serde_json::to_value(&one)?;
+        let mut o = IdentifyOptions::new(ConfigSource::Value {
+            value,
+            name: format!("{} [test {}]", config.display(), k + 1),
+        });
+        o.sets = Vec::new();
+        let (mut p, _) = identify::problem(&o)?;
+        p.set_threads(1)?;
+        singles.push(p);
+    }
+    // a new point for every evaluation: every law value scaled by 1 + 1e-4 (r + 1)
+    let point = |r: usize| -> Vec<f64> {
+        c0.iter()
+            .map(|v| v * (1.0 + 1e-4 * (r as f64 + 1.0)))
+            .collect()
+    };
+    let mut ev_joint = Evaluator::new(&joint)?;
+    let mut ev_single: Vec<Evaluator> = singles
+        .iter()
+        .map(Evaluator::new)
+        .collect::<Result<_, _>>()?;
+    // one warm-up of each
+    ev_joint.cost_and_gradient(&point(rounds))?;
+    for e in &mut ev_single {
+        e.cost_and_gradient(&point(rounds))?;
+    }
+    let mut t_joint = Vec::new();
+    let mut t_single = vec![Vec::new(); n];
+    for r in 0..rounds {
+        let c = point(r);
+        let clock = Instant::now();
+        ev_joint.cost_and_gradient(&c)?;
+        t_joint.push(clock.elapsed().as_secs_f64());
+        for (k, e) in ev_single.iter_mut().enumerate() {
+            let clock = Instant::now();
+            e.cost_and_gradient(&c)?;
+            t_single[k].push(clock.elapsed().as_secs_f64());
+        }
+    }
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    println!(
+        "## One cost + gradient evaluation of `{}`: {n} tests on {threads} threads vs each test alone (1 thread), {rounds} rounds back to back\n",
+        config.display()
+    );
+    println!("| evaluation | median wall (s) | all rounds (s) |");
+    println!("|---|---|---|");
+    let show = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut slowest: f64 = 0.0;
+    let mut sum = 0.0;
+    for (k, t) in t_single.iter().enumerate() {
+        let m = median(t);
+        slowest = slowest.max(m);
+        sum += m;
+        println!("| test {} alone | {m:.3} | {} |", k + 1, show(t));
+    }
+    let mj = median(&t_joint);
+    println!(
+        "| joint ({n} tests, {threads} threads) | {mj:.3} | {} |",
+        show(&t_joint)
+    );
+    println!(
+        "\n- joint / slowest single test: **{:.2}x** (target <= 1.2x); joint / sum of the \
+         single tests: {:.2}x; the load average during the run: {}",
+        mj / slowest,
+        mj / sum,
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
+    Ok(())
+}
