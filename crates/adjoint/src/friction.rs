@@ -151,25 +151,7 @@ impl Adjoint {
         for &k in &rec.active {
             self.full[2 * model.candidates[k as usize] + 1] += rho;
         }
-        model.disc.strains(&self.full, &mut self.strain);
-        for q in 0..self.field_b.len() {
-            let sm = s.mul_vec(&self.field_a[q]);
-            let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
-            self.field_b[q] = mu;
-            let wmu = mu * model.disc.qp[q].w;
-            let ds = sig1[q] - sig0[q];
-            for a in 0..4 {
-                for b in 0..4 {
-                    sweep.m_acc.0[a][b] += wmu[a] * ds[b];
-                }
-            }
-            if sig1[q].max_abs() > 0.0 {
-                for (k, g) in sweep.grad.iter_mut().enumerate() {
-                    *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
-                }
-            }
-        }
-        std::mem::swap(&mut self.field_a, &mut self.field_b);
+        self.back_substitute(model, law, c, sweep, rec.dt, sig0, sig1);
         Ok(())
     }
 

@@ -409,10 +409,28 @@ impl Adjoint {
         self.eq = eq;
         self.xbar.fill(0.0);
         self.expand(model);
+        self.back_substitute(model, law, c, sweep, rec.dt, sig0, sig1);
+        Ok(())
+    }
+
+    /// The Gauss-point half of a sweep step, from the adjoint displacement `V` in
+    /// `self.full`: `mu_i = C (S mu_{i+1} - B V)` into `field_a` (swapped), and
+    /// `gradient -= sum w mu_i . R_i` with `R_i = dS/dc (s1 - s0) + dt dg/dc(s1)`; the
+    /// `dS/dc` part is accumulated as `M = sum w mu (x) (s1 - s0)` and contracted with
+    /// `dS/dc` once at the end.
+    #[allow(clippy::too_many_arguments)]
+    fn back_substitute(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        sweep: &mut Sweep,
+        dt: f64,
+        sig0: &[Vec4],
+        sig1: &[Vec4],
+    ) {
         self.strains_of_full(model);
-        // mu_i = C (S mu_{i+1} - B V); gradient -= sum w mu_i . R_i with
-        // R_i = dS/dc (s1 - s0) + dt dg/dc(s1): the dS/dc part is accumulated as
-        // M = sum w mu (x) (s1 - s0) and contracted with dS/dc once at the end
+        let s = sweep.s;
         for q in 0..self.field_b.len() {
             let sm = s.mul_vec(&self.field_a[q]);
             let mu = self.tangents[q].mul_vec(&(sm - Vec4(self.strain[q])));
@@ -426,12 +444,11 @@ impl Adjoint {
             }
             if sig1[q].max_abs() > 0.0 {
                 for (k, g) in sweep.grad.iter_mut().enumerate() {
-                    *g -= rec.dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
+                    *g -= dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
                 }
             }
         }
         std::mem::swap(&mut self.field_a, &mut self.field_b);
-        Ok(())
     }
 
     /// Forward sensitivities `dF_i/dc_k` of every step force by direct differentiation.
