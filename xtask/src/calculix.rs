@@ -19,7 +19,10 @@
 //!
 //! The material models (CalculiX 2.20, read in its source):
 //! - elastic: `*ELASTIC` (isotropic, linear); with `NLGEOM` a compressible neo-Hooke
-//!   solid of the same small-strain moduli (`*ELASTIC` would be St. Venant-Kirchhoff there);
+//!   solid of the same small-strain moduli (`*ELASTIC` would be St. Venant-Kirchhoff there),
+//!   or with `--elastic mooney-rivlin` the Mooney-Rivlin solid `C10 = C01 = mu/4`,
+//!   `D1 = 2/kappa`, whose isochoric part equals our Hencky-linear law's
+//!   `mu |dev E|^2` to third order in the logarithmic strains ([`FiniteElastic`]);
 //! - Maxwell and Norton-Hoff, small strain: the additive infinitesimal-strain
 //!   viscoplastic model "elastic anisotropy with isotropic viscoplasticity"
 //!   (`umat_aniso_plas.f`, material name `ANISO_PLAS...`, `*USER MATERIAL` with 15
@@ -139,6 +142,46 @@ impl ContactType {
     }
 }
 
+/// CalculiX's hyperelastic solid for our elastic law under `NLGEOM` (CalculiX cannot
+/// express Hencky's energy `mu |dev E|^2 + kappa (ln J)^2 / 2` exactly).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FiniteElastic {
+    /// `*HYPERELASTIC, NEO HOOKE`: `C10 = mu/2`, `D1 = 2/kappa` (the default). Its
+    /// isochoric energy differs from Hencky's at second order in the strains (in
+    /// compression about 1% per 1% strain softer).
+    NeoHooke,
+    /// `*HYPERELASTIC, MOONEY-RIVLIN`: `C10 = C01 = mu/4`, `D1 = 2/kappa`. In the
+    /// isochoric principal stretches it is Ogden's `sum_p 2 mu_p/alpha_p^2 (sum_i
+    /// lambda_i^alpha_p - 3)` with `alpha = (2, -2)`, `mu_p = mu/2`: the cubic term of its
+    /// expansion in the log strains cancels (`sum_p mu_p alpha_p = 0`), so it equals
+    /// Hencky's `mu |dev E|^2` up to a relative stress error of about `(2/3) eps^2`. The
+    /// volumetric parts still differ (`kappa (J - 1)` against `kappa ln(J)/J` for the
+    /// pressure), which vanishes as `nu -> 1/2`.
+    MooneyRivlin,
+}
+
+impl FiniteElastic {
+    /// Parses `neo-hooke` or `mooney-rivlin`.
+    ///
+    /// # Errors
+    /// Any other spelling, named.
+    pub fn from_name(name: &str) -> Result<FiniteElastic> {
+        match name {
+            "neo-hooke" => Ok(FiniteElastic::NeoHooke),
+            "mooney-rivlin" => Ok(FiniteElastic::MooneyRivlin),
+            _ => bail!("--elastic: `{name}` is not neo-hooke or mooney-rivlin"),
+        }
+    }
+
+    /// The suffix of a run's file stem (`-mr` for Mooney-Rivlin, none for the default).
+    pub fn suffix(self) -> &'static str {
+        match self {
+            FiniteElastic::NeoHooke => "",
+            FiniteElastic::MooneyRivlin => "-mr",
+        }
+    }
+}
+
 /// Options of a deck.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DeckOptions {
@@ -149,6 +192,8 @@ pub struct DeckOptions {
     pub punch_r_min: f64,
     /// Geometrically nonlinear (finite strain) analysis.
     pub nlgeom: bool,
+    /// The hyperelastic solid of an elastic law under `NLGEOM`.
+    pub finite_elastic: FiniteElastic,
     /// The loading segment as its own `*STEP`, the rest of the history as a second one
     /// (amplitude and time points in total time).
     pub split_load: bool,
@@ -170,6 +215,7 @@ impl Default for DeckOptions {
             contact: ContactType::NodeToSurface,
             punch_r_min: 1e-4,
             nlgeom: false,
+            finite_elastic: FiniteElastic::NeoHooke,
             split_load: false,
             friction: 0.0,
             penalty: 1e9,
@@ -354,11 +400,26 @@ pub fn deck(
             // out at half the small-strain one. A compressible neo-Hooke solid with the
             // same small-strain moduli is used instead: W = C10 (I1b - 3) + (J - 1)^2 / D1,
             // C10 = mu/2, D1 = 2/kappa.
+            // With `finite_elastic: MooneyRivlin`, C10 = C01 = mu/4 (see [`FiniteElastic`]).
             let mu = e / (2.0 * (1.0 + nu));
             let kappa = e / (3.0 * (1.0 - 2.0 * nu));
             writeln!(w, "*MATERIAL, NAME=SPEC")?;
-            writeln!(w, "*HYPERELASTIC, NEO HOOKE")?;
-            writeln!(w, "{:.12e}, {:.12e}", mu / 2.0, 2.0 / kappa)?;
+            match o.finite_elastic {
+                FiniteElastic::NeoHooke => {
+                    writeln!(w, "*HYPERELASTIC, NEO HOOKE")?;
+                    writeln!(w, "{:.12e}, {:.12e}", mu / 2.0, 2.0 / kappa)?;
+                }
+                FiniteElastic::MooneyRivlin => {
+                    writeln!(w, "*HYPERELASTIC, MOONEY-RIVLIN")?;
+                    writeln!(
+                        w,
+                        "{:.12e}, {:.12e}, {:.12e}",
+                        mu / 4.0,
+                        mu / 4.0,
+                        2.0 / kappa
+                    )?;
+                }
+            }
             writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
         }
         Material::Elastic { e, nu } => {
@@ -561,12 +622,19 @@ pub struct Case {
     pub sets: &'static [&'static str],
 }
 
-/// R0 (elastic), R1 (Maxwell), R2 (Norton-Hoff, sY = 500) and R2 with sY = 0.
-pub const CASES: [Case; 4] = [
+/// R0 (elastic), R1 (Maxwell), R2 (Norton-Hoff, sY = 500) and R2 with sY = 0; R0 with
+/// `nu = 0.49` isolates the kinematics from the volumetric elastic law (`r0-nu049`, not run
+/// by default).
+pub const CASES: [Case; 5] = [
     Case {
         name: "r0",
         example: "examples/r0-elastic.ron",
         sets: &[],
+    },
+    Case {
+        name: "r0-nu049",
+        example: "examples/r0-elastic.ron",
+        sets: &["law.nu=0.49"],
     },
     Case {
         name: "r1",
@@ -826,7 +894,7 @@ pub fn run(o: &RunOptions) -> Result<String> {
     );
     for name in &o.cases {
         let case = CASES.iter().find(|c| c.name == name).ok_or_else(|| {
-            anyhow::anyhow!("unknown case `{name}`: expected r0, r1, r2 or r2-sy0")
+            anyhow::anyhow!("unknown case `{name}`: expected r0, r0-nu049, r1, r2 or r2-sy0")
         })?;
         let loaded = load(&o.root, case)?;
         let mesh = &loaded.prepared.model.mesh;
@@ -835,7 +903,10 @@ pub fn run(o: &RunOptions) -> Result<String> {
         for &nlgeom in &o.kinematics {
             let mut frictionless: Option<Vec<(f64, f64)>> = None;
             for &mu in &o.frictions {
-                let stem = stem(case.name, mu, nlgeom);
+                let mut stem = stem(case.name, mu, nlgeom);
+                if nlgeom && matches!(loaded.material, Material::Elastic { .. }) {
+                    stem.push_str(o.deck.finite_elastic.suffix());
+                }
                 let opts = DeckOptions {
                     nlgeom,
                     friction: mu,

@@ -328,3 +328,39 @@ fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
         .unwrap();
     assert!(first < second);
 }
+
+#[test]
+fn mooney_rivlin_deck_states_hencky_s_shear_modulus_in_both_invariants() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::Elastic { e: 2e4, nu: 0.3 };
+    let o = DeckOptions {
+        punch_segments: 4,
+        nlgeom: true,
+        finite_elastic: calculix::FiniteElastic::MooneyRivlin,
+        ..DeckOptions::default()
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &o).unwrap();
+    let card = deck
+        .split("*HYPERELASTIC, MOONEY-RIVLIN\n")
+        .nth(1)
+        .and_then(|rest| rest.lines().next())
+        .expect("a Mooney-Rivlin card");
+    let v: Vec<f64> = card.split(',').map(|x| x.trim().parse().unwrap()).collect();
+    let mu = 2e4 / (2.0 * 1.3);
+    let kappa = 2e4 / (3.0 * (1.0 - 0.6));
+    // C10 = C01 = mu/4: the initial shear modulus 2 (C10 + C01) = mu
+    assert!((v[0] - mu / 4.0).abs() < 1e-9 * mu && (v[1] - mu / 4.0).abs() < 1e-9 * mu);
+    assert!((v[2] - 2.0 / kappa).abs() < 1e-12 / kappa);
+    assert!(!deck.contains("NEO HOOKE"));
+    // the default stays neo-Hooke, and small strain stays *ELASTIC
+    let nh = DeckOptions {
+        finite_elastic: calculix::FiniteElastic::NeoHooke,
+        ..o
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &nh).unwrap();
+    assert!(deck.contains("*HYPERELASTIC, NEO HOOKE\n"));
+    assert!(calculix::FiniteElastic::from_name("ogden").is_err());
+}
