@@ -321,4 +321,27 @@ fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
         .find("\n2.500000000000e-1, 2.000000000000e0, ")
         .unwrap();
     assert!(first < second);
+    // the loading's increments divided (--load-substeps 5), the rest's kept, the minimum
+    // (dt 1e-4) kept
+    let sub = DeckOptions {
+        load_substeps: 5,
+        ..two
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &sub).unwrap();
+    assert!(
+        deck.contains(
+            "\n5.000000000000e-2, 1.000000000000e0, 2.500000000000e-5, 5.000000000000e-2\n"
+        )
+    );
+    assert!(
+        deck.contains(
+            "\n2.500000000000e-1, 2.000000000000e0, 2.500000000000e-5, 2.500000000000e-1\n"
+        )
+    );
+    let zero = DeckOptions {
+        load_substeps: 0,
+        ..two
+    };
+    let e = calculix::deck("t", &mesh, &punch, &m, &schedule, &zero).unwrap_err();
+    assert!(e.to_string().contains("load_substeps"), "{e}");
 }
