@@ -197,6 +197,11 @@ pub struct DeckOptions {
     /// The loading segment as its own `*STEP`, the rest of the history as a second one
     /// (amplitude and time points in total time).
     pub split_load: bool,
+    /// Increments per schedule step in the first `*STEP` (the loading with `split_load`,
+    /// the whole history otherwise): its initial and largest increment is
+    /// `dt / load_substeps` (1: `dt`; the `NLGEOM` friction run of R2 sY = 0 with
+    /// mu = 0.2 needs 3, docs/validation-finite-strain.md §7).
+    pub load_substeps: usize,
     /// Coulomb friction coefficient (0: frictionless, no `*FRICTION` card).
     pub friction: f64,
     /// Slope of the linear pressure-overclosure law (MPa/mm).
@@ -217,6 +222,7 @@ impl Default for DeckOptions {
             nlgeom: false,
             finite_elastic: FiniteElastic::NeoHooke,
             split_load: false,
+            load_substeps: 1,
             friction: 0.0,
             penalty: 1e9,
             stick_slope: 1e8,
@@ -517,7 +523,16 @@ pub fn deck(
         Some(&(t1, _)) if o.split_load && t1 < t_end => vec![t1, t_end - t1],
         _ => vec![t_end],
     };
-    for duration in steps {
+    if o.load_substeps == 0 {
+        bail!("load_substeps = 0: expected at least 1 increment per schedule step");
+    }
+    for (k, duration) in steps.into_iter().enumerate() {
+        // the first step's increments: dt / load_substeps (the minimum stays dt 1e-4)
+        let inc = if k == 0 {
+            dt / o.load_substeps as f64
+        } else {
+            dt
+        };
         if o.nlgeom {
             writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
         } else {
@@ -540,7 +555,7 @@ pub fn deck(
         }
         writeln!(
             w,
-            "{dt:.12e}, {duration:.12e}, {:.12e}, {dt:.12e}",
+            "{inc:.12e}, {duration:.12e}, {:.12e}, {inc:.12e}",
             dt * 1e-4
         )?;
         writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;

@@ -1,7 +1,7 @@
 //! The CalculiX deck generator and `.dat` parser (without `ccx`): the materials against our
 //! laws' own flow rules, the deck's mesh, surfaces and amplitude, the contact formulation
 //! and the punch kept off the axis, the force parser, our side of every run (friction and
-//! finite strain through `--set`, the refusal of both together) and the comparison table.
+//! finite strain through `--set`, also both together) and the comparison table.
 
 use indentify_contact::{ContactKind, Kinematics, Punch, Schedule, Segment};
 use indentify_laws::{Law, Maxwell, NortonHoff, Vec4};
@@ -235,22 +235,16 @@ fn our_runs_are_the_configurations_with_friction_and_finite_strain() {
         ]
     );
     let source = indentify_study::source::ConfigSource::Path(root().join(r2.example));
-    // finite strain with friction is refused when the configuration is loaded
-    let e = format!("{:#}", source.load(&sets).unwrap_err());
-    assert!(e.contains("friction") && e.contains("Finite"), "{e}");
+    // finite strain with friction: the configuration loads with both
+    let cfg = source.load(&sets).unwrap();
+    assert_eq!(cfg.contact, ContactKind::NormalFriction { friction: 0.1 });
+    assert_eq!(cfg.kinematics, Kinematics::Finite);
     let cfg = source.load(&calculix::our_sets(r2, 0.1, false)).unwrap();
     assert_eq!(cfg.contact, ContactKind::NormalFriction { friction: 0.1 });
     assert_eq!(cfg.kinematics, Kinematics::Small);
     let cfg = source.load(&calculix::our_sets(r2, 0.0, false)).unwrap();
     assert_eq!(cfg.contact, ContactKind::Normal);
     assert_eq!(cfg.kinematics, Kinematics::Small);
-    // finite strain with friction: our code refuses it (the NLGEOM friction runs are
-    // CalculiX's only), with its own reason
-    let loaded = calculix::load(&root(), r2).unwrap();
-    let e = calculix::ours(&loaded, r2, 0.2, true)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("friction") && e.contains("Finite"), "{e}");
     // the stems name every run
     assert_eq!(calculix::stem("r2-sy0", 0.1, true), "r2-sy0-mu0.1-nlgeom");
     assert_eq!(calculix::stem("r1", 0.0, false), "r1");
@@ -327,6 +321,29 @@ fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
         .find("\n2.500000000000e-1, 2.000000000000e0, ")
         .unwrap();
     assert!(first < second);
+    // the loading's increments divided (--load-substeps 5), the rest's kept, the minimum
+    // (dt 1e-4) kept
+    let sub = DeckOptions {
+        load_substeps: 5,
+        ..two
+    };
+    let deck = calculix::deck("t", &mesh, &punch, &m, &schedule, &sub).unwrap();
+    assert!(
+        deck.contains(
+            "\n5.000000000000e-2, 1.000000000000e0, 2.500000000000e-5, 5.000000000000e-2\n"
+        )
+    );
+    assert!(
+        deck.contains(
+            "\n2.500000000000e-1, 2.000000000000e0, 2.500000000000e-5, 2.500000000000e-1\n"
+        )
+    );
+    let zero = DeckOptions {
+        load_substeps: 0,
+        ..two
+    };
+    let e = calculix::deck("t", &mesh, &punch, &m, &schedule, &zero).unwrap_err();
+    assert!(e.to_string().contains("load_substeps"), "{e}");
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! The exact adjoint and forward sensitivities with Coulomb friction
-//! ([`indentify_contact::ContactKind::NormalFriction`]), small strain, the contact set and
-//! the stick/slip partition held at their converged values (docs/validation-contact.md
-//! §7).
+//! ([`indentify_contact::ContactKind::NormalFriction`]), the contact set and the
+//! stick/slip partition held at their converged values (docs/validation-contact.md §7),
+//! small or finite strain.
 //!
 //! Step `i` linearized, in the frames `(t, m)` of its active nodes (`z = Q^T du`):
 //! `m . du = 0` on every active node; a sticking node ties its closest point to the
@@ -25,6 +25,15 @@
 //!
 //! ([`ConstrainedSystem::solve_transposed`](indentify_contact::ConstrainedSystem::solve_transposed)
 //! for `w` and `pi`).
+//!
+//! Finite strain ([`indentify_contact::Kinematics::Finite`], docs/validation-finite-strain.md
+//! §7): the friction rows and the stick ties are the same (the closest point, its arc
+//! coordinate and `1 + g kappa` are functions of the displaced node); the element part
+//! becomes the step's `G_i = P B_L(u_i)` in place of `B`, `K` the consistent tangent
+//! (geometric part included), the variation of the internal force `K du + G^T C q` (no
+//! longer `B* dsigma`), hence `g = G^T (C S - I) mu_{i+1} - rho K e_A + l_i` and
+//! `mu_i = C (S mu_{i+1} - G (V + rho e_A))`; the reactions that form the frames are the
+//! finite internal force `sum w0 B_L^T P T`.
 
 use indentify_contact::{Model, StepFields, StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};
@@ -50,7 +59,11 @@ impl Adjoint {
         sigma1: &[Vec4],
         u1: &[f64],
     ) -> Vec<indentify_contact::NodeFrame> {
-        model.disc.internal_force(sigma1, &mut self.full);
+        match &self.finite {
+            None => model.disc.internal_force(sigma1, &mut self.full),
+            // finite strain: sum w0 B_L^T P T at the step's displacement (prepared)
+            Some(fs) => fs.force(model, sigma1, &mut self.full),
+        }
         model.friction_frames(&rec.active, &rec.slip, &self.full, u1, rec.depth)
     }
 
@@ -114,18 +127,38 @@ impl Adjoint {
         self.prepare_step(model, law, c, rec, sig1, &f1.u, i)?;
         let pairs = self.frame_of_active(model, rec, i)?;
         let s = sweep.s;
-        // e_A: 1 on the vertical dof of every active node
-        self.full.fill(0.0);
-        for &k in &rec.active {
-            self.full[2 * model.candidates[k as usize] + 1] = 1.0;
+        if self.finite.is_none() {
+            // e_A: 1 on the vertical dof of every active node
+            self.full.fill(0.0);
+            for &k in &rec.active {
+                self.full[2 * model.candidates[k as usize] + 1] = 1.0;
+            }
+            model.disc.strains(&self.full, &mut self.strain);
+            // g = B* [(C S - I) mu_{i+1} - rho C B e_A]
+            for q in 0..self.field_b.len() {
+                let sm = s.mul_vec(&self.field_a[q]) - Vec4(self.strain[q]) * rho;
+                self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+            }
+            model.disc.internal_force(&self.field_b, &mut self.full);
+        } else {
+            // finite strain: g = G^T (C S - I) mu_{i+1} - rho K e_A (K the consistent
+            // tangent, geometric part included: dF = -e_A . (K du + G^T C q))
+            for q in 0..self.field_b.len() {
+                let sm = s.mul_vec(&self.field_a[q]);
+                self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+            }
+            self.force_of_field_b(model);
+            let mut e_a = std::mem::take(&mut self.xbar_full);
+            e_a.clear();
+            e_a.resize(self.full.len(), 0.0);
+            for &k in &rec.active {
+                e_a[2 * model.candidates[k as usize] + 1] = -rho;
+            }
+            if let Some(fs) = &self.finite {
+                fs.add_k_times(model, &e_a, &mut self.full);
+            }
+            self.xbar_full = e_a;
         }
-        model.disc.strains(&self.full, &mut self.strain);
-        // g = B* [(C S - I) mu_{i+1} - rho C B e_A]
-        for q in 0..self.field_b.len() {
-            let sm = s.mul_vec(&self.field_a[q]) - Vec4(self.strain[q]) * rho;
-            self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
-        }
-        model.disc.internal_force(&self.field_b, &mut self.full);
         // + l_i: the sticking loads of step i + 1 on this step's tangential motion
         let active_now = |k: usize| rec.active.binary_search(&(k as u32)).is_ok();
         for (k, pi) in std::mem::take(&mut sweep.stick) {
@@ -204,7 +237,7 @@ impl Adjoint {
                         - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
                     self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
                 }
-                model.disc.internal_force(&self.field_b, &mut self.full);
+                self.force_of_field_b(model);
                 self.restrict(model);
                 self.xbar.fill(0.0);
                 for &(er, node, coef, t0) in &stick {
@@ -216,14 +249,14 @@ impl Adjoint {
                 self.eq = eq;
                 self.expand(model);
                 du_prev[k].copy_from_slice(&self.full);
-                model.disc.strains(&self.full, &mut self.strain);
+                self.strains_of_full(model);
                 for qp in 0..nq {
                     let bv = Vec4(self.strain[qp]);
                     let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
                     self.field_b[qp] = dsig;
                     y[k][qp] = s.mul_vec(&dsig) - bv;
                 }
-                model.disc.internal_force(&self.field_b, &mut self.full);
+                self.delta_force(model, &q_field);
                 df[i][k] = -rec
                     .active
                     .iter()

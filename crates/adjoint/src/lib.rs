@@ -131,6 +131,8 @@ pub struct Adjoint {
     full: Vec<f64>,
     eq: Vec<f64>,
     xbar: Vec<f64>,
+    /// Scratch of all dofs (finite strain with friction: `-rho e_A`).
+    xbar_full: Vec<f64>,
     /// Frames of the current step's active nodes (normal contact; empty otherwise).
     frames: Vec<NodeFrame>,
     /// The step's finite-strain operators (`Kinematics::Finite` only).
@@ -155,6 +157,7 @@ impl Adjoint {
             full: vec![0.0; model.disc.n_dofs()],
             eq: vec![0.0; model.dofs.n_eq],
             xbar: vec![0.0; model.dofs.n_eq],
+            xbar_full: Vec::new(),
             frames: Vec::new(),
             finite,
         })
@@ -240,6 +243,26 @@ impl Adjoint {
         match &self.finite {
             None => model.disc.strains(&self.full, &mut self.strain),
             Some(fs) => fs.strains(model, &self.full, &mut self.strain),
+        }
+    }
+
+    /// The variation of the internal force into `self.full`, which holds the
+    /// displacement variation `du` on entry, with `self.field_b` holding `dsigma = C (B du
+    /// + q)`: `sum_g w B^T dsigma` (small strain), `K du + sum_g w0 G^T C q` under finite
+    /// strain (geometric part included; `field_b` is overwritten with `C q`).
+    fn delta_force(&mut self, model: &Model, q_field: &[Vec4]) {
+        match &mut self.finite {
+            None => model.disc.internal_force(&self.field_b, &mut self.full),
+            Some(fs) => {
+                for (b, (t, q)) in self
+                    .field_b
+                    .iter_mut()
+                    .zip(self.tangents.iter().zip(q_field))
+                {
+                    *b = t.mul_vec(q);
+                }
+                fs.delta_force(model, &self.field_b, &mut self.full);
+            }
         }
     }
 
@@ -501,16 +524,7 @@ impl Adjoint {
                     self.field_b[qp] = dsig;
                     y[k][qp] = s.mul_vec(&dsig) - bv;
                 }
-                match &mut self.finite {
-                    None => model.disc.internal_force(&self.field_b, &mut self.full),
-                    Some(fs) => {
-                        // delta f_int = K du + sum w0 G^T C q (geometric part included)
-                        for qp in 0..nq {
-                            self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]);
-                        }
-                        fs.delta_force(model, &self.field_b, &mut self.full);
-                    }
-                }
+                self.delta_force(model, &q_field);
                 df[i][k] = -rec
                     .active
                     .iter()

@@ -18,7 +18,7 @@ use crate::{ContactError, ContactKind};
 /// Kinematics of the direct problem.
 ///
 /// Config: `kinematics: Small` (the default) or `kinematics: Finite` (requires
-/// `contact: Normal`).
+/// `contact: Normal` or `contact: Normal(friction: mu)`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Kinematics {
     /// The paper's small strain: `eps = B u` on the reference configuration.
@@ -27,32 +27,26 @@ pub enum Kinematics {
     /// Finite strain: total-Lagrangian axisymmetric Q8 with the hoop stretch
     /// `1 + u_r/R`, the laws applied to the Hencky strain `ln(C)/2` (their small-strain
     /// update and tangent unchanged), the consistent tangent with its material and
-    /// geometric parts. Needs normal contact (the gap at the displaced position).
+    /// geometric parts. Needs normal contact (the gap at the displaced position),
+    /// frictionless or with Coulomb friction.
     Finite,
 }
 
 impl Kinematics {
-    /// Checks that `contact` supports these kinematics: finite strain needs frictionless
-    /// `Normal` contact (the gap of the displaced node along the punch's normal).
+    /// Checks that `contact` supports these kinematics: finite strain needs `Normal`
+    /// contact (the gap of the displaced node along the punch's normal), frictionless or
+    /// with Coulomb friction (`Normal(friction: mu)`: the stick/slip law on the displaced
+    /// node's closest point, as in small strain).
     ///
     /// # Errors
     /// [`ContactError::Input`] naming `kinematics`, with what is allowed.
     pub fn check_contact(self, contact: ContactKind) -> Result<(), ContactError> {
-        if self == Kinematics::Finite && matches!(contact, ContactKind::NormalFriction { .. }) {
+        if self == Kinematics::Finite && !contact.is_normal() {
             return Err(ContactError::Input {
                 field: "kinematics",
                 value: "Finite".into(),
-                allowed: "`kinematics: Finite` with frictionless contact only: Coulomb friction \
-                      under finite strain is not built; set `contact: Normal` (or keep \
-                      `kinematics: Small`)"
-                    .into(),
-            });
-        }
-        if self == Kinematics::Finite && contact != ContactKind::Normal {
-            return Err(ContactError::Input {
-                field: "kinematics",
-                value: "Finite".into(),
-                allowed: "`kinematics: Finite` with `contact: Normal` only: vertical contact \
+                allowed: "`kinematics: Finite` with `contact: Normal` or `Normal(friction: \
+                      mu)` only: vertical contact \
                       takes the gap at the node's reference radius and a vertical \
                       reaction, which finite strain's displaced and rotated surface \
                       contradicts; set `contact: Normal` (or keep `kinematics: Small`)"

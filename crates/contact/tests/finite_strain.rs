@@ -228,7 +228,8 @@ fn the_small_depth_limit_is_small_strain() {
     assert!((s[10] - f[10]).abs() > 0.01 * s[10]);
 }
 
-/// Finite strain with vertical contact is refused, naming the field and the fix.
+/// Finite strain with vertical contact is refused, naming the field and the fix; with
+/// normal contact and friction it is accepted.
 #[test]
 fn finite_strain_needs_normal_contact() {
     let mesh = CylinderMesher {
@@ -254,17 +255,13 @@ fn finite_strain_needs_normal_contact() {
         }
     ));
     assert!(text.contains("contact: Normal"), "{text}");
-    // friction under finite strain is not built, and the refusal says so
+    // normal contact with Coulomb friction takes finite strain (tests/finite_friction.rs)
     let friction = ContactKind::NormalFriction { friction: 0.2 };
-    let text = Model::with_contact(mesh, Punch::Flat { radius: 3.0 }, friction)
+    let model = Model::with_contact(mesh, Punch::Flat { radius: 3.0 }, friction)
         .unwrap()
         .with_kinematics(Kinematics::Finite)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        text.contains("friction under finite strain is not built"),
-        "{text}"
-    );
+        .unwrap();
+    assert_eq!(model.kinematics, Kinematics::Finite);
 }
 
 /// An element squashed towards inversion stops the run (inverted, or its tangent no longer

@@ -43,9 +43,9 @@ pub struct Config {
     #[serde(default)]
     pub contact: ContactKind,
     /// The kinematics: `Small` (the paper's) or `Finite` (total-Lagrangian, the laws in
-    /// logarithmic strain space; needs frictionless `contact: Normal`). Left out, it is
-    /// `Small` for a depth `history` and `Finite` for measured data whose contact is
-    /// frictionless `Normal` ([`Config::resolve_model_defaults`]).
+    /// logarithmic strain space; needs `contact: Normal`, frictionless or with friction).
+    /// Left out, it is `Small` for a depth `history` and `Finite` for measured data whose
+    /// contact is `Normal` (with or without friction, [`Config::resolve_model_defaults`]).
     #[serde(default)]
     pub kinematics: Kinematics,
     /// The constitutive law and its parameters.
@@ -980,9 +980,10 @@ impl Config {
     /// - with measured data ([`Config::is_measured`]), the physical model:
     ///   `contact: Normal` (frictionless, the gap along the punch's normal in the current
     ///   configuration) and `kinematics: Finite`, which together describe the material
-    ///   under a real indenter (docs/validation-finite-strain.md); the kinematics stays
-    ///   `Small` if a stated contact (top level or a test's) is not frictionless `Normal`,
-    ///   which finite strain does not support.
+    ///   under a real indenter (docs/validation-finite-strain.md); a stated friction
+    ///   (`Normal(friction: mu)`) keeps `Finite` too, and the kinematics stays `Small`
+    ///   only if a stated contact (top level or a test's) is `Vertical`, which finite
+    ///   strain does not support.
     ///
     /// Friction stays opt-in: no default coefficient is supported by the shipped data.
     pub fn resolve_model_defaults(&mut self, stated: StatedModel) {
@@ -993,10 +994,10 @@ impl Config {
             self.contact = ContactKind::Normal;
         }
         if !stated.kinematics {
-            let frictionless_normal = std::iter::once(self.contact)
+            let normal = std::iter::once(self.contact)
                 .chain(self.tests.iter().flatten().filter_map(|t| t.contact))
-                .all(|c| c == ContactKind::Normal);
-            self.kinematics = if frictionless_normal {
+                .all(|c| c.is_normal());
+            self.kinematics = if normal {
                 Kinematics::Finite
             } else {
                 Kinematics::Small
@@ -1942,8 +1943,18 @@ mod tests {
             (Vertical, Small)
         );
         assert_eq!(model(&measured(""), &["kinematics=Small"]), (Normal, Small));
-        // friction is opt-in, and finite strain does not take it: small strain then
+        // friction is opt-in, and a stated friction keeps finite strain
         let (c, k) = model(&measured(""), &["contact=Normal(friction: 0.1)"]);
+        assert_eq!((c.friction(), k), (0.1, Finite));
+        let (c, k) = model(&measured("contact: Normal(friction: 0.2),"), &[]);
+        assert_eq!((c.friction(), k), (0.2, Finite));
+        let (c, k) = model(
+            &measured("contact: Normal(friction: 0.2),"),
+            &["kinematics=Small"],
+        );
+        assert_eq!((c.friction(), k), (0.2, Small));
+        // a depth history with friction keeps the paper's small strain
+        let (c, k) = model(&r0_text(), &["contact=Normal(friction: 0.1)"]);
         assert_eq!((c.friction(), k), (0.1, Small));
         // a stated finite strain with vertical contact is refused, not changed
         let e = load_str(

@@ -282,7 +282,7 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
         "    // The model. Contact: Vertical (the paper's: gap at the reference radius, vertical\n\
          \x20   // reaction), Normal (gap of the displaced node along the punch's normal, frictionless)\n\
          \x20   // or Normal(friction: 0.1) (Coulomb; docs/validation-contact.md). Kinematics: Small (the\n\
-         \x20   // paper's) or Finite (logarithmic strain, needs frictionless Normal contact;\n\
+         \x20   // paper's) or Finite (logarithmic strain, needs Normal contact, with or without friction;\n\
          \x20   // docs/validation-finite-strain.md). Left out: Vertical and Small for a depth history,\n\
          \x20   // Normal and Finite for measured data.\n",
     );

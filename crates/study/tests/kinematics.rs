@@ -1,6 +1,7 @@
 //! The `kinematics` field: `--set kinematics=Finite` runs the finite-strain forward problem
-//! with normal contact, is refused with vertical contact, and `gradient`, `gradient-check`
-//! and `identify` run with its exact adjoint (checked against central differences).
+//! with normal contact (frictionless or with Coulomb friction), is refused with vertical
+//! contact, and `gradient`, `gradient-check` and `identify` run with its exact adjoint
+//! (checked against central differences).
 
 use indentify_study::ConfigSource;
 use indentify_study::simulate::{self, SimulateOptions};
@@ -82,6 +83,49 @@ fn gradients_under_finite_strain_match_finite_differences() {
         "{:?}",
         out.result
     );
+}
+
+/// `gradient-check` under finite strain with Coulomb friction (R1 Maxwell, 6 x 6,
+/// `Normal(friction: 0.2)`): the adjoint against central differences of the
+/// whole-history cost (1e-6) with every step's contact set and stick/slip statuses held
+/// by the +-h runs, and against `J^T rho` (1e-8); the run's nodes stick (counted).
+#[test]
+fn gradients_under_finite_strain_with_friction_match_finite_differences() {
+    let sets = coarse(&["contact=Normal(friction: 0.2)", "kinematics=Finite"]);
+    let mut opts = SimulateOptions::new(r1());
+    opts.sets = sets.clone();
+    let o = simulate::run(&opts).unwrap();
+    assert!(o.failure.is_none());
+    let statuses: Vec<i8> = o
+        .trajectory
+        .steps
+        .iter()
+        .flat_map(|s| s.slip.clone())
+        .collect();
+    let (stick, slip) = (
+        statuses.iter().filter(|&&s| s == 0).count(),
+        statuses.iter().filter(|&&s| s != 0).count(),
+    );
+    println!("R1 finite, mu = 0.2: {stick} sticking, {slip} slipping node-steps");
+    // on this coarse R1 every active node sticks (also at mu = 0.05): finite strain's
+    // tangential forces stay inside the cone; slipping nodes are covered by
+    // adjoint/tests/gradient_fd_finite_friction.rs
+    assert!(stick > 0, "stick {stick}, slip {slip}");
+    let mut c = indentify_study::check::CheckOptions::new(r1());
+    c.sets = sets;
+    let report = indentify_study::check::run(&c).unwrap();
+    for p in &report.checks {
+        println!(
+            "R1 finite mu = 0.2 {}: adjoint {:.10e} fd {:.10e} | rel fd {:.1e} sens {:.1e} | \
+             statuses held {:?}",
+            p.name, p.adjoint, p.fd, p.rel_diff_fd, p.rel_diff_sensitivity, p.statuses_held
+        );
+        assert_eq!(p.statuses_held, Some(true), "{}", p.name);
+        assert!(p.rel_diff_fd < 1e-6, "{}: {p:?}", p.name);
+        assert!(p.rel_diff_sensitivity < 1e-8, "{}: {p:?}", p.name);
+    }
+    assert_eq!(report.checks.len(), 3);
+    assert!(report.passed, "{:?}", report.failures);
 }
 
 /// `gradient-check` under finite strain on a measured history: the Berkovich record of

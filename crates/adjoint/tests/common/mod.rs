@@ -1,10 +1,12 @@
 //! The whole-history gradient check shared by the adjoint's test files: the adjoint
 //! against central differences of the direct solver's own cost, against the forward
-//! sensitivities (`J^T rho`), and the checkpointed adjoint against the recorded one.
+//! sensitivities (`J^T rho`), and the checkpointed adjoint against the recorded one;
+//! with Coulomb friction, the same with the finite-difference rule that every step's
+//! contact set and stick/slip statuses of the +-h runs equal the base run's.
 
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_contact::{DirectSolver, Model, Schedule, SolverOptions, trapezoid};
+use indentify_contact::{DirectSolver, Model, Schedule, SolverOptions, Trajectory, trapezoid};
 use indentify_laws::Law;
 
 /// On `model`, the trapezoid 0 -> 0.1 mm -> hold -> 0 in `steps` steps per segment with
@@ -13,7 +15,7 @@ use indentify_laws::Law;
 /// first `checked` parameters (a parameter on its bound, sY = 0, has no central
 /// difference); the contact zone must grow and be lost. Returns the worst relative
 /// differences (fd, sensitivities).
-#[allow(clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments, dead_code)]
 pub fn whole_history_check(
     model: &Model,
     law: &dyn Law,
@@ -109,4 +111,201 @@ pub fn whole_history_check(
         worst_sens = worst_sens.max(rs);
     }
     (worst_fd, worst_sens)
+}
+
+/// Each step's active set and stick/slip statuses.
+#[allow(dead_code)]
+pub type Statuses = Vec<(Vec<u32>, Vec<i8>)>;
+
+#[allow(dead_code)]
+pub fn statuses(traj: &Trajectory) -> Statuses {
+    traj.steps
+        .iter()
+        .map(|s| (s.active.clone(), s.slip.clone()))
+        .collect()
+}
+
+/// Worst relative differences of one case: adjoint vs finite differences, vs `J^T rho`.
+/// and the sticking and slipping node-steps (off the axis) of the base run.
+#[allow(dead_code)]
+#[derive(Default)]
+pub struct Outcome {
+    pub fd: f64,
+    pub sens: f64,
+    pub stick: usize,
+    pub slip: usize,
+}
+
+impl Outcome {
+    #[allow(dead_code)]
+    pub fn add(&mut self, o: Outcome) {
+        println!(
+            "worst: fd {:.1e}, sens {:.1e}; stick {}, slip {} node-steps",
+            o.fd, o.sens, o.stick, o.slip
+        );
+        self.fd = self.fd.max(o.fd);
+        self.sens = self.sens.max(o.sens);
+        self.stick += o.stick;
+        self.slip += o.slip;
+    }
+
+    /// Both statuses were exercised.
+    #[allow(dead_code)]
+    pub fn assert_stick_and_slip(&self) {
+        println!(
+            "all cases: worst fd {:.1e}, sens {:.1e}; stick {}, slip {} node-steps",
+            self.fd, self.sens, self.stick, self.slip
+        );
+        assert!(
+            self.stick >= 10 && self.slip >= 10,
+            "stick {}, slip {} node-steps",
+            self.stick,
+            self.slip
+        );
+    }
+}
+
+/// With friction, on `model`: the trapezoid 0 -> 0.1 mm -> hold -> 0.02 mm in `steps`
+/// steps per segment with the data simulated at `truth`; adjoint vs central differences
+/// (1e-6), vs J^T rho (1e-10), and the checkpointed adjoint vs the recorded one (1e-10),
+/// for the first `checked` parameters (a parameter on its bound, sY = 0, has no central
+/// difference); the +-h runs must have the base run's active sets and statuses at every
+/// step (the step size is the largest of 1e-5, 1e-6, 1e-7 relative for which they do).
+#[allow(dead_code)]
+pub fn friction_history_check(
+    model: &Model,
+    law: &dyn Law,
+    truth: &[f64],
+    c: &[f64],
+    checked: usize,
+    steps: usize,
+) -> Outcome {
+    // unloading stops at 0.02 mm: at zero depth the axis node's contact is borderline
+    // (zero reaction), and its status flips under any perturbation
+    let mut segments = trapezoid(0.1, 1.0, 1.0, 1.0, steps);
+    segments[2].depth = 0.02;
+    let sched = Schedule::from_segments(&segments).unwrap();
+    let opts = SolverOptions {
+        residual_tol: 1e-12,
+        ..Default::default()
+    };
+    let mut solver = DirectSolver::new(model).unwrap();
+    let data: Vec<f64> = solver
+        .run(model, law, truth, &sched, &opts)
+        .unwrap()
+        .forces();
+    let traj = solver.run(model, law, c, &sched, &opts).unwrap();
+    let base = statuses(&traj);
+    // the contact zone grows, holds and is lost; sticking and slipping node-steps
+    let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
+    let most = *sizes.iter().max().unwrap();
+    assert!(most >= 3 && *sizes.last().unwrap() < most, "{sizes:?}");
+    let (mut stick, mut slip) = (0, 0);
+    for s in &traj.steps {
+        for (&k, &st) in s.active.iter().zip(&s.slip) {
+            if model.candidate_r(k as usize) > 0.0 {
+                if st == 0 {
+                    stick += 1;
+                } else {
+                    slip += 1;
+                }
+            }
+        }
+    }
+    let cost_of = |t: &Trajectory| -> f64 {
+        0.5 * t
+            .forces()
+            .iter()
+            .zip(&data)
+            .map(|(f, d)| (f - d).powi(2))
+            .sum::<f64>()
+    };
+    // central differences with the statuses of the base run held
+    let mut fd = Vec::new();
+    for k in 0..checked {
+        let mut found = None;
+        for h_rel in [1e-5, 1e-6, 1e-7] {
+            let h = if c[k] == 0.0 {
+                h_rel
+            } else {
+                h_rel * c[k].abs()
+            };
+            let mut run = |x: f64| {
+                let mut p = c.to_vec();
+                p[k] = x;
+                solver.run(model, law, &p, &sched, &opts).unwrap()
+            };
+            let (tp, tm) = (run(c[k] + h), run(c[k] - h));
+            if statuses(&tp) == base && statuses(&tm) == base {
+                found = Some(((cost_of(&tp) - cost_of(&tm)) / (2.0 * h), h_rel));
+                break;
+            }
+            for (name, t) in [("+h", &tp), ("-h", &tm)] {
+                let st = statuses(t);
+                if st.len() != base.len() {
+                    println!("  {name}: {} steps, base {}", st.len(), base.len());
+                }
+                for (i, (a, b)) in st.iter().zip(&base).enumerate() {
+                    if a != b {
+                        println!("  {name}: step {i}: {a:?} vs base {b:?}");
+                    }
+                }
+            }
+            println!("parameter {k}: h = {h_rel:e} flips a status; trying a smaller one");
+        }
+        let (d, h_rel) = found.expect("no step size keeps every status of the base run");
+        println!("parameter {k}: h = {h_rel:e} keeps every status");
+        fd.push(d);
+    }
+    let rho: Vec<f64> = traj
+        .steps
+        .iter()
+        .map(|s| {
+            if s.on_schedule {
+                s.force - data[s.schedule_index]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut adj = Adjoint::new(model).unwrap();
+    let g = adj.gradient(model, law, c, &traj, &rho).unwrap();
+    let sens = adj.sensitivities(model, law, c, &traj).unwrap();
+    let jt = sens.transpose_mul(&rho);
+    // the same gradient from a checkpointed run replayed segment by segment
+    let ck_opts = SolverOptions {
+        record_fields: false,
+        checkpoint_every: 5,
+        ..opts.clone()
+    };
+    let ck = solver.run(model, law, c, &sched, &ck_opts).unwrap();
+    let g_ck = adj
+        .gradient_replayed(model, law, c, &ck, &rho, &mut solver, &sched, &ck_opts)
+        .unwrap();
+    let mut out = Outcome {
+        stick,
+        slip,
+        ..Outcome::default()
+    };
+    println!("stick {stick}, slip {slip} node-steps; active per step {sizes:?}");
+    for k in 0..checked {
+        let name = law.params()[k].name;
+        let (rf, rs) = (
+            relative_difference(g.dj_dc[k], fd[k]),
+            relative_difference(g.dj_dc[k], jt[k]),
+        );
+        println!(
+            "{name}: adjoint={:.12e} fd={:.12e} sens={:.12e} | rel fd {rf:.1e} sens {rs:.1e}",
+            g.dj_dc[k], fd[k], jt[k],
+        );
+        assert!(rf < 1e-6, "{name}: {rf:e} vs finite differences");
+        assert!(rs < 1e-10, "{name}: {rs:e} vs the sensitivities");
+        assert!(
+            relative_difference(g.dj_dc[k], g_ck.dj_dc[k]) < 1e-10,
+            "{name}"
+        );
+        out.fd = out.fd.max(rf);
+        out.sens = out.sens.max(rs);
+    }
+    out
 }
