@@ -23,29 +23,64 @@ pub struct LogStrain {
     pub e: Vec4,
     /// `P = 2 dE/dC` (Mandel 4x4, symmetric).
     pub p: Mat4,
-    /// `d2E/dC_i dC_k` of each component `j` (Mandel), `hess[j][i][k]`.
-    hess: [[[f64; 4]; 4]; 4],
+    /// The second derivatives `d2E/dC2`, by the scalars they are made of.
+    second: Second,
+}
+
+/// The second derivatives of `E` in compact form: with `g0`, `g1` functions of `(m, s)`,
+/// `d2E_j/dC_k dC_l = 1_j H(g0)_kl + D_j H(g1)_kl + Pd_jl dg1_k + Pd_jk dg1_l` in plane
+/// (`H(g) = g_mm dm dm + g_ms (dm D + D dm) + g_ss D D + g_s Pd`, `dm = [1/2, 1/2, 0, 0]`,
+/// `Pd` the in-plane deviatoric projector) and `d2E_tt/dC_tt2 = -1/(2 C_tt^2)`. A
+/// contraction with `T` is then one Hessian of the same form with the coefficients
+/// `T:1 g0_.. + T:D g1_..` ([`LogStrain::t_l`]): 15 products instead of the 64 entries
+/// of the full third-order array.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Second {
+    /// `[g_mm, g_ms, g_ss, g_s]` of `g0` and of `g1`.
+    g0: [f64; 4],
+    g1: [f64; 4],
+    /// The gradient of `g1` over `C` (Mandel; hoop entry 0).
+    dg1: [f64; 4],
+    /// The in-plane deviator `D = [d0, -d0, 0, x3]` of `C`.
+    dvec: [f64; 4],
+    /// `C_tt`.
+    ct: f64,
 }
 
 /// Series bound: below it `h`, `h'` and `h''` come from their Taylor series.
 const Y_SERIES: f64 = 0.05;
 
+/// The Taylor coefficients of `h = sum y^k/(2k + 1)` (16 terms: the remainder is below
+/// `0.05^16 ~ 1.5e-21`), of `h'` (`k c_k`, index `k`) and of `h''` (`k (k - 1) c_k`).
+const H_SERIES: [[f64; 16]; 3] = {
+    let mut c = [[0.0; 16]; 3];
+    let mut k = 0;
+    while k < 16 {
+        let ck = 1.0 / (2 * k + 1) as f64;
+        let kf = k as f64;
+        c[0][k] = ck;
+        c[1][k] = kf * ck;
+        c[2][k] = kf * (kf - 1.0) * ck;
+        k += 1;
+    }
+    c
+};
+
 /// `h(y) = artanh(sqrt y)/sqrt y` and its first two derivatives, for `0 <= y < 1`.
+#[inline]
 fn h_and_derivatives(y: f64) -> (f64, f64, f64) {
     if y < Y_SERIES {
-        // h = sum y^k / (2k + 1); 16 terms: the remainder is below 0.05^16 ~ 1.5e-21
+        // Horner: h = sum c_k y^k, h' = sum k c_k y^(k-1), h'' = sum k(k-1) c_k y^(k-2)
+        let [c0, c1, c2] = &H_SERIES;
         let (mut h, mut h1, mut h2) = (0.0, 0.0, 0.0);
         for k in (0..16).rev() {
-            // Horner: h = sum c_k y^k, h' = sum k c_k y^(k-1), h'' = sum k(k-1) c_k y^(k-2)
-            let c = 1.0 / (2 * k + 1) as f64;
-            let kf = k as f64;
-            h = h * y + c;
-            if k >= 1 {
-                h1 = h1 * y + kf * c;
-            }
-            if k >= 2 {
-                h2 = h2 * y + kf * (kf - 1.0) * c;
-            }
+            h = h * y + c0[k];
+        }
+        for k in (1..16).rev() {
+            h1 = h1 * y + c1[k];
+        }
+        for k in (2..16).rev() {
+            h2 = h2 * y + c2[k];
         }
         return (h, h1, h2);
     }
@@ -110,62 +145,74 @@ impl LogStrain {
             [0.0, 0.0, 0.0, 1.0],
         ];
         let one2 = [1.0, 1.0, 0.0, 0.0];
-        let grad =
-            |gm: f64, gs: f64| -> [f64; 4] { std::array::from_fn(|k| gm * dm[k] + gs * dvec[k]) };
+        let grad = |gm: f64, gs: f64| -> [f64; 4] {
+            [
+                gm * dm[0] + gs * dvec[0],
+                gm * dm[1] + gs * dvec[1],
+                gm * dm[2] + gs * dvec[2],
+                gm * dm[3] + gs * dvec[3],
+            ]
+        };
         let dg0 = grad(g0_m, g0_s);
         let dg1 = grad(g1_m, g1_s);
-        let hessian = |gmm: f64, gms: f64, gss: f64, gs: f64| -> [[f64; 4]; 4] {
-            std::array::from_fn(|k| {
-                std::array::from_fn(|l| {
-                    gmm * dm[k] * dm[l]
-                        + gms * (dm[k] * dvec[l] + dvec[k] * dm[l])
-                        + gss * dvec[k] * dvec[l]
-                        + gs * pd[k][l]
-                })
-            })
-        };
-        let hg0 = hessian(g0_mm, g0_ms, g0_ss, g0_s);
-        let hg1 = hessian(g1_mm, g1_ms, g1_ss, g1_s);
         let mut e = [0.0; 4];
         let mut p = [[0.0; 4]; 4];
-        let mut hess = [[[0.0; 4]; 4]; 4];
         for j in [0, 1, 3] {
             e[j] = g0 * one2[j] + g1 * dvec[j];
             for k in [0, 1, 3] {
                 p[j][k] = 2.0 * (one2[j] * dg0[k] + dvec[j] * dg1[k] + g1 * pd[j][k]);
-                for l in [0, 1, 3] {
-                    hess[j][k][l] = one2[j] * hg0[k][l]
-                        + dvec[j] * hg1[k][l]
-                        + pd[j][l] * dg1[k]
-                        + pd[j][k] * dg1[l];
-                }
             }
         }
         e[2] = 0.5 * ct1.ln_1p();
         p[2][2] = 1.0 / ct;
-        hess[2][2][2] = -0.5 / (ct * ct);
         Some(LogStrain {
             e: Vec4(e),
             p: Mat4(p),
-            hess,
+            second: Second {
+                g0: [g0_mm, g0_ms, g0_ss, g0_s],
+                g1: [g1_mm, g1_ms, g1_ss, g1_s],
+                dg1,
+                dvec,
+                ct,
+            },
         })
     }
 
     /// `T : L = 4 sum_j T_j d2E_j/dC dC` (Mandel 4x4, symmetric): the part of the material
     /// tangent `dS/dE_GL` from the change of `P`.
     pub fn t_l(&self, t: &Vec4) -> Mat4 {
+        let Second {
+            g0,
+            g1,
+            dg1,
+            dvec,
+            ct,
+        } = &self.second;
+        let t = &t.0;
+        // sum_j T_j 1_j and sum_j T_j D_j weigh the Hessians of g0 and g1; Pd T
+        let (t1, td) = (t[0] + t[1], dvec[0] * (t[0] - t[1]) + dvec[3] * t[3]);
+        let dt = 0.5 * (t[0] - t[1]);
+        let pt = [dt, -dt, 0.0, t[3]];
+        let coef = |i: usize| 4.0 * (t1 * g0[i] + td * g1[i]);
+        let (gmm, gms, gss, gs) = (coef(0), coef(1), coef(2), coef(3));
+        let dm = [0.5, 0.5, 0.0, 0.0];
+        const PD: [[f64; 4]; 4] = [
+            [0.5, -0.5, 0.0, 0.0],
+            [-0.5, 0.5, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
         let mut m = [[0.0; 4]; 4];
-        for (j, hj) in self.hess.iter().enumerate() {
-            let tj = 4.0 * t.0[j];
-            if tj == 0.0 {
-                continue;
-            }
-            for (row, hrow) in m.iter_mut().zip(hj) {
-                for (v, h) in row.iter_mut().zip(hrow) {
-                    *v += tj * h;
-                }
+        for k in [0, 1, 3] {
+            for l in [0, 1, 3] {
+                m[k][l] = gmm * dm[k] * dm[l]
+                    + gms * (dm[k] * dvec[l] + dvec[k] * dm[l])
+                    + gss * dvec[k] * dvec[l]
+                    + gs * PD[k][l]
+                    + 4.0 * (dg1[k] * pt[l] + pt[k] * dg1[l]);
             }
         }
+        m[2][2] = -2.0 * t[2] / (ct * ct);
         Mat4(m)
     }
 
@@ -175,9 +222,30 @@ impl LogStrain {
     }
 
     /// The material tangent `dS/dE_GL = P : A : P + T : L` for the law's tangent
-    /// `A = dT/dE`.
+    /// `A = dT/dE`. (`P` couples the in-plane components `[0, 1, 3]` only among
+    /// themselves, its hoop entry stands alone: the products skip its zeros.)
+    #[inline]
     pub fn material_tangent(&self, a: &Mat4, t: &Vec4) -> Mat4 {
-        self.p.mul_mat(&a.mul_mat(&self.p)) + self.t_l(t)
+        let (p, a) = (&self.p.0, &a.0);
+        const PLANE: [usize; 3] = [0, 1, 3];
+        // A P, then P (A P)
+        let mut ap = [[0.0; 4]; 4];
+        for i in 0..4 {
+            for l in PLANE {
+                ap[i][l] = a[i][0] * p[0][l] + a[i][1] * p[1][l] + a[i][3] * p[3][l];
+            }
+            ap[i][2] = a[i][2] * p[2][2];
+        }
+        let mut m = self.t_l(t).0;
+        for k in PLANE {
+            for l in 0..4 {
+                m[k][l] += p[k][0] * ap[0][l] + p[k][1] * ap[1][l] + p[k][3] * ap[3][l];
+            }
+        }
+        for l in 0..4 {
+            m[2][l] += p[2][2] * ap[2][l];
+        }
+        Mat4(m)
     }
 }
 
