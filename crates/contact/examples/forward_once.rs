@@ -3,7 +3,9 @@
 //! `cargo run --release -p indentify-contact --example forward_once -- r2 [REPEAT]`
 //! (with REPEAT > 1 it reports the fastest of REPEAT runs; `--steps` lists every step's
 //! iterations and active-set changes; `--normal` takes normal contact, `--finite` finite
-//! strain with normal contact, for back-to-back ratios against `--normal`).
+//! strain with normal contact, for back-to-back ratios against `--normal`; `--sy V` sets
+//! R2's yield stress sY to V MPa instead of 500; `--forces` prints every step's time and
+//! force with 17 significant digits, to compare two builds' results).
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
 };
@@ -15,7 +17,7 @@ fn main() {
     let (law, params): (&dyn Law, Vec<f64>) = match case.as_str() {
         "r0" => (&Elastic, vec![2e4, 0.3]),
         "r1" => (&Maxwell, vec![2e4, 0.3, 3e4]),
-        "r2" => (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 500.0]),
+        "r2" => (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, yield_stress()]),
         other => {
             eprintln!("unknown case {other}: expected r0, r1 or r2");
             std::process::exit(2);
@@ -93,6 +95,11 @@ fn main() {
                 .sum()
         })
         .collect();
+    if std::env::args().any(|a| a == "--forces") {
+        for r in &t.steps {
+            println!("{:.17e} {:.17e}", r.t, r.force);
+        }
+    }
     println!(
         "{case}: {} steps, {} iterations (load/hold/unload {:?}), {}; F_max {:.6} N",
         t.steps.len(),
@@ -101,4 +108,19 @@ fn main() {
         t.timing,
         t.forces().iter().cloned().fold(0.0, f64::max)
     );
+}
+
+/// R2's yield stress sY (MPa): the value after `--sy`, 500 without it.
+fn yield_stress() -> f64 {
+    let args: Vec<String> = std::env::args().collect();
+    match args.iter().position(|a| a == "--sy") {
+        None => 500.0,
+        Some(i) => match args.get(i + 1).and_then(|v| v.parse::<f64>().ok()) {
+            Some(v) if v >= 0.0 && v.is_finite() => v,
+            _ => {
+                eprintln!("--sy: expected a yield stress >= 0 in MPa after it");
+                std::process::exit(2);
+            }
+        },
+    }
 }

@@ -598,6 +598,8 @@ impl std::fmt::Debug for Checkpoint {
 #[derive(Debug)]
 pub struct DirectSolver {
     system: ConstrainedSystem,
+    /// The laws' consistent tangents of the last evaluation (every Gauss point; under
+    /// finite strain `dT/dE`, from which the element tangents are formed).
     tangents: Vec<Mat4>,
     f_int: Vec<f64>,
     rhs: Vec<f64>,
@@ -605,7 +607,7 @@ pub struct DirectSolver {
     /// Relative residual of every pass of the last step attempted, with the active-set
     /// changes made before it.
     residuals: Vec<(f64, u32)>,
-    /// Finite strain: the element tangents of the last evaluation, and the Hencky strains
+    /// Finite strain: the element tangents of the last Newton solve, and the Hencky strains
     /// of the step's initial state (empty under small strain).
     finite_ke: Vec<[[f64; 16]; 16]>,
     finite_e0: Vec<Vec4>,
@@ -866,7 +868,7 @@ impl DirectSolver {
             let out = FiniteOut {
                 sigma: sigma_out,
                 f_int: &mut self.f_int,
-                ke: &mut self.finite_ke,
+                tangents: &mut self.tangents,
             };
             return kinematics::evaluate(
                 disc,
@@ -1321,7 +1323,21 @@ impl DirectSolver {
             iterations += 1;
             match &affine {
                 Some((_, cm)) => self.system.set_tangent_uniform(model, cm, (c, dt)),
-                None if finite => self.system.set_tangent_elements(model, &self.finite_ke),
+                None if finite => {
+                    // the element tangents of this iterate: formed only now that a solve
+                    // needs them (a converged pass returned above without them)
+                    let tl = std::time::Instant::now();
+                    kinematics::element_tangents(
+                        &model.disc,
+                        &u,
+                        &sigma,
+                        &self.tangents,
+                        &mut self.finite_ke,
+                    )
+                    .map_err(|f| finite_failure(f, depth))?;
+                    timing.local += tl.elapsed().as_secs_f64();
+                    self.system.set_tangent_elements(model, &self.finite_ke)
+                }
                 None => {
                     let reuse = law.is_linear().then_some((c, dt));
                     self.system.set_tangent(model, &self.tangents, reuse)

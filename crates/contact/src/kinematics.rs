@@ -10,7 +10,7 @@
 //! `tau = R T R^T`, so `T` has the principal values of `J sigma`.
 
 use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
-use indentify_laws::{ElasticDomain, Law, LogStrain, Vec4};
+use indentify_laws::{ElasticDomain, Law, LogStrain, Mat4, Vec4};
 use serde::{Deserialize, Serialize};
 
 use crate::{ContactError, ContactKind};
@@ -72,9 +72,13 @@ pub(crate) enum FiniteFailure {
 
 /// Output buffers of [`evaluate`].
 pub(crate) struct FiniteOut<'a> {
+    /// The stresses `T` (every Gauss point).
     pub sigma: &'a mut [Vec4],
+    /// The internal force (all dofs).
     pub f_int: &'a mut [f64],
-    pub ke: &'a mut [[[f64; 16]; 16]],
+    /// The laws' consistent tangents `A = dT/dE` (every Gauss point), from which
+    /// [`element_tangents`] forms the element matrices if a Newton pass needs them.
+    pub tangents: &'a mut [Mat4],
 }
 
 /// The Hencky strain of every Gauss point at displacement `u` (all dofs).
@@ -119,8 +123,9 @@ pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
 }
 
 /// Local updates from the state (`t0`, Hencky strains `e0`) to displacement `u`: the
-/// stresses `T` into `out.sigma`, the internal force into `out.f_int` (overwritten) and
-/// the element tangents (lower triangles) into `out.ke`.
+/// stresses `T` into `out.sigma`, the laws' tangents into `out.tangents` and the internal
+/// force into `out.f_int` (overwritten). The element tangents are left to
+/// [`element_tangents`]: a Newton pass whose residual has converged never needs them.
 ///
 /// # Errors
 /// The first inverted Gauss point or failed local update.
@@ -141,17 +146,11 @@ pub(crate) fn evaluate(
         let dofs = disc.element_dofs(e);
         let ue = dofs.map(|d| u[d]);
         let mut fe = [0.0; 16];
-        let ke = &mut out.ke[e];
-        *ke = [[0.0; 16]; 16];
         for g in 0..QP_PER_ELEMENT {
             let q = QP_PER_ELEMENT * e + g;
             let qp = &disc.qp[q];
             let def = Deformation::new(qp, &ue);
-            let det = def.det();
-            let ls = (det > 0.0)
-                .then(|| LogStrain::from_difference(&def.c_minus_one()))
-                .flatten()
-                .ok_or(FiniteFailure::Inverted { qp: q, det })?;
+            let ls = log_strain(&def, q)?;
             let de = ls.e - e0[q];
             let (t, a) = match domain.and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
             {
@@ -168,17 +167,57 @@ pub(crate) fn evaluate(
                 }
             };
             let s = ls.pk2(&t);
-            let b = def.b_l(qp);
-            Deformation::add_bt(&b, &s, qp.w, &mut fe);
-            let dm = ls.material_tangent(&a, &t);
-            Deformation::add_tangent(qp, &b, &dm, &s, qp.w, ke);
+            Deformation::add_bt(&def.b_l(qp), &s, qp.w, &mut fe);
             out.sigma[q] = t;
+            out.tangents[q] = a;
         }
         for (d, v) in dofs.iter().zip(fe) {
             out.f_int[*d] += v;
         }
     }
     Ok(())
+}
+
+/// The element tangents (lower triangles) at displacement `u` with the stresses `t` and
+/// laws' tangents `a` that [`evaluate`] left at the same `u`: per point
+/// `w0 (B_L^T (P A P + T:L) B_L + G(S))`, `S = P T`.
+///
+/// # Errors
+/// [`FiniteFailure::Inverted`] at the first inverted point (never after a successful
+/// [`evaluate`] at the same `u`, which computed the same `F`).
+pub(crate) fn element_tangents(
+    disc: &Discretization,
+    u: &[f64],
+    t: &[Vec4],
+    a: &[Mat4],
+    ke: &mut [[[f64; 16]; 16]],
+) -> Result<(), FiniteFailure> {
+    for (e, ke) in ke.iter_mut().enumerate() {
+        let ue = disc.gather(e, u);
+        *ke = [[0.0; 16]; 16];
+        for g in 0..QP_PER_ELEMENT {
+            let q = QP_PER_ELEMENT * e + g;
+            let qp = &disc.qp[q];
+            let def = Deformation::new(qp, &ue);
+            let ls = log_strain(&def, q)?;
+            let dm = ls.material_tangent(&a[q], &t[q]);
+            Deformation::add_tangent(qp, &def.b_l(qp), &dm, &ls.pk2(&t[q]), qp.w, ke);
+        }
+    }
+    Ok(())
+}
+
+/// The Hencky strain of deformation `def` at Gauss point `q`.
+///
+/// # Errors
+/// [`FiniteFailure::Inverted`] if `det F <= 0` (or `C` is not positive definite).
+#[inline]
+fn log_strain(def: &Deformation, q: usize) -> Result<LogStrain, FiniteFailure> {
+    let det = def.det();
+    (det > 0.0)
+        .then(|| LogStrain::from_difference(&def.c_minus_one()))
+        .flatten()
+        .ok_or(FiniteFailure::Inverted { qp: q, det })
 }
 
 #[cfg(test)]
@@ -229,12 +268,14 @@ mod tests {
                     let mut sigma = vec![Vec4::ZERO; nq];
                     let mut f = vec![0.0; nd];
                     let mut ke = vec![[[0.0; 16]; 16]; ne];
+                    let mut a = vec![Mat4::ZERO; nq];
                     let out = FiniteOut {
                         sigma: &mut sigma,
                         f_int: &mut f,
-                        ke: &mut ke,
+                        tangents: &mut a,
                     };
                     evaluate(&disc, *law, c, 0.1, &t0, &e0, u, None, out).unwrap();
+                    element_tangents(&disc, u, &sigma, &a, &mut ke).unwrap();
                     (f, ke)
                 };
                 let (_, ke) = run(&u1);

@@ -147,8 +147,10 @@ impl Deformation {
         }
     }
 
-    /// Adds `w (B_L^T D B_L + G(S))` to the lower triangle (`row >= column`) of the element
-    /// matrix `ke`: `D = dS/dE_GL`, `s` the second Piola-Kirchhoff stress.
+    /// Adds `w (B_L^T D B_L + G(S))` to the element matrix `ke`: `D = dS/dE_GL`, `s` the
+    /// second Piola-Kirchhoff stress. Every entry is written (whole rows run faster than
+    /// triangles), but the solver and the adjoint read the lower triangle (`row >=
+    /// column`) only.
     #[inline]
     pub fn add_tangent(
         qp: &QuadPoint,
@@ -170,25 +172,30 @@ impl Deformation {
                 }
             }
         }
+        // each entry is `w ((B_L^T D B_L)_pq + G_pq)`, the geometric part added in two
+        // terms (in-plane, then hoop) where it is not zero (adding a zero leaves a sum
+        // unchanged, bit for bit); whole rows of 16, without branches
         let srz = s.0[3] / SQRT2;
+        let mut g = [[0.0; 16]; 2];
+        let mut h = [0.0; 16];
         for (p, kp) in ke.iter_mut().enumerate() {
             let (a, i) = (p / 2, p % 2);
             let bp = &b[a];
             let [dra, dza, nra] = qp.dn[a];
-            for (q, v) in kp.iter_mut().enumerate().take(p + 1) {
-                let mut m = bp[0][i] * db[0][q]
-                    + bp[1][i] * db[1][q]
-                    + bp[2][i] * db[2][q]
-                    + bp[3][i] * db[3][q];
-                let (bn, j) = (q / 2, q % 2);
-                if i == j {
-                    let [drb, dzb, nrb] = qp.dn[bn];
-                    m += s.0[0] * dra * drb + s.0[1] * dza * dzb + srz * (dra * dzb + dza * drb);
-                    if i == 0 {
-                        m += s.0[2] * nra * nrb;
-                    }
+            // the in-plane geometric term on the columns of the same direction `i`
+            let gi = &mut g[i];
+            for (bn, [drb, dzb, nrb]) in qp.dn.iter().enumerate() {
+                gi[2 * bn + i] =
+                    s.0[0] * dra * drb + s.0[1] * dza * dzb + srz * (dra * dzb + dza * drb);
+                if i == 0 {
+                    h[2 * bn] = s.0[2] * nra * nrb;
                 }
-                *v += w * m;
+            }
+            let hp = if i == 0 { &h } else { &[0.0; 16] };
+            let (b0, b1, b2, b3) = (bp[0][i], bp[1][i], bp[2][i], bp[3][i]);
+            for q in 0..16 {
+                let m = b0 * db[0][q] + b1 * db[1][q] + b2 * db[2][q] + b3 * db[3][q];
+                kp[q] += w * ((m + g[i][q]) + hp[q]);
             }
         }
     }

@@ -23,29 +23,63 @@ pub struct LogStrain {
     pub e: Vec4,
     /// `P = 2 dE/dC` (Mandel 4x4, symmetric).
     pub p: Mat4,
-    /// `d2E/dC_i dC_k` of each component `j` (Mandel), `hess[j][i][k]`.
-    hess: [[[f64; 4]; 4]; 4],
+    /// The second derivatives `d2E/dC2`, by the scalars they are made of.
+    second: Second,
+}
+
+/// The second derivatives of `E` in compact form: with `g0`, `g1` functions of `(m, s)`,
+/// `d2E_j/dC_k dC_l = 1_j H(g0)_kl + D_j H(g1)_kl + Pd_jl dg1_k + Pd_jk dg1_l` in plane
+/// (`H(g) = g_mm dm dm + g_ms (dm D + D dm) + g_ss D D + g_s Pd`, `dm = [1/2, 1/2, 0, 0]`,
+/// `Pd` the in-plane deviatoric projector) and `d2E_tt/dC_tt2 = -1/(2 C_tt^2)`. Kept as
+/// these scalars, the array is formed only where a tangent needs it ([`LogStrain::t_l`]),
+/// not for every stress evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Second {
+    /// `[g_mm, g_ms, g_ss, g_s]` of `g0` and of `g1`.
+    g0: [f64; 4],
+    g1: [f64; 4],
+    /// The gradient of `g1` over `C` (Mandel; hoop entry 0).
+    dg1: [f64; 4],
+    /// The in-plane deviator `D = [d0, -d0, 0, x3]` of `C`.
+    dvec: [f64; 4],
+    /// `C_tt`.
+    ct: f64,
 }
 
 /// Series bound: below it `h`, `h'` and `h''` come from their Taylor series.
 const Y_SERIES: f64 = 0.05;
 
+/// The Taylor coefficients of `h = sum y^k/(2k + 1)` (16 terms: the remainder is below
+/// `0.05^16 ~ 1.5e-21`), of `h'` (`k c_k`, index `k`) and of `h''` (`k (k - 1) c_k`).
+const H_SERIES: [[f64; 16]; 3] = {
+    let mut c = [[0.0; 16]; 3];
+    let mut k = 0;
+    while k < 16 {
+        let ck = 1.0 / (2 * k + 1) as f64;
+        let kf = k as f64;
+        c[0][k] = ck;
+        c[1][k] = kf * ck;
+        c[2][k] = kf * (kf - 1.0) * ck;
+        k += 1;
+    }
+    c
+};
+
 /// `h(y) = artanh(sqrt y)/sqrt y` and its first two derivatives, for `0 <= y < 1`.
+#[inline]
 fn h_and_derivatives(y: f64) -> (f64, f64, f64) {
     if y < Y_SERIES {
-        // h = sum y^k / (2k + 1); 16 terms: the remainder is below 0.05^16 ~ 1.5e-21
+        // Horner: h = sum c_k y^k, h' = sum k c_k y^(k-1), h'' = sum k(k-1) c_k y^(k-2)
+        let [c0, c1, c2] = &H_SERIES;
         let (mut h, mut h1, mut h2) = (0.0, 0.0, 0.0);
         for k in (0..16).rev() {
-            // Horner: h = sum c_k y^k, h' = sum k c_k y^(k-1), h'' = sum k(k-1) c_k y^(k-2)
-            let c = 1.0 / (2 * k + 1) as f64;
-            let kf = k as f64;
-            h = h * y + c;
-            if k >= 1 {
-                h1 = h1 * y + kf * c;
-            }
-            if k >= 2 {
-                h2 = h2 * y + kf * (kf - 1.0) * c;
-            }
+            h = h * y + c0[k];
+        }
+        for k in (1..16).rev() {
+            h1 = h1 * y + c1[k];
+        }
+        for k in (2..16).rev() {
+            h2 = h2 * y + c2[k];
         }
         return (h, h1, h2);
     }
@@ -110,11 +144,60 @@ impl LogStrain {
             [0.0, 0.0, 0.0, 1.0],
         ];
         let one2 = [1.0, 1.0, 0.0, 0.0];
-        let grad =
-            |gm: f64, gs: f64| -> [f64; 4] { std::array::from_fn(|k| gm * dm[k] + gs * dvec[k]) };
+        let grad = |gm: f64, gs: f64| -> [f64; 4] {
+            [
+                gm * dm[0] + gs * dvec[0],
+                gm * dm[1] + gs * dvec[1],
+                gm * dm[2] + gs * dvec[2],
+                gm * dm[3] + gs * dvec[3],
+            ]
+        };
         let dg0 = grad(g0_m, g0_s);
         let dg1 = grad(g1_m, g1_s);
-        let hessian = |gmm: f64, gms: f64, gss: f64, gs: f64| -> [[f64; 4]; 4] {
+        let mut e = [0.0; 4];
+        let mut p = [[0.0; 4]; 4];
+        for j in [0, 1, 3] {
+            e[j] = g0 * one2[j] + g1 * dvec[j];
+            for k in [0, 1, 3] {
+                p[j][k] = 2.0 * (one2[j] * dg0[k] + dvec[j] * dg1[k] + g1 * pd[j][k]);
+            }
+        }
+        e[2] = 0.5 * ct1.ln_1p();
+        p[2][2] = 1.0 / ct;
+        Some(LogStrain {
+            e: Vec4(e),
+            p: Mat4(p),
+            second: Second {
+                g0: [g0_mm, g0_ms, g0_ss, g0_s],
+                g1: [g1_mm, g1_ms, g1_ss, g1_s],
+                dg1,
+                dvec,
+                ct,
+            },
+        })
+    }
+
+    /// `T : L = 4 sum_j T_j d2E_j/dC dC` (Mandel 4x4, symmetric): the part of the material
+    /// tangent `dS/dE_GL` from the change of `P`.
+    pub fn t_l(&self, t: &Vec4) -> Mat4 {
+        // the third-order array d2E_j/dC_k dC_l from the stored scalars, by the same
+        // expressions (and so the same round-off) as it was always formed, then contracted
+        let Second {
+            g0,
+            g1,
+            dg1,
+            dvec,
+            ct,
+        } = &self.second;
+        let dm = [0.5, 0.5, 0.0, 0.0];
+        let pd = [
+            [0.5, -0.5, 0.0, 0.0],
+            [-0.5, 0.5, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
+        let one2 = [1.0, 1.0, 0.0, 0.0];
+        let hessian = |[gmm, gms, gss, gs]: [f64; 4]| -> [[f64; 4]; 4] {
             std::array::from_fn(|k| {
                 std::array::from_fn(|l| {
                     gmm * dm[k] * dm[l]
@@ -124,15 +207,10 @@ impl LogStrain {
                 })
             })
         };
-        let hg0 = hessian(g0_mm, g0_ms, g0_ss, g0_s);
-        let hg1 = hessian(g1_mm, g1_ms, g1_ss, g1_s);
-        let mut e = [0.0; 4];
-        let mut p = [[0.0; 4]; 4];
+        let (hg0, hg1) = (hessian(*g0), hessian(*g1));
         let mut hess = [[[0.0; 4]; 4]; 4];
         for j in [0, 1, 3] {
-            e[j] = g0 * one2[j] + g1 * dvec[j];
             for k in [0, 1, 3] {
-                p[j][k] = 2.0 * (one2[j] * dg0[k] + dvec[j] * dg1[k] + g1 * pd[j][k]);
                 for l in [0, 1, 3] {
                     hess[j][k][l] = one2[j] * hg0[k][l]
                         + dvec[j] * hg1[k][l]
@@ -141,21 +219,9 @@ impl LogStrain {
                 }
             }
         }
-        e[2] = 0.5 * ct1.ln_1p();
-        p[2][2] = 1.0 / ct;
         hess[2][2][2] = -0.5 / (ct * ct);
-        Some(LogStrain {
-            e: Vec4(e),
-            p: Mat4(p),
-            hess,
-        })
-    }
-
-    /// `T : L = 4 sum_j T_j d2E_j/dC dC` (Mandel 4x4, symmetric): the part of the material
-    /// tangent `dS/dE_GL` from the change of `P`.
-    pub fn t_l(&self, t: &Vec4) -> Mat4 {
         let mut m = [[0.0; 4]; 4];
-        for (j, hj) in self.hess.iter().enumerate() {
+        for (j, hj) in hess.iter().enumerate() {
             let tj = 4.0 * t.0[j];
             if tj == 0.0 {
                 continue;
