@@ -55,7 +55,15 @@ fn refined_schedules_nest_and_probe_times_are_shared() {
 #[test]
 fn a_small_study_runs_and_converges_towards_its_reference() {
     let cfg = r1_coarse();
-    let st = mesh_study::study(&cfg, "r1-coarse", 2, &[]).unwrap();
+    let st = mesh_study::study(
+        &cfg,
+        "r1-coarse",
+        &mesh_study::StudyOptions {
+            levels: 2,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(st.mesh_series.len(), 2);
     assert_eq!(st.step_series.len(), 2);
     assert_eq!(st.mesh_series[1].elements, 4 * st.mesh_series[0].elements);
@@ -72,5 +80,15 @@ fn a_small_study_runs_and_converges_towards_its_reference() {
     );
     let md = mesh_study::render(&st);
     assert!(md.contains("mesh x2, steps x2"), "{md}");
-    assert!(mesh_study::study(&cfg, "r1-coarse", 4, &[]).is_err());
+    assert!(
+        mesh_study::study(
+            &cfg,
+            "r1-coarse",
+            &mesh_study::StudyOptions {
+                levels: 4,
+                ..Default::default()
+            }
+        )
+        .is_err()
+    );
 }
