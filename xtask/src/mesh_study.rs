@@ -218,6 +218,13 @@ pub fn run_one(
         .iter()
         .map(|s| s.contact_radius)
         .fold(0.0, f64::max);
+    // every run's result as it comes (a long study stopped early keeps what it measured)
+    eprintln!(
+        "run `{label}` [{}]: {elements} elements, {} steps, F = {forces:?} N at t = {times:?} s, \
+         largest contact radius {contact_radius:.6e} mm, {seconds:.2} s",
+        mesher.describe(),
+        schedule.n_steps()
+    );
     Ok(Run {
         contact_radius,
         label: label.to_string(),
