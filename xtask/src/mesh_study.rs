@@ -264,6 +264,9 @@ pub struct StudyOptions {
     pub additive_reference: bool,
     /// A reference measured before (N, at the probe times): no refined runs.
     pub reference: Option<Vec<f64>>,
+    /// Run the mesh refinements (false: the step refinements only, against the given
+    /// reference or the finest steps).
+    pub mesh_series: bool,
 }
 
 impl Default for StudyOptions {
@@ -274,6 +277,7 @@ impl Default for StudyOptions {
             candidates_fine_steps: true,
             additive_reference: false,
             reference: None,
+            mesh_series: true,
         }
     }
 }
@@ -302,7 +306,8 @@ pub fn study(cfg: &Config, name: &str, o: &StudyOptions) -> Result<Study> {
     let history = cfg.history.as_ref();
     let top = levels - 1;
     let mut mesh_series = Vec::new();
-    for k in 0..levels {
+    let mesh_levels = if o.mesh_series { levels } else { 1 };
+    for k in 0..mesh_levels {
         let m = refine_mesher_times(&base_mesher, k)?;
         let run = run_one(
             cfg,
@@ -349,6 +354,8 @@ pub fn study(cfg: &Config, name: &str, o: &StudyOptions) -> Result<Study> {
             seconds: 0.0,
             contact_radius: 0.0,
         }
+    } else if !o.mesh_series {
+        step_series[top].clone()
     } else if additive_reference {
         // the mesh and step errors taken as additive: the finest mesh's force plus the
         // change the finest steps make on the configuration's mesh
