@@ -170,7 +170,7 @@ mod tests {
                 let m = auto_specimen(p, h, &AutoOptions::default()).unwrap();
                 let mesh = m.build().unwrap();
                 mesh.check_quality().unwrap();
-                assert!(mesh.elements.len() <= 400, "{p:?} {h}: {m:?}");
+                assert!(mesh.elements.len() <= 625, "{p:?} {h}: {m:?}");
             }
         }
     }
