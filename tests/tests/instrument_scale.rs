@@ -16,7 +16,7 @@
 //! automatic specimen is `a_max` times numbers that depend on the options only), the
 //! discrete force over `E h^2` is the same at every depth, to round-off.
 //!
-//! Goal: forces within 2% of Sneddon at both scales (equal errors, to 1e-9), at most 400
+//! Goal: forces within 2% of Sneddon at both scales (equal errors, to 1e-9), at most 625
 //! elements, and a finite-size effect below 1% (doubling the cylinder changes F by < 1%).
 //!
 //! ```text
@@ -71,7 +71,7 @@ fn cone_reference(h: f64) -> f64 {
 
 /// The automatic specimen shall resolve a 2 um and a 0.1 mm Berkovich indent alike: both
 /// forces within 2% of Sneddon's cone, with the same relative error to round-off (F ~ h^2
-/// exactly), on at most 400 elements.
+/// exactly), on at most 625 elements (the default 25 x 25).
 #[test]
 fn berkovich_at_2um_and_0p1mm_match_sneddon_equally() {
     let o = AutoOptions::default();
@@ -85,7 +85,7 @@ fn berkovich_at_2um_and_0p1mm_match_sneddon_equally() {
             100.0 * err
         );
         assert!(err.abs() < TOL, "h = {h}: {err}");
-        assert!(n <= 400, "{n} elements");
+        assert!(n <= 625, "{n} elements");
         errors.push((f / (h * h), err));
     }
     let scale = rel(errors[0].0, errors[1].0);
@@ -107,7 +107,7 @@ fn cone_force_scales_as_depth_squared() {
 }
 
 /// A 10 um sphere at 0.5 um on the automatic specimen shall give Sneddon's exact-sphere
-/// force within 2% on at most 400 elements.
+/// force within 2% on at most 625 elements (the default 25 x 25).
 #[test]
 fn sphere_10um_at_0p5um_matches_sneddon() {
     let (f, n) = auto_force(&sphere(), SPHERE_H, &AutoOptions::default());
@@ -118,7 +118,7 @@ fn sphere_10um_at_0p5um_matches_sneddon() {
         100.0 * err
     );
     assert!(err.abs() < TOL, "{f} vs {f_sn}");
-    assert!(n <= 400, "{n} elements");
+    assert!(n <= 625, "{n} elements");
 }
 
 /// Doubling the automatic cylinder (radius and height) shall change the force by less
@@ -154,7 +154,7 @@ fn rounded_tips_run_on_the_auto_specimen() {
         h,
         &o,
     );
-    assert!(n <= 400);
+    assert!(n <= 625);
     assert!(
         worn > 0.9 * sharp && worn < 1.2 * sharp,
         "{worn} vs {sharp}"

@@ -1,7 +1,7 @@
 //! `cargo xtask`: project automation. `cargo xtask paper-tables` regenerates
 //! docs/paper-tables.md and its figures (docs/figures/*.svg) from the reference problems.
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use indentify_identify::Method;
 use xtask::paper::{self, Data, Options, Setup, Stopwatch, Table};
 
@@ -26,7 +26,7 @@ fn main() -> Result<()> {
         Some("joint-cost") => jointcost::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 2|3] [--set path=value ...] [--auto N:K:G,...]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)"
             );
             bail!("unknown or missing command")
         }
@@ -298,23 +298,14 @@ fn mesh_study(args: &[String]) -> Result<()> {
     ];
     let mut levels = 3;
     let mut sets: Vec<String> = Vec::new();
-    let mut candidates = vec![
-        indentify_contact::punch::AutoOptions {
-            elements_in_contact: 12,
-            size_factor: 48.0,
-            grading: 1.5,
-        },
-        indentify_contact::punch::AutoOptions {
-            elements_in_contact: 16,
-            size_factor: 48.0,
-            grading: 1.5,
-        },
-        indentify_contact::punch::AutoOptions {
-            elements_in_contact: 16,
-            size_factor: 48.0,
-            grading: 1.3,
-        },
-    ];
+    let mut candidates: Vec<xtask::mesh_study::Candidate> = ["12:48:1.5", "16:48:1.5", "16:48:1.3"]
+        .iter()
+        .map(|x| xtask::mesh_study::Candidate::parse(x))
+        .collect::<Result<_>>()?;
+    let mut fine_steps = true;
+    let mut additive = false;
+    let mut mesh_series = true;
+    let mut reference: Option<Vec<f64>> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -326,20 +317,20 @@ fn mesh_study(args: &[String]) -> Result<()> {
                 candidates = val()
                     .split(',')
                     .filter(|x| !x.is_empty())
-                    .map(|x| {
-                        let p: Vec<&str> = x.split(':').collect();
-                        match p.as_slice() {
-                            [n, k, g] => Ok(indentify_contact::punch::AutoOptions {
-                                elements_in_contact: n.parse()?,
-                                size_factor: k.parse()?,
-                                grading: g.parse()?,
-                            }),
-                            _ => bail!(
-                                "--auto: `{x}` is not elements_in_contact:size_factor:grading"
-                            ),
-                        }
-                    })
+                    .map(xtask::mesh_study::Candidate::parse)
                     .collect::<Result<_>>()?;
+            }
+            "--no-candidate-fine-steps" => fine_steps = false,
+            "--additive-reference" => additive = true,
+            "--steps-only" => mesh_series = false,
+            "--reference" => {
+                reference = Some(
+                    val()
+                        .split(',')
+                        .map(str::parse)
+                        .collect::<Result<_, _>>()
+                        .context("--reference: forces (N) separated by commas")?,
+                )
             }
             other => bail!("unknown option {other}"),
         }
@@ -347,7 +338,18 @@ fn mesh_study(args: &[String]) -> Result<()> {
     for c in &configs {
         let path = root.join(c);
         let cfg = indentify_study::config::load(&path, &sets)?;
-        let st = xtask::mesh_study::study(&cfg, c, levels, &candidates)?;
+        let st = xtask::mesh_study::study(
+            &cfg,
+            c,
+            &xtask::mesh_study::StudyOptions {
+                levels,
+                candidates: candidates.clone(),
+                candidates_fine_steps: fine_steps,
+                additive_reference: additive,
+                reference: reference.clone(),
+                mesh_series,
+            },
+        )?;
         println!("{}", xtask::mesh_study::render(&st));
     }
     Ok(())

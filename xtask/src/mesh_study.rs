@@ -30,6 +30,74 @@ pub struct Run {
     pub forces: Vec<f64>,
     /// Wall time of the forward run (s).
     pub seconds: f64,
+    /// The largest contact radius of the run (mm).
+    pub contact_radius: f64,
+}
+
+/// A candidate automatic mesh: the `Auto()` options and the side of the uniform core in
+/// contact-radius bounds (1: `auto_specimen`'s core; other values are studied by building
+/// the zoned mesher directly).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// The `Auto()` options.
+    pub options: AutoOptions,
+    /// Core side over the contact-radius bound (1 = `auto_specimen`).
+    pub core_factor: f64,
+}
+
+impl Candidate {
+    /// `Auto(N, K, G)` or `Auto(N, K, G), core C a`.
+    pub fn label(&self) -> String {
+        let o = &self.options;
+        let mut s = format!(
+            "Auto({}, {}, {})",
+            o.elements_in_contact, o.size_factor, o.grading
+        );
+        if self.core_factor != 1.0 {
+            let _ = write!(s, ", core {} a", self.core_factor);
+        }
+        s
+    }
+
+    /// Parses `N:K:G` or `N:K:G:C` (elements in contact, size factor, grading, core factor).
+    ///
+    /// # Errors
+    /// Another shape or a number that does not parse.
+    pub fn parse(x: &str) -> Result<Candidate> {
+        let p: Vec<&str> = x.split(':').collect();
+        let (n, k, g, c) = match p.as_slice() {
+            [n, k, g] => (n, k, g, "1"),
+            [n, k, g, c] => (n, k, g, *c),
+            _ => {
+                bail!("--auto: `{x}` is not elements_in_contact:size_factor:grading[:core_factor]")
+            }
+        };
+        Ok(Candidate {
+            options: AutoOptions {
+                elements_in_contact: n.parse()?,
+                size_factor: k.parse()?,
+                grading: g.parse()?,
+            },
+            core_factor: c.parse()?,
+        })
+    }
+
+    /// The mesher of this candidate for `cfg`'s punch at the depth `h_max`.
+    ///
+    /// # Errors
+    /// Options out of range; a core factor outside [0.5, 4] or one that leaves no far field.
+    pub fn mesher(&self, cfg: &Config, h_max: f64) -> Result<Mesher> {
+        let mut m = auto_specimen(&cfg.punch, h_max, &self.options)?;
+        if !(0.5..=4.0).contains(&self.core_factor) {
+            bail!(
+                "core factor {}: expected a value in [0.5, 4]",
+                self.core_factor
+            );
+        }
+        m.core *= self.core_factor;
+        m.validate()?;
+        Ok(Mesher::Zoned(m))
+    }
 }
 
 /// The study of one configuration.
@@ -46,8 +114,13 @@ pub struct Study {
     pub step_series: Vec<Run>,
     /// The finest mesh with the finest steps: the reference.
     pub reference: Run,
-    /// Candidate meshes (at the configuration's steps and at the finest steps).
-    pub candidates: Vec<(Run, Run)>,
+    /// Candidate meshes (at the configuration's steps and, unless skipped, at the finest
+    /// steps).
+    pub candidates: Vec<(Run, Option<Run>)>,
+    /// The contact-radius bound at the largest depth (mm): the core side of `Auto()`.
+    pub a: f64,
+    /// The model in words (contact, kinematics).
+    pub model: String,
 }
 
 /// The mesher refined `k` times.
@@ -126,7 +199,8 @@ pub fn run_one(
     let (law, params) = cfg.law.build()?;
     let (mesh, _, _) = mesher.build_for(&cfg.punch)?;
     let elements = mesh.elements.len();
-    let model = Model::with_contact(mesh, cfg.punch.clone(), cfg.contact)?;
+    let model = Model::with_contact(mesh, cfg.punch.clone(), cfg.contact)?
+        .with_kinematics(cfg.kinematics)?;
     let opts = cfg.solver.options(false);
     let clock = Instant::now();
     let mut solver = DirectSolver::new(&model)?;
@@ -139,7 +213,20 @@ pub fn run_one(
         .iter()
         .map(|&t| force_at(&schedule.t, &f, t))
         .collect::<Result<Vec<f64>>>()?;
+    let contact_radius = traj
+        .steps
+        .iter()
+        .map(|s| s.contact_radius)
+        .fold(0.0, f64::max);
+    // every run's result as it comes (a long study stopped early keeps what it measured)
+    eprintln!(
+        "run `{label}` [{}]: {elements} elements, {} steps, F = {forces:?} N at t = {times:?} s, \
+         largest contact radius {contact_radius:.6e} mm, {seconds:.2} s",
+        mesher.describe(),
+        schedule.n_steps()
+    );
     Ok(Run {
+        contact_radius,
         label: label.to_string(),
         mesh: mesher.describe(),
         elements,
@@ -161,14 +248,56 @@ pub fn richardson(f1: f64, f2: f64, f4: f64) -> Option<(f64, f64)> {
     Some((p, f4 + (f4 - f2) / (2f64.powf(p) - 1.0)))
 }
 
-/// Runs the study of `cfg` (already loaded with its overrides) with `levels` refinement
-/// levels (2: x1, x2; 3: x1, x2, x4) and the candidate `Auto()` options.
+/// What a study runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StudyOptions {
+    /// Refinement levels: 1 (the configuration's run only, against a given `reference`),
+    /// 2 (x1, x2) or 3 (x1, x2, x4).
+    pub levels: usize,
+    /// Candidate `Auto()` meshes (automatic specimens only).
+    pub candidates: Vec<Candidate>,
+    /// Candidates also at the finest steps.
+    pub candidates_fine_steps: bool,
+    /// The reference as the finest mesh's force plus the change the finest steps make on
+    /// the configuration's own mesh (errors taken as additive), instead of the finest mesh
+    /// with the finest steps (when that run is too long).
+    pub additive_reference: bool,
+    /// A reference measured before (N, at the probe times): no refined runs.
+    pub reference: Option<Vec<f64>>,
+    /// Run the mesh refinements (false: the step refinements only, against the given
+    /// reference or the finest steps).
+    pub mesh_series: bool,
+}
+
+impl Default for StudyOptions {
+    fn default() -> StudyOptions {
+        StudyOptions {
+            levels: 3,
+            candidates: Vec::new(),
+            candidates_fine_steps: true,
+            additive_reference: false,
+            reference: None,
+            mesh_series: true,
+        }
+    }
+}
+
+/// Runs the study of `cfg` (already loaded with its overrides): its own run, its mesh and
+/// steps refined `levels - 1` times, the reference and the candidate meshes (see
+/// [`StudyOptions`]).
 ///
 /// # Errors
-/// A configuration that cannot be prepared, a run that fails, `levels` outside [2, 3].
-pub fn study(cfg: &Config, name: &str, levels: usize, candidates: &[AutoOptions]) -> Result<Study> {
-    if !(2..=3).contains(&levels) {
-        bail!("--levels {levels}: expected 2 or 3");
+/// A configuration that cannot be prepared, a run that fails, `levels` outside [1, 3],
+/// one level without a reference, a reference of the wrong length.
+pub fn study(cfg: &Config, name: &str, o: &StudyOptions) -> Result<Study> {
+    let (levels, candidates, candidates_fine_steps, additive_reference) = (
+        o.levels,
+        &o.candidates,
+        o.candidates_fine_steps,
+        o.additive_reference,
+    );
+    if !(1..=3).contains(&levels) || (levels == 1 && o.reference.is_none()) {
+        bail!("--levels {levels}: expected 2 or 3 (1 with a given --reference)");
     }
     let prepared = cfg.prepare(name)?;
     let base_mesher = prepared.mesher;
@@ -177,7 +306,8 @@ pub fn study(cfg: &Config, name: &str, levels: usize, candidates: &[AutoOptions]
     let history = cfg.history.as_ref();
     let top = levels - 1;
     let mut mesh_series = Vec::new();
-    for k in 0..levels {
+    let mesh_levels = if o.mesh_series { levels } else { 1 };
+    for k in 0..mesh_levels {
         let m = refine_mesher_times(&base_mesher, k)?;
         let run = run_one(
             cfg,
@@ -207,35 +337,75 @@ pub fn study(cfg: &Config, name: &str, levels: usize, candidates: &[AutoOptions]
     }
     let fine_schedule = refine_schedule_times(history, &base, top)?;
     let fine_mesher = refine_mesher_times(&base_mesher, top)?;
-    let reference = run_one(
-        cfg,
-        &format!("mesh x{0}, steps x{0}", 1 << top),
-        &fine_mesher,
-        &fine_schedule,
-        &times,
-    )?;
-    eprintln!("{name}: reference in {:.1} s", reference.seconds);
+    let reference = if let Some(r) = &o.reference {
+        if r.len() != times.len() {
+            bail!(
+                "--reference: {} forces given, {} probe times",
+                r.len(),
+                times.len()
+            );
+        }
+        Run {
+            label: "reference (given)".into(),
+            mesh: String::new(),
+            elements: 0,
+            steps: 0,
+            forces: r.clone(),
+            seconds: 0.0,
+            contact_radius: 0.0,
+        }
+    } else if !o.mesh_series {
+        step_series[top].clone()
+    } else if additive_reference {
+        // the mesh and step errors taken as additive: the finest mesh's force plus the
+        // change the finest steps make on the configuration's mesh
+        let (m, st, b) = (&mesh_series[top], &step_series[top], &mesh_series[0]);
+        Run {
+            label: format!("reference: mesh x{0} + (steps x{0} - steps x1)", 1 << top),
+            mesh: m.mesh.clone(),
+            elements: m.elements,
+            steps: st.steps,
+            forces: (0..times.len())
+                .map(|i| m.forces[i] + st.forces[i] - b.forces[i])
+                .collect(),
+            seconds: m.seconds + st.seconds,
+            contact_radius: m.contact_radius,
+        }
+    } else {
+        let r = run_one(
+            cfg,
+            &format!("mesh x{0}, steps x{0}", 1 << top),
+            &fine_mesher,
+            &fine_schedule,
+            &times,
+        )?;
+        eprintln!("{name}: reference in {:.1} s", r.seconds);
+        r
+    };
     let mut cands = Vec::new();
     if matches!(base_mesher, Mesher::Zoned(_)) {
         let h_max = base.depth.iter().copied().fold(0.0, f64::max);
         for o in candidates {
-            let m = Mesher::Zoned(auto_specimen(&cfg.punch, h_max, o)?);
-            let label = format!(
-                "Auto({}, {}, {})",
-                o.elements_in_contact, o.size_factor, o.grading
-            );
+            let m = o.mesher(cfg, h_max)?;
+            let label = o.label();
             let a = run_one(cfg, &format!("{label}, steps x1"), &m, &base, &times)?;
-            let b = run_one(
-                cfg,
-                &format!("{label}, steps x{}", 1 << top),
-                &m,
-                &fine_schedule,
-                &times,
-            )?;
             eprintln!(
-                "{name}: {label} in {:.1} s and {:.1} s",
-                a.seconds, b.seconds
+                "{name}: {label} ({} elements) in {:.1} s",
+                a.elements, a.seconds
             );
+            let b = if candidates_fine_steps {
+                let b = run_one(
+                    cfg,
+                    &format!("{label}, steps x{}", 1 << top),
+                    &m,
+                    &fine_schedule,
+                    &times,
+                )?;
+                eprintln!("{name}: {label}, fine steps in {:.1} s", b.seconds);
+                Some(b)
+            } else {
+                None
+            };
             cands.push((a, b));
         }
     }
@@ -246,6 +416,10 @@ pub fn study(cfg: &Config, name: &str, levels: usize, candidates: &[AutoOptions]
         step_series,
         reference,
         candidates: cands,
+        a: cfg
+            .punch
+            .contact_radius_bound(base.depth.iter().copied().fold(0.0, f64::max)),
+        model: cfg.describe_model(),
     })
 }
 
@@ -258,8 +432,15 @@ fn sig5(v: f64) -> String {
     format!("{v:.digits$}")
 }
 
-fn row(s: &mut String, run: &Run, reference: &[f64], base_seconds: f64) {
-    let _ = write!(s, "| {} | {} | {} |", run.label, run.elements, run.steps);
+fn row(s: &mut String, run: &Run, reference: &[f64], base_seconds: f64, a: f64) {
+    let _ = write!(
+        s,
+        "| {} | {} | {} | {:.2} |",
+        run.label,
+        run.elements,
+        run.steps,
+        run.contact_radius / a
+    );
     for (f, r) in run.forces.iter().zip(reference) {
         let _ = write!(s, " {} ({:+.2}%) |", sig5(*f), 100.0 * (f / r - 1.0));
     }
@@ -276,25 +457,33 @@ fn row(s: &mut String, run: &Run, reference: &[f64], base_seconds: f64) {
 /// estimates.
 pub fn render(st: &Study) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "#### {}\n", st.name);
-    let _ = write!(s, "| run | elements | steps |");
+    let _ = writeln!(
+        s,
+        "#### {} ({}; a = {} mm)\n",
+        st.name,
+        st.model,
+        sig5(st.a)
+    );
+    let _ = write!(s, "| run | elements | steps | max contact radius / a |");
     for t in &st.times {
         let _ = write!(s, " F(t = {t:.4} s), N (vs reference) |");
     }
     let _ = writeln!(s, " forward run |");
-    let _ = writeln!(s, "|---|---|---|{}---|", "---|".repeat(st.times.len()));
+    let _ = writeln!(s, "|---|---|---|---|{}---|", "---|".repeat(st.times.len()));
     let r = &st.reference.forces;
     let base = st.mesh_series[0].seconds;
     for run in &st.mesh_series {
-        row(&mut s, run, r, base);
+        row(&mut s, run, r, base, st.a);
     }
     for run in st.step_series.iter().skip(1) {
-        row(&mut s, run, r, base);
+        row(&mut s, run, r, base, st.a);
     }
-    row(&mut s, &st.reference, r, base);
+    row(&mut s, &st.reference, r, base, st.a);
     for (a, b) in &st.candidates {
-        row(&mut s, a, r, base);
-        row(&mut s, b, r, base);
+        row(&mut s, a, r, base, st.a);
+        if let Some(b) = b {
+            row(&mut s, b, r, base, st.a);
+        }
     }
     if st.mesh_series.len() == 3 {
         let _ = writeln!(s);

@@ -308,7 +308,7 @@ pub enum Specimen {
     /// beyond (the contact crate's [`indentify_contact::auto_specimen`]); every field
     /// optional.
     Auto {
-        /// Element edges across the contact-radius bound, in [2, 64] (default 8).
+        /// Element edges across the contact-radius bound, in [2, 64] (default 12).
         #[serde(default = "auto_elements_in_contact")]
         elements_in_contact: usize,
         /// Specimen size over the contact-radius bound, in [5, 10000] (default 48).

@@ -194,7 +194,7 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
          \x20   //     0 <= r <= radius, -height <= z <= 0 (the punch presses on z = 0) cut into nr x nz\n\
          \x20   //     8-node quadrilaterals whose sizes grow geometrically away from the axis (ratio\n\
          \x20   //     grading_r) and away from the top surface (ratio grading_z);\n\
-         \x20   //   Auto(elements_in_contact: 8, size_factor: 48.0, grading: 1.5): sized from the punch\n\
+         \x20   //   Auto(elements_in_contact: 12, size_factor: 48.0, grading: 1.5): sized from the punch\n\
          \x20   //     and the maximum depth a = contact-radius bound (geometric radius x 1.2): radius =\n\
          \x20   //     height = size_factor x a, a uniform core of elements_in_contact squares per side\n\
          \x20   //     over a, graded beyond (instrument scale: nm to mm indents alike).\n",
