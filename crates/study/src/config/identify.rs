@@ -665,6 +665,7 @@ mod tests {
             method: Some(MethodName::Lbfgs),
             max_iterations: Some(7),
             noise: None,
+            bfgs_start: None,
         };
         let cfg = IdentifySection::resolve(None, &maxwell(), &ov).unwrap();
         assert_eq!(free_names(&cfg), ["E", "nu"]);
