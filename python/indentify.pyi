@@ -145,6 +145,65 @@ class Result:
     quality: Optional[dict[str, float]]
     truth: Optional[dict[str, float]]
     files: Optional[dict[str, Any]]
+    tests: list["TestFit"]
+    """A joint fit's tests in the configuration's order (empty for one test); `fit` then
+    holds their curves end to end."""
+
+class TestFit(TypedDict):
+    """One test of a joint fit (`tests: [...]`)."""
+
+    name: str
+    data: str
+    weight: float
+    """w_k in J = sum_k w_k J_k."""
+    default_weight: bool
+    """Whether w_k is the default 1 / (n_k F_max,k^2)."""
+    wJ: float
+    """Its share w_k J_k of the final cost."""
+    quality: Optional[dict[str, float]]
+    fit: Fit
+
+NoiseModel = Union[
+    Literal["Residual", "RelativeEstimated"],
+    Mapping[Literal["Relative", "Absolute"], float],
+]
+"""What the standard deviations assume about the force noise: "Residual" (one variance,
+2J/(n-p)), "RelativeEstimated" (multiplicative, level from the residuals), {"Relative": f}
+(standard deviation f |F|) or {"Absolute": s} (N); the last three by the sandwich covariance."""
+
+class DesignCandidate(TypedDict):
+    """One candidate protocol of `design`."""
+
+    name: str
+    tests: list[str]
+    n_data: int
+    std: dict[str, float]
+    """{name: standard deviation} (parameter units; inf when undetermined)."""
+    rel_std: dict[str, float]
+    log_det: float
+    """ln det of the information matrix of the scaled variables (-inf: singular)."""
+    worst: tuple[str, float]
+    undetermined: list[tuple[str, str]]
+    condition_number: float
+    weakest_direction: Optional[str]
+    correlation: FloatArray
+
+class Design(TypedDict):
+    """The ranked candidates of `design`."""
+
+    config: str
+    noise: str
+    names: list[str]
+    nominal: dict[str, float]
+    candidates: list[DesignCandidate]
+    rank_d: list[int]
+    """Candidate indices by decreasing log det (D-optimal)."""
+    rank_worst: list[int]
+    """Candidate indices by increasing worst relative deviation."""
+    table: str
+    threads: int
+    seconds: float
+    files: list[str]
 
 class MapIndent(TypedDict):
     id: str
@@ -177,15 +236,21 @@ def simulate(
     sets: Sets = None,
     noise: Optional[float] = None,
     seed: int = 1,
+    test: Optional[int] = None,
 ) -> dict[str, FloatArray]:
-    """Simulates the test: {"t" (s), "h" (mm), "F" (N), "a" (contact radius, mm)}."""
+    """Simulates the test: {"t" (s), "h" (mm), "F" (N), "a" (contact radius, mm)}.
+
+    test: the 1-based test of a joint configuration (required for one)."""
 
 def gradient(
     config: ConfigLike = None,
     data: DataLike = None,
     sets: Sets = None,
+    test: Optional[int] = None,
 ) -> GradientResult:
-    """J = 1/2 sum (F - F_data)^2 (N^2) and dJ/dc by the discrete adjoint."""
+    """J = 1/2 sum (F - F_data)^2 (N^2) and dJ/dc by the discrete adjoint.
+
+    test: the 1-based test of a joint configuration (required for one)."""
 
 def identify(
     config: ConfigLike = None,
@@ -202,8 +267,24 @@ def identify(
     start: Optional[Mapping[str, float]] = None,
     noise: Optional[float] = None,
     seed: int = 1,
+    noise_model: Optional[NoiseModel] = None,
 ) -> Result:
-    """Identifies the parameters (GIL released; Ctrl-C stops after the iteration)."""
+    """Identifies the parameters (GIL released; Ctrl-C stops after the iteration).
+
+    A joint configuration (tests: [...]) is fitted as a whole (Result.tests). noise_model
+    replaces the configuration's identify.noise."""
+
+def design(
+    config: ConfigLike = None,
+    sets: Sets = None,
+    *,
+    free: Optional[Sequence[str]] = None,
+    fixed: Union[Mapping[str, Optional[float]], Sequence[str], None] = None,
+    out: Union[str, "os.PathLike[str]", None] = None,
+    jobs: Optional[int] = None,
+) -> Design:
+    """Ranks the `design` section's candidate protocols by the deviations they would give
+    at the nominal (law) values under the section's stated noise (candidates in parallel)."""
 
 def make_map(
     dir: Union[str, "os.PathLike[str]"],

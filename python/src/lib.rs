@@ -19,7 +19,8 @@ mod results;
 use std::path::PathBuf;
 
 use indentify_identify::{Cancel, IterationRecord};
-use indentify_study::config::{MethodName, Overrides};
+use indentify_study::config::{MethodName, NoiseSetting, Overrides};
+use indentify_study::design::{self as study_design, DesignOptions};
 use indentify_study::gradient::{self as study_gradient, GradientOptions};
 use indentify_study::identify::{self as study_identify, IdentifyOptions, Observer, RunInfo};
 use indentify_study::simulate::{self as study_simulate, SimulateOptions};
@@ -117,18 +118,21 @@ fn read_record(
 ///
 /// Returns a dict of float64 arrays at the schedule times: `t` (s), `h` (mm), `F` (N),
 /// `a` (contact radius, mm). A step that fails even after cutting raises `SolverError`
-/// whose `partial` attribute holds the curve up to the failure.
+/// whose `partial` attribute holds the curve up to the failure. `test`: the 1-based test
+/// of a joint configuration (`tests: [...]`), required for one.
 #[pyfunction]
-#[pyo3(signature = (config=None, sets=None, noise=None, seed=1))]
+#[pyo3(signature = (config=None, sets=None, noise=None, seed=1, test=None))]
 fn simulate<'py>(
     py: Python<'py>,
     config: Option<&Bound<'py, PyAny>>,
     sets: Option<&Bound<'py, PyAny>>,
     noise: Option<f64>,
     seed: u64,
+    test: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut opts = SimulateOptions::new(config_source(config)?);
     opts.sets = sets_arg(sets)?;
+    opts.test = test;
     opts.noise = noise.map(|a| (a, seed));
     let outcome = py
         .detach(|| study_simulate::run(&opts))
@@ -160,18 +164,21 @@ fn simulate<'py>(
 /// `data`: None (the configuration's `data` record), a path to a curve (CSV with `t`,
 /// `F`) or record, a `Record`, a dict with `t`, `F` (and `h`) arrays, or an array of shape
 /// (n, 2) / (n, 3). Returns a `GradientResult` (`J`, `gradient` {name: dJ/dc}, ...) that
-/// unpacks as `J, grad = indentify.gradient(...)`.
+/// unpacks as `J, grad = indentify.gradient(...)`. `test`: the 1-based test of a joint
+/// configuration, required for one.
 #[pyfunction]
-#[pyo3(signature = (config=None, data=None, sets=None))]
+#[pyo3(signature = (config=None, data=None, sets=None, test=None))]
 fn gradient(
     py: Python<'_>,
     config: Option<&Bound<'_, PyAny>>,
     data: Option<&Bound<'_, PyAny>>,
     sets: Option<&Bound<'_, PyAny>>,
+    test: Option<usize>,
 ) -> PyResult<GradientResult> {
     let (data, _temp) = data_arg(data)?;
     let mut opts = GradientOptions::new(config_source(config)?, data);
     opts.sets = sets_arg(sets)?;
+    opts.test = test;
     let outcome = py
         .detach(|| study_gradient::run(&opts))
         .map_err(study_error)?;
@@ -219,14 +226,19 @@ impl Observer for PyObserver {
 /// directory (result.json, history.csv, fit.csv, report and figures), `force` replacing
 /// another run's. `method` ("bfgs", "lbfgs", "lbfgsb", "lm"), `max_iterations`, `free`
 /// (names), `fixed` ({name: value or None}) and `start` ({name: value}) override the
-/// configuration's `identify` section.
+/// configuration's `identify` section. `noise_model` replaces `identify.noise`, what the
+/// standard deviations assume about the force noise: "Residual" (one variance, the
+/// default), "RelativeEstimated", {"Relative": f} (standard deviation f |F|) or
+/// {"Absolute": s} (N). A joint configuration (`tests: [...]`) is fitted as a whole;
+/// `Result.tests` then holds each test's curves and fit quality.
 ///
 /// Returns a `Result`. Ctrl-C stops the run after its current iteration and raises
 /// `KeyboardInterrupt`.
 #[pyfunction]
 #[pyo3(signature = (
     config=None, data=None, sets=None, progress=None, *, out=None, force=false, method=None,
-    max_iterations=None, free=None, fixed=None, start=None, noise=None, seed=1
+    max_iterations=None, free=None, fixed=None, start=None, noise=None, seed=1,
+    noise_model=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn identify(
@@ -244,6 +256,7 @@ fn identify(
     start: Option<&Bound<'_, PyAny>>,
     noise: Option<f64>,
     seed: u64,
+    noise_model: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<IdentifyResult> {
     let callback = match progress.filter(|p| !p.is_none()) {
         Some(p) if p.is_callable() => Some(p.clone().unbind()),
@@ -268,25 +281,7 @@ fn identify(
     opts.noise = noise.map(|a| (a, seed));
     opts.overrides = Overrides {
         free,
-        fixed: match fixed.filter(|f| !f.is_none()) {
-            None => Vec::new(),
-            Some(f) => match f.extract::<Vec<String>>() {
-                Ok(names) if !f.is_instance_of::<pyo3::types::PyString>() => {
-                    names.into_iter().map(|n| (n, None)).collect()
-                }
-                _ => f
-                    .extract::<std::collections::HashMap<String, Option<f64>>>()
-                    .map_err(|_| {
-                        PyTypeError::new_err(format!(
-                            "fixed: expected a dict {{name: value or None}} or a list of names, \
-                             got {}",
-                            type_name(f)
-                        ))
-                    })?
-                    .into_iter()
-                    .collect(),
-            },
-        },
+        fixed: fixed_arg(fixed)?,
         starts: match start.filter(|s| !s.is_none()) {
             None => Vec::new(),
             Some(s) => s
@@ -307,7 +302,11 @@ fn identify(
             }
         },
         max_iterations,
-        noise: None,
+        noise: match noise_model.filter(|n| !n.is_none()) {
+            None => None,
+            Some(n) => Some(noise_setting(n, "noise_model")?),
+        },
+        bfgs_start: None,
     };
     let cancel = opts.cancel.clone();
     let mut observer = PyObserver {
@@ -323,6 +322,144 @@ fn identify(
     let outcome = outcome.map_err(study_error)?;
     py.check_signals()?;
     IdentifyResult::new(py, &outcome)
+}
+
+/// A noise model given as "Residual", "RelativeEstimated", {"Relative": f} or
+/// {"Absolute": s}, checked (a stated level must be a finite number > 0).
+fn noise_setting(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<NoiseSetting> {
+    let allowed = "\"Residual\", \"RelativeEstimated\", {\"Relative\": f} (standard deviation f |F|) \
+                   or {\"Absolute\": s} (standard deviation s in N)";
+    let value = convert::to_json(obj, what)?;
+    let setting: NoiseSetting = serde_json::from_value(value.clone()).map_err(|_| {
+        config_error(format!(
+            "{what} = {value} is not allowed: expected {allowed}"
+        ))
+    })?;
+    setting
+        .check(what)
+        .map_err(|e| config_error(format!("{e:#}")))?;
+    Ok(setting)
+}
+
+/// Ranks the candidate protocols of a configuration's `design` section by the standard
+/// deviations they would give at the nominal parameters (the `law` values) under the
+/// section's stated noise, from forward sensitivities (no data needed); candidates are
+/// evaluated in parallel on `jobs` threads (None: all cores).
+///
+/// `config`, `sets`: as for `simulate`; `free` (names) and `fixed` ({name: value or None}
+/// or a list of names) choose which parameters count, as for `identify`. `out`: a folder
+/// for design.json and design.md.
+///
+/// Returns a dict: `config`, `noise` (in words), `names` (free parameters), `nominal`
+/// ({name: value}), `candidates` (in the configuration's order: dicts `name`, `tests`,
+/// `n_data`, `std` and `rel_std` ({name: value}, inf when undetermined), `log_det`
+/// (-inf when singular), `worst` ((name, relative deviation)), `undetermined`
+/// ([(name, reason)]), `condition_number`, `weakest_direction`, `correlation` (numpy p x
+/// p)), `rank_d` (candidate indices by decreasing log det, D-optimal) and `rank_worst`
+/// (by increasing worst relative deviation), `table` (the CLI's table), `threads`,
+/// `seconds`.
+#[pyfunction]
+#[pyo3(signature = (config=None, sets=None, *, free=None, fixed=None, out=None, jobs=None))]
+fn design<'py>(
+    py: Python<'py>,
+    config: Option<&Bound<'py, PyAny>>,
+    sets: Option<&Bound<'py, PyAny>>,
+    free: Option<Vec<String>>,
+    fixed: Option<&Bound<'py, PyAny>>,
+    out: Option<&Bound<'py, PyAny>>,
+    jobs: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut opts = DesignOptions::new(config_source(config)?);
+    opts.sets = sets_arg(sets)?;
+    opts.overrides = Overrides {
+        free,
+        fixed: fixed_arg(fixed)?,
+        ..Overrides::default()
+    };
+    opts.out = match out.filter(|o| !o.is_none()) {
+        Some(o) => Some(path_arg(o, "out")?),
+        None => None,
+    };
+    opts.jobs = jobs;
+    let d = py
+        .detach(|| study_design::run(&opts))
+        .map_err(study_error)?;
+    py.check_signals()?;
+    let res = PyDict::new(py);
+    res.set_item("config", &d.config)?;
+    res.set_item("noise", &d.noise)?;
+    res.set_item("names", d.names.clone())?;
+    let nominal = PyDict::new(py);
+    for (n, v) in &d.nominal {
+        nominal.set_item(n, v)?;
+    }
+    res.set_item("nominal", nominal)?;
+    let cands = PyList::empty(py);
+    for c in &d.candidates {
+        let cd = PyDict::new(py);
+        cd.set_item("name", &c.name)?;
+        cd.set_item("tests", c.tests.clone())?;
+        cd.set_item("n_data", c.n_data)?;
+        let std = PyDict::new(py);
+        let rel = PyDict::new(py);
+        for p in &c.params {
+            std.set_item(p.name, p.std_dev)?;
+            rel.set_item(p.name, p.rel_std_dev)?;
+        }
+        cd.set_item("std", std)?;
+        cd.set_item("rel_std", rel)?;
+        cd.set_item("log_det", c.log_det)?;
+        cd.set_item("worst", c.worst)?;
+        cd.set_item("undetermined", c.undetermined.clone())?;
+        cd.set_item("condition_number", c.condition_number)?;
+        cd.set_item("weakest_direction", c.weakest_direction.clone())?;
+        let corr = if c.correlation.is_empty() {
+            numpy::PyArray2::<f64>::zeros(py, [0, 0], false).into_any()
+        } else {
+            numpy::PyArray2::from_vec2(py, &c.correlation)
+                .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?
+                .into_any()
+        };
+        cd.set_item("correlation", corr)?;
+        cands.append(cd)?;
+    }
+    res.set_item("candidates", cands)?;
+    res.set_item("rank_d", d.rank_d.clone())?;
+    res.set_item("rank_worst", d.rank_worst.clone())?;
+    res.set_item("table", d.table())?;
+    res.set_item("threads", d.threads)?;
+    res.set_item("seconds", d.seconds)?;
+    res.set_item(
+        "files",
+        d.files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(res)
+}
+
+/// `fixed=`: a dict {name: value or None} or a list of names.
+fn fixed_arg(fixed: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(String, Option<f64>)>> {
+    Ok(match fixed.filter(|f| !f.is_none()) {
+        None => Vec::new(),
+        Some(f) => match f.extract::<Vec<String>>() {
+            Ok(names) if !f.is_instance_of::<pyo3::types::PyString>() => {
+                names.into_iter().map(|n| (n, None)).collect()
+            }
+            _ => f
+                .extract::<std::collections::HashMap<String, Option<f64>>>()
+                .map_err(|_| {
+                    PyTypeError::new_err(format!(
+                        "fixed: expected a dict {{name: value or None}} or a list of names, \
+                         got {}",
+                        type_name(f)
+                    ))
+                })?
+                .into_iter()
+                .collect(),
+        },
+    })
 }
 
 /// Writes a synthetic two-phase Maxwell map into `dir`: an n x n grid of indents over a
@@ -418,6 +555,7 @@ fn indentify(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gradient, m)?)?;
     m.add_function(wrap_pyfunction!(identify, m)?)?;
     m.add_function(wrap_pyfunction!(make_map, m)?)?;
+    m.add_function(wrap_pyfunction!(design, m)?)?;
     m.add_function(wrap_pyfunction!(load_config, m)?)?;
     m.add_class::<Record>()?;
     m.add_class::<GradientResult>()?;

@@ -292,6 +292,42 @@ pub struct IdentifyResult {
     /// The report directory's files (`result`, `history`, `fit`, `report`), or None.
     #[pyo3(get)]
     files: Py<PyAny>,
+    /// A joint fit's tests (empty for a one-test configuration), in the configuration's
+    /// order: dicts `name`, `data`, `weight` (w_k), `default_weight` (bool), `wJ` (its
+    /// share w_k J_k of the final cost), `quality` (as `Result.quality`) and `fit` (its
+    /// curves, as `Result.fit`). `Result.fit` then holds every test's curves end to end.
+    #[pyo3(get)]
+    tests: Py<PyList>,
+}
+
+/// A fit quality as a dict (None when not computable).
+fn quality_dict(py: Python<'_>, q: Option<&indentify_report::FitQuality>) -> PyResult<Py<PyAny>> {
+    Ok(match q {
+        Some(q) => {
+            let d = PyDict::new(py);
+            d.set_item("r2", q.r2)?;
+            d.set_item("rms", q.rms)?;
+            d.set_item("rms_rel", q.rms_rel)?;
+            d.set_item("max_abs", q.max_abs)?;
+            d.set_item("n", q.n)?;
+            d.into_any().unbind()
+        }
+        None => py.None(),
+    })
+}
+
+/// Curves as a dict of arrays `t`, `h`, `F_data`, `F_fit`, `F_start`.
+fn fit_dict<'py>(
+    py: Python<'py>,
+    f: &indentify_study::identify::FitCurves,
+) -> PyResult<Bound<'py, PyDict>> {
+    let fit = PyDict::new(py);
+    fit.set_item("t", array(py, &f.t))?;
+    fit.set_item("h", array(py, &f.h))?;
+    fit.set_item("F_data", array(py, &f.f_data))?;
+    fit.set_item("F_fit", array(py, &f.f_final))?;
+    fit.set_item("F_start", array(py, &f.f_start))?;
+    Ok(fit)
 }
 
 impl IdentifyResult {
@@ -334,28 +370,24 @@ impl IdentifyResult {
                 Vec::new(),
             ),
         };
-        let fit = PyDict::new(py);
-        fit.set_item("t", array(py, &o.fit.t))?;
-        fit.set_item("h", array(py, &o.fit.h))?;
-        fit.set_item("F_data", array(py, &o.fit.f_data))?;
-        fit.set_item("F_fit", array(py, &o.fit.f_final))?;
-        fit.set_item("F_start", array(py, &o.fit.f_start))?;
+        let fit = fit_dict(py, &o.fit)?;
+        let tests = PyList::empty(py);
+        for t in &o.tests {
+            let d = PyDict::new(py);
+            d.set_item("name", &t.name)?;
+            d.set_item("data", &t.data)?;
+            d.set_item("weight", t.weight)?;
+            d.set_item("default_weight", t.default_weight)?;
+            d.set_item("wJ", t.cost)?;
+            d.set_item("quality", quality_dict(py, t.quality.as_ref())?)?;
+            d.set_item("fit", fit_dict(py, &t.fit)?)?;
+            tests.append(d)?;
+        }
         let history = PyList::empty(py);
         for rec in &r.history {
             history.append(iteration_dict(py, &o.names, rec)?)?;
         }
-        let quality = match &o.quality {
-            Some(q) => {
-                let d = PyDict::new(py);
-                d.set_item("r2", q.r2)?;
-                d.set_item("rms", q.rms)?;
-                d.set_item("rms_rel", q.rms_rel)?;
-                d.set_item("max_abs", q.max_abs)?;
-                d.set_item("n", q.n)?;
-                d.into_any().unbind()
-            }
-            None => py.None(),
-        };
+        let quality = quality_dict(py, o.quality.as_ref())?;
         let truth = match &o.truth {
             Some(t) => {
                 let d = PyDict::new(py);
@@ -399,6 +431,7 @@ impl IdentifyResult {
             quality,
             truth,
             files,
+            tests: tests.unbind(),
         })
     }
 }

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{Result, bail};
 use indentify_study::ConfigSource;
-use indentify_study::config::{MethodName, NoiseSetting, Overrides};
+use indentify_study::config::{BfgsStartName, MethodName, NoiseSetting, Overrides};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome};
 use xtask::paper::{PAPER_III, R2_TRUTH};
 
@@ -41,10 +41,13 @@ struct Options {
     relative: bool,
     /// First seed of the coverage.
     first_seed: u64,
+    /// BFGS's initial inverse Hessian (default: the configuration's).
+    bfgs_start: Option<BfgsStartName>,
 }
 
 /// `cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs]
-/// [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts] [--set K=V]`.
+/// [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts] [--set K=V]
+/// [--bfgs-start scaled|gauss-newton]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut o = Options {
         config: PathBuf::from("examples/r2-multi-rate.ron"),
@@ -58,6 +61,7 @@ pub fn run(args: &[String]) -> Result<()> {
         coverage: true,
         relative: true,
         first_seed: 1,
+        bfgs_start: None,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -77,6 +81,13 @@ pub fn run(args: &[String]) -> Result<()> {
                 }
             }
             "--no-starts" => o.methods.clear(),
+            "--bfgs-start" => {
+                o.bfgs_start = Some(match val().as_str() {
+                    "scaled" => BfgsStartName::Scaled,
+                    "gauss-newton" => BfgsStartName::GaussNewton,
+                    other => bail!("--bfgs-start {other}: expected scaled or gauss-newton"),
+                })
+            }
             "--set" => o.sets.push(val()),
             "--coarse" => {
                 for k in 0..3 {
@@ -284,6 +295,7 @@ fn fit(
         method: Some(method),
         max_iterations: Some(o.max_iterations),
         noise: (noise.is_some() && o.relative).then_some(NoiseSetting::RelativeEstimated),
+        bfgs_start: o.bfgs_start,
         ..Overrides::default()
     };
     Ok(identify::run(&opts, &mut ())?)

@@ -39,9 +39,31 @@ impl Gradient for ArgminObjective<'_, '_> {
 pub(crate) struct Monitored<'a, 'm, 'p, S> {
     pub inner: S,
     pub monitor: &'a Monitor<'m, 'p>,
+    /// BFGS: when an update is skipped, restart from the Gauss-Newton inverse Hessian of
+    /// the new iterate instead of keeping the old matrix.
+    pub restart_gauss_newton: bool,
 }
 
-impl<O, S, H: Clone> Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>
+/// Inverse Hessians the wrapper can rebuild (BFGS's dense matrix); `()` for the solvers
+/// that keep none.
+pub(crate) trait GaussNewtonRestart: Sized {
+    /// The Gauss-Newton inverse Hessian at `y`, if this type can hold one.
+    fn gauss_newton(monitor: &Monitor<'_, '_>, y: &[f64]) -> Option<Result<Self, Error>>;
+}
+
+impl GaussNewtonRestart for Vec<Vec<f64>> {
+    fn gauss_newton(monitor: &Monitor<'_, '_>, y: &[f64]) -> Option<Result<Self, Error>> {
+        Some(crate::lm::gauss_newton_inverse(monitor, y).map_err(|e| monitor.objective.fail(e)))
+    }
+}
+
+impl GaussNewtonRestart for () {
+    fn gauss_newton(_: &Monitor<'_, '_>, _: &[f64]) -> Option<Result<Self, Error>> {
+        None
+    }
+}
+
+impl<O, S, H: Clone + GaussNewtonRestart> Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>
     for Monitored<'_, '_, '_, S>
 where
     S: Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>,
@@ -62,7 +84,9 @@ where
     /// skipped when the curvature condition `s.y > 0` fails, which an Armijo-only line
     /// search does not guarantee (J is not convex in log-scaled parameters far from the
     /// optimum) and which argmin's BFGS does not check: an indefinite `H` would give an
-    /// ascent direction and the next line search would stall.
+    /// ascent direction and the next line search would stall. With
+    /// `restart_gauss_newton` the skipped update is replaced by the Gauss-Newton inverse
+    /// Hessian of the new iterate.
     fn next_iter(
         &mut self,
         problem: &mut ArgminProblem<O>,
@@ -79,7 +103,16 @@ where
             let y: Vec<f64> = g1.iter().zip(&g0).map(|(a, b)| a - b).collect();
             let sy: f64 = s.iter().zip(&y).map(|(a, b)| a * b).sum();
             if !(sy > 1e-12 * norm2(&s) * norm2(&y)) {
-                next = next.inv_hessian(h0);
+                let restart = if self.restart_gauss_newton {
+                    H::gauss_newton(self.monitor, x1)
+                } else {
+                    None
+                };
+                let h = match restart {
+                    Some(h) => h?,
+                    None => h0,
+                };
+                next = next.inv_hessian(h);
                 self.monitor
                     .skipped_updates
                     .set(self.monitor.skipped_updates.get() + 1);

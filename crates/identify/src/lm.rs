@@ -10,8 +10,8 @@
 use crate::IdentifyError;
 use nalgebra::{DMatrix, DVector};
 
-use crate::linalg::{from_rows, solve_spd};
-use crate::optimize::Monitor;
+use crate::linalg::{from_rows, norm_inf, solve_spd};
+use crate::optimize::{GN_MAX_STEP, Monitor};
 
 /// Residuals and scaled Jacobian at `y`: `(f, r, A, grad f)`.
 type Linearization = (f64, Vec<f64>, DMatrix<f64>, Vec<f64>);
@@ -45,6 +45,50 @@ fn linearize(monitor: &Monitor<'_, '_>, y: &[f64]) -> Result<Linearization, Iden
         .copied()
         .collect();
     Ok((f, r, a, g))
+}
+
+/// The initial inverse Hessian of BFGS with [`crate::optimize::BfgsStart::GaussNewton`] at
+/// `y`: `(A^T A + 1e-3 diag(A^T A))^-1` (the matrix of LM's first step; one forward and one
+/// sensitivity solve, both cached), symmetrized, and scaled down when the step it gives,
+/// `H grad f`, is longer than [`GN_MAX_STEP`] (infinity norm, scaled variables). When the
+/// damped matrix is not numerically positive definite the identity is returned (the
+/// paper's start).
+pub(crate) fn gauss_newton_inverse(
+    monitor: &Monitor<'_, '_>,
+    y: &[f64],
+) -> Result<Vec<Vec<f64>>, IdentifyError> {
+    let np = y.len();
+    let eye = || -> Vec<Vec<f64>> {
+        (0..np)
+            .map(|i| (0..np).map(|k| f64::from(u8::from(i == k))).collect())
+            .collect()
+    };
+    let (_, _, a, g) = linearize(monitor, y)?;
+    let mut m = a.tr_mul(&a);
+    for k in 0..np {
+        let d = m[(k, k)];
+        m[(k, k)] += 1e-3 * d.max(1e-12 * (1.0 + d));
+    }
+    let Some(chol) = m.cholesky() else {
+        return Ok(eye());
+    };
+    let inv = chol.inverse();
+    let mut h: Vec<Vec<f64>> = (0..np)
+        .map(|i| (0..np).map(|k| 0.5 * (inv[(i, k)] + inv[(k, i)])).collect())
+        .collect();
+    if h.iter().flatten().any(|v| !v.is_finite()) {
+        return Ok(eye());
+    }
+    let step: Vec<f64> = h
+        .iter()
+        .map(|row| row.iter().zip(&g).map(|(u, v)| u * v).sum())
+        .collect();
+    let len = norm_inf(&step);
+    if len > GN_MAX_STEP && len.is_finite() {
+        let s = GN_MAX_STEP / len;
+        h.iter_mut().flatten().for_each(|v| *v *= s);
+    }
+    Ok(h)
 }
 
 /// Runs LM from `y0`, reporting each accepted iterate to the monitor.

@@ -12,7 +12,9 @@
 //!
 //! Methods ([`Method`]):
 //! - `Bfgs`: argmin BFGS with backtracking line search under the Armijo condition (the
-//!   paper's algorithm, §4.2, after Gill-Murray-Wright); bounds by projection.
+//!   paper's algorithm, §4.2, after Gill-Murray-Wright); bounds by projection. Its initial
+//!   inverse Hessian is [`IdentifyConfig::bfgs_start`]: `kappa I` (the paper's) or the
+//!   inverse of the damped Gauss-Newton matrix at the start ([`BfgsStart::GaussNewton`]).
 //! - `Lbfgs`: argmin L-BFGS with the More-Thuente line search; bounds by projection.
 //! - `Lbfgsb`: L-BFGS-B (rcompat-lbfgsb), bounds handled by the method itself.
 //! - `LevenbergMarquardt`: projected LM on the sensitivity Jacobian (one forward and one
@@ -74,6 +76,37 @@ impl Method {
     }
 }
 
+/// The inverse Hessian that BFGS starts from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BfgsStart {
+    /// The identity in the internal objective, `kappa I` in terms of `J / J_ref`, with
+    /// `kappa` making the first step [`IdentifyConfig::initial_step`] long (the paper's).
+    #[default]
+    Scaled,
+    /// The inverse of the Gauss-Newton matrix `A^T A` of the scaled residuals at the start
+    /// (one forward-sensitivity solve), damped as Levenberg-Marquardt's first step
+    /// (`A^T A + 1e-3 diag(A^T A)`) and scaled down, if needed, so that the first step is
+    /// at most [`GN_MAX_STEP`] long in the scaled variables (infinity norm). BFGS then
+    /// starts with the curvature of the data instead of learning it from secant pairs;
+    /// an update skipped for `s.y <= 0` restarts from the Gauss-Newton matrix of the
+    /// current iterate (one more sensitivity solve).
+    GaussNewton,
+}
+
+/// The longest first step (infinity norm in the scaled variables) of
+/// [`BfgsStart::GaussNewton`]: a factor e^2 = 7.4 on a log-scaled parameter.
+pub const GN_MAX_STEP: f64 = 2.0;
+
+impl BfgsStart {
+    /// The name in configurations (`Scaled`, `GaussNewton`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            BfgsStart::Scaled => "Scaled",
+            BfgsStart::GaussNewton => "GaussNewton",
+        }
+    }
+}
+
 /// When to stop. Costs are relative, `J / J_ref` with `J_ref = 1/2 sum w_i (F_i^exp)^2`;
 /// gradients are `|P grad_y J| / J_ref` (2-norm of the projected gradient with respect
 /// to the scaled variables, so that each parameter counts by its relative change).
@@ -121,6 +154,8 @@ pub struct IdentifyConfig {
     /// Length (infinity norm, scaled variables) of the first steepest-descent trial step;
     /// 0.5 = at most a factor e^0.5 = 1.65 on a log-scaled parameter.
     pub initial_step: f64,
+    /// The initial inverse Hessian of [`Method::Bfgs`] (ignored by the other methods).
+    pub bfgs_start: BfgsStart,
     /// Compute the [`Identifiability`] summary at the end (one sensitivity solve).
     pub identifiability: bool,
     /// What the summary's standard deviations assume about the force noise (default: one
@@ -162,6 +197,7 @@ impl IdentifyConfig {
             method: Method::Bfgs,
             stop: StopCriteria::default(),
             initial_step: 0.5,
+            bfgs_start: BfgsStart::Scaled,
             identifiability: true,
             noise: NoiseModel::Residual,
             cancel: Cancel::default(),
@@ -736,7 +772,7 @@ fn run(
         cancel: config.cancel.clone(),
     };
     let outcome = match config.method {
-        Method::Bfgs => run_bfgs(&monitor, &y0),
+        Method::Bfgs => run_bfgs(&monitor, &y0, config.bfgs_start),
         Method::Lbfgs { memory } => run_lbfgs(&monitor, &y0, memory),
         Method::Lbfgsb { memory } => run_lbfgsb(&monitor, &y0, memory, &config.stop),
         Method::LevenbergMarquardt => crate::lm::run(&monitor, &y0),
@@ -894,7 +930,7 @@ fn argmin_outcome(r: Result<(), ArgminError>) -> Result<(), IdentifyError> {
     r.map_err(|e| IdentifyError::Optimizer(e.to_string()))
 }
 
-fn run_bfgs(monitor: &Monitor<'_, '_>, y0: &[f64]) -> Result<(), IdentifyError> {
+fn run_bfgs(monitor: &Monitor<'_, '_>, y0: &[f64], start: BfgsStart) -> Result<(), IdentifyError> {
     let n = y0.len();
     let armijo = ArmijoCondition::new(1e-4).map_err(|e| IdentifyError::Optimizer(e.to_string()))?;
     let ls = BacktrackingLineSearch::new(armijo)
@@ -907,16 +943,21 @@ fn run_bfgs(monitor: &Monitor<'_, '_>, y0: &[f64]) -> Result<(), IdentifyError> 
     let eye: Vec<Vec<f64>> = (0..n)
         .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
         .collect();
+    let (h0, restart) = match start {
+        BfgsStart::Scaled => (eye, false),
+        BfgsStart::GaussNewton => (crate::lm::gauss_newton_inverse(monitor, y0)?, true),
+    };
     let solver = Monitored {
         inner: bfgs,
         monitor,
+        restart_gauss_newton: restart,
     };
     let problem = ArgminObjective {
         objective: monitor.objective,
     };
     argmin_outcome(
         Executor::new(problem, solver)
-            .configure(|s| s.param(y0.to_vec()).inv_hessian(eye))
+            .configure(|s| s.param(y0.to_vec()).inv_hessian(h0))
             .ctrlc(false)
             .timer(false)
             .run()
@@ -933,6 +974,7 @@ fn run_lbfgs(monitor: &Monitor<'_, '_>, y0: &[f64], memory: usize) -> Result<(),
     let solver = Monitored {
         inner: lbfgs,
         monitor,
+        restart_gauss_newton: false,
     };
     let problem = ArgminObjective {
         objective: monitor.objective,

@@ -215,6 +215,55 @@ fn joint_fit_recovers_truth_bit_identically_on_1_and_2_threads() {
     }
 }
 
+/// BFGS started from the damped Gauss-Newton inverse Hessian (`BfgsStart::GaussNewton`)
+/// shall recover (E, eta) within 1e-6 from a far start in fewer iterations than the
+/// paper's `kappa I` start, and spend sensitivity solves only for its start and restarts
+/// (the paper's BFGS spends none before its final summary). Bit-identical on 1 and 2
+/// threads.
+#[test]
+fn bfgs_from_the_gauss_newton_matrix_needs_fewer_iterations() {
+    use indentify_identify::BfgsStart;
+    let (p, _) = joint();
+    let run = |start: BfgsStart, threads: usize| {
+        let mut cfg = IdentifyConfig::new(specs(4000.0, 300000.0));
+        cfg.method = Method::Bfgs;
+        cfg.bfgs_start = start;
+        cfg.identifiability = false;
+        cfg.stop.max_iterations = 60;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| identify(&p, &cfg, &mut |_| {}).unwrap())
+    };
+    let paper = run(BfgsStart::Scaled, 2);
+    let gn = run(BfgsStart::GaussNewton, 2);
+    println!(
+        "scaled: {} it ({}), {:?}; Gauss-Newton: {} it ({}), {:?}, {} sensitivity solves",
+        paper.iterations,
+        paper.stop_reason,
+        paper.c,
+        gn.iterations,
+        gn.stop_reason,
+        gn.c,
+        gn.sensitivity_solves
+    );
+    assert_eq!(paper.sensitivity_solves, 0);
+    assert!(gn.stop_reason.is_converged(), "{}", gn.stop_reason);
+    assert!(rel(gn.c[0], TRUTH[0]) < 1e-6, "E = {}", gn.c[0]);
+    assert!(rel(gn.c[2], TRUTH[2]) < 1e-6, "eta = {}", gn.c[2]);
+    assert!(gn.sensitivity_solves >= 1);
+    assert!(
+        gn.iterations < paper.iterations,
+        "Gauss-Newton start {} iterations, paper's {}",
+        gn.iterations,
+        paper.iterations
+    );
+    let one = run(BfgsStart::GaussNewton, 1);
+    assert_eq!(one.c, gn.c);
+    assert_eq!(one.iterations, gn.iterations);
+}
+
 /// Bad input shall be refused with the field named: an empty list of tests, a test weight
 /// that is not finite and > 0.
 #[test]

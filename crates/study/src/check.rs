@@ -191,9 +191,11 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let name = args.config.name();
-    let cfg = args
-        .config
-        .load(&args.sets)?
+    let cfg = args.config.load(&args.sets)?;
+    if cfg.tests.is_some() && args.test.is_none() {
+        return run_joint(args, cfg, &name);
+    }
+    let cfg = cfg
         .one_test(args.test, "gradient-check", &name)
         .kind(ErrorKind::Config)?;
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
@@ -424,6 +426,163 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         fd_seconds,
         fd_forward_solves: solves,
         schedule_times: problem.schedule().t.len(),
+        data_name,
+        synthesized,
+        failures,
+    })
+}
+
+/// The check of a joint configuration (`tests: [...]`, no `--test`): the gradient of the
+/// joint cost `J = sum_k w_k J_k` (the tests' adjoint gradients summed in test order by
+/// the [`Evaluator`], tests solved in parallel) against central differences of the joint
+/// cost over every test's whole history and against the stacked sensitivities
+/// `sum_i w_i (F_i - F_i^exp) dF_i/dc`. Tests without a record are synthesized at the law
+/// values; when every test is synthesized the check point is perturbed as for one test,
+/// else it is the law values.
+fn run_joint(
+    args: &CheckOptions,
+    mut cfg: crate::config::Config,
+    name: &str,
+) -> Result<CheckReport> {
+    use indentify_identify::Evaluator;
+    if args.data.is_some() {
+        return Err(crate::Error::msg(
+            ErrorKind::Config,
+            format!(
+                "--data replaces the record of a one-test configuration, and `{name}` is a \
+                 joint configuration: give each test's record in tests[K].data, or check one \
+                 test with --test K"
+            ),
+        ));
+    }
+    let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    let names = param_names(law);
+    let infos = law.params();
+    // tight forward solves for the differences (the data are synthesized with them too)
+    cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
+    let opts = crate::identify::IdentifyOptions::new(args.config.clone());
+    let (problem, tests, _) = crate::identify::joint_problem(&opts, &cfg, name, law, &truth)?;
+    let synthesized = tests.iter().all(|(_, d, ..)| d.truth.is_some());
+    let point: Vec<f64> = if synthesized {
+        names
+            .iter()
+            .zip(&truth)
+            .map(|(n, v)| {
+                let f = if *n == "nu" {
+                    NU_PERTURBATION
+                } else {
+                    PERTURBATION
+                };
+                round_significant(v * f)
+            })
+            .collect()
+    } else {
+        truth.clone()
+    };
+    law.check_params(&point)
+        .map_err(|e| anyhow!("the check point is not admissible: {e}"))
+        .kind(ErrorKind::Config)?;
+    ensure_differentiable(law, &point, "no gradient check").kind(ErrorKind::Config)?;
+    let mut eval = Evaluator::new(&problem).kind(ErrorKind::Solver)?;
+    let start = Instant::now();
+    let forces = eval.forces(&point).kind(ErrorKind::Solver)?;
+    let forward_seconds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let (j, grad) = eval.cost_and_gradient(&point).kind(ErrorKind::Solver)?;
+    let adjoint_seconds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let jac = eval.jacobian(&point).kind(ErrorKind::Solver)?;
+    let sensitivity_seconds = start.elapsed().as_secs_f64();
+    let rho: Vec<f64> = forces
+        .iter()
+        .zip(&problem.target)
+        .zip(&problem.weights)
+        .map(|((f, t), w)| w * (f - t))
+        .collect();
+    let fd_start = Instant::now();
+    let mut solves = 0usize;
+    let mut cost = |c: &[f64]| -> Result<f64> {
+        solves += 1;
+        eval.cost(c).kind(ErrorKind::Solver)
+    };
+    let mut checks = Vec::new();
+    for (k, info) in infos.iter().enumerate() {
+        let fd = central_difference(&mut cost, &point, k, args.rel_step)?;
+        let rows = if args.scan {
+            Some(scan(&mut cost, &point, k, grad[k], &SCAN_STEPS)?)
+        } else {
+            None
+        };
+        let s: f64 = jac.iter().zip(&rho).map(|(row, r)| r * row[k]).sum();
+        let a = grad[k];
+        let (rd_fd, rd_s) = (relative_difference(a, fd), relative_difference(a, s));
+        checks.push(ParamCheck {
+            name: info.name,
+            unit: info.unit,
+            value: point[k],
+            adjoint: a,
+            fd,
+            sensitivity: s,
+            rel_diff_fd: rd_fd,
+            rel_diff_sensitivity: rd_s,
+            passed: rd_fd <= args.tol && rd_s <= SENSITIVITY_TOL && a.is_finite(),
+            scan: rows.map(|r| {
+                r.iter()
+                    .map(|r| ScanRow {
+                        rel_step: r.h_rel,
+                        fd: r.fd,
+                        rel_diff: r.rel_diff,
+                    })
+                    .collect()
+            }),
+            statuses_held: None,
+        });
+    }
+    let fd_seconds = fd_start.elapsed().as_secs_f64();
+    let passed = checks.iter().all(|c| c.passed);
+    let failures: Vec<String> = checks
+        .iter()
+        .filter(|c| !c.passed)
+        .map(|c| {
+            format!(
+                "{}: adjoint vs central FD {:.1e} (--tol {:.0e}), adjoint vs sensitivities {:.1e} \
+                 (limit {SENSITIVITY_TOL:.0e})",
+                c.name, c.rel_diff_fd, args.tol, c.rel_diff_sensitivity
+            )
+        })
+        .collect();
+    let describe = tests
+        .iter()
+        .map(|(label, d, ..)| format!("{label}: {}", d.describe))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let data_name = format!(
+        "the joint cost sum_k w_k J_k of {} tests ({describe})",
+        tests.len()
+    );
+    Ok(CheckReport {
+        law: law.name(),
+        config: name.to_string(),
+        data: if synthesized {
+            "synthesized".into()
+        } else {
+            data_name.clone()
+        },
+        truth: synthesized.then(|| Named::new(names.iter().copied().zip(truth.clone()))),
+        params: Named::new(names.iter().copied().zip(point.iter().copied())),
+        j,
+        rel_step: args.rel_step,
+        tol: args.tol,
+        sensitivity_tol: SENSITIVITY_TOL,
+        residual_tol: cfg.solver.residual_tol,
+        checks,
+        passed,
+        forward_seconds,
+        adjoint_seconds,
+        sensitivity_seconds,
+        fd_seconds,
+        fd_forward_solves: solves,
+        schedule_times: problem.n_data(),
         data_name,
         synthesized,
         failures,

@@ -22,8 +22,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 pub use identify::{
-    IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName, fixed_item,
-    name_value,
+    BfgsStartName, IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName,
+    fixed_item, name_value,
 };
 
 /// A whole simulation: what `indentify simulate` reads.

@@ -259,9 +259,9 @@ impl IdentifyOutcome {
 
 /// Where the data come from.
 pub(crate) struct Data {
-    record: ForceRecord,
-    describe: String,
-    truth: Option<Vec<f64>>,
+    pub(crate) record: ForceRecord,
+    pub(crate) describe: String,
+    pub(crate) truth: Option<Vec<f64>>,
 }
 
 /// A configuration resolved before any solve: its law, the identification settings.
@@ -379,8 +379,8 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
         return Err(Error::msg(
             ErrorKind::Config,
             format!(
-                "`{name}` is a joint fit (a `tests` list): the cost map and the test design \
-                 take one test; choose one with `--set` on a copy holding that test"
+                "`{name}` is a joint fit (a `tests` list): this set-up takes one test \
+                 (joint configurations go through `joint_problem`)"
             ),
         ));
     }
@@ -449,13 +449,6 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         ));
     }
     if let Some(tests) = &resolved.cfg.tests {
-        if opts.starts.is_some() || opts.profiles.is_some() {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                "--starts and --profiles take a one-test configuration: they do not run on a \
-                 joint fit (a `tests` list) yet",
-            ));
-        }
         let n_tests = tests.len();
         let Resolved {
             cfg,
@@ -671,14 +664,55 @@ fn run_joint(
         data: format!("{n_tests} tests fitted jointly ({describe})"),
         ..run_info(&name, law, &names, &id_cfg, opts)
     });
-    let result = optimize(
-        &problem,
-        &id_cfg,
-        resume_from.as_ref(),
-        history.as_mut(),
-        observer,
-    )
-    .map_err(|e| e.context(format!("the joint identification of `{name}` failed")))?;
+    let mut id_cfg = id_cfg;
+    if opts.profiles.is_some() {
+        // the profiles' threshold needs s^2 from the identifiability summary
+        id_cfg.identifiability = true;
+    }
+    // each start of a multi-start is a joint fit (its tests solved in parallel inside it)
+    let (result, multistart) = match &opts.starts {
+        Some(starts) => {
+            let (summary, best) = crate::explore::multistart(&problem, &id_cfg, starts)
+                .map_err(|e| e.context(format!("the multi-start of `{name}` failed")))?;
+            for r in &best.history {
+                if let Some(h) = history.as_mut() {
+                    h.record(r).kind(ErrorKind::Io)?;
+                }
+                observer.iteration(r);
+            }
+            (best, Some(summary))
+        }
+        None => (
+            optimize(
+                &problem,
+                &id_cfg,
+                resume_from.as_ref(),
+                history.as_mut(),
+                observer,
+            )
+            .map_err(|e| e.context(format!("the joint identification of `{name}` failed")))?,
+            None,
+        ),
+    };
+    // each profile point is a constrained joint re-fit
+    let profiles = match &opts.profiles {
+        Some(_) if opts.cancel.is_raised() => {
+            tracing::warn!("warning: interrupted: no profiles");
+            None
+        }
+        Some(settings) => {
+            let wall = Instant::now();
+            let profiles = crate::explore::profiles(&problem, &id_cfg, &result, settings)
+                .map_err(|e| e.context(format!("the profiles of `{name}` failed")))?;
+            tracing::info!(
+                "  profiles: {} joint re-fits in {:.1} s",
+                profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),
+                wall.elapsed().as_secs_f64()
+            );
+            Some(profiles)
+        }
+        None => None,
+    };
     // each test's curves at the start and at the result (the result's forces are known)
     let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
     let mut fits = Vec::with_capacity(n_tests);
@@ -753,8 +787,8 @@ fn run_joint(
         result,
         truth,
         data: format!("{n_tests} tests: {describe}"),
-        multistart: None,
-        profiles: None,
+        multistart,
+        profiles,
         test: None,
         fit: all,
         files: None,

@@ -194,3 +194,227 @@ fn tests_of_a_joint_fit_get_unrelated_noise_streams() {
         }
     }
 }
+
+/// A two-rate Maxwell joint configuration (4 x 4 mesh, a few steps): loads in 0.2 s and 2 s,
+/// each held 1 s, E and eta free, Levenberg-Marquardt.
+fn joint_maxwell() -> String {
+    let hist = |t: f64| {
+        format!(
+            "(segments: [(duration: {t}, depth: 0.1, steps: 4), (duration: 1.0, depth: 0.1, \
+             steps: 3)])"
+        )
+    };
+    format!(
+        "({HEAD} tests: [(name: \"fast\", history: {}), (name: \"slow\", history: {})], \
+         identify: (params: {{\"E\": Free(start: 12000.0, lower: 1000.0, upper: 1e6), \
+         \"nu\": Fixed(value: 0.3), \"eta\": Free(start: 60000.0, lower: 1000.0, upper: 1e7)}}, \
+         method: Lm))",
+        hist(0.2),
+        hist(2.0)
+    )
+}
+
+fn joint_options(jobs: usize) -> IdentifyOptions {
+    let mut o = IdentifyOptions::new(ConfigSource::Text {
+        name: "joint-maxwell".into(),
+        text: joint_maxwell(),
+    });
+    o.refine = false;
+    o.figures = false;
+    o.jobs = Some(jobs);
+    o.noise = Some((0.02, 7));
+    o
+}
+
+/// `--starts` on a joint configuration shall run every start as a joint fit (in parallel)
+/// and report the clusters; every start shall reach the one minimum, which is the plain
+/// joint fit's optimum, and the outcome shall be bit-identical on 1 and 2 threads.
+/// Reference: the plain joint fit from the configuration's start (a different start).
+#[test]
+fn joint_multistart_reaches_the_joint_optimum_bit_identically() {
+    let plain = identify::run(&joint_options(2), &mut ()).unwrap();
+    assert!(plain.converged(), "{}", plain.result.stop_reason);
+    let with_starts = |jobs| {
+        let mut o = joint_options(jobs);
+        o.starts = Some(indentify_study::explore::StartsOptions {
+            n: 3,
+            seed: 5,
+            tol: 1e-3,
+        });
+        identify::run(&o, &mut ()).unwrap()
+    };
+    let two = with_starts(2);
+    let ms = two.multistart.as_ref().expect("a multi-start summary");
+    assert_eq!(ms.runs.len(), 3);
+    assert_eq!(ms.minima.len(), 1, "{:?}", ms.minima);
+    assert!(ms.runs.iter().all(|r| r.converged), "{:?}", ms.runs);
+    // the starts differ from each other and from the configuration's
+    assert!(ms.runs[0].start != ms.runs[1].start && ms.runs[1].start != ms.runs[2].start);
+    for (p, q) in two.result.params.iter().zip(&plain.result.params) {
+        assert!(
+            (p.value - q.value).abs() <= 1e-6 * q.value.abs(),
+            "{}: {} vs {}",
+            p.name,
+            p.value,
+            q.value
+        );
+    }
+    assert_eq!(two.tests.len(), 2);
+    let one = with_starts(1);
+    assert_eq!(one.result.c, two.result.c);
+    assert_eq!(
+        one.multistart
+            .unwrap()
+            .runs
+            .iter()
+            .map(|r| r.cost.to_bits())
+            .collect::<Vec<_>>(),
+        ms.runs.iter().map(|r| r.cost.to_bits()).collect::<Vec<_>>()
+    );
+}
+
+/// `--profiles` on a joint configuration shall profile every free parameter with joint
+/// re-fits: each profile passes through the optimum, its interval contains the fitted
+/// value, and its profile costs are not below J* (the fit is the joint minimum); the same
+/// on 1 and 2 threads, bit for bit.
+#[test]
+fn joint_profiles_bracket_the_joint_optimum() {
+    let run = |jobs| {
+        let mut o = joint_options(jobs);
+        o.profiles = Some(indentify_identify::profile::ProfileSettings {
+            points_per_side: 2,
+            ..Default::default()
+        });
+        identify::run(&o, &mut ()).unwrap()
+    };
+    let two = run(2);
+    let profiles = two.profiles.as_ref().expect("profiles");
+    assert_eq!(
+        profiles.iter().map(|p| p.name).collect::<Vec<_>>(),
+        ["E", "eta"]
+    );
+    for p in profiles {
+        let v = two.value(p.name).unwrap();
+        assert_eq!(p.optimum, v);
+        assert!(p.points.len() >= 3, "{}: {} points", p.name, p.points.len());
+        assert!(p.lower_cost_found.is_none(), "{}: a lower cost", p.name);
+        let lo = p.lower.value();
+        let hi = p.upper.value();
+        assert!(lo < v && v < hi, "{}: [{lo}, {hi}] around {v}", p.name);
+    }
+    let one = run(1);
+    for (a, b) in one.profiles.unwrap().iter().zip(profiles) {
+        assert_eq!(
+            a.points
+                .iter()
+                .map(|q| q.cost.to_bits())
+                .collect::<Vec<_>>(),
+            b.points
+                .iter()
+                .map(|q| q.cost.to_bits())
+                .collect::<Vec<_>>()
+        );
+    }
+}
+
+/// `gradient-check` of a joint configuration without `--test` shall check the joint cost's
+/// gradient (every test's adjoint, weighted and summed) against central differences of the
+/// joint cost over both tests' whole histories (1e-6) and against the stacked
+/// sensitivities (1e-8); `--data` is refused for a joint configuration, naming tests[K].data.
+#[test]
+fn joint_gradient_check_covers_every_test() {
+    use indentify_study::check::{self, CheckOptions};
+    let source = ConfigSource::Text {
+        name: "joint-maxwell".into(),
+        text: joint_maxwell(),
+    };
+    let report = check::run(&CheckOptions::new(source.clone())).unwrap();
+    for c in &report.checks {
+        println!(
+            "{}: adjoint {:e}, fd {:e} ({:.1e}), sens {:.1e}",
+            c.name, c.adjoint, c.fd, c.rel_diff_fd, c.rel_diff_sensitivity
+        );
+    }
+    assert!(report.passed, "{:?}", report.failures);
+    assert!(report.synthesized && report.j > 0.0);
+    // both tests' points: 8 schedule times each (the initial state included)
+    assert_eq!(report.schedule_times, 16);
+    // the check point is the truth x 1.1 (nu x 0.97), every parameter differenced
+    assert_eq!(report.checks.len(), 3);
+    assert!(report.checks.iter().all(|c| c.adjoint != 0.0));
+    // one test of it alone is a different cost: its gradient differs from the joint one
+    let mut one = CheckOptions::new(source.clone());
+    one.test = Some(1);
+    let single = check::run(&one).unwrap();
+    assert!(single.passed);
+    assert_ne!(single.checks[0].adjoint, report.checks[0].adjoint);
+    let mut with_data = CheckOptions::new(source);
+    with_data.data = Some(PathBuf::from("curve.csv"));
+    let e = check::run(&with_data).unwrap_err();
+    assert!(format!("{e:#}").contains("tests[K].data"), "{e:#}");
+}
+
+/// `map` of a joint configuration shall evaluate the joint cost over the slice (grid points
+/// in parallel): through the law values of exact data its lowest point is the centre with
+/// J = 0, every other point is positive, and the map is bit-identical on 1 and 2 threads.
+/// Reference: each grid point's cost re-computed as the sum of the one-test costs w_k J_k
+/// (the one-test configurations with their default weights taken from the joint fit).
+#[test]
+fn joint_cost_map_is_the_sum_of_the_tests_costs() {
+    use indentify_study::costmap::{self, MapOptions, Through};
+    let map = |jobs| {
+        let mut o = joint_options(jobs);
+        o.noise = None;
+        costmap::run(&MapOptions {
+            identify: o,
+            pair: vec!["E".into(), "eta".into()],
+            grid: 3,
+            span: vec![0.2],
+            through: Through::Law,
+            out: None,
+            jobs: Some(jobs),
+        })
+        .unwrap()
+    };
+    let two = map(2);
+    assert_eq!(two.cost.len(), 9);
+    assert_eq!(two.failed, 0);
+    assert_eq!(two.centre_cost, 0.0);
+    assert_eq!(two.cost[4], 0.0, "the centre of the 3 x 3 grid");
+    assert!(two.cost.iter().enumerate().all(|(p, &j)| p == 4 || j > 0.0));
+    let one = map(1);
+    assert_eq!(
+        one.cost.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+        two.cost.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+    );
+    // a corner against the weighted sum of the one-test costs at that point
+    let (e, eta) = (two.x[0], two.y[2]);
+    let mut o = joint_options(1);
+    o.noise = None;
+    let (problem, _) = identify::problem(&o).unwrap();
+    let mut sum = 0.0;
+    for k in 0..2 {
+        let mut g = indentify_study::gradient::GradientOptions::new(o.config.clone(), None);
+        g.test = Some(k + 1);
+        g.sets = vec![format!("law.E={e}"), format!("law.eta={eta}")];
+        // the data: test k's curve at the truth
+        let mut s = SimulateOptions::new(o.config.clone());
+        s.test = Some(k + 1);
+        let curve = simulate::run(&s).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("curve.csv");
+        let mut csv = String::from("t,F\n");
+        for r in &curve.rows {
+            csv.push_str(&format!("{:e},{:e}\n", r.t, r.f));
+        }
+        std::fs::write(&path, csv).unwrap();
+        g.data = Some(path);
+        let j = indentify_study::gradient::run(&g).unwrap().j;
+        sum += problem.tests[k].weight * j;
+    }
+    let corner = two.cost[6];
+    assert!(
+        (corner - sum).abs() <= 1e-9 * sum,
+        "map {corner:e} vs sum of the tests {sum:e}"
+    );
+}

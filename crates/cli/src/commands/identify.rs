@@ -235,6 +235,7 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
             method: args.method,
             max_iterations: args.max_iter,
             noise: None,
+            bfgs_start: None,
         },
         resume: args.resume,
         force: args.force,

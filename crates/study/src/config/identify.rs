@@ -13,7 +13,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization, Scaling, StopCriteria,
+    BfgsStart, IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization, Scaling,
+    StopCriteria,
 };
 use indentify_laws::Law;
 use serde::{Deserialize, Serialize};
@@ -37,6 +38,10 @@ pub struct IdentifySection {
     /// e^0.5 on a log-scaled parameter).
     #[serde(default = "default_initial_step")]
     pub initial_step: f64,
+    /// The initial inverse Hessian of `Bfgs`: `Scaled` (the paper's, the default) or
+    /// `GaussNewton` (the damped Gauss-Newton matrix of the start; docs/joint-fits.md).
+    #[serde(default, skip_serializing_if = "BfgsStartName::is_scaled")]
+    pub bfgs_start: BfgsStartName,
     /// Stopping rules.
     #[serde(default)]
     pub stop: StopSection,
@@ -101,6 +106,32 @@ impl NoiseSetting {
     }
 }
 
+/// The initial inverse Hessian of BFGS (`identify.bfgs_start`), as written in
+/// configurations; see `indentify_identify::BfgsStart`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BfgsStartName {
+    /// `kappa I`, the first step `initial_step` long (the paper's).
+    #[default]
+    Scaled,
+    /// The inverse of the damped Gauss-Newton matrix at the start (one sensitivity solve),
+    /// and again after an update skipped for lack of curvature.
+    GaussNewton,
+}
+
+impl BfgsStartName {
+    fn is_scaled(&self) -> bool {
+        *self == BfgsStartName::Scaled
+    }
+
+    /// The library's value.
+    pub fn start(self) -> BfgsStart {
+        match self {
+            BfgsStartName::Scaled => BfgsStart::Scaled,
+            BfgsStartName::GaussNewton => BfgsStart::GaussNewton,
+        }
+    }
+}
+
 fn default_memory() -> usize {
     5
 }
@@ -120,6 +151,7 @@ impl Default for IdentifySection {
             method: MethodName::default(),
             memory: default_memory(),
             initial_step: default_initial_step(),
+            bfgs_start: BfgsStartName::Scaled,
             stop: StopSection::default(),
             identifiability: true,
             noise: NoiseSetting::Residual,
@@ -307,6 +339,8 @@ pub struct Overrides {
     pub max_iterations: Option<usize>,
     /// The noise model of the deviations (replaces `identify.noise`).
     pub noise: Option<NoiseSetting>,
+    /// The initial inverse Hessian of BFGS (replaces `identify.bfgs_start`).
+    pub bfgs_start: Option<BfgsStartName>,
 }
 
 /// Parses `name=value` (`flag` names the option in messages).
@@ -517,6 +551,7 @@ impl IdentifySection {
             method: overrides.method.unwrap_or(s.method).method(s.memory),
             stop,
             initial_step: s.initial_step,
+            bfgs_start: overrides.bfgs_start.unwrap_or(s.bfgs_start).start(),
             identifiability: s.identifiability,
             noise: match overrides.noise {
                 Some(n) => {
@@ -630,6 +665,7 @@ mod tests {
             method: Some(MethodName::Lbfgs),
             max_iterations: Some(7),
             noise: None,
+            bfgs_start: None,
         };
         let cfg = IdentifySection::resolve(None, &maxwell(), &ov).unwrap();
         assert_eq!(free_names(&cfg), ["E", "nu"]);
