@@ -309,3 +309,80 @@ pub fn friction_history_check(
     }
     out
 }
+
+/// A law's friction gradient check: its truth and start, how many parameters have central
+/// differences, and its two (punch, mu) runs (a cone of 68 degrees, a sphere of 1 mm).
+#[allow(dead_code)]
+#[derive(Clone, Copy, Debug)]
+pub enum FrictionCase {
+    /// Elastic, cone mu = 0.1, sphere mu = 0.2: stick points make even elasticity history
+    /// dependent.
+    Elastic,
+    /// Maxwell, cone mu = 0.2, sphere mu = 0.1.
+    Maxwell,
+    /// Norton-Hoff with yield (sY > 0), cone mu = 0.1, sphere mu = 0.2.
+    NortonHoffYield,
+    /// Norton-Hoff without yield (sY = 0; on its bound, no central difference), cone and
+    /// sphere mu = 0.2 (with 0.1 on the sphere nearly every node slips).
+    NortonHoffNoYield,
+}
+
+/// [`friction_history_check`] of `case` on the models `model(punch, mu)` in `steps` steps
+/// per segment, both runs, with stick and slip node-steps asserted over the two.
+#[allow(dead_code)]
+pub fn friction_law_check(
+    case: FrictionCase,
+    model: impl Fn(indentify_contact::Punch, f64) -> Model,
+    steps: usize,
+) {
+    use indentify_contact::Punch;
+    use indentify_laws::{Elastic, Maxwell, NortonHoff};
+    let cone = || Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let sphere = || Punch::Sphere { radius: 1.0 };
+    let nh_truth = |sy: f64| vec![1e5, 0.3, 1500.0, 5.0, sy];
+    let nh_start = |sy: f64| vec![1.2e5, 0.31, 1300.0, 4.0, sy];
+    let (law, truth, start, checked, runs): (&dyn Law, Vec<f64>, Vec<f64>, usize, _) = match case {
+        FrictionCase::Elastic => (
+            &Elastic,
+            vec![20000.0, 0.3],
+            vec![17000.0, 0.27],
+            2,
+            [(cone(), 0.1), (sphere(), 0.2)],
+        ),
+        FrictionCase::Maxwell => (
+            &Maxwell,
+            vec![20000.0, 0.3, 30000.0],
+            vec![15000.0, 0.28, 45000.0],
+            3,
+            [(cone(), 0.2), (sphere(), 0.1)],
+        ),
+        FrictionCase::NortonHoffYield => (
+            &NortonHoff,
+            nh_truth(500.0),
+            nh_start(420.0),
+            5,
+            [(cone(), 0.1), (sphere(), 0.2)],
+        ),
+        FrictionCase::NortonHoffNoYield => (
+            &NortonHoff,
+            nh_truth(0.0),
+            nh_start(0.0),
+            4,
+            [(cone(), 0.2), (sphere(), 0.2)],
+        ),
+    };
+    let mut all = Outcome::default();
+    for (punch, mu) in runs {
+        all.add(friction_history_check(
+            &model(punch, mu),
+            law,
+            &truth,
+            &start,
+            checked,
+            steps,
+        ));
+    }
+    all.assert_stick_and_slip();
+}
