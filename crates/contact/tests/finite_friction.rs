@@ -6,6 +6,8 @@
 //! strain with friction) and the small friction effect on a cone's force (as CalculiX's
 //! `NLGEOM` runs).
 
+mod common;
+
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, Segment, SolverOptions,
     Trajectory, trapezoid,
@@ -71,58 +73,6 @@ fn finite_force(model: &Model, traj: &Trajectory, i: usize) -> Vec<f64> {
     f
 }
 
-/// At every converged step: active nodes on the surface with `lambda >= 0`; sticking
-/// off-axis nodes inside the Coulomb cone with their closest point where it was at the
-/// previous step; slipping ones on the cone and moving along their direction. Returns
-/// (sticking, slipping) node-steps.
-fn check_coulomb(model: &Model, traj: &Trajectory, mu: f64) -> (usize, usize) {
-    let (mut n_stick, mut n_slip) = (0, 0);
-    for (i, s) in traj.steps.iter().enumerate() {
-        let (u0, u) = (&traj.fields[i].u, &traj.fields[i + 1].u);
-        let depth0 = if i == 0 { 0.0 } else { traj.steps[i - 1].depth };
-        let f_int = finite_force(model, traj, i + 1);
-        assert_eq!(s.slip.len(), s.active.len());
-        for ((&k, &lam), &st) in s.active.iter().zip(&s.lambda).zip(&s.slip) {
-            let k = k as usize;
-            let node = model.candidates[k];
-            if model.dofs.equation(2 * node).is_none() {
-                continue;
-            }
-            let p = model.project(k, u, s.depth).in_contact();
-            let p0 = model.project(k, u0, depth0);
-            assert!(p.gap.abs() <= 1e-12, "step {i} node {k}: gap {}", p.gap);
-            assert!(lam >= -1e-9 * s.force.abs(), "step {i} node {k}: {lam}");
-            let f = [f_int[2 * node], f_int[2 * node + 1]];
-            // the recorded reaction is the normal component of this force
-            let lam_here = -(f[0] * p.m[0] + f[1] * p.m[1]);
-            assert!((lam_here - lam).abs() <= 1e-8 * s.force.abs());
-            let tau = f[0] * p.t[0] + f[1] * p.t[1];
-            let tol = 1e-8 * s.force.abs();
-            if st == 0 {
-                n_stick += 1;
-                assert!(
-                    tau.abs() <= mu * lam + tol,
-                    "step {i} node {k}: {tau} vs {lam}"
-                );
-                assert!((p.s - p0.s).abs() <= 1e-11, "step {i} node {k} slid");
-            } else {
-                n_slip += 1;
-                let sigma = f64::from(st);
-                assert!(
-                    (tau + mu * sigma * lam).abs() <= tol,
-                    "step {i} node {k}: tau {tau}, mu lambda {}",
-                    mu * lam
-                );
-                assert!(
-                    sigma * (p.s - p0.s) >= -1e-11,
-                    "step {i} node {k} slid back"
-                );
-            }
-        }
-    }
-    (n_stick, n_slip)
-}
-
 /// The solver shall converge quadratically under finite strain with Coulomb friction on a
 /// sphere (elastic mu = 0.02 and Norton-Hoff mu = 0.2, strains of tens of percent under
 /// the tip): in the last step of a ramp, once the contact set and the stick/slip partition
@@ -165,7 +115,7 @@ fn newton_converges_quadratically_with_friction_under_finite_strain() {
             }
         }
         assert!(checked >= 1, "{r:?}");
-        let (st, sl) = check_coulomb(&model, &traj, mu);
+        let (st, sl) = common::check_coulomb(&model, &traj, mu, |i| finite_force(&model, &traj, i));
         println!("{}: {st} sticking and {sl} slipping node-steps", law.name());
         assert!(st > 0 && sl > 0, "stick {st}, slip {sl}");
     }
@@ -188,7 +138,7 @@ fn peak(kind: ContactKind, kin: Kinematics) -> f64 {
         .unwrap();
     let mu = kind.friction();
     if mu > 1e-3 && kin == Kinematics::Finite {
-        let (st, sl) = check_coulomb(&m, &traj, mu);
+        let (st, sl) = common::check_coulomb(&m, &traj, mu, |i| finite_force(&m, &traj, i));
         println!("mu = {mu}: {st} sticking, {sl} slipping node-steps");
         assert!(st > 0 && sl > 0, "stick {st}, slip {sl}");
     }

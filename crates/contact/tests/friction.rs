@@ -3,6 +3,8 @@
 //! converged step, the force against the friction coefficient (mu -> 0: frictionless,
 //! mu large: full stick), and the configuration's spellings and bad values.
 
+mod common;
+
 use indentify_contact::{
     ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions,
     Trajectory, trapezoid,
@@ -42,63 +44,12 @@ fn norton() -> (NortonHoff, Vec<f64>) {
     (NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 500.0])
 }
 
-/// At every converged step: active nodes on the surface with `lambda >= 0`; sticking
-/// off-axis nodes inside the Coulomb cone (`|tau| <= mu lambda`) with their closest point
-/// where it was at the previous step; slipping ones on the cone (`tau = -mu sigma
-/// lambda`) and moving along `sigma`. Returns (sticking, slipping) node-steps.
-fn check_coulomb(model: &Model, traj: &Trajectory, mu: f64) -> (usize, usize) {
-    let (mut n_stick, mut n_slip) = (0, 0);
-    for (i, s) in traj.steps.iter().enumerate() {
-        let (u0, u) = (&traj.fields[i].u, &traj.fields[i + 1].u);
-        let depth0 = if i == 0 { 0.0 } else { traj.steps[i - 1].depth };
-        assert_eq!(s.slip.len(), s.active.len());
-        for ((&k, &lam), &st) in s.active.iter().zip(&s.lambda).zip(&s.slip) {
-            let k = k as usize;
-            let node = model.candidates[k];
-            if model.dofs.equation(2 * node).is_none() {
-                continue;
-            }
-            let p = model.project(k, u, s.depth).in_contact();
-            let p0 = model.project(k, u0, depth0);
-            assert!(p.gap.abs() <= 1e-12, "step {i} node {k}: gap {}", p.gap);
-            assert!(lam >= -1e-9 * s.force.abs(), "step {i} node {k}: {lam}");
-            let f = [
-                traj_force(model, traj, i, node, 0),
-                traj_force(model, traj, i, node, 1),
-            ];
-            let tau = f[0] * p.t[0] + f[1] * p.t[1];
-            let tol = 1e-8 * s.force.abs();
-            if st == 0 {
-                n_stick += 1;
-                assert!(
-                    tau.abs() <= mu * lam + tol,
-                    "step {i} node {k}: {tau} vs {lam}"
-                );
-                assert!((p.s - p0.s).abs() <= 1e-11, "step {i} node {k} slid");
-            } else {
-                n_slip += 1;
-                let sigma = f64::from(st);
-                assert!(
-                    (tau + mu * sigma * lam).abs() <= tol,
-                    "step {i} node {k}: tau {tau}, mu lambda {}",
-                    mu * lam
-                );
-                assert!(
-                    sigma * (p.s - p0.s) >= -1e-11,
-                    "step {i} node {k} slid back"
-                );
-            }
-        }
-    }
-    (n_stick, n_slip)
-}
-
-/// The nodal internal force `f_int` (component `c`) of a recorded step, recomputed from
-/// its stresses.
-fn traj_force(model: &Model, traj: &Trajectory, i: usize, node: usize, c: usize) -> f64 {
+/// The internal force `f_int` (all dofs) of recorded state `i`, recomputed from its
+/// stresses.
+fn traj_force(model: &Model, traj: &Trajectory, i: usize) -> Vec<f64> {
     let mut f = vec![0.0; model.disc.n_dofs()];
-    model.disc.internal_force(&traj.fields[i + 1].sigma, &mut f);
-    f[2 * node + c]
+    model.disc.internal_force(&traj.fields[i].sigma, &mut f);
+    f
 }
 
 /// The solver shall converge quadratically with Coulomb friction (mu = 0.2) on a sphere,
@@ -143,7 +94,7 @@ fn newton_converges_quadratically_with_friction() {
             }
         }
         assert!(checked >= 1, "{r:?}");
-        let (st, sl) = check_coulomb(&model, &traj, mu);
+        let (st, sl) = common::check_coulomb(&model, &traj, mu, |i| traj_force(&model, &traj, i));
         println!("{}: {st} sticking and {sl} slipping node-steps", law.name());
         assert!(st > 0, "no sticking node");
     }
@@ -171,7 +122,7 @@ fn peaks(punch: &Punch, law: &dyn Law, c: &[f64], mus: &[f64]) -> Vec<f64> {
                 traj.steps.iter().map(|s| s.active_set_changes).sum::<u32>()
             );
             if mu > 0.0 {
-                check_coulomb(&m, &traj, mu);
+                common::check_coulomb(&m, &traj, mu, |i| traj_force(&m, &traj, i));
             }
             traj.steps.iter().map(|s| s.force).fold(0.0, f64::max)
         })
