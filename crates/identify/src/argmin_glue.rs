@@ -39,8 +39,10 @@ impl Gradient for ArgminObjective<'_, '_> {
 pub(crate) struct Monitored<'a, 'm, 'p, S> {
     pub inner: S,
     pub monitor: &'a Monitor<'m, 'p>,
-    /// BFGS: when an update is skipped, restart from the Gauss-Newton inverse Hessian of
-    /// the new iterate instead of keeping the old matrix.
+    /// BFGS: when an update is skipped, or when the line search had to shorten the
+    /// quasi-Newton step (the matrix's model of the cost was wrong along it), restart from
+    /// the Gauss-Newton inverse Hessian of the new iterate instead of updating the old
+    /// matrix.
     pub restart_gauss_newton: bool,
 }
 
@@ -49,11 +51,22 @@ pub(crate) struct Monitored<'a, 'm, 'p, S> {
 pub(crate) trait GaussNewtonRestart: Sized {
     /// The Gauss-Newton inverse Hessian at `y`, if this type can hold one.
     fn gauss_newton(monitor: &Monitor<'_, '_>, y: &[f64]) -> Option<Result<Self, Error>>;
+
+    /// The length (2-norm) of the quasi-Newton step `H g`, if this type holds `H`.
+    fn step_length(&self, g: &[f64]) -> Option<f64>;
 }
 
 impl GaussNewtonRestart for Vec<Vec<f64>> {
     fn gauss_newton(monitor: &Monitor<'_, '_>, y: &[f64]) -> Option<Result<Self, Error>> {
         Some(crate::lm::gauss_newton_inverse(monitor, y).map_err(|e| monitor.objective.fail(e)))
+    }
+
+    fn step_length(&self, g: &[f64]) -> Option<f64> {
+        let step: Vec<f64> = self
+            .iter()
+            .map(|row| row.iter().zip(g).map(|(h, v)| h * v).sum())
+            .collect();
+        Some(norm2(&step))
     }
 }
 
@@ -61,7 +74,15 @@ impl GaussNewtonRestart for () {
     fn gauss_newton(_: &Monitor<'_, '_>, _: &[f64]) -> Option<Result<Self, Error>> {
         None
     }
+
+    fn step_length(&self, _: &[f64]) -> Option<f64> {
+        None
+    }
 }
+
+/// A step shorter than this fraction of the quasi-Newton step `H g` was shortened by the
+/// line search (backtracking halves it: the first shortened step is 0.5).
+const SHORTENED: f64 = 1.0 - 1e-9;
 
 impl<O, S, H: Clone + GaussNewtonRestart> Solver<O, IterState<Vec<f64>, Vec<f64>, (), H, (), f64>>
     for Monitored<'_, '_, '_, S>
@@ -86,7 +107,11 @@ where
     /// optimum) and which argmin's BFGS does not check: an indefinite `H` would give an
     /// ascent direction and the next line search would stall. With
     /// `restart_gauss_newton` the skipped update is replaced by the Gauss-Newton inverse
-    /// Hessian of the new iterate.
+    /// Hessian of the new iterate, and so is the update after a step that the line search
+    /// shortened: far from the optimum a secant update carries the curvature of a region
+    /// the iterates are leaving, the Gauss-Newton matrix that of the data where they are
+    /// (with exact data it tends to the Hessian at the optimum, where full steps are
+    /// taken and the BFGS updates build on it).
     fn next_iter(
         &mut self,
         problem: &mut ArgminProblem<O>,
@@ -102,17 +127,21 @@ where
             let s: Vec<f64> = x1.iter().zip(&x0).map(|(a, b)| a - b).collect();
             let y: Vec<f64> = g1.iter().zip(&g0).map(|(a, b)| a - b).collect();
             let sy: f64 = s.iter().zip(&y).map(|(a, b)| a * b).sum();
-            if !(sy > 1e-12 * norm2(&s) * norm2(&y)) {
-                let restart = if self.restart_gauss_newton {
-                    H::gauss_newton(self.monitor, x1)
-                } else {
-                    None
-                };
-                let h = match restart {
-                    Some(h) => h?,
-                    None => h0,
-                };
-                next = next.inv_hessian(h);
+            let skipped = !(sy > 1e-12 * norm2(&s) * norm2(&y));
+            let shortened = h0
+                .step_length(&g0)
+                .is_some_and(|full| norm2(&s) < SHORTENED * full);
+            let restart = if self.restart_gauss_newton && (skipped || shortened) {
+                H::gauss_newton(self.monitor, x1)
+            } else {
+                None
+            };
+            match restart {
+                Some(h) => next = next.inv_hessian(h?),
+                None if skipped => next = next.inv_hessian(h0),
+                None => {}
+            }
+            if skipped {
                 self.monitor
                     .skipped_updates
                     .set(self.monitor.skipped_updates.get() + 1);

@@ -88,8 +88,9 @@ pub enum BfgsStart {
     /// (`A^T A + 1e-3 diag(A^T A)`) and scaled down, if needed, so that the first step is
     /// at most [`GN_MAX_STEP`] long in the scaled variables (infinity norm). BFGS then
     /// starts with the curvature of the data instead of learning it from secant pairs;
-    /// an update skipped for `s.y <= 0` restarts from the Gauss-Newton matrix of the
-    /// current iterate (one more sensitivity solve).
+    /// an update skipped for `s.y <= 0`, or a step that the line search had to shorten,
+    /// restarts from the Gauss-Newton matrix of the current iterate (one more sensitivity
+    /// solve); full steps update the matrix by BFGS.
     GaussNewton,
 }
 

@@ -218,12 +218,14 @@ fn joint_fit_recovers_truth_bit_identically_on_1_and_2_threads() {
 /// BFGS started from the damped Gauss-Newton inverse Hessian (`BfgsStart::GaussNewton`)
 /// shall recover (E, eta) within 1e-6 from a far start in fewer iterations than the
 /// paper's `kappa I` start, and spend sensitivity solves only for its start and restarts
-/// (the paper's BFGS spends none before its final summary). Bit-identical on 1 and 2
-/// threads.
+/// (the paper's BFGS spends none before its final summary): every iteration whose line
+/// search shortened the quasi-Newton step (more than one trial point) restarts from the
+/// Gauss-Newton matrix (one sensitivity solve per test). Bit-identical on 1 and 2 threads.
 #[test]
 fn bfgs_from_the_gauss_newton_matrix_needs_fewer_iterations() {
     use indentify_identify::BfgsStart;
     let (p, _) = joint();
+    let n_tests = p.tests.len();
     let run = |start: BfgsStart, threads: usize| {
         let mut cfg = IdentifyConfig::new(specs(4000.0, 300000.0));
         cfg.method = Method::Bfgs;
@@ -253,6 +255,22 @@ fn bfgs_from_the_gauss_newton_matrix_needs_fewer_iterations() {
     assert!(rel(gn.c[0], TRUTH[0]) < 1e-6, "E = {}", gn.c[0]);
     assert!(rel(gn.c[2], TRUTH[2]) < 1e-6, "eta = {}", gn.c[2]);
     assert!(gn.sensitivity_solves >= 1);
+    // each trial point is one forward solve per test; an iteration with several was
+    // shortened and must restart from the Gauss-Newton matrix of its end point
+    let mut shortened = 0;
+    for w in gn.history.windows(2) {
+        let trials = (w[1].forward_solves - w[0].forward_solves) / n_tests;
+        let restarts = (w[1].sensitivity_solves - w[0].sensitivity_solves) / n_tests;
+        println!(
+            "iteration {}: {trials} trial points, {restarts} Gauss-Newton restarts",
+            w[1].iteration
+        );
+        if trials > 1 {
+            shortened += 1;
+            assert_eq!(restarts, 1, "iteration {}", w[1].iteration);
+        }
+    }
+    assert!(shortened > 0, "no line search was shortened: the restart is not exercised");
     assert!(
         gn.iterations < paper.iterations,
         "Gauss-Newton start {} iterations, paper's {}",
