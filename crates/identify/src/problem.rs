@@ -248,6 +248,16 @@ impl Problem {
         Ok(())
     }
 
+    /// Runs `f` on the problem's pool ([`Problem::set_threads`]), or on the current rayon
+    /// pool without one: for work over the tests done outside the [`Evaluator`] (the
+    /// refined runs of the discretization error).
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        match &self.pool {
+            Some(p) => p.install(f),
+            None => f(),
+        }
+    }
+
     /// The first test's model (the only one of a one-test problem).
     pub fn model(&self) -> &Model {
         &self.tests[0].model

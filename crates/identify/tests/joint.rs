@@ -270,7 +270,10 @@ fn bfgs_from_the_gauss_newton_matrix_needs_fewer_iterations() {
             assert_eq!(restarts, 1, "iteration {}", w[1].iteration);
         }
     }
-    assert!(shortened > 0, "no line search was shortened: the restart is not exercised");
+    assert!(
+        shortened > 0,
+        "no line search was shortened: the restart is not exercised"
+    );
     assert!(
         gn.iterations < paper.iterations,
         "Gauss-Newton start {} iterations, paper's {}",

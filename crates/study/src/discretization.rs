@@ -13,6 +13,11 @@
 //! eigendecomposition with a rank cut; a parameter that does not act on the data, or that
 //! lies in a dropped direction, gets no shift ("undetermined").
 //!
+//! A joint fit refines every test (each on its own mesh and schedule, the tests in
+//! parallel) and stacks them as the fit does: `delta_F` and `S` are the tests' rows laid
+//! end to end, `W` their weights (the test weights `w_k` included), so `delta_c` is the
+//! shift of the joint identification.
+//!
 //! Refinement rules: a `Cylinder` specimen gets `2 nr x 2 nz` elements with the gradings
 //! square-rooted (every element split in four: the refined mesh nests the original); an
 //! `Auto` specimen gets `2 elements_in_contact` in its uniform core and its far-field
@@ -37,36 +42,82 @@ pub const RANK_CUT: f64 = 1e-12;
 /// The discretization error of a fit at its optimum.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Discretization {
-    /// The refined mesh, e.g. `graded cylinder 12 x 12 Q8 (...)`.
+    /// The refined mesh, e.g. `graded cylinder 12 x 12 Q8 (...)`; for a joint fit each
+    /// test's, `name: mesh` joined by `; ` (the same mesh named once).
     pub mesh: String,
-    /// The refined time steps, e.g. `every segment's steps doubled: 24 steps (was 12)`.
+    /// The refined time steps, e.g. `every segment's steps doubled: 24 steps (was 12)`;
+    /// for a joint fit each test's, as `mesh`.
     pub steps: String,
-    /// Elements of the original and of the refined mesh.
+    /// Elements of the original and of the refined mesh (a joint fit: summed over the
+    /// tests).
     pub elements: (usize, usize),
-    /// Schedule steps of the original and of the refined run.
+    /// Schedule steps of the original and of the refined run (a joint fit: summed).
     pub n_steps: (usize, usize),
-    /// `F_refined(t_i) - F_fit(t_i)` at the schedule times (N).
+    /// `F_refined(t_i) - F_fit(t_i)` at the schedule times (N); a joint fit's tests laid
+    /// end to end as the problem's data.
     pub delta_f: Vec<f64>,
-    /// RMS of `delta_F` (N).
+    /// RMS of `delta_F` (N), all rows.
     pub rms: f64,
-    /// RMS of `delta_F` over the largest |F_fit|.
+    /// RMS of `delta_F` over the largest |F_fit|; for a joint fit the largest of the
+    /// tests' (each over its own F_max).
     pub rms_rel: f64,
     /// Largest |delta_F| (N).
     pub max_abs: f64,
     /// Per law parameter: `c_refined - c_fit` predicted through the sensitivities; `None`
-    /// for a fixed or an undetermined parameter.
+    /// for a fixed or an undetermined parameter. A joint fit's shift is the joint one:
+    /// every test refined at once, the tests' weighted sensitivities stacked.
     pub shift: Vec<Option<f64>>,
     /// `shift / |c|`.
     pub relative_shift: Vec<Option<f64>>,
     /// Free parameters that the data do not determine (no shift).
     pub undetermined: Vec<&'static str>,
-    /// Wall time of the refined run and the sensitivities (s).
+    /// Wall time of the refined runs and the sensitivities (s).
     pub seconds: f64,
+    /// Per test (one entry for a one-test fit): its refined discretization and force
+    /// change.
+    pub tests: Vec<TestDiscretization>,
+}
+
+/// One test's part of a [`Discretization`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TestDiscretization {
+    /// The test's name (`tests[K].name` or `test K`; the configuration's for one test).
+    pub name: String,
+    /// Its refined mesh, described.
+    pub mesh: String,
+    /// Its refined time steps, described.
+    pub steps: String,
+    /// Elements of the original and of the refined mesh.
+    pub elements: (usize, usize),
+    /// Schedule steps of the original and of the refined run.
+    pub n_steps: (usize, usize),
+    /// Its rows in [`Discretization::delta_f`].
+    pub rows: std::ops::Range<usize>,
+    /// RMS of its `delta_F` (N).
+    pub rms: f64,
+    /// RMS of its `delta_F` over its largest |F_fit|.
+    pub rms_rel: f64,
+    /// Its largest |delta_F| (N).
+    pub max_abs: f64,
 }
 
 impl Discretization {
     /// One line: `refined mesh ..., steps ...: force change RMS 0.12% of F_max`.
     pub fn summary(&self) -> String {
+        if self.tests.len() > 1 {
+            return format!(
+                "discretization: each of the {} tests on its mesh refined 2x with its steps                  halved: the force changes by RMS {:.3}% of F_max at most ({}), max {:.3e} N,                  {:.1} s",
+                self.tests.len(),
+                100.0 * self.rms_rel,
+                self.tests
+                    .iter()
+                    .map(|t| format!("{} {:.3}%", t.name, 100.0 * t.rms_rel))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                self.max_abs,
+                self.seconds
+            );
+        }
         format!(
             "discretization: {} and {}: the force changes by RMS {:.3}% of F_max (max {:.3e} \
              N), {:.1} s",
@@ -79,20 +130,29 @@ impl Discretization {
     }
 }
 
+/// One test of the fit, as [`compute`] needs it.
+pub struct TestInputs<'a> {
+    /// The test's name (for messages and the per-test results).
+    pub name: String,
+    /// The test's configuration (a joint fit's `Config::test_config`: its specimen,
+    /// punch, contact, kinematics, history or data).
+    pub config: &'a Config,
+    /// The test's mesher as prepared.
+    pub mesher: &'a Mesher,
+    /// Solver options of the test's run.
+    pub solver: &'a SolverOptions,
+}
+
 /// The pieces of the fit the computation needs.
 pub struct Inputs<'a> {
-    /// The configuration (its specimen, punch, contact, history or data).
-    pub config: &'a Config,
-    /// The specimen's mesher as prepared.
-    pub mesher: &'a Mesher,
-    /// The identification problem (original model, schedule, weights).
+    /// The tests, in the problem's order (one for a one-test fit).
+    pub tests: &'a [TestInputs<'a>],
+    /// The identification problem (original models, schedules, weights).
     pub problem: &'a Problem,
     /// The optimum (full law vector).
     pub c: &'a [f64],
     /// Which law parameters are free.
     pub free: &'a [bool],
-    /// Solver options of the run.
-    pub solver: &'a SolverOptions,
     /// The configuration's name, for messages.
     pub name: &'a str,
 }
@@ -167,40 +227,27 @@ pub fn refine_schedule(
     Ok((s, text))
 }
 
-/// Runs the refined forward problem at the optimum and the sensitivities of the fit, and
-/// returns the force change and the parameter shift.
-///
-/// # Errors
-/// A refined mesh or schedule that cannot be built, a refined run or a sensitivity pass
-/// that fails.
-pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
-    let clock = Instant::now();
-    let Inputs {
-        config,
-        mesher,
-        problem,
-        c,
-        free,
-        solver,
-        name,
-    } = *inputs;
-    // the fit: forces and sensitivities in the original discretization
-    let mut ev = Evaluator::new(problem)?;
-    let f_fit = ev.forces(c)?;
-    let jac = ev.jacobian(c)?;
-    drop(ev);
-
-    // the refined run
-    let fine_mesher = refine_mesher(mesher)?;
+/// One test's refined run at `c`: its force change at the schedule times against
+/// `f_fit` (the test's rows of the fit) and its description.
+fn refine_test(
+    t: &TestInputs<'_>,
+    test: &indentify_identify::Test,
+    law: &dyn indentify_laws::Law,
+    c: &[f64],
+    f_fit: &[f64],
+    rows: std::ops::Range<usize>,
+    name: &str,
+) -> Result<(Vec<f64>, TestDiscretization)> {
+    let fine_mesher = refine_mesher(t.mesher)?;
     let (mesh, _, _) = fine_mesher
-        .build_for(&config.punch)
+        .build_for(&t.config.punch)
         .context("cannot build the refined mesh")?;
-    let elements = (problem.model().mesh.elements.len(), mesh.elements.len());
-    let model = Model::with_contact(mesh, config.punch.clone(), config.contact)
-        .and_then(|m| m.with_kinematics(config.kinematics))
+    let elements = (test.model.mesh.elements.len(), mesh.elements.len());
+    let model = Model::with_contact(mesh, t.config.punch.clone(), t.config.contact)
+        .and_then(|m| m.with_kinematics(t.config.kinematics))
         .context("cannot build the refined model")?;
-    let (schedule, steps) = refine_schedule(config.history.as_ref(), problem.schedule())?;
-    let n = problem.schedule().t.len();
+    let (schedule, steps) = refine_schedule(t.config.history.as_ref(), &test.schedule)?;
+    let n = test.schedule.t.len();
     if schedule.t.len() != 2 * n - 1 {
         bail!(
             "the refined schedule has {} times, expected {}",
@@ -211,10 +258,10 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
     let opts = SolverOptions {
         record_fields: false,
         checkpoint_every: 0,
-        ..solver.clone()
+        ..t.solver.clone()
     };
     let mut direct = DirectSolver::new(&model)?;
-    let traj = forward(&mut direct, &model, problem.law, c, &schedule, &opts, name)
+    let traj = forward(&mut direct, &model, law, c, &schedule, &opts, name)
         .context("the refined run for the discretization error failed")?;
     let f_fine = traj.forces();
     if f_fine.len() != schedule.t.len() || f_fit.len() != n {
@@ -227,6 +274,105 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
     let rms = (delta_f.iter().map(|d| d * d).sum::<f64>() / n as f64).sqrt();
     let max_abs = delta_f.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
     let rms_rel = if f_max > 0.0 { rms / f_max } else { f64::NAN };
+    Ok((
+        delta_f,
+        TestDiscretization {
+            name: t.name.clone(),
+            mesh: fine_mesher.describe(),
+            steps,
+            elements,
+            n_steps: (n - 1, schedule.n_steps()),
+            rows,
+            rms,
+            rms_rel,
+            max_abs,
+        },
+    ))
+}
+
+/// `name: text` of every test, a text shared by all tests given once.
+fn per_test_text(
+    tests: &[TestDiscretization],
+    text: impl Fn(&TestDiscretization) -> &str,
+) -> String {
+    let first = tests.first().map_or("", &text);
+    if tests.len() == 1 || tests.iter().all(|t| text(t) == first) {
+        return first.to_string();
+    }
+    tests
+        .iter()
+        .map(|t| format!("{}: {}", t.name, text(t)))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Runs every test's refined forward problem at the optimum (the tests in parallel on the
+/// problem's pool) and the sensitivities of the fit, and returns the force changes and the
+/// parameter shift.
+///
+/// # Errors
+/// A refined mesh or schedule that cannot be built, a refined run or a sensitivity pass
+/// that fails (naming the test of a joint fit).
+pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
+    use rayon::prelude::*;
+    let clock = Instant::now();
+    let Inputs {
+        tests,
+        problem,
+        c,
+        free,
+        name,
+    } = *inputs;
+    if tests.len() != problem.tests.len() {
+        bail!(
+            "{} tests given for a problem of {}",
+            tests.len(),
+            problem.tests.len()
+        );
+    }
+    // the fit: forces and sensitivities in the original discretization
+    let mut ev = Evaluator::new(problem)?;
+    let f_fit = ev.forces(c)?;
+    let jac = ev.jacobian(c)?;
+    drop(ev);
+
+    // the refined runs, in test order whatever the threads
+    let joint = tests.len() > 1;
+    let law = problem.law;
+    let runs: Vec<Result<(Vec<f64>, TestDiscretization)>> = problem.install(|| {
+        tests
+            .par_iter()
+            .zip(problem.tests.par_iter())
+            .enumerate()
+            .map(|(k, (t, test))| {
+                let rows = problem.rows_of(k);
+                let label = if joint {
+                    format!("{name} [{}]", t.name)
+                } else {
+                    name.to_string()
+                };
+                let f = f_fit.get(rows.clone()).unwrap_or_default();
+                refine_test(t, test, law, c, f, rows, &label).with_context(|| {
+                    if joint {
+                        format!("in test {} ({})", k + 1, t.name)
+                    } else {
+                        String::new()
+                    }
+                })
+            })
+            .collect()
+    });
+    let mut delta_f = Vec::with_capacity(f_fit.len());
+    let mut per_test = Vec::with_capacity(tests.len());
+    for r in runs {
+        let (d, t) = r?;
+        delta_f.extend(d);
+        per_test.push(t);
+    }
+    let n = delta_f.len();
+    let rms = (delta_f.iter().map(|d| d * d).sum::<f64>() / n as f64).sqrt();
+    let max_abs = delta_f.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
+    let rms_rel = per_test.iter().map(|t| t.rms_rel).fold(f64::NAN, f64::max);
 
     let free_idx: Vec<usize> = (0..c.len()).filter(|&k| free[k]).collect();
     let (shifts, undetermined_idx) = shift(&jac, &problem.weights, &delta_f, c, &free_idx);
@@ -241,10 +387,14 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
         .collect();
     let names = problem.law.params();
     Ok(Discretization {
-        mesh: fine_mesher.describe(),
-        steps,
-        elements,
-        n_steps: (n - 1, schedule.n_steps()),
+        mesh: per_test_text(&per_test, |t| &t.mesh),
+        steps: per_test_text(&per_test, |t| &t.steps),
+        elements: per_test
+            .iter()
+            .fold((0, 0), |(a, b), t| (a + t.elements.0, b + t.elements.1)),
+        n_steps: per_test
+            .iter()
+            .fold((0, 0), |(a, b), t| (a + t.n_steps.0, b + t.n_steps.1)),
         delta_f,
         rms,
         rms_rel,
@@ -253,6 +403,7 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
         relative_shift,
         undetermined: undetermined_idx.iter().map(|&k| names[k].name).collect(),
         seconds: clock.elapsed().as_secs_f64(),
+        tests: per_test,
     })
 }
 

@@ -569,31 +569,13 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         }
     }
     if opts.refine && !opts.cancel.is_raised() {
-        let free: Vec<bool> = outcome.result.params.iter().map(|p| p.free).collect();
-        let computed = disc::compute(&disc::Inputs {
+        let tests = [disc::TestInputs {
+            name: name.clone(),
             config: &cfg,
             mesher: &mesher,
-            problem: &problem,
-            c: &outcome.result.c,
-            free: &free,
             solver: &solver_opts,
-            name: &name,
-        });
-        match computed {
-            Ok(d) => {
-                tracing::info!("{}", d.summary());
-                for w in discretization_warnings(&outcome, &d) {
-                    tracing::warn!("warning: {w}");
-                    outcome.warnings.push(w);
-                }
-                outcome.discretization = Some(d);
-            }
-            Err(e) => {
-                let w = format!("no discretization error: {e:#}");
-                tracing::warn!("warning: {w}");
-                outcome.warnings.push(w);
-            }
-        }
+        }];
+        add_discretization(&mut outcome, &tests, &problem, &name);
     }
     if let Some(p) = paths {
         outcome.files = Some(write_report(
@@ -716,7 +698,7 @@ fn run_joint(
     // each test's curves at the start and at the result (the result's forces are known)
     let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
     let mut fits = Vec::with_capacity(n_tests);
-    for (k, (test, (label, data, _, default_weight, solver_opts))) in
+    for (k, (test, (label, data, _, default_weight, solver_opts, ..))) in
         problem.tests.iter().zip(&infos).enumerate()
     {
         let rows = problem.rows_of(k);
@@ -772,13 +754,6 @@ fn run_joint(
         all.f_start.extend(&f.fit.f_start);
         all.f_final.extend(&f.fit.f_final);
     }
-    if opts.refine {
-        tracing::info!(
-            "  the discretization error (--refine) is estimated for one-test configurations \
-             only: not computed for this joint fit (run one test with --set or its own \
-             configuration)"
-        );
-    }
     let mut outcome = IdentifyOutcome {
         config: name.clone(),
         law: law.name(),
@@ -798,6 +773,20 @@ fn run_joint(
         discretization: None,
         tests: fits,
     };
+    if opts.refine && !opts.cancel.is_raised() {
+        let tests: Vec<disc::TestInputs<'_>> = infos
+            .iter()
+            .map(
+                |(label, _, _, _, solver, config, mesher)| disc::TestInputs {
+                    name: label.clone(),
+                    config,
+                    mesher,
+                    solver,
+                },
+            )
+            .collect();
+        add_discretization(&mut outcome, &tests, &problem, &name);
+    }
     if let Some(p) = paths {
         outcome.files = Some(write_joint_report(&p, &outcome, opts, &infos)?);
     }
@@ -832,7 +821,15 @@ pub fn problem(opts: &IdentifyOptions) -> Result<(Problem, Vec<f64>)> {
 
 /// What [`joint_problem`] keeps of each test besides its [`indentify_identify::Test`]:
 /// label, data, measured record, whether its weight is the default, solver options.
-pub(crate) type JointInfo = (String, Data, Option<Measured>, bool, SolverOptions);
+pub(crate) type JointInfo = (
+    String,
+    Data,
+    Option<Measured>,
+    bool,
+    SolverOptions,
+    Config,
+    crate::config::Mesher,
+);
 
 /// The [`Problem`] of a joint configuration (`cfg.tests`): every test prepared, its data
 /// loaded (synthesized at `law_values` with the noise seed [`test_seed`] for test `k`
@@ -885,6 +882,7 @@ pub(crate) fn joint_problem(
         let Prepared {
             schedule,
             model,
+            mesher,
             measured,
             warnings: w,
             ..
@@ -908,7 +906,15 @@ pub(crate) fn joint_problem(
         .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
         .kind(ErrorKind::Data)?;
         tests.push(test);
-        infos.push((label, data, measured, given.is_none(), solver_opts));
+        infos.push((
+            label,
+            data,
+            measured,
+            given.is_none(),
+            solver_opts,
+            sub,
+            mesher,
+        ));
     }
     let mut problem =
         Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
@@ -927,7 +933,7 @@ fn write_joint_report(
     paths: &Paths,
     outcome: &IdentifyOutcome,
     opts: &IdentifyOptions,
-    infos: &[(String, Data, Option<Measured>, bool, SolverOptions)],
+    infos: &[JointInfo],
 ) -> Result<ReportFiles> {
     let mut text = String::from("test,t,h,F_data,F_start,F_final\n");
     for (k, t) in outcome.tests.iter().enumerate() {
@@ -953,7 +959,7 @@ fn write_joint_report(
     let history_records = crate::history::read_all(&paths.history, outcome.names.len());
     let mut all_figures = Vec::new();
     let mut first = None;
-    for (k, (t, (_, _, measured, _, _))) in outcome.tests.iter().zip(infos).enumerate() {
+    for (k, (t, (_, _, measured, ..))) in outcome.tests.iter().zip(infos).enumerate() {
         let dir = paths.dir.join(format!("test-{}", k + 1));
         let (file, test) = match measured {
             Some(m) => (
@@ -985,7 +991,21 @@ fn write_joint_report(
                     f_final: &t.fit.f_final,
                     history: &history_records,
                     warnings: &outcome.warnings,
-                    discretization: None,
+                    // the joint shift, with this test's refined discretization and force
+                    // change
+                    discretization: outcome.discretization.as_ref().and_then(|d| {
+                        let td = d.tests.get(k)?;
+                        Some(indentify_report::DiscretizationSummary {
+                            refined: format!(
+                                "{} with {} (every test refined; the shift is the joint fit's)",
+                                td.mesh, td.steps
+                            ),
+                            rms_rel: td.rms_rel,
+                            max_abs: td.max_abs,
+                            shift: d.shift.clone(),
+                            seconds: d.seconds,
+                        })
+                    }),
                 },
             )
         });
@@ -1010,6 +1030,40 @@ fn write_joint_report(
         files.report = Some((md, json, all_figures));
     }
     Ok(files)
+}
+
+/// The discretization error of `outcome`'s fit ([`disc::compute`]: every test refined, the
+/// tests in parallel), its summary logged and its warnings added; a failure is a warning,
+/// never an error (the fit stands).
+fn add_discretization(
+    outcome: &mut IdentifyOutcome,
+    tests: &[disc::TestInputs<'_>],
+    problem: &Problem,
+    name: &str,
+) {
+    let free: Vec<bool> = outcome.result.params.iter().map(|p| p.free).collect();
+    let computed = disc::compute(&disc::Inputs {
+        tests,
+        problem,
+        c: &outcome.result.c,
+        free: &free,
+        name,
+    });
+    match computed {
+        Ok(d) => {
+            tracing::info!("{}", d.summary());
+            for w in discretization_warnings(outcome, &d) {
+                tracing::warn!("warning: {w}");
+                outcome.warnings.push(w);
+            }
+            outcome.discretization = Some(d);
+        }
+        Err(e) => {
+            let w = format!("no discretization error: {e:#}");
+            tracing::warn!("warning: {w}");
+            outcome.warnings.push(w);
+        }
+    }
 }
 
 /// One warning per parameter that the discretization moves by more than its standard
@@ -1608,6 +1662,22 @@ struct DiscretizationJson {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     undetermined: Vec<&'static str>,
     seconds: f64,
+    /// A joint fit's tests: each one's refined discretization and force change.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    tests: Vec<TestDiscretizationJson>,
+}
+
+/// One test's refined discretization in result.json (joint fits).
+#[derive(Debug, Serialize)]
+struct TestDiscretizationJson {
+    name: String,
+    mesh: String,
+    steps: String,
+    elements: [usize; 2],
+    n_steps: [usize; 2],
+    rms: f64,
+    rms_rel: f64,
+    max_abs: f64,
 }
 
 impl DiscretizationJson {
@@ -1634,6 +1704,23 @@ impl DiscretizationJson {
             std_dev: Named::new(free.iter().map(|&(_, n)| (n, o.std_dev(n)))),
             undetermined: d.undetermined.clone(),
             seconds: d.seconds,
+            tests: if d.tests.len() > 1 {
+                d.tests
+                    .iter()
+                    .map(|t| TestDiscretizationJson {
+                        name: t.name.clone(),
+                        mesh: t.mesh.clone(),
+                        steps: t.steps.clone(),
+                        elements: [t.elements.0, t.elements.1],
+                        n_steps: [t.n_steps.0, t.n_steps.1],
+                        rms: t.rms,
+                        rms_rel: t.rms_rel,
+                        max_abs: t.max_abs,
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
         }
     }
 }

@@ -482,19 +482,42 @@ pub fn summary(o: &IdentifyOutcome) -> String {
                 None => format!("{} undetermined", p.name),
             })
             .collect();
-        text.push_str(&format!(
-            "  discretization: mesh refined 2x ({} -> {} elements), steps halved ({} -> {}): \
-             force change RMS {:.3}% of F_max (largest {:.3e} N); relative parameter shift {}; \
-             {:.1} s (--no-refine skips it)\n",
-            d.elements.0,
-            d.elements.1,
-            d.n_steps.0,
-            d.n_steps.1,
-            100.0 * d.rms_rel,
-            d.max_abs,
-            rel.join(", "),
-            d.seconds
-        ));
+        if d.tests.len() > 1 {
+            // a joint fit: every test refined, one line each, then the joint shift
+            text.push_str(&format!(
+                "  discretization: each test's mesh refined 2x and steps halved; relative \
+                 parameter shift of the joint fit {}; {:.1} s (--no-refine skips it)\n",
+                rel.join(", "),
+                d.seconds
+            ));
+            for t in &d.tests {
+                text.push_str(&format!(
+                    "    {}: {} -> {} elements, {} -> {} steps: force change RMS {:.3}% of \
+                     F_max (largest {:.3e} N)\n",
+                    t.name,
+                    t.elements.0,
+                    t.elements.1,
+                    t.n_steps.0,
+                    t.n_steps.1,
+                    100.0 * t.rms_rel,
+                    t.max_abs
+                ));
+            }
+        } else {
+            text.push_str(&format!(
+                "  discretization: mesh refined 2x ({} -> {} elements), steps halved ({} -> \
+                 {}): force change RMS {:.3}% of F_max (largest {:.3e} N); relative parameter \
+                 shift {}; {:.1} s (--no-refine skips it)\n",
+                d.elements.0,
+                d.elements.1,
+                d.n_steps.0,
+                d.n_steps.1,
+                100.0 * d.rms_rel,
+                d.max_abs,
+                rel.join(", "),
+                d.seconds
+            ));
+        }
     }
     if let Some(f) = &o.files {
         let reports = f.report.as_ref().map_or(String::new(), |(md, json, figs)| {
