@@ -151,19 +151,31 @@ pub fn refine_schedule(
     }
     let mut t = Vec::with_capacity(2 * n + 1);
     let mut d = Vec::with_capacity(2 * n + 1);
+    let mut k = Vec::with_capacity(2 * n);
     for i in 0..n {
         t.push(schedule.t[i]);
         d.push(schedule.depth[i]);
         t.push(0.5 * (schedule.t[i] + schedule.t[i + 1]));
         d.push(0.5 * (schedule.depth[i] + schedule.depth[i + 1]));
+        // each half keeps the step's sub-steps: the solver's steps are halved too
+        k.extend([schedule.substeps_of(i + 1); 2]);
     }
     t.push(schedule.t[n]);
     d.push(schedule.depth[n]);
-    let s = Schedule::from_record(&t, &d)?;
-    let text = format!(
-        "the record's midpoints inserted ({} steps, was {n})",
-        s.n_steps()
-    );
+    let s = Schedule::from_record(&t, &d)?.with_substeps(k)?;
+    let text = if s.substeps.is_empty() {
+        format!(
+            "the record's midpoints inserted ({} steps, was {n})",
+            s.n_steps()
+        )
+    } else {
+        format!(
+            "the record's midpoints inserted ({} steps, was {n}; {} solver steps, was {})",
+            s.n_steps(),
+            s.n_solver_steps(),
+            schedule.n_solver_steps()
+        )
+    };
     Ok((s, text))
 }
 

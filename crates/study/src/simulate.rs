@@ -211,10 +211,7 @@ fn write_matrix(
     params: &[f64],
     schedule: &indentify_contact::Schedule,
 ) -> Result<(PathBuf, usize, usize)> {
-    let prefix = indentify_contact::Schedule {
-        t: schedule.t[..=step].to_vec(),
-        depth: schedule.depth[..=step].to_vec(),
-    };
+    let prefix = schedule.prefix(step);
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let opts = indentify_contact::SolverOptions {
         record_fields: false,
