@@ -184,7 +184,12 @@ fn the_adjoint_through_substeps_matches_finite_differences() {
                 g.dj_dc[k], fd[k]
             );
             assert!(rf < 1e-6, "{name}: adjoint {} vs fd {}", g.dj_dc[k], fd[k]);
-            assert!(rs < 1e-10, "{name}: adjoint {} vs J^T rho {}", g.dj_dc[k], jt[k]);
+            assert!(
+                rs < 1e-10,
+                "{name}: adjoint {} vs J^T rho {}",
+                g.dj_dc[k],
+                jt[k]
+            );
             assert!(rc < 1e-10, "{name}: recorded vs replayed {}", g_ck.dj_dc[k]);
         }
     }

@@ -142,10 +142,7 @@ impl Schedule {
                 allowed: format!("one count per step ({})", self.n_steps()),
             });
         }
-        if let Some(j) = counts
-            .iter()
-            .position(|k| !(1..=MAX_SUBSTEPS).contains(k))
-        {
+        if let Some(j) = counts.iter().position(|k| !(1..=MAX_SUBSTEPS).contains(k)) {
             return Err(ContactError::Input {
                 field: "schedule.substeps",
                 value: format!("{} (step {})", counts[j], j + 1),
@@ -196,6 +193,18 @@ impl Schedule {
     /// The number of solver steps without cuts: the sum of the sub-steps.
     pub fn n_solver_steps(&self) -> usize {
         (1..=self.n_steps()).map(|j| self.substeps_of(j)).sum()
+    }
+
+    /// The sub-steps in words, `None` without: `2 sub-steps per step` (all equal) or
+    /// `1 to 3 sub-steps per step`.
+    pub fn substeps_summary(&self) -> Option<String> {
+        let lo = self.substeps.iter().copied().min()?;
+        let hi = self.substeps.iter().copied().max()?;
+        Some(if lo == hi {
+            format!("{lo} sub-steps per step")
+        } else {
+            format!("{lo} to {hi} sub-steps per step")
+        })
     }
 
     /// The first `j + 1` points (steps 1 to `j`) with their sub-steps.
@@ -290,6 +299,11 @@ mod tests {
         assert_eq!(s3.step_targets(2), vec![2.0, 3.0, 4.0]);
         assert_eq!((s3.n_steps(), s3.n_solver_steps()), (2, 4));
         assert_eq!(s3.prefix(1).substeps, vec![1]);
+        assert_eq!(
+            s3.substeps_summary().as_deref(),
+            Some("1 to 3 sub-steps per step")
+        );
+        assert_eq!(s.substeps_summary(), None);
         // all ones is the schedule itself
         assert_eq!(s.clone().with_uniform_substeps(1).unwrap(), s);
         for bad in [vec![0, 1], vec![1, MAX_SUBSTEPS + 1], vec![2]] {

@@ -131,7 +131,7 @@ pub struct DataSection {
     /// Equal sub-steps of the forward solve between consecutive points of the preprocessed
     /// record (the depth interpolated linearly): the force is still compared with the data
     /// at the record's points only, and the gradient stays exact. An integer in
-    /// `[1, MAX_SUBSTEPS]`; default [`DEFAULT_SUBSTEPS`] (docs/discretization.md).
+    /// `[1, MAX_DATA_SUBSTEPS]`; default [`DEFAULT_SUBSTEPS`] (docs/discretization.md).
     #[serde(
         default = "default_substeps",
         deserialize_with = "deserialize_substeps"
@@ -145,15 +145,18 @@ pub struct DataSection {
 /// docs/discretization.md).
 pub const DEFAULT_SUBSTEPS: usize = 2;
 
+/// The most sub-steps `data.substeps` allows (beyond, resample the record to more points).
+pub const MAX_DATA_SUBSTEPS: usize = 100;
+
 fn default_substeps() -> usize {
     DEFAULT_SUBSTEPS
 }
 
-/// `data.substeps`, refused outside `[1, MAX_SUBSTEPS]` while parsing (so that the error
+/// `data.substeps`, refused outside `[1, MAX_DATA_SUBSTEPS]` while parsing (so that the error
 /// carries the file, line and column).
 fn deserialize_substeps<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
     let k = u64::deserialize(d)?;
-    let max = indentify_contact::MAX_SUBSTEPS;
+    let max = MAX_DATA_SUBSTEPS;
     match usize::try_from(k) {
         Ok(k) if (1..=max).contains(&k) => Ok(k),
         _ => Err(serde::de::Error::custom(format!(

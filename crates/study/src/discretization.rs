@@ -43,7 +43,8 @@ pub struct Discretization {
     pub steps: String,
     /// Elements of the original and of the refined mesh.
     pub elements: (usize, usize),
-    /// Schedule steps of the original and of the refined run.
+    /// Solver steps (the schedule's steps times their sub-steps, without cuts) of the
+    /// original and of the refined run.
     pub n_steps: (usize, usize),
     /// `F_refined(t_i) - F_fit(t_i)` at the schedule times (N).
     pub delta_f: Vec<f64>,
@@ -256,7 +257,11 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
         mesh: fine_mesher.describe(),
         steps,
         elements,
-        n_steps: (n - 1, schedule.n_steps()),
+        // the solver's steps: the schedule's with their own sub-steps (data.substeps)
+        n_steps: (
+            problem.schedule().n_solver_steps(),
+            schedule.n_solver_steps(),
+        ),
         delta_f,
         rms,
         rms_rel,

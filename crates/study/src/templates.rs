@@ -548,7 +548,7 @@ fn data_block(d: &DataSection) -> String {
         "        // equal sub-steps of the forward solve between consecutive points (the force\n\
          \x20       // compared with the data at the points only), in [1, {}]\n\
          \x20       substeps: {},\n    ),\n",
-        indentify_contact::MAX_SUBSTEPS,
+        crate::config::MAX_DATA_SUBSTEPS,
         d.substeps
     ));
     out
