@@ -223,14 +223,15 @@ pub fn run_one(
         "run `{label}` [{}]: {elements} elements, {} steps, F = {forces:?} N at t = {times:?} s, \
          largest contact radius {contact_radius:.6e} mm, {seconds:.2} s",
         mesher.describe(),
-        schedule.n_steps()
+        schedule.n_solver_steps()
     );
     Ok(Run {
         contact_radius,
         label: label.to_string(),
         mesh: mesher.describe(),
         elements,
-        steps: schedule.n_steps(),
+        // the solver's steps: the schedule's with their sub-steps (data.substeps)
+        steps: schedule.n_solver_steps(),
         forces,
         seconds,
     })

@@ -248,11 +248,15 @@ fn init_with_data_writes_a_valid_template_for_the_record() {
         );
         assert!(text.contains("specimen: Auto(") && text.contains("punch: Berkovich"));
         let p = dir.path().join(format!("{law}.ron"));
-        std::fs::write(&p, text).unwrap();
+        std::fs::write(&p, &text).unwrap();
+        // the template writes the sub-steps of measured data out; the record's 60 points
+        // are the fitted ones, each step solved in 2 sub-steps (docs/discretization.md)
+        assert!(text.contains("substeps: 2,"), "{text}");
         let o = indentify(&["check", p.to_str().unwrap()]);
         assert_ok(&o);
         assert!(
-            stderr(&o).contains("1000 samples -> 60 points"),
+            stderr(&o).contains("1000 samples -> 60 points")
+                && stderr(&o).contains("59 steps (2 sub-steps per step: 118 solver steps)"),
             "{}",
             stderr(&o)
         );

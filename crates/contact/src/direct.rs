@@ -314,7 +314,8 @@ pub struct StepRecord {
     pub iterations: u32,
     /// Active-set changes during this step.
     pub active_set_changes: u32,
-    /// `true` for steps ending on a time of the schedule, `false` for sub-steps of a cut.
+    /// `true` for steps ending on a time of the schedule, `false` for sub-steps (of a cut,
+    /// or the schedule's own, [`Schedule::with_substeps`]).
     pub on_schedule: bool,
     /// Index of the schedule time this step ends at (or heads to, for a sub-step).
     pub schedule_index: usize,
@@ -774,8 +775,14 @@ impl DirectSolver {
                     state: state.clone(),
                 });
             }
-            // targets still to reach, last first; a failed step pushes an intermediate time
-            let mut targets = vec![(schedule.t[j], 0u32)];
+            // targets still to reach, last first (the step's sub-steps, then t[j]); a failed
+            // step pushes an intermediate time
+            let mut targets: Vec<(f64, u32)> = schedule
+                .step_targets(j)
+                .into_iter()
+                .rev()
+                .map(|t| (t, 0u32))
+                .collect();
             while let Some(&(t1, level)) = targets.last() {
                 let u1 = schedule.depth_at(t1);
                 match self.step(model, law, c, &state, t1, u1, opts, &mut traj.timing) {

@@ -18,14 +18,26 @@ pub struct Segment {
     pub steps: usize,
 }
 
+/// The largest number of sub-steps of one schedule step ([`Schedule::with_substeps`]).
+pub const MAX_SUBSTEPS: usize = 1000;
+
 /// The discrete schedule: times `t[0] < t[1] < ...` (s) and punch depths `depth[i]` (mm).
 /// Index 0 is the initial, stress-free state; steps are `1..len`.
+///
+/// Each step may be solved in several equal sub-steps ([`Schedule::with_substeps`]; the
+/// depth linearly interpolated between its ends): the solver's steps are then finer than
+/// the schedule, whose times stay the only ones where the force is reported and compared
+/// with data (the sub-steps are recorded as the sub-steps of a cut step are, with
+/// `on_schedule = false`, and the adjoint transposes them).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Schedule {
     /// Times (s), strictly increasing.
     pub t: Vec<f64>,
     /// Depth of the punch tip below the undeformed surface (mm).
     pub depth: Vec<f64>,
+    /// Sub-steps of each step: step `j` (from 1) is solved in `substeps[j - 1]` equal
+    /// sub-steps. Empty: one each (the schedule's steps are the solver's).
+    pub substeps: Vec<usize>,
 }
 
 impl Schedule {
@@ -73,7 +85,11 @@ impl Schedule {
                 depth.push(d0 + f * (s.depth - d0));
             }
         }
-        Ok(Schedule { t, depth })
+        Ok(Schedule {
+            t,
+            depth,
+            substeps: Vec::new(),
+        })
     }
 
     /// A schedule from a measured record `(t_i, h_i)`; the first point is the initial state.
@@ -108,7 +124,96 @@ impl Schedule {
         Ok(Schedule {
             t: t.to_vec(),
             depth: depth.to_vec(),
+            substeps: Vec::new(),
         })
+    }
+
+    /// The schedule with step `j` (from 1) solved in `counts[j - 1]` equal sub-steps
+    /// (an empty `counts`, or all ones, is the schedule as it is).
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] for a count outside `[1, MAX_SUBSTEPS]` or a length other
+    /// than the number of steps.
+    pub fn with_substeps(mut self, counts: Vec<usize>) -> Result<Schedule, ContactError> {
+        if !counts.is_empty() && counts.len() != self.n_steps() {
+            return Err(ContactError::Input {
+                field: "schedule.substeps",
+                value: format!("{} counts", counts.len()),
+                allowed: format!("one count per step ({})", self.n_steps()),
+            });
+        }
+        if let Some(j) = counts.iter().position(|k| !(1..=MAX_SUBSTEPS).contains(k)) {
+            return Err(ContactError::Input {
+                field: "schedule.substeps",
+                value: format!("{} (step {})", counts[j], j + 1),
+                allowed: format!("an integer in [1, {MAX_SUBSTEPS}]"),
+            });
+        }
+        self.substeps = if counts.iter().all(|&k| k == 1) {
+            Vec::new()
+        } else {
+            counts
+        };
+        Ok(self)
+    }
+
+    /// The schedule with every step solved in `k` equal sub-steps.
+    ///
+    /// # Errors
+    /// As [`Schedule::with_substeps`].
+    pub fn with_uniform_substeps(self, k: usize) -> Result<Schedule, ContactError> {
+        let n = self.n_steps();
+        self.with_substeps(vec![k; n])
+    }
+
+    /// The number of sub-steps of step `j` (from 1): 1 without sub-steps.
+    pub fn substeps_of(&self, j: usize) -> usize {
+        j.checked_sub(1)
+            .and_then(|i| self.substeps.get(i))
+            .copied()
+            .unwrap_or(1)
+    }
+
+    /// The times the solver steps to in step `j` (from 1): its sub-steps' ends, `t[j]`
+    /// last (only `t[j]` without sub-steps).
+    pub fn step_targets(&self, j: usize) -> Vec<f64> {
+        let k = self.substeps_of(j);
+        let (ta, tb) = (self.t[j - 1], self.t[j]);
+        (1..=k)
+            .map(|i| {
+                if i == k {
+                    tb
+                } else {
+                    ta + (tb - ta) * i as f64 / k as f64
+                }
+            })
+            .collect()
+    }
+
+    /// The number of solver steps without cuts: the sum of the sub-steps.
+    pub fn n_solver_steps(&self) -> usize {
+        (1..=self.n_steps()).map(|j| self.substeps_of(j)).sum()
+    }
+
+    /// The sub-steps in words, `None` without: `2 sub-steps per step` (all equal) or
+    /// `1 to 3 sub-steps per step`.
+    pub fn substeps_summary(&self) -> Option<String> {
+        let lo = self.substeps.iter().copied().min()?;
+        let hi = self.substeps.iter().copied().max()?;
+        Some(if lo == hi {
+            format!("{lo} sub-steps per step")
+        } else {
+            format!("{lo} to {hi} sub-steps per step")
+        })
+    }
+
+    /// The first `j + 1` points (steps 1 to `j`) with their sub-steps.
+    pub fn prefix(&self, j: usize) -> Schedule {
+        Schedule {
+            t: self.t[..=j].to_vec(),
+            depth: self.depth[..=j].to_vec(),
+            substeps: self.substeps.iter().take(j).copied().collect(),
+        }
     }
 
     /// Number of time steps (`t.len() - 1`).
@@ -183,5 +288,27 @@ mod tests {
         assert!(e.to_string().contains("duration"), "{e}");
         let e = Schedule::from_record(&[0.0, 1.0, 0.5], &[0.0, 0.1, 0.2]).unwrap_err();
         assert!(e.to_string().contains("t[2] = 0.5"), "{e}");
+    }
+
+    #[test]
+    fn substeps_split_steps_equally_and_are_checked() {
+        let s = Schedule::from_record(&[0.0, 1.0, 4.0], &[0.0, 0.1, 0.2]).unwrap();
+        assert_eq!(s.step_targets(2), vec![4.0]);
+        let s3 = s.clone().with_substeps(vec![1, 3]).unwrap();
+        assert_eq!(s3.step_targets(1), vec![1.0]);
+        assert_eq!(s3.step_targets(2), vec![2.0, 3.0, 4.0]);
+        assert_eq!((s3.n_steps(), s3.n_solver_steps()), (2, 4));
+        assert_eq!(s3.prefix(1).substeps, vec![1]);
+        assert_eq!(
+            s3.substeps_summary().as_deref(),
+            Some("1 to 3 sub-steps per step")
+        );
+        assert_eq!(s.substeps_summary(), None);
+        // all ones is the schedule itself
+        assert_eq!(s.clone().with_uniform_substeps(1).unwrap(), s);
+        for bad in [vec![0, 1], vec![1, MAX_SUBSTEPS + 1], vec![2]] {
+            let e = s.clone().with_substeps(bad).unwrap_err().to_string();
+            assert!(e.contains("schedule.substeps"), "{e}");
+        }
     }
 }

@@ -18,7 +18,7 @@ pub use direct::{
     Checkpoint, DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
     nodal_pressures,
 };
-pub use history::{Schedule, Segment, trapezoid};
+pub use history::{MAX_SUBSTEPS, Schedule, Segment, trapezoid};
 pub use kinematics::Kinematics;
 pub use normal::ContactKind;
 pub use punch::Punch;

@@ -93,7 +93,8 @@ mod text;
 pub use anton_paar::TestResults;
 pub use error::{PrepError, ReadError, ReadErrorKind};
 pub use prep::{
-    Applied, Control, Correction, Phase, Preprocessing, Resample, Segments, Span, ZeroPoint, apply,
+    Applied, Control, Correction, MAX_RESAMPLE_POINTS, Phase, Preprocessing, Resample, Segments,
+    Span, ZeroPoint, apply,
 };
 pub use record::{Format, LoadSegment, Meta, Protocol, Quantity, ReadOptions, Record};
 

@@ -89,11 +89,34 @@ impl Default for Segments {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Resample {
-    /// Number of points of the result (>= 2, and at least one more than the number of
-    /// segments). Default 200.
+    /// Number of points of the result (in `[2, MAX_RESAMPLE_POINTS]`, and at least one
+    /// more than the number of segments). Default 200. Refused out of range already while
+    /// parsing (a RON error then carries the line).
+    #[serde(deserialize_with = "deserialize_points")]
     pub n: usize,
     /// Fewest intervals per segment, when `n` allows. Default 5.
     pub min_per_segment: usize,
+}
+
+/// The most points [`resample`] makes: each drives a step of the simulation (a record of
+/// 10^5 points already takes hours to simulate).
+pub const MAX_RESAMPLE_POINTS: usize = 100_000;
+
+/// What `resample.n` allows, in words.
+fn points_allowed() -> String {
+    format!("an integer in [2, {MAX_RESAMPLE_POINTS}] points")
+}
+
+/// `resample.n`, refused outside `[2, MAX_RESAMPLE_POINTS]`.
+fn deserialize_points<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    let n = u64::deserialize(d)?;
+    match usize::try_from(n) {
+        Ok(n) if (2..=MAX_RESAMPLE_POINTS).contains(&n) => Ok(n),
+        _ => Err(serde::de::Error::custom(format!(
+            "resample.n = {n} is not allowed: expected {}",
+            points_allowed()
+        ))),
+    }
 }
 
 impl Default for Resample {
@@ -856,8 +879,8 @@ fn trapezoids(t: &[f64], y: &[f64]) -> Vec<f64> {
 /// inconsistent record.
 pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError> {
     validate(r)?;
-    if o.n < 2 {
-        return Err(option_error("resample.n", o.n, "at least 2 points"));
+    if !(2..=MAX_RESAMPLE_POINTS).contains(&o.n) {
+        return Err(option_error("resample.n", o.n, &points_allowed()));
     }
     let len = r.len();
     if len < 2 || r.h.len() != len || r.f.len() != len {
@@ -1367,6 +1390,35 @@ mod tests {
             .len(),
             3
         );
+    }
+
+    #[test]
+    fn absurd_point_counts_are_refused_in_parsing_and_in_resampling() {
+        let r = rec(
+            vec![0.0, 1.0, 2.0],
+            vec![0.0, 2.0, 1.0],
+            vec![0.0, 1.0, 0.5],
+        );
+        let e = resample(
+            &r,
+            &Resample {
+                n: MAX_RESAMPLE_POINTS + 1,
+                min_per_segment: 1,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("resample.n") && e.contains("100000"), "{e}");
+        let parse = |text: &str| ron::from_str::<Resample>(text);
+        assert_eq!(parse("(n: 60)").unwrap().n, 60);
+        for bad in ["(n: 0)", "(n: 1)", "(n: 100001)", "(n: 1000000000000)"] {
+            let e = parse(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("resample.n =") && e.contains("[2, 100000]"),
+                "{bad}: {e}"
+            );
+        }
+        assert!(parse("(n: 6.5)").is_err() && parse("(n: -3)").is_err());
     }
 
     #[test]

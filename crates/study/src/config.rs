@@ -128,6 +128,42 @@ pub struct DataSection {
     /// segments on, no resampling).
     #[serde(default)]
     pub preprocessing: Preprocessing,
+    /// Equal sub-steps of the forward solve between consecutive points of the preprocessed
+    /// record (the depth interpolated linearly): the force is still compared with the data
+    /// at the record's points only, and the gradient stays exact. An integer in
+    /// `[1, MAX_DATA_SUBSTEPS]`; default [`DEFAULT_SUBSTEPS`] (docs/discretization.md).
+    #[serde(
+        default = "default_substeps",
+        deserialize_with = "deserialize_substeps"
+    )]
+    pub substeps: usize,
+}
+
+/// The default [`DataSection::substeps`]: the forward solve of a measured record takes
+/// this many sub-steps between its points (with the records resampled to 60 points, every
+/// probe of the three real examples within 1% of the step-converged force;
+/// docs/discretization.md).
+pub const DEFAULT_SUBSTEPS: usize = 2;
+
+/// The most sub-steps `data.substeps` allows (beyond, resample the record to more points).
+pub const MAX_DATA_SUBSTEPS: usize = 100;
+
+fn default_substeps() -> usize {
+    DEFAULT_SUBSTEPS
+}
+
+/// `data.substeps`, refused outside `[1, MAX_DATA_SUBSTEPS]` while parsing (so that the error
+/// carries the file, line and column).
+fn deserialize_substeps<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    let k = u64::deserialize(d)?;
+    let max = MAX_DATA_SUBSTEPS;
+    match usize::try_from(k) {
+        Ok(k) if (1..=max).contains(&k) => Ok(k),
+        _ => Err(serde::de::Error::custom(format!(
+            "data.substeps = {k} is not allowed: expected an integer in [1, {max}] (the \
+             forward solve's equal sub-steps between consecutive record points)"
+        ))),
+    }
 }
 
 /// A measured record read and preprocessed.
@@ -1114,12 +1150,14 @@ impl Config {
                 let m = d
                     .load(self.base_dir.as_deref())
                     .with_context(|| DataFailure(format!("cannot use the data of `{name}`")))?;
-                let s = Schedule::from_record(&m.record.t, &m.record.h).with_context(|| {
-                    DataFailure(format!(
-                        "the record `{}` cannot drive a simulation",
-                        m.path.display()
-                    ))
-                })?;
+                let s = Schedule::from_record(&m.record.t, &m.record.h)
+                    .and_then(|s| s.with_uniform_substeps(d.substeps))
+                    .with_context(|| {
+                        DataFailure(format!(
+                            "the record `{}` cannot drive a simulation",
+                            m.path.display()
+                        ))
+                    })?;
                 (s, Some(m))
             }
             None => (self.schedule()?, None),

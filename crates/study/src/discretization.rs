@@ -51,7 +51,8 @@ pub struct Discretization {
     /// Elements of the original and of the refined mesh (a joint fit: summed over the
     /// tests).
     pub elements: (usize, usize),
-    /// Schedule steps of the original and of the refined run (a joint fit: summed).
+    /// Solver steps (the schedule's steps times their sub-steps, without cuts) of the
+    /// original and of the refined run (a joint fit: summed).
     pub n_steps: (usize, usize),
     /// `F_refined(t_i) - F_fit(t_i)` at the schedule times (N); a joint fit's tests laid
     /// end to end as the problem's data.
@@ -89,7 +90,8 @@ pub struct TestDiscretization {
     pub steps: String,
     /// Elements of the original and of the refined mesh.
     pub elements: (usize, usize),
-    /// Schedule steps of the original and of the refined run.
+    /// Solver steps (the schedule's steps times their sub-steps) of the original and of
+    /// the refined run.
     pub n_steps: (usize, usize),
     /// Its rows in [`Discretization::delta_f`].
     pub rows: std::ops::Range<usize>,
@@ -211,19 +213,31 @@ pub fn refine_schedule(
     }
     let mut t = Vec::with_capacity(2 * n + 1);
     let mut d = Vec::with_capacity(2 * n + 1);
+    let mut k = Vec::with_capacity(2 * n);
     for i in 0..n {
         t.push(schedule.t[i]);
         d.push(schedule.depth[i]);
         t.push(0.5 * (schedule.t[i] + schedule.t[i + 1]));
         d.push(0.5 * (schedule.depth[i] + schedule.depth[i + 1]));
+        // each half keeps the step's sub-steps: the solver's steps are halved too
+        k.extend([schedule.substeps_of(i + 1); 2]);
     }
     t.push(schedule.t[n]);
     d.push(schedule.depth[n]);
-    let s = Schedule::from_record(&t, &d)?;
-    let text = format!(
-        "the record's midpoints inserted ({} steps, was {n})",
-        s.n_steps()
-    );
+    let s = Schedule::from_record(&t, &d)?.with_substeps(k)?;
+    let text = if s.substeps.is_empty() {
+        format!(
+            "the record's midpoints inserted ({} steps, was {n})",
+            s.n_steps()
+        )
+    } else {
+        format!(
+            "the record's midpoints inserted ({} steps, was {n}; {} solver steps, was {})",
+            s.n_steps(),
+            s.n_solver_steps(),
+            schedule.n_solver_steps()
+        )
+    };
     Ok((s, text))
 }
 
@@ -281,7 +295,8 @@ fn refine_test(
             mesh: fine_mesher.describe(),
             steps,
             elements,
-            n_steps: (n - 1, schedule.n_steps()),
+            // the solver's steps: the schedule's with their own sub-steps (data.substeps)
+            n_steps: (test.schedule.n_solver_steps(), schedule.n_solver_steps()),
             rows,
             rms,
             rms_rel,

@@ -79,6 +79,8 @@ pub struct GradientOutcome {
     pub steps: usize,
     /// Schedule times.
     pub schedule_times: usize,
+    /// The steps of the schedule with their own sub-steps (`data.substeps`; without cuts).
+    pub solver_steps: usize,
     /// Factorizations of the adjoint sweep.
     pub factorizations: usize,
     /// Factorizations of the forward run.
@@ -211,6 +213,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         adjoint_seconds: grad.seconds,
         steps: traj.steps.len(),
         schedule_times: problem.schedule().t.len(),
+        solver_steps: problem.schedule().n_solver_steps(),
         factorizations: grad.factorizations,
         forward_factorizations: traj.timing.factorizations,
         recorded_bytes: traj.recorded_bytes(),

@@ -25,7 +25,7 @@ pub struct CurveRow {
 }
 
 /// The curve at the schedule times: the initial state, then every step that ends on a
-/// schedule time (sub-steps of cut steps left out).
+/// schedule time (sub-steps, of cut steps or the schedule's own, left out).
 pub fn curve(schedule: &Schedule, traj: &Trajectory) -> Vec<CurveRow> {
     std::iter::once(CurveRow {
         t: schedule.t[0],

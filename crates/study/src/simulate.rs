@@ -68,6 +68,11 @@ pub struct SimulateOutcome {
     pub size: (usize, usize),
     /// Schedule steps.
     pub schedule_steps: usize,
+    /// The schedule's own sub-steps in words (`data.substeps`), `None` without.
+    pub substeps: Option<String>,
+    /// The steps the solver took beyond the schedule's steps and their own sub-steps: the
+    /// sub-steps of cut steps (over the schedule steps reached).
+    pub cut_substeps: usize,
     /// The curve at the schedule times reached (noise applied).
     pub rows: Vec<CurveRow>,
     /// The trajectory (timings, iterations, steps).
@@ -191,6 +196,12 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         mesher,
         size: (model.mesh.nodes.len(), model.mesh.elements.len()),
         schedule_steps: schedule.n_steps(),
+        substeps: schedule.substeps_summary(),
+        cut_substeps: trajectory.steps.len().saturating_sub(
+            schedule
+                .prefix(trajectory.schedule_steps().count())
+                .n_solver_steps(),
+        ),
         rows,
         trajectory,
         measured: prepared.measured,
@@ -211,10 +222,7 @@ fn write_matrix(
     params: &[f64],
     schedule: &indentify_contact::Schedule,
 ) -> Result<(PathBuf, usize, usize)> {
-    let prefix = indentify_contact::Schedule {
-        t: schedule.t[..=step].to_vec(),
-        depth: schedule.depth[..=step].to_vec(),
-    };
+    let prefix = schedule.prefix(step);
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let opts = indentify_contact::SolverOptions {
         record_fields: false,

@@ -129,6 +129,7 @@ pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
             }),
             ..indentify_records::Preprocessing::default()
         },
+        substeps: crate::config::DEFAULT_SUBSTEPS,
     });
     let mut id = reference.identify_section();
     for (name, setting) in id.params.iter_mut() {
@@ -542,7 +543,14 @@ fn data_block(d: &DataSection) -> String {
     if let Some(t) = d.test {
         out.push_str(&format!("        test: {t},\n"));
     }
-    out.push_str(&format!("        preprocessing: {pre},\n    ),\n"));
+    out.push_str(&format!("        preprocessing: {pre},\n"));
+    out.push_str(&format!(
+        "        // equal sub-steps of the forward solve between consecutive points (the force\n\
+         \x20       // compared with the data at the points only), in [1, {}]\n\
+         \x20       substeps: {},\n    ),\n",
+        crate::config::MAX_DATA_SUBSTEPS,
+        d.substeps
+    ));
     out
 }
 

@@ -41,11 +41,17 @@ pub fn run(args: &Args) -> Result<()> {
         .write_all(annotated(&cfg, &header).as_bytes())
         .context("cannot write to standard output")?;
     tracing::info!(
-        "{name}: valid; law {}, punch {}, mesh: {}, {} steps over {} s",
+        "{name}: valid; law {}, punch {}, mesh: {}, {} steps{} over {} s",
         cfg.law.name(),
         cfg.punch.describe(),
         prepared.mesher.describe(),
         schedule.n_steps(),
+        schedule
+            .substeps_summary()
+            .map_or(String::new(), |s| format!(
+                " ({s}: {} solver steps)",
+                schedule.n_solver_steps()
+            )),
         indentify_study::format::sig(schedule.t.last().copied().unwrap_or(0.0), 6)
             .parse::<f64>()
             .unwrap_or(0.0)

@@ -60,6 +60,7 @@ struct JsonReport {
     adjoint_to_forward: f64,
     steps: usize,
     schedule_times: usize,
+    solver_steps: usize,
     factorizations: usize,
     forward_factorizations: usize,
     recorded_bytes: usize,
@@ -96,6 +97,7 @@ pub fn run(args: &Args) -> Result<()> {
             adjoint_to_forward: ratio,
             steps: g.steps,
             schedule_times: g.schedule_times,
+            solver_steps: g.solver_steps,
             factorizations: g.factorizations,
             forward_factorizations: g.forward_factorizations,
             recorded_bytes: g.recorded_bytes,
@@ -118,7 +120,13 @@ pub fn run(args: &Args) -> Result<()> {
             gradient_unit(g.units[k]),
         ]);
     }
-    let sub_steps = g.steps + 1 - g.schedule_times;
+    let sub_steps = g.steps.saturating_sub(g.solver_steps);
+    let own = g.solver_steps + 1 - g.schedule_times;
+    let own = if own > 0 {
+        format!("{own} sub-steps between the schedule times (data.substeps), ")
+    } else {
+        String::new()
+    };
     let memory = match args.checkpoint {
         Some(n) => format!(
             "recorded {} (states every {n} schedule steps; storing every step would take {}); \
@@ -134,7 +142,7 @@ pub fn run(args: &Args) -> Result<()> {
     let sets: String = args.sets.iter().map(|s| format!(" --set {s}")).collect();
     let text = format!(
         "indentify gradient {name} --data {data}{sets}\n  \
-         law {law_name}, {steps} steps ({sub_steps} sub-step{plural} from cuts), data `{data}` \
+         law {law_name}, {steps} steps ({own}{sub_steps} sub-step{plural} from cuts), data `{data}` \
          ({rows_n} rows, t in [{a}, {b}] s)\n  \
          J = 1/2 sum_i (F_i - F_exp,i)^2 over the {n_times} schedule times (weights 1) = {j:.10e} N^2\n\n\
          {table}\n\n  \

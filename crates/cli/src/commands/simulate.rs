@@ -87,7 +87,7 @@ pub fn run(args: &Args) -> Result<()> {
         "indentify simulate {name}\n  \
          law {} ({}), punch {}\n  \
          mesh: {} ({} nodes, {} elements)\n  \
-         {} of {} schedule steps ({} sub-steps from cuts), {} Newton iterations, {} factorizations\n  \
+         {} of {} schedule steps{} ({} sub-steps from cuts), {} Newton iterations, {} factorizations\n  \
          max force {:.6} N at t = {} s, h = {} mm (contact radius {:.6} mm)\n  \
          wall time {:.3} s (solver {:.3} s: local {:.3}, assembly {:.3}, factorization {:.3}, solve {:.3})",
         o.law,
@@ -98,7 +98,10 @@ pub fn run(args: &Args) -> Result<()> {
         o.size.1,
         rows.len() - 1,
         o.schedule_steps,
-        o.trajectory.steps.len() - (rows.len() - 1),
+        o.substeps
+            .as_ref()
+            .map_or(String::new(), |s| format!(", {s}")),
+        o.cut_substeps,
         o.trajectory.total_iterations(),
         tm.factorizations,
         peak.f,
