@@ -52,7 +52,10 @@ pub struct SolverOptions {
     /// iterations with 1e-6, 284 with 1e-2, same solution); a step converges only with its
     /// set verified at `residual_tol`.
     pub active_set_check_tol: f64,
-    /// Relative tolerance on penetration (times the current depth) before a node is activated.
+    /// Relative tolerance on penetration before a node is activated: times the current
+    /// depth, and never less than times the width of the first element under the punch
+    /// ([`Model::gap_length`]), so that near depth 0 a node just released is not
+    /// re-activated by a penetration of round-off size.
     pub gap_tol: f64,
     /// Relative tolerance on tensile reactions (times the current force) before a node is released.
     pub lambda_tol: f64,
@@ -286,6 +289,20 @@ impl Model {
     /// Radius of candidate `k` (mm).
     pub fn candidate_r(&self, k: usize) -> f64 {
         self.mesh.nodes[self.candidates[k]][0]
+    }
+
+    /// The length (mm) below which the penetration tolerance stops shrinking with the
+    /// depth: the width of the first element under the punch (the radius of the third
+    /// contact candidate, the first element's outer corner; of the last candidate on a
+    /// top edge with fewer). The tolerance is `gap_tol * max(|depth|, gap_length)`:
+    /// relative to the depth alone it vanished at depth 0, where a node leaving contact
+    /// with a gap of round-off size was re-activated and the active set cycled.
+    pub fn gap_length(&self) -> f64 {
+        let k = self.candidates.len().saturating_sub(1).min(2);
+        self.candidates
+            .get(k)
+            .map_or(0.0, |_| self.candidate_r(k))
+            .max(1e-12)
     }
 }
 
@@ -958,6 +975,7 @@ impl DirectSolver {
     ) -> Result<(State, StepRecord), StepFailure> {
         let dt = t1 - state.t;
         let nc = model.candidates.len();
+        let gap_length = model.gap_length();
         let n_eq = model.dofs.n_eq;
         let mut u = state.u.clone();
         let mut sigma = state.sigma.clone();
@@ -1155,7 +1173,7 @@ impl DirectSolver {
                     .map(|k| -self.f_int[zdof(k)])
                     .sum();
                 let ltol = opts.lambda_tol * force.abs().max(1e-300);
-                let gtol = opts.gap_tol * depth.abs().max(1e-12);
+                let gtol = opts.gap_tol * depth.abs().max(gap_length);
                 let mut worst: Option<(usize, f64)> = None;
                 let mut violations = Vec::new();
                 for k in 0..nc {
