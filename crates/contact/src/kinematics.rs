@@ -201,7 +201,7 @@ pub(crate) fn element_tangents(
             let def = Deformation::new(qp, &ue);
             let ls = log_strain(&def, q)?;
             let dm = ls.material_tangent(&a[q], &t[q]);
-            Deformation::add_tangent(qp, &def.b_l(qp), &dm, &ls.pk2(&t[q]), qp.w, ke);
+            def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
         }
     }
     Ok(())
