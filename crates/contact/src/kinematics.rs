@@ -11,6 +11,7 @@
 
 use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
 use indentify_laws::{ElasticDomain, Law, LogStrain, Mat4, Vec4};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{ContactError, ContactKind};
@@ -69,6 +70,20 @@ pub(crate) enum FiniteFailure {
         factor: f64,
     },
 }
+
+impl FiniteFailure {
+    /// The Gauss point where it failed (the first in element order is the one reported).
+    fn qp(&self) -> usize {
+        match self {
+            FiniteFailure::Inverted { qp, .. } | FiniteFailure::Local { qp, .. } => *qp,
+        }
+    }
+}
+
+/// Elements per parallel task of the Gauss-point passes ([`evaluate`],
+/// [`element_tangents`]): fixed, so the work split, and with the assembly in element
+/// order the results, do not depend on the number of threads.
+const ELEMENT_CHUNK: usize = 8;
 
 /// Output buffers of [`evaluate`].
 pub(crate) struct FiniteOut<'a> {
@@ -141,37 +156,63 @@ pub(crate) fn evaluate(
     domain: Option<&ElasticDomain>,
     out: FiniteOut<'_>,
 ) -> Result<(), FiniteFailure> {
-    out.f_int.fill(0.0);
-    for e in 0..disc.elements.len() {
-        let dofs = disc.element_dofs(e);
-        let ue = dofs.map(|d| u[d]);
-        let mut fe = [0.0; 16];
-        for g in 0..QP_PER_ELEMENT {
-            let q = QP_PER_ELEMENT * e + g;
-            let qp = &disc.qp[q];
-            let def = Deformation::new(qp, &ue);
-            let ls = log_strain(&def, q)?;
-            let de = ls.e - e0[q];
-            let (t, a) = match domain.and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
-            {
-                Some(x) => x,
-                None => {
-                    let up = law
-                        .update(c, &t0[q], &de, dt)
-                        .map_err(|f| FiniteFailure::Local {
-                            qp: q,
-                            reason: f.reason,
-                            factor: f.suggested_dt_factor,
-                        })?;
-                    (up.sigma, up.tangent)
+    let ne = disc.elements.len();
+    let nq = QP_PER_ELEMENT * ne;
+    // element forces in parallel over fixed chunks of elements, each element's arithmetic
+    // the serial one; then assembled serially in element order: bit for bit the same for
+    // any number of threads
+    let mut fe_all = vec![[0.0; 16]; ne];
+    let chunk_qp = QP_PER_ELEMENT * ELEMENT_CHUNK;
+    let first_failure = fe_all
+        .par_chunks_mut(ELEMENT_CHUNK)
+        .zip(out.sigma[..nq].par_chunks_mut(chunk_qp))
+        .zip(out.tangents[..nq].par_chunks_mut(chunk_qp))
+        .enumerate()
+        .filter_map(|(chunk, ((fes, sigma), tangents))| {
+            for (i, fe) in fes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let ue = disc.gather(e, u);
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let local = QP_PER_ELEMENT * i + g;
+                    let qp = &disc.qp[q];
+                    let def = Deformation::new(qp, &ue);
+                    let ls = match log_strain(&def, q) {
+                        Ok(ls) => ls,
+                        Err(f) => return Some(f),
+                    };
+                    let de = ls.e - e0[q];
+                    let (t, a) = match domain
+                        .and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
+                    {
+                        Some(x) => x,
+                        None => match law.update(c, &t0[q], &de, dt) {
+                            Ok(up) => (up.sigma, up.tangent),
+                            Err(f) => {
+                                return Some(FiniteFailure::Local {
+                                    qp: q,
+                                    reason: f.reason,
+                                    factor: f.suggested_dt_factor,
+                                });
+                            }
+                        },
+                    };
+                    let s = ls.pk2(&t);
+                    Deformation::add_bt(&def.b_l(qp), &s, qp.w, fe);
+                    sigma[local] = t;
+                    tangents[local] = a;
                 }
-            };
-            let s = ls.pk2(&t);
-            Deformation::add_bt(&def.b_l(qp), &s, qp.w, &mut fe);
-            out.sigma[q] = t;
-            out.tangents[q] = a;
-        }
-        for (d, v) in dofs.iter().zip(fe) {
+            }
+            None
+        })
+        // the failure of the first element in order, as the serial loop would report it
+        .min_by_key(FiniteFailure::qp);
+    if let Some(f) = first_failure {
+        return Err(f);
+    }
+    out.f_int.fill(0.0);
+    for (e, fe) in fe_all.iter().enumerate() {
+        for (d, v) in disc.element_dofs(e).iter().zip(fe) {
             out.f_int[*d] += v;
         }
     }
@@ -192,19 +233,32 @@ pub(crate) fn element_tangents(
     a: &[Mat4],
     ke: &mut [[[f64; 16]; 16]],
 ) -> Result<(), FiniteFailure> {
-    for (e, ke) in ke.iter_mut().enumerate() {
-        let ue = disc.gather(e, u);
-        *ke = [[0.0; 16]; 16];
-        for g in 0..QP_PER_ELEMENT {
-            let q = QP_PER_ELEMENT * e + g;
-            let qp = &disc.qp[q];
-            let def = Deformation::new(qp, &ue);
-            let ls = log_strain(&def, q)?;
-            let dm = ls.material_tangent(&a[q], &t[q]);
-            def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
-        }
-    }
-    Ok(())
+    // every element writes its own matrix: in parallel over fixed chunks, bit for bit the
+    // serial result for any number of threads
+    let first_failure = ke
+        .par_chunks_mut(ELEMENT_CHUNK)
+        .enumerate()
+        .filter_map(|(chunk, kes)| {
+            for (i, ke) in kes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let ue = disc.gather(e, u);
+                *ke = [[0.0; 16]; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let qp = &disc.qp[q];
+                    let def = Deformation::new(qp, &ue);
+                    let ls = match log_strain(&def, q) {
+                        Ok(ls) => ls,
+                        Err(f) => return Some(f),
+                    };
+                    let dm = ls.material_tangent(&a[q], &t[q]);
+                    def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
+                }
+            }
+            None
+        })
+        .min_by_key(FiniteFailure::qp);
+    first_failure.map_or(Ok(()), Err)
 }
 
 /// The Hencky strain of deformation `def` at Gauss point `q`.
