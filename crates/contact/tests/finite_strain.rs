@@ -365,3 +365,63 @@ fn the_finite_forward_is_the_same_for_any_number_of_threads() {
         }
     }
 }
+
+/// At the end of an elastic load-unload back to depth 0 the contact is released to
+/// round-off (every force ~ 0), and the release must not depend on round-off: with the
+/// penetration tolerance relative to the depth alone (zero at depth 0) a node released
+/// with a gap of -1e-17 mm was re-activated, the set cycled and the step was cut in one
+/// of two runs that differ only in round-off (here: with and without checkpoints, whose
+/// segments start from a fresh factorization). With the tolerance floored at the first
+/// element's width under the punch (`Model::gap_length`), both runs take the schedule's
+/// 18 steps, uncut. (The mesh and history of `adjoint/tests/gradient_fd_finite.rs`, where
+/// the cut broke the checkpointed gradient; without the floor this test fails: 19 steps
+/// for `E = 17000, nu = 0.27`.)
+#[test]
+fn the_release_at_depth_zero_does_not_depend_on_round_off() {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 8,
+        nz: 8,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+    let opts = SolverOptions {
+        residual_tol: 1e-12,
+        ..Default::default()
+    };
+    let ck_opts = SolverOptions {
+        record_fields: false,
+        checkpoint_every: 5,
+        ..opts.clone()
+    };
+    for punch in [
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+        Punch::Sphere { radius: 1.0 },
+    ] {
+        let model = Model::with_contact(mesh.clone(), punch, ContactKind::Normal)
+            .unwrap()
+            .with_kinematics(Kinematics::Finite)
+            .unwrap();
+        // the first element's width under the punch: the graded mesh's first radial size
+        let width = model.mesh.nodes[model.candidates[2]][0];
+        assert!(width > 0.0 && width < 0.2, "{width}");
+        assert_eq!(model.gap_length(), width);
+        let mut solver = DirectSolver::new(&model).unwrap();
+        for c in [[17000.0, 0.27], [20000.0, 0.3]] {
+            let plain = solver.run(&model, &Elastic, &c, &sched, &opts).unwrap();
+            let ck = solver.run(&model, &Elastic, &c, &sched, &ck_opts).unwrap();
+            for t in [&plain, &ck] {
+                let n: Vec<usize> = t.steps.iter().map(|s| s.active.len()).collect();
+                assert_eq!(t.steps.len(), 18, "{c:?}: {n:?}");
+                assert!(t.steps.iter().all(|s| s.on_schedule), "{c:?}: a cut step");
+                assert!(*n.iter().max().unwrap() >= 3, "{n:?}");
+            }
+        }
+    }
+}
