@@ -628,6 +628,9 @@ pub struct DirectSolver {
     /// of the step's initial state (empty under small strain).
     finite_ke: Vec<[[f64; 16]; 16]>,
     finite_e0: Vec<Vec4>,
+    /// Finite strain: each Gauss point's deformation and Hencky strain of the last
+    /// evaluation, from which its element tangents are formed.
+    finite_points: Vec<kinematics::Point>,
 }
 
 impl DirectSolver {
@@ -653,6 +656,7 @@ impl DirectSolver {
             residuals: Vec::new(),
             finite_ke: Vec::new(),
             finite_e0: Vec::new(),
+            finite_points: Vec::new(),
         })
     }
 
@@ -886,6 +890,7 @@ impl DirectSolver {
                 sigma: sigma_out,
                 f_int: &mut self.f_int,
                 tangents: &mut self.tangents,
+                points: &mut self.finite_points,
             };
             return kinematics::evaluate(
                 disc,
@@ -1016,6 +1021,9 @@ impl DirectSolver {
             let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
             self.finite_e0.resize(nq, Vec4::ZERO);
             self.finite_ke.resize(ne, [[0.0; 16]; 16]);
+            if self.finite_points.len() != nq {
+                self.finite_points = vec![kinematics::undeformed_point(&model.disc); nq];
+            }
             kinematics::log_strains(&model.disc, &state.u, &mut self.finite_e0)
                 .map_err(|f| finite_failure(f, state.depth))?;
         }
@@ -1345,14 +1353,15 @@ impl DirectSolver {
                     // the element tangents of this iterate: formed only now that a solve
                     // needs them (a converged pass returned above without them)
                     let tl = std::time::Instant::now();
+                    // (from the deformations and Hencky strains the evaluation of this
+                    // iterate kept: the same `u`)
                     kinematics::element_tangents(
                         &model.disc,
-                        &u,
+                        &self.finite_points,
                         &sigma,
                         &self.tangents,
                         &mut self.finite_ke,
-                    )
-                    .map_err(|f| finite_failure(f, depth))?;
+                    );
                     timing.local += tl.elapsed().as_secs_f64();
                     self.system.set_tangent_elements(model, &self.finite_ke)
                 }

@@ -94,6 +94,20 @@ pub(crate) struct FiniteOut<'a> {
     /// The laws' consistent tangents `A = dT/dE` (every Gauss point), from which
     /// [`element_tangents`] forms the element matrices if a Newton pass needs them.
     pub tangents: &'a mut [Mat4],
+    /// The deformation and its Hencky strain (with `P` and the second derivatives) at every
+    /// Gauss point, kept for [`element_tangents`] at the same displacement.
+    pub points: &'a mut [Point],
+}
+
+/// A Gauss point's deformation and Hencky strain, as [`evaluate`] formed them.
+pub(crate) type Point = (Deformation, LogStrain);
+
+/// A placeholder [`Point`] (the undeformed state) for sizing buffers.
+pub(crate) fn undeformed_point(disc: &Discretization) -> Point {
+    let def = Deformation::new(&disc.qp[0], &[0.0; 16]);
+    let ls = LogStrain::from_difference(&Vec4::ZERO)
+        .unwrap_or_else(|| unreachable!("the Hencky strain of C = 1 exists"));
+    (def, ls)
 }
 
 /// The Hencky strain of every Gauss point at displacement `u` (all dofs).
@@ -138,9 +152,10 @@ pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
 }
 
 /// Local updates from the state (`t0`, Hencky strains `e0`) to displacement `u`: the
-/// stresses `T` into `out.sigma`, the laws' tangents into `out.tangents` and the internal
-/// force into `out.f_int` (overwritten). The element tangents are left to
-/// [`element_tangents`]: a Newton pass whose residual has converged never needs them.
+/// stresses `T` into `out.sigma`, the laws' tangents into `out.tangents`, each point's
+/// deformation and Hencky strain into `out.points` and the internal force into `out.f_int`
+/// (overwritten). The element tangents are left to [`element_tangents`], from those kept
+/// points: a Newton pass whose residual has converged never needs them.
 ///
 /// # Errors
 /// The first inverted Gauss point or failed local update.
@@ -167,8 +182,9 @@ pub(crate) fn evaluate(
         .par_chunks_mut(ELEMENT_CHUNK)
         .zip(out.sigma[..nq].par_chunks_mut(chunk_qp))
         .zip(out.tangents[..nq].par_chunks_mut(chunk_qp))
+        .zip(out.points[..nq].par_chunks_mut(chunk_qp))
         .enumerate()
-        .filter_map(|(chunk, ((fes, sigma), tangents))| {
+        .filter_map(|(chunk, (((fes, sigma), tangents), points))| {
             for (i, fe) in fes.iter_mut().enumerate() {
                 let e = chunk * ELEMENT_CHUNK + i;
                 let ue = disc.gather(e, u);
@@ -201,6 +217,7 @@ pub(crate) fn evaluate(
                     Deformation::add_bt(&def.b_l(qp), &s, qp.w, fe);
                     sigma[local] = t;
                     tangents[local] = a;
+                    points[local] = (def, ls);
                 }
             }
             None
@@ -219,46 +236,33 @@ pub(crate) fn evaluate(
     Ok(())
 }
 
-/// The element tangents (lower triangles) at displacement `u` with the stresses `t` and
-/// laws' tangents `a` that [`evaluate`] left at the same `u`: per point
-/// `w0 (B_L^T (P A P + T:L) B_L + G(S))`, `S = P T`.
-///
-/// # Errors
-/// [`FiniteFailure::Inverted`] at the first inverted point (never after a successful
-/// [`evaluate`] at the same `u`, which computed the same `F`).
+/// The element tangents (lower triangles) from the deformations and Hencky strains
+/// `points`, stresses `t` and laws' tangents `a` that [`evaluate`] left at one
+/// displacement: per point `w0 (B_L^T (P A P + T:L) B_L + G(S))`, `S = P T`. Each element
+/// writes its own matrix: in parallel over fixed chunks, bit for bit the serial result for
+/// any number of threads.
 pub(crate) fn element_tangents(
     disc: &Discretization,
-    u: &[f64],
+    points: &[Point],
     t: &[Vec4],
     a: &[Mat4],
     ke: &mut [[[f64; 16]; 16]],
-) -> Result<(), FiniteFailure> {
-    // every element writes its own matrix: in parallel over fixed chunks, bit for bit the
-    // serial result for any number of threads
-    let first_failure = ke
-        .par_chunks_mut(ELEMENT_CHUNK)
+) {
+    ke.par_chunks_mut(ELEMENT_CHUNK)
         .enumerate()
-        .filter_map(|(chunk, kes)| {
+        .for_each(|(chunk, kes)| {
             for (i, ke) in kes.iter_mut().enumerate() {
                 let e = chunk * ELEMENT_CHUNK + i;
-                let ue = disc.gather(e, u);
                 *ke = [[0.0; 16]; 16];
                 for g in 0..QP_PER_ELEMENT {
                     let q = QP_PER_ELEMENT * e + g;
                     let qp = &disc.qp[q];
-                    let def = Deformation::new(qp, &ue);
-                    let ls = match log_strain(&def, q) {
-                        Ok(ls) => ls,
-                        Err(f) => return Some(f),
-                    };
+                    let (def, ls) = &points[q];
                     let dm = ls.material_tangent(&a[q], &t[q]);
                     def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
                 }
             }
-            None
-        })
-        .min_by_key(FiniteFailure::qp);
-    first_failure.map_or(Ok(()), Err)
+        });
 }
 
 /// The Hencky strain of deformation `def` at Gauss point `q`.
@@ -323,13 +327,15 @@ mod tests {
                     let mut f = vec![0.0; nd];
                     let mut ke = vec![[[0.0; 16]; 16]; ne];
                     let mut a = vec![Mat4::ZERO; nq];
+                    let mut points = vec![undeformed_point(&disc); nq];
                     let out = FiniteOut {
                         sigma: &mut sigma,
                         f_int: &mut f,
                         tangents: &mut a,
+                        points: &mut points,
                     };
                     evaluate(&disc, *law, c, 0.1, &t0, &e0, u, None, out).unwrap();
-                    element_tangents(&disc, u, &sigma, &a, &mut ke).unwrap();
+                    element_tangents(&disc, &points, &sigma, &a, &mut ke);
                     (f, ke)
                 };
                 let (_, ke) = run(&u1);
