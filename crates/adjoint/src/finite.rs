@@ -73,7 +73,7 @@ impl FiniteStep {
                     })?;
                 let b = def.b_l(qp);
                 let dm = ls.material_tangent(&a[q], &t[q]);
-                Deformation::add_tangent(qp, &b, &dm, &ls.pk2(&t[q]), qp.w, ke);
+                def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
                 self.b[q] = b;
                 self.p[q] = ls.p;
             }

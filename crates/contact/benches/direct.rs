@@ -6,7 +6,9 @@
 //! [`ContactKind::NormalFriction`]) right after the frictionless normal twin. Finite strain
 //! (`*_finite`, [`Kinematics::Finite`], normal contact) runs right after its small-strain
 //! normal twin, for R0, R1 and R2 with sY = 500 and sY = 0 (`r2_sy0_*`): the ratio of
-//! issue 13 (docs/validation-finite-strain.md §4).
+//! issue 13 (docs/validation-finite-strain.md §4). Finite strain's Gauss-point passes run
+//! on rayon's threads, small strain's do not: `RAYON_NUM_THREADS=1 cargo bench -p
+//! indentify-contact` gives the serial ratio.
 //! `cargo bench -p indentify-contact`.
 
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -5,7 +5,8 @@
 //! iterations and active-set changes; `--normal` takes normal contact, `--finite` finite
 //! strain with normal contact, for back-to-back ratios against `--normal`; `--sy V` sets
 //! R2's yield stress sY to V MPa instead of 500; `--forces` prints every step's time and
-//! force with 17 significant digits, to compare two builds' results).
+//! force with 17 significant digits, to compare two builds' results; `--friction MU` takes
+//! normal contact with Coulomb friction of coefficient MU instead of frictionless).
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
 };
@@ -25,7 +26,9 @@ fn main() {
     };
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
     let finite = std::env::args().any(|a| a == "--finite");
-    let contact = if finite || std::env::args().any(|a| a == "--normal") {
+    let contact = if let Some(mu) = friction() {
+        ContactKind::NormalFriction { friction: mu }
+    } else if finite || std::env::args().any(|a| a == "--normal") {
         ContactKind::Normal
     } else {
         ContactKind::Vertical
@@ -122,5 +125,18 @@ fn yield_stress() -> f64 {
                 std::process::exit(2);
             }
         },
+    }
+}
+
+/// The friction coefficient after `--friction`, if given.
+fn friction() -> Option<f64> {
+    let args: Vec<String> = std::env::args().collect();
+    let i = args.iter().position(|a| a == "--friction")?;
+    match args.get(i + 1).and_then(|v| v.parse::<f64>().ok()) {
+        Some(v) if v > 0.0 && v.is_finite() => Some(v),
+        _ => {
+            eprintln!("--friction: expected a friction coefficient > 0 after it");
+            std::process::exit(2);
+        }
     }
 }

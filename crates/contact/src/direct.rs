@@ -52,7 +52,10 @@ pub struct SolverOptions {
     /// iterations with 1e-6, 284 with 1e-2, same solution); a step converges only with its
     /// set verified at `residual_tol`.
     pub active_set_check_tol: f64,
-    /// Relative tolerance on penetration (times the current depth) before a node is activated.
+    /// Relative tolerance on penetration before a node is activated: times the current
+    /// depth, and never less than times the width of the first element under the punch
+    /// ([`Model::gap_length`]), so that near depth 0 a node just released is not
+    /// re-activated by a penetration of round-off size.
     pub gap_tol: f64,
     /// Relative tolerance on tensile reactions (times the current force) before a node is released.
     pub lambda_tol: f64,
@@ -286,6 +289,20 @@ impl Model {
     /// Radius of candidate `k` (mm).
     pub fn candidate_r(&self, k: usize) -> f64 {
         self.mesh.nodes[self.candidates[k]][0]
+    }
+
+    /// The length (mm) below which the penetration tolerance stops shrinking with the
+    /// depth: the width of the first element under the punch (the radius of the third
+    /// contact candidate, the first element's outer corner; of the last candidate on a
+    /// top edge with fewer). The tolerance is `gap_tol * max(|depth|, gap_length)`:
+    /// relative to the depth alone it vanished at depth 0, where a node leaving contact
+    /// with a gap of round-off size was re-activated and the active set cycled.
+    pub fn gap_length(&self) -> f64 {
+        let k = self.candidates.len().saturating_sub(1).min(2);
+        self.candidates
+            .get(k)
+            .map_or(0.0, |_| self.candidate_r(k))
+            .max(1e-12)
     }
 }
 
@@ -612,6 +629,9 @@ pub struct DirectSolver {
     /// of the step's initial state (empty under small strain).
     finite_ke: Vec<[[f64; 16]; 16]>,
     finite_e0: Vec<Vec4>,
+    /// Finite strain: each Gauss point's deformation and Hencky strain of the last
+    /// evaluation, from which its element tangents are formed.
+    finite_points: Vec<kinematics::Point>,
 }
 
 impl DirectSolver {
@@ -637,6 +657,7 @@ impl DirectSolver {
             residuals: Vec::new(),
             finite_ke: Vec::new(),
             finite_e0: Vec::new(),
+            finite_points: Vec::new(),
         })
     }
 
@@ -876,6 +897,7 @@ impl DirectSolver {
                 sigma: sigma_out,
                 f_int: &mut self.f_int,
                 tangents: &mut self.tangents,
+                points: &mut self.finite_points,
             };
             return kinematics::evaluate(
                 disc,
@@ -965,6 +987,7 @@ impl DirectSolver {
     ) -> Result<(State, StepRecord), StepFailure> {
         let dt = t1 - state.t;
         let nc = model.candidates.len();
+        let gap_length = model.gap_length();
         let n_eq = model.dofs.n_eq;
         let mut u = state.u.clone();
         let mut sigma = state.sigma.clone();
@@ -1005,6 +1028,9 @@ impl DirectSolver {
             let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
             self.finite_e0.resize(nq, Vec4::ZERO);
             self.finite_ke.resize(ne, [[0.0; 16]; 16]);
+            if self.finite_points.len() != nq {
+                self.finite_points = vec![kinematics::undeformed_point(&model.disc); nq];
+            }
             kinematics::log_strains(&model.disc, &state.u, &mut self.finite_e0)
                 .map_err(|f| finite_failure(f, state.depth))?;
         }
@@ -1162,7 +1188,7 @@ impl DirectSolver {
                     .map(|k| -self.f_int[zdof(k)])
                     .sum();
                 let ltol = opts.lambda_tol * force.abs().max(1e-300);
-                let gtol = opts.gap_tol * depth.abs().max(1e-12);
+                let gtol = opts.gap_tol * depth.abs().max(gap_length);
                 let mut worst: Option<(usize, f64)> = None;
                 let mut violations = Vec::new();
                 for k in 0..nc {
@@ -1334,14 +1360,15 @@ impl DirectSolver {
                     // the element tangents of this iterate: formed only now that a solve
                     // needs them (a converged pass returned above without them)
                     let tl = std::time::Instant::now();
+                    // (from the deformations and Hencky strains the evaluation of this
+                    // iterate kept: the same `u`)
                     kinematics::element_tangents(
                         &model.disc,
-                        &u,
+                        &self.finite_points,
                         &sigma,
                         &self.tangents,
                         &mut self.finite_ke,
-                    )
-                    .map_err(|f| finite_failure(f, depth))?;
+                    );
                     timing.local += tl.elapsed().as_secs_f64();
                     self.system.set_tangent_elements(model, &self.finite_ke)
                 }

@@ -11,6 +11,7 @@
 
 use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
 use indentify_laws::{ElasticDomain, Law, LogStrain, Mat4, Vec4};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{ContactError, ContactKind};
@@ -70,6 +71,20 @@ pub(crate) enum FiniteFailure {
     },
 }
 
+impl FiniteFailure {
+    /// The Gauss point where it failed (the first in element order is the one reported).
+    fn qp(&self) -> usize {
+        match self {
+            FiniteFailure::Inverted { qp, .. } | FiniteFailure::Local { qp, .. } => *qp,
+        }
+    }
+}
+
+/// Elements per parallel task of the Gauss-point passes ([`evaluate`],
+/// [`element_tangents`]): fixed, so the work split, and with the assembly in element
+/// order the results, do not depend on the number of threads.
+const ELEMENT_CHUNK: usize = 8;
+
 /// Output buffers of [`evaluate`].
 pub(crate) struct FiniteOut<'a> {
     /// The stresses `T` (every Gauss point).
@@ -79,6 +94,20 @@ pub(crate) struct FiniteOut<'a> {
     /// The laws' consistent tangents `A = dT/dE` (every Gauss point), from which
     /// [`element_tangents`] forms the element matrices if a Newton pass needs them.
     pub tangents: &'a mut [Mat4],
+    /// The deformation and its Hencky strain (with `P` and the second derivatives) at every
+    /// Gauss point, kept for [`element_tangents`] at the same displacement.
+    pub points: &'a mut [Point],
+}
+
+/// A Gauss point's deformation and Hencky strain, as [`evaluate`] formed them.
+pub(crate) type Point = (Deformation, LogStrain);
+
+/// A placeholder [`Point`] (the undeformed state) for sizing buffers.
+pub(crate) fn undeformed_point(disc: &Discretization) -> Point {
+    let def = Deformation::new(&disc.qp[0], &[0.0; 16]);
+    let ls = LogStrain::from_difference(&Vec4::ZERO)
+        .unwrap_or_else(|| unreachable!("the Hencky strain of C = 1 exists"));
+    (def, ls)
 }
 
 /// The Hencky strain of every Gauss point at displacement `u` (all dofs).
@@ -123,9 +152,10 @@ pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
 }
 
 /// Local updates from the state (`t0`, Hencky strains `e0`) to displacement `u`: the
-/// stresses `T` into `out.sigma`, the laws' tangents into `out.tangents` and the internal
-/// force into `out.f_int` (overwritten). The element tangents are left to
-/// [`element_tangents`]: a Newton pass whose residual has converged never needs them.
+/// stresses `T` into `out.sigma`, the laws' tangents into `out.tangents`, each point's
+/// deformation and Hencky strain into `out.points` and the internal force into `out.f_int`
+/// (overwritten). The element tangents are left to [`element_tangents`], from those kept
+/// points: a Newton pass whose residual has converged never needs them.
 ///
 /// # Errors
 /// The first inverted Gauss point or failed local update.
@@ -141,70 +171,98 @@ pub(crate) fn evaluate(
     domain: Option<&ElasticDomain>,
     out: FiniteOut<'_>,
 ) -> Result<(), FiniteFailure> {
-    out.f_int.fill(0.0);
-    for e in 0..disc.elements.len() {
-        let dofs = disc.element_dofs(e);
-        let ue = dofs.map(|d| u[d]);
-        let mut fe = [0.0; 16];
-        for g in 0..QP_PER_ELEMENT {
-            let q = QP_PER_ELEMENT * e + g;
-            let qp = &disc.qp[q];
-            let def = Deformation::new(qp, &ue);
-            let ls = log_strain(&def, q)?;
-            let de = ls.e - e0[q];
-            let (t, a) = match domain.and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
-            {
-                Some(x) => x,
-                None => {
-                    let up = law
-                        .update(c, &t0[q], &de, dt)
-                        .map_err(|f| FiniteFailure::Local {
-                            qp: q,
-                            reason: f.reason,
-                            factor: f.suggested_dt_factor,
-                        })?;
-                    (up.sigma, up.tangent)
+    let ne = disc.elements.len();
+    let nq = QP_PER_ELEMENT * ne;
+    // element forces in parallel over fixed chunks of elements, each element's arithmetic
+    // the serial one; then assembled serially in element order: bit for bit the same for
+    // any number of threads
+    let mut fe_all = vec![[0.0; 16]; ne];
+    let chunk_qp = QP_PER_ELEMENT * ELEMENT_CHUNK;
+    let first_failure = fe_all
+        .par_chunks_mut(ELEMENT_CHUNK)
+        .zip(out.sigma[..nq].par_chunks_mut(chunk_qp))
+        .zip(out.tangents[..nq].par_chunks_mut(chunk_qp))
+        .zip(out.points[..nq].par_chunks_mut(chunk_qp))
+        .enumerate()
+        .filter_map(|(chunk, (((fes, sigma), tangents), points))| {
+            for (i, fe) in fes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let ue = disc.gather(e, u);
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let local = QP_PER_ELEMENT * i + g;
+                    let qp = &disc.qp[q];
+                    let def = Deformation::new(qp, &ue);
+                    let ls = match log_strain(&def, q) {
+                        Ok(ls) => ls,
+                        Err(f) => return Some(f),
+                    };
+                    let de = ls.e - e0[q];
+                    let (t, a) = match domain
+                        .and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
+                    {
+                        Some(x) => x,
+                        None => match law.update(c, &t0[q], &de, dt) {
+                            Ok(up) => (up.sigma, up.tangent),
+                            Err(f) => {
+                                return Some(FiniteFailure::Local {
+                                    qp: q,
+                                    reason: f.reason,
+                                    factor: f.suggested_dt_factor,
+                                });
+                            }
+                        },
+                    };
+                    let s = ls.pk2(&t);
+                    Deformation::add_bt(&def.b_l(qp), &s, qp.w, fe);
+                    sigma[local] = t;
+                    tangents[local] = a;
+                    points[local] = (def, ls);
                 }
-            };
-            let s = ls.pk2(&t);
-            Deformation::add_bt(&def.b_l(qp), &s, qp.w, &mut fe);
-            out.sigma[q] = t;
-            out.tangents[q] = a;
-        }
-        for (d, v) in dofs.iter().zip(fe) {
+            }
+            None
+        })
+        // the failure of the first element in order, as the serial loop would report it
+        .min_by_key(FiniteFailure::qp);
+    if let Some(f) = first_failure {
+        return Err(f);
+    }
+    out.f_int.fill(0.0);
+    for (e, fe) in fe_all.iter().enumerate() {
+        for (d, v) in disc.element_dofs(e).iter().zip(fe) {
             out.f_int[*d] += v;
         }
     }
     Ok(())
 }
 
-/// The element tangents (lower triangles) at displacement `u` with the stresses `t` and
-/// laws' tangents `a` that [`evaluate`] left at the same `u`: per point
-/// `w0 (B_L^T (P A P + T:L) B_L + G(S))`, `S = P T`.
-///
-/// # Errors
-/// [`FiniteFailure::Inverted`] at the first inverted point (never after a successful
-/// [`evaluate`] at the same `u`, which computed the same `F`).
+/// The element tangents (lower triangles) from the deformations and Hencky strains
+/// `points`, stresses `t` and laws' tangents `a` that [`evaluate`] left at one
+/// displacement: per point `w0 (B_L^T (P A P + T:L) B_L + G(S))`, `S = P T`. Each element
+/// writes its own matrix: in parallel over fixed chunks, bit for bit the serial result for
+/// any number of threads.
 pub(crate) fn element_tangents(
     disc: &Discretization,
-    u: &[f64],
+    points: &[Point],
     t: &[Vec4],
     a: &[Mat4],
     ke: &mut [[[f64; 16]; 16]],
-) -> Result<(), FiniteFailure> {
-    for (e, ke) in ke.iter_mut().enumerate() {
-        let ue = disc.gather(e, u);
-        *ke = [[0.0; 16]; 16];
-        for g in 0..QP_PER_ELEMENT {
-            let q = QP_PER_ELEMENT * e + g;
-            let qp = &disc.qp[q];
-            let def = Deformation::new(qp, &ue);
-            let ls = log_strain(&def, q)?;
-            let dm = ls.material_tangent(&a[q], &t[q]);
-            Deformation::add_tangent(qp, &def.b_l(qp), &dm, &ls.pk2(&t[q]), qp.w, ke);
-        }
-    }
-    Ok(())
+) {
+    ke.par_chunks_mut(ELEMENT_CHUNK)
+        .enumerate()
+        .for_each(|(chunk, kes)| {
+            for (i, ke) in kes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                *ke = [[0.0; 16]; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let qp = &disc.qp[q];
+                    let (def, ls) = &points[q];
+                    let dm = ls.material_tangent(&a[q], &t[q]);
+                    def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
+                }
+            }
+        });
 }
 
 /// The Hencky strain of deformation `def` at Gauss point `q`.
@@ -269,13 +327,15 @@ mod tests {
                     let mut f = vec![0.0; nd];
                     let mut ke = vec![[[0.0; 16]; 16]; ne];
                     let mut a = vec![Mat4::ZERO; nq];
+                    let mut points = vec![undeformed_point(&disc); nq];
                     let out = FiniteOut {
                         sigma: &mut sigma,
                         f_int: &mut f,
                         tangents: &mut a,
+                        points: &mut points,
                     };
                     evaluate(&disc, *law, c, 0.1, &t0, &e0, u, None, out).unwrap();
-                    element_tangents(&disc, u, &sigma, &a, &mut ke).unwrap();
+                    element_tangents(&disc, &points, &sigma, &a, &mut ke);
                     (f, ke)
                 };
                 let (_, ke) = run(&u1);

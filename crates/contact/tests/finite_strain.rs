@@ -1,11 +1,12 @@
 //! Finite-strain kinematics (`Kinematics::Finite`): homogeneous compression of a cylinder
 //! against the closed form (elastic Hencky) and the log-strain ODE (Norton-Hoff, integrated
 //! here by RK4), Newton's quadratic rate under a cone, the small-depth limit equal to small
-//! strain, and the refusal of vertical contact.
+//! strain, the refusal of vertical contact, and the parallel Gauss-point passes giving the
+//! same bits for any number of threads.
 
 use indentify_contact::{
     ContactError, ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, Segment,
-    SolverOptions,
+    SolverOptions, Trajectory, trapezoid,
 };
 use indentify_laws::{Elastic, NortonHoff};
 use indentify_mesh::CylinderMesher;
@@ -303,4 +304,124 @@ fn an_inverted_element_is_reported() {
     assert!(text.contains("element 0"), "{text}");
     assert!(text.contains("depth"), "{text}");
     assert!(text.contains("refine"), "{text}");
+}
+
+/// The finite-strain Gauss-point passes run on rayon over fixed chunks of elements and
+/// assemble in element order: a load-hold-unload history (Norton-Hoff sY = 500, cone,
+/// frictionless and with Coulomb friction mu = 0.2) gives bit for bit the same steps,
+/// forces, reactions, displacements and stresses on 1, 2 and 4 threads.
+#[test]
+fn the_finite_forward_is_the_same_for_any_number_of_threads() {
+    let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+    let c = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    for contact in [
+        ContactKind::Normal,
+        ContactKind::NormalFriction { friction: 0.2 },
+    ] {
+        let model = Model::with_contact(
+            cone_model(Kinematics::Small).mesh,
+            Punch::Cone {
+                half_angle_deg: 68.0,
+            },
+            contact,
+        )
+        .unwrap()
+        .with_kinematics(Kinematics::Finite)
+        .unwrap();
+        let run = |threads: usize| -> Trajectory {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                DirectSolver::new(&model)
+                    .unwrap()
+                    .run(&model, &NortonHoff, &c, &sched, &SolverOptions::default())
+                    .unwrap()
+            })
+        };
+        let bits = |t: &Trajectory| -> Vec<u64> {
+            let mut b: Vec<u64> = Vec::new();
+            for s in &t.steps {
+                b.extend([s.t, s.force].map(f64::to_bits));
+                b.extend(s.lambda.iter().map(|v| v.to_bits()));
+            }
+            for f in &t.fields {
+                b.extend(f.u.iter().map(|v| v.to_bits()));
+                b.extend(f.sigma.iter().flat_map(|v| v.0).map(f64::to_bits));
+            }
+            b
+        };
+        let one = run(1);
+        assert!(one.steps.iter().any(|s| s.active.len() >= 3));
+        let reference = bits(&one);
+        for threads in [2, 4] {
+            let other = run(threads);
+            assert_eq!(one.steps.len(), other.steps.len(), "{threads} threads");
+            assert!(
+                bits(&other) == reference,
+                "{contact:?}: {threads} threads differ"
+            );
+        }
+    }
+}
+
+/// At the end of an elastic load-unload back to depth 0 the contact is released to
+/// round-off (every force ~ 0), and the release must not depend on round-off: with the
+/// penetration tolerance relative to the depth alone (zero at depth 0) a node released
+/// with a gap of -1e-17 mm was re-activated, the set cycled and the step was cut in one
+/// of two runs that differ only in round-off (here: with and without checkpoints, whose
+/// segments start from a fresh factorization). With the tolerance floored at the first
+/// element's width under the punch (`Model::gap_length`), both runs take the schedule's
+/// 18 steps, uncut. (The mesh and history of `adjoint/tests/gradient_fd_finite.rs`, where
+/// the cut broke the checkpointed gradient; without the floor this test fails: 19 steps
+/// for `E = 17000, nu = 0.27`.)
+#[test]
+fn the_release_at_depth_zero_does_not_depend_on_round_off() {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 8,
+        nz: 8,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+    let opts = SolverOptions {
+        residual_tol: 1e-12,
+        ..Default::default()
+    };
+    let ck_opts = SolverOptions {
+        record_fields: false,
+        checkpoint_every: 5,
+        ..opts.clone()
+    };
+    for punch in [
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+        Punch::Sphere { radius: 1.0 },
+    ] {
+        let model = Model::with_contact(mesh.clone(), punch, ContactKind::Normal)
+            .unwrap()
+            .with_kinematics(Kinematics::Finite)
+            .unwrap();
+        // the first element's width under the punch: the graded mesh's first radial size
+        let width = model.mesh.nodes[model.candidates[2]][0];
+        assert!(width > 0.0 && width < 0.2, "{width}");
+        assert_eq!(model.gap_length(), width);
+        let mut solver = DirectSolver::new(&model).unwrap();
+        for c in [[17000.0, 0.27], [20000.0, 0.3]] {
+            let plain = solver.run(&model, &Elastic, &c, &sched, &opts).unwrap();
+            let ck = solver.run(&model, &Elastic, &c, &sched, &ck_opts).unwrap();
+            for t in [&plain, &ck] {
+                let n: Vec<usize> = t.steps.iter().map(|s| s.active.len()).collect();
+                assert_eq!(t.steps.len(), 18, "{c:?}: {n:?}");
+                assert!(t.steps.iter().all(|s| s.on_schedule), "{c:?}: a cut step");
+                assert!(*n.iter().max().unwrap() >= 3, "{n:?}");
+            }
+        }
+    }
 }

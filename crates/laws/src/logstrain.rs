@@ -30,9 +30,10 @@ pub struct LogStrain {
 /// The second derivatives of `E` in compact form: with `g0`, `g1` functions of `(m, s)`,
 /// `d2E_j/dC_k dC_l = 1_j H(g0)_kl + D_j H(g1)_kl + Pd_jl dg1_k + Pd_jk dg1_l` in plane
 /// (`H(g) = g_mm dm dm + g_ms (dm D + D dm) + g_ss D D + g_s Pd`, `dm = [1/2, 1/2, 0, 0]`,
-/// `Pd` the in-plane deviatoric projector) and `d2E_tt/dC_tt2 = -1/(2 C_tt^2)`. Kept as
-/// these scalars, the array is formed only where a tangent needs it ([`LogStrain::t_l`]),
-/// not for every stress evaluation.
+/// `Pd` the in-plane deviatoric projector) and `d2E_tt/dC_tt2 = -1/(2 C_tt^2)`. A
+/// contraction with `T` is then one Hessian of the same form with the coefficients
+/// `T:1 g0_.. + T:D g1_..` ([`LogStrain::t_l`]): 15 products instead of the 64 entries
+/// of the full third-order array.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Second {
     /// `[g_mm, g_ms, g_ss, g_s]` of `g0` and of `g1`.
@@ -180,8 +181,6 @@ impl LogStrain {
     /// `T : L = 4 sum_j T_j d2E_j/dC dC` (Mandel 4x4, symmetric): the part of the material
     /// tangent `dS/dE_GL` from the change of `P`.
     pub fn t_l(&self, t: &Vec4) -> Mat4 {
-        // the third-order array d2E_j/dC_k dC_l from the stored scalars, by the same
-        // expressions (and so the same round-off) as it was always formed, then contracted
         let Second {
             g0,
             g1,
@@ -189,49 +188,31 @@ impl LogStrain {
             dvec,
             ct,
         } = &self.second;
+        let t = &t.0;
+        // sum_j T_j 1_j and sum_j T_j D_j weigh the Hessians of g0 and g1; Pd T
+        let (t1, td) = (t[0] + t[1], dvec[0] * (t[0] - t[1]) + dvec[3] * t[3]);
+        let dt = 0.5 * (t[0] - t[1]);
+        let pt = [dt, -dt, 0.0, t[3]];
+        let coef = |i: usize| 4.0 * (t1 * g0[i] + td * g1[i]);
+        let (gmm, gms, gss, gs) = (coef(0), coef(1), coef(2), coef(3));
         let dm = [0.5, 0.5, 0.0, 0.0];
-        let pd = [
+        const PD: [[f64; 4]; 4] = [
             [0.5, -0.5, 0.0, 0.0],
             [-0.5, 0.5, 0.0, 0.0],
             [0.0, 0.0, 0.0, 0.0],
             [0.0, 0.0, 0.0, 1.0],
         ];
-        let one2 = [1.0, 1.0, 0.0, 0.0];
-        let hessian = |[gmm, gms, gss, gs]: [f64; 4]| -> [[f64; 4]; 4] {
-            std::array::from_fn(|k| {
-                std::array::from_fn(|l| {
-                    gmm * dm[k] * dm[l]
-                        + gms * (dm[k] * dvec[l] + dvec[k] * dm[l])
-                        + gss * dvec[k] * dvec[l]
-                        + gs * pd[k][l]
-                })
-            })
-        };
-        let (hg0, hg1) = (hessian(*g0), hessian(*g1));
-        let mut hess = [[[0.0; 4]; 4]; 4];
-        for j in [0, 1, 3] {
-            for k in [0, 1, 3] {
-                for l in [0, 1, 3] {
-                    hess[j][k][l] = one2[j] * hg0[k][l]
-                        + dvec[j] * hg1[k][l]
-                        + pd[j][l] * dg1[k]
-                        + pd[j][k] * dg1[l];
-                }
-            }
-        }
-        hess[2][2][2] = -0.5 / (ct * ct);
         let mut m = [[0.0; 4]; 4];
-        for (j, hj) in hess.iter().enumerate() {
-            let tj = 4.0 * t.0[j];
-            if tj == 0.0 {
-                continue;
-            }
-            for (row, hrow) in m.iter_mut().zip(hj) {
-                for (v, h) in row.iter_mut().zip(hrow) {
-                    *v += tj * h;
-                }
+        for k in [0, 1, 3] {
+            for l in [0, 1, 3] {
+                m[k][l] = gmm * dm[k] * dm[l]
+                    + gms * (dm[k] * dvec[l] + dvec[k] * dm[l])
+                    + gss * dvec[k] * dvec[l]
+                    + gs * PD[k][l]
+                    + 4.0 * (dg1[k] * pt[l] + pt[k] * dg1[l]);
             }
         }
+        m[2][2] = -2.0 * t[2] / (ct * ct);
         Mat4(m)
     }
 
@@ -241,9 +222,30 @@ impl LogStrain {
     }
 
     /// The material tangent `dS/dE_GL = P : A : P + T : L` for the law's tangent
-    /// `A = dT/dE`.
+    /// `A = dT/dE`. (`P` couples the in-plane components `[0, 1, 3]` only among
+    /// themselves, its hoop entry stands alone: the products skip its zeros.)
+    #[inline]
     pub fn material_tangent(&self, a: &Mat4, t: &Vec4) -> Mat4 {
-        self.p.mul_mat(&a.mul_mat(&self.p)) + self.t_l(t)
+        let (p, a) = (&self.p.0, &a.0);
+        const PLANE: [usize; 3] = [0, 1, 3];
+        // A P, then P (A P)
+        let mut ap = [[0.0; 4]; 4];
+        for i in 0..4 {
+            for l in PLANE {
+                ap[i][l] = a[i][0] * p[0][l] + a[i][1] * p[1][l] + a[i][3] * p[3][l];
+            }
+            ap[i][2] = a[i][2] * p[2][2];
+        }
+        let mut m = self.t_l(t).0;
+        for k in PLANE {
+            for l in 0..4 {
+                m[k][l] += p[k][0] * ap[0][l] + p[k][1] * ap[1][l] + p[k][3] * ap[3][l];
+            }
+        }
+        for l in 0..4 {
+            m[2][l] += p[2][2] * ap[2][l];
+        }
+        Mat4(m)
     }
 }
 
