@@ -10,7 +10,9 @@ use indentify_study::simulate::{self, SimulateOptions};
 use std::path::{Path, PathBuf};
 
 fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/real").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/real")
+        .join(name)
 }
 
 /// Measured data take 2 sub-steps between points unless stated; a history has none.
@@ -28,7 +30,10 @@ fn measured_records_default_to_two_substeps_and_histories_to_none() {
     );
     let one = load(&example("anon-nh.ron"), &["data.substeps=1".into()]).unwrap();
     let p1 = one.prepare("anon-nh").unwrap();
-    assert_eq!((p1.schedule.n_solver_steps(), p1.schedule.substeps_summary()), (59, None));
+    assert_eq!(
+        (p1.schedule.n_solver_steps(), p1.schedule.substeps_summary()),
+        (59, None)
+    );
     // the record's points are the schedule's either way
     assert_eq!(p1.schedule.t, p.schedule.t);
     let r1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/r1-maxwell.ron");
@@ -53,7 +58,12 @@ fn the_curve_stays_on_the_record_points() {
     let (a, b) = (run(1), run(3));
     assert_eq!(a.rows.len(), 12);
     assert_eq!(b.rows.len(), 12);
-    assert!(a.rows.iter().zip(&b.rows).all(|(x, y)| x.t == y.t && x.h == y.h));
+    assert!(
+        a.rows
+            .iter()
+            .zip(&b.rows)
+            .all(|(x, y)| x.t == y.t && x.h == y.h)
+    );
     assert!(b.trajectory.steps.len() >= 3 * 11);
     assert_eq!(b.trajectory.schedule_steps().count(), 11);
     assert_eq!(b.substeps.as_deref(), Some("3 sub-steps per step"));
