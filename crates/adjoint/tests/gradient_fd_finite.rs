@@ -13,28 +13,8 @@
 mod common;
 
 use indentify_adjoint::Adjoint;
-use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
-};
+use indentify_contact::{DirectSolver, Punch, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-fn model(punch: Punch) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, ContactKind::Normal)
-        .unwrap()
-        .with_kinematics(Kinematics::Finite)
-        .unwrap()
-}
 
 fn cone() -> Punch {
     Punch::Cone {
@@ -56,7 +36,15 @@ fn check_gradient(
     c: &[f64],
     checked: usize,
 ) -> (f64, f64) {
-    common::whole_history_check(&model(punch), law, truth, c, checked, 6, 1e-10)
+    common::whole_history_check(
+        &common::finite_model(punch),
+        law,
+        truth,
+        c,
+        checked,
+        6,
+        1e-10,
+    )
 }
 
 /// The finite-strain adjoint shall differentiate an elastic cost (cone and sphere).
@@ -126,7 +114,7 @@ fn stress_scaling_identity_under_finite_strain() {
         ),
     ];
     for punch in [cone(), sphere()] {
-        let model = model(punch);
+        let model = common::finite_model(punch);
         let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
         let opts = SolverOptions {
             residual_tol: 1e-12,

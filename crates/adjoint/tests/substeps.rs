@@ -9,30 +9,10 @@
 //! Norton-Hoff with yield, cone and sphere; 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45;
 //! trapezoid 0 -> 0.1 mm -> hold -> 0 in 4 steps per segment, sub-steps 1 to 3 per step.
 
-use indentify_adjoint::Adjoint;
-use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
-};
-use indentify_laws::{Law, NortonHoff};
-use indentify_mesh::CylinderMesher;
+mod common;
 
-fn model(punch: Punch) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, ContactKind::Normal)
-        .unwrap()
-        .with_kinematics(Kinematics::Finite)
-        .unwrap()
-}
+use indentify_contact::{DirectSolver, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_laws::NortonHoff;
 
 /// The trapezoid's 12 steps with uneven sub-steps (more in the loading, none in places).
 fn schedule() -> Schedule {
@@ -75,7 +55,7 @@ fn substeps_solve_the_schedule_with_the_points_inserted() {
         },
         Punch::Sphere { radius: 1.0 },
     ] {
-        let m = model(punch);
+        let m = common::finite_model(punch);
         let s = schedule();
         let (fine, at) = inserted(&s);
         let mut solver = DirectSolver::new(&m).unwrap();
@@ -112,7 +92,8 @@ fn substeps_solve_the_schedule_with_the_points_inserted() {
 }
 
 /// The adjoint through sub-steps: vs central differences of the cost at the schedule's
-/// points (1e-6), vs `J^T rho` (1e-10), recorded vs replayed from checkpoints (1e-10).
+/// points (1e-6), vs `J^T rho` (1e-10), recorded vs replayed from checkpoints (1e-10)
+/// (`common::whole_history_check_on`).
 #[test]
 fn the_adjoint_through_substeps_matches_finite_differences() {
     let law = NortonHoff;
@@ -124,73 +105,9 @@ fn the_adjoint_through_substeps_matches_finite_differences() {
         },
         Punch::Sphere { radius: 1.0 },
     ] {
-        let m = model(punch);
-        let s = schedule();
-        let opts = opts();
-        let mut solver = DirectSolver::new(&m).unwrap();
-        let data = solver.run(&m, &law, &truth, &s, &opts).unwrap().forces();
-        let mut cost = |p: &[f64]| -> Result<f64, String> {
-            let t = solver
-                .run(&m, &law, p, &s, &opts)
-                .map_err(|e| e.to_string())?;
-            Ok(0.5
-                * t.forces()
-                    .iter()
-                    .zip(&data)
-                    .map(|(f, d)| (f - d).powi(2))
-                    .sum::<f64>())
-        };
-        let fd: Vec<f64> = (0..5)
-            .map(|k| central_difference(&mut cost, &c, k, 1e-5).unwrap())
-            .collect();
-        let mut solver = DirectSolver::new(&m).unwrap();
-        let traj = solver.run(&m, &law, &c, &s, &opts).unwrap();
-        assert!(traj.steps.len() >= s.n_solver_steps());
-        let rho: Vec<f64> = traj
-            .steps
-            .iter()
-            .map(|st| {
-                if st.on_schedule {
-                    st.force - data[st.schedule_index]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let mut adj = Adjoint::new(&m).unwrap();
-        let g = adj.gradient(&m, &law, &c, &traj, &rho).unwrap();
-        let jt = adj
-            .sensitivities(&m, &law, &c, &traj)
-            .unwrap()
-            .transpose_mul(&rho);
-        let ck_opts = SolverOptions {
-            record_fields: false,
-            checkpoint_every: 5,
-            ..opts.clone()
-        };
-        let ck = solver.run(&m, &law, &c, &s, &ck_opts).unwrap();
-        let g_ck = adj
-            .gradient_replayed(&m, &law, &c, &ck, &rho, &mut solver, &s, &ck_opts)
-            .unwrap();
-        for k in 0..5 {
-            let name = law.params()[k].name;
-            let (rf, rs, rc) = (
-                relative_difference(g.dj_dc[k], fd[k]),
-                relative_difference(g.dj_dc[k], jt[k]),
-                relative_difference(g.dj_dc[k], g_ck.dj_dc[k]),
-            );
-            println!(
-                "{name}: adjoint {:.12e} fd {:.12e} | rel fd {rf:.1e} sens {rs:.1e} replay {rc:.1e}",
-                g.dj_dc[k], fd[k]
-            );
-            assert!(rf < 1e-6, "{name}: adjoint {} vs fd {}", g.dj_dc[k], fd[k]);
-            assert!(
-                rs < 1e-10,
-                "{name}: adjoint {} vs J^T rho {}",
-                g.dj_dc[k],
-                jt[k]
-            );
-            assert!(rc < 1e-10, "{name}: recorded vs replayed {}", g_ck.dj_dc[k]);
-        }
+        let m = common::finite_model(punch);
+        let (fd, sens) =
+            common::whole_history_check_on(&m, &law, &truth, &c, 5, &schedule(), 1e-10);
+        println!("worst relative differences: fd {fd:.1e}, sensitivities {sens:.1e}");
     }
 }

@@ -6,8 +6,32 @@
 
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_contact::{DirectSolver, Model, Schedule, SolverOptions, Trajectory, trapezoid};
+use indentify_contact::{
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
+    trapezoid,
+};
 use indentify_laws::Law;
+use indentify_mesh::CylinderMesher;
+
+/// The finite-strain test model: a 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45 towards the
+/// axis and the top, frictionless normal contact with `punch`, `Kinematics::Finite`.
+#[allow(dead_code)]
+pub fn finite_model(punch: Punch) -> Model {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 8,
+        nz: 8,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    Model::with_contact(mesh, punch, ContactKind::Normal)
+        .unwrap()
+        .with_kinematics(Kinematics::Finite)
+        .unwrap()
+}
 
 /// On `model`, the trapezoid 0 -> 0.1 mm -> hold -> 0 in `steps` steps per segment with
 /// the data simulated at `truth`: adjoint vs central differences (1e-6), vs `J^T rho`
@@ -26,6 +50,22 @@ pub fn whole_history_check(
     sens_tol: f64,
 ) -> (f64, f64) {
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, steps)).unwrap();
+    whole_history_check_on(model, law, truth, c, checked, &sched, sens_tol)
+}
+
+/// [`whole_history_check`] over any schedule `sched` (which must load into contact and
+/// release it), e.g. one whose steps are solved in sub-steps.
+#[allow(clippy::too_many_arguments, dead_code)]
+pub fn whole_history_check_on(
+    model: &Model,
+    law: &dyn Law,
+    truth: &[f64],
+    c: &[f64],
+    checked: usize,
+    sched: &Schedule,
+    sens_tol: f64,
+) -> (f64, f64) {
+    let sched = sched.clone();
     let opts = SolverOptions {
         residual_tol: 1e-12,
         ..Default::default()
