@@ -16,51 +16,39 @@
 mod common;
 
 use common::FrictionCase;
-use indentify_contact::{ContactKind, Kinematics, Model, Punch};
-use indentify_mesh::CylinderMesher;
-
-fn model(punch: Punch, mu: f64) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    let kind = ContactKind::normal_with_friction(mu).unwrap();
-    Model::with_contact(mesh, punch, kind)
-        .unwrap()
-        .with_kinematics(Kinematics::Finite)
-        .unwrap()
-}
 
 /// The finite-strain adjoint with friction shall differentiate an elastic cost (cone
 /// mu = 0.1, sphere mu = 0.2).
 #[test]
 fn elastic_finite_with_friction() {
-    common::friction_law_check(FrictionCase::Elastic, model, 6);
+    common::friction_law_check(FrictionCase::Elastic, common::finite_model_with_friction, 6);
 }
 
 /// The finite-strain adjoint with friction shall differentiate a Maxwell cost (cone
 /// mu = 0.2, sphere mu = 0.1).
 #[test]
 fn maxwell_finite_with_friction() {
-    common::friction_law_check(FrictionCase::Maxwell, model, 6);
+    common::friction_law_check(FrictionCase::Maxwell, common::finite_model_with_friction, 6);
 }
 
 /// The finite-strain adjoint with friction shall differentiate a Norton-Hoff cost with
 /// yield (sY > 0; cone mu = 0.1, sphere mu = 0.2).
 #[test]
 fn norton_hoff_with_yield_finite_with_friction() {
-    common::friction_law_check(FrictionCase::NortonHoffYield, model, 6);
+    common::friction_law_check(
+        FrictionCase::NortonHoffYield,
+        common::finite_model_with_friction,
+        6,
+    );
 }
 
 /// The finite-strain adjoint with friction shall differentiate a Norton-Hoff cost without
 /// yield (sY = 0; cone and sphere, mu = 0.2).
 #[test]
 fn norton_hoff_without_yield_finite_with_friction() {
-    common::friction_law_check(FrictionCase::NortonHoffNoYield, model, 6);
+    common::friction_law_check(
+        FrictionCase::NortonHoffNoYield,
+        common::finite_model_with_friction,
+        6,
+    );
 }

@@ -17,6 +17,12 @@ use indentify_mesh::CylinderMesher;
 /// axis and the top, frictionless normal contact with `punch`, `Kinematics::Finite`.
 #[allow(dead_code)]
 pub fn finite_model(punch: Punch) -> Model {
+    finite_model_with_friction(punch, 0.0)
+}
+
+/// [`finite_model`] with Coulomb friction `mu` (frictionless `Normal` for `mu = 0`).
+#[allow(dead_code)]
+pub fn finite_model_with_friction(punch: Punch, mu: f64) -> Model {
     let mesh = CylinderMesher {
         radius: 4.0,
         height: 4.0,
@@ -27,7 +33,8 @@ pub fn finite_model(punch: Punch) -> Model {
     }
     .build()
     .unwrap();
-    Model::with_contact(mesh, punch, ContactKind::Normal)
+    let kind = ContactKind::normal_with_friction(mu).unwrap();
+    Model::with_contact(mesh, punch, kind)
         .unwrap()
         .with_kinematics(Kinematics::Finite)
         .unwrap()
