@@ -74,6 +74,7 @@ pub mod profile;
 
 mod argmin_glue;
 mod lm;
+mod tasks;
 
 pub use data::ForceRecord;
 pub use identifiability::{Identifiability, NoiseModel};
@@ -83,7 +84,7 @@ pub use optimize::{
     ParamOutcome, StopCriteria, StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
-pub use problem::{Evaluator, Problem, Test};
+pub use problem::{Evaluator, Prefetch, Problem, Test};
 
 use indentify_adjoint::AdjointError;
 use indentify_contact::ContactError;

@@ -32,7 +32,7 @@ use crate::argmin_glue::{ArgminObjective, Monitored};
 use crate::identifiability::{Column, Forces, Identifiability, NoiseModel};
 use crate::linalg::{norm_inf, norm2};
 use crate::params::{ParamSpec, Parameterization};
-use crate::problem::{Evaluator, Problem};
+use crate::problem::{Evaluator, Prefetch, Problem};
 
 /// The optimization method.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -748,7 +748,13 @@ fn run(
     if matches!(config.method, Method::Lbfgsb { .. }) && !cfg!(feature = "lbfgsb") {
         return Err(IdentifyError::MethodUnavailable("lbfgsb"));
     }
-    let eval = Evaluator::new(problem)?;
+    let mut eval = Evaluator::new(problem)?;
+    // what the method asks for after a cost: a gradient after an accepted line-search point,
+    // a Jacobian after an accepted Levenberg-Marquardt trial (computed on idle cores only)
+    eval.set_prefetch(match config.method {
+        Method::LevenbergMarquardt => Prefetch::Jacobian,
+        _ => Prefetch::Gradient,
+    });
     let objective = Objective::new(eval, param, config.stop.max_line_search_evaluations);
     let y0 = objective.param.to_scaled(&objective.param.base);
     // kappa from the start's gradient (one forward + one adjoint, cached for the optimizer)

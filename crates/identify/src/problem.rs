@@ -12,10 +12,10 @@ use std::time::Instant;
 use indentify_adjoint::Adjoint;
 use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
 use indentify_laws::Law;
-use rayon::prelude::*;
 
 use crate::IdentifyError;
 use crate::data::ForceRecord;
+use crate::tasks::{self, Follow, Todo};
 
 /// One test of an identification: the direct problem (model, depth schedule, solver
 /// options) and the data it is compared with, weighted.
@@ -326,15 +326,46 @@ pub struct Counts {
     pub forward: usize,
     /// Forward solves that failed (the cost is then `+inf`).
     pub forward_failed: usize,
-    /// Adjoint sweeps.
+    /// Adjoint sweeps asked for (one per test and gradient request not in the cache,
+    /// whether the sweep ran then or had been computed ahead: [`Counts::prefetched`]).
     pub adjoint: usize,
-    /// Forward-sensitivity (Jacobian) computations.
+    /// Forward-sensitivity (Jacobian) computations asked for (as [`Counts::adjoint`]).
     pub sensitivities: usize,
     /// Requests answered from the cache.
     pub cache_hits: usize,
     /// Distinct parameter points requested (forward solves can only exceed this when the
     /// optimizer comes back to a point it left: the cache holds one point).
     pub distinct_points: usize,
+    /// Adjoint sweeps or sensitivity passes computed ahead of a request on a core that
+    /// would otherwise have waited ([`Evaluator::set_prefetch`]); unlike the other counts
+    /// this one depends on timing, and those of points the optimizer leaves are wasted.
+    pub prefetched: usize,
+}
+
+/// What an [`Evaluator`] may compute ahead of a request, on cores that the forward runs of
+/// a joint problem leave idle (fewer tests left than cores while the last forwards run):
+/// the follow-up an optimizer usually asks for next at the point whose cost it just asked
+/// for. It never delays the request that was made (a follow-up only starts when it is
+/// expected, from the previous evaluation's timings, to end by the time the last running
+/// forward does) and never changes a result (bit-identical with or without).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Prefetch {
+    /// Compute nothing ahead (the default).
+    #[default]
+    None,
+    /// The tests' adjoint sweeps (gradient methods: the gradient follows an accepted
+    /// line-search point).
+    Gradient,
+    /// The tests' forward sensitivities (Levenberg-Marquardt: the Jacobian follows an
+    /// accepted trial point).
+    Jacobian,
+}
+
+/// The follow-up of a test's forward run in one evaluation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Gradient,
+    Jacobian,
 }
 
 /// What the cache holds of one test at the last parameter point.
@@ -342,8 +373,23 @@ pub struct Counts {
 struct TestEntry {
     forces: Option<Vec<f64>>,
     traj: Option<Trajectory>,
+    /// Why the forward run failed (taken when the evaluation is assembled).
+    forward_error: Option<ContactError>,
     gradient: Option<Vec<f64>>,
     jacobian: Option<Vec<Vec<f64>>>,
+    /// Why the adjoint sweep failed (taken by the request).
+    gradient_error: Option<IdentifyError>,
+    /// Why the sensitivities failed (taken by the request).
+    jacobian_error: Option<IdentifyError>,
+}
+
+impl TestEntry {
+    fn has(&self, kind: Kind) -> bool {
+        match kind {
+            Kind::Gradient => self.gradient.is_some(),
+            Kind::Jacobian => self.jacobian.is_some(),
+        }
+    }
 }
 
 /// What the cache holds for the last parameter point.
@@ -358,11 +404,13 @@ struct Entry {
     jacobian: Option<Vec<Vec<f64>>>,
 }
 
-/// The forward and adjoint workspaces of one test.
+/// The forward and adjoint workspaces of one test, and how long its last forward run,
+/// adjoint sweep and sensitivity pass took (for the scheduling of [`Prefetch`]).
 #[derive(Debug)]
 struct Work {
     solver: DirectSolver,
     adjoint: Adjoint,
+    seconds: [Option<f64>; 3],
 }
 
 /// The cost/gradient oracle of one [`Problem`]: owns each test's forward and adjoint
@@ -373,10 +421,13 @@ struct Work {
 /// report's force call cost one forward solve and one adjoint sweep per test in total.
 /// Each request at a new point replaces the entry.
 ///
-/// The tests of a joint problem are solved in parallel on the current rayon pool (each
-/// test's forward run, adjoint sweep and sensitivities are independent); their costs,
-/// gradients and Jacobian rows are combined in test order, never in completion order,
-/// so every result is bit-identical whatever the number of threads.
+/// The tests of a joint problem are solved in parallel on the current rayon pool: each
+/// test's forward run is a task and its adjoint sweep or sensitivities another, started
+/// when that forward ends (forwards first), so that with fewer cores than tests the
+/// follow-ups fill the cores the last forwards leave idle ([`Prefetch`] does the same for
+/// a follow-up not yet asked for). Costs, gradients and Jacobian rows are combined in
+/// test order, never in completion order, so every result is bit-identical whatever the
+/// number of threads and the timing.
 #[derive(Debug)]
 pub struct Evaluator<'p> {
     problem: &'p Problem,
@@ -386,35 +437,176 @@ pub struct Evaluator<'p> {
     best: Option<(f64, Vec<f64>)>,
     start: Instant,
     seen: HashSet<Vec<u64>>,
+    prefetch: Prefetch,
 }
 
 fn key_of(c: &[f64]) -> Vec<u64> {
     c.iter().map(|v| v.to_bits()).collect()
 }
 
-/// `f` on every (workspace, test, cache entry) triple, in parallel when there are several
-/// tests; the results in test order.
-fn per_test<T: Send>(
-    pool: Option<&rayon::ThreadPool>,
-    work: &mut [Work],
-    tests: &[Test],
-    entries: &mut [TestEntry],
-    f: impl Fn(&mut Work, &Test, &mut TestEntry) -> T + Sync + Send,
-) -> Vec<T> {
-    if tests.len() == 1 {
-        return vec![f(&mut work[0], &tests[0], &mut entries[0])];
+/// Test `k`'s forward run at `c` into its cache entry; false when it failed.
+fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
+    let t = &p.tests[k];
+    match w
+        .solver
+        .run(&t.model, p.law, c, &t.schedule, &t.solver_options)
+    {
+        Ok(traj) => {
+            te.forces = Some(traj.forces());
+            te.traj = Some(traj);
+            true
+        }
+        Err(e) => {
+            te.forward_error = Some(e);
+            false
+        }
     }
-    let mut all = move || {
-        work.par_iter_mut()
-            .zip(tests.par_iter())
-            .zip(entries.par_iter_mut())
-            .map(|((w, t), e)| f(w, t, e))
-            .collect()
+}
+
+/// Test `k`'s adjoint gradient at `c` from its cached trajectory.
+fn gradient_task(
+    p: &Problem,
+    c: &[f64],
+    k: usize,
+    w: &mut Work,
+    te: &TestEntry,
+) -> Result<Vec<f64>, IdentifyError> {
+    let t = &p.tests[k];
+    let Some(traj) = te.traj.as_ref() else {
+        return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
-    match pool {
-        Some(p) => p.install(all),
-        None => all(),
+    let rho = t.dj_df(traj);
+    let g = if t.solver_options.checkpoint_every > 0 {
+        w.adjoint.gradient_replayed(
+            &t.model,
+            p.law,
+            c,
+            traj,
+            &rho,
+            &mut w.solver,
+            &t.schedule,
+            &t.solver_options,
+        )
+    } else {
+        w.adjoint.gradient(&t.model, p.law, c, traj, &rho)
     }
+    .map_err(|source| IdentifyError::Adjoint {
+        params: c.to_vec(),
+        source,
+    })?;
+    Ok(g.dj_dc)
+}
+
+/// Test `k`'s Jacobian rows (`dF/dc` at its schedule times) at `c` by forward
+/// sensitivities from its cached trajectory.
+fn jacobian_task(
+    p: &Problem,
+    c: &[f64],
+    k: usize,
+    w: &mut Work,
+    te: &TestEntry,
+) -> Result<Vec<Vec<f64>>, IdentifyError> {
+    let t = &p.tests[k];
+    let Some(traj) = te.traj.as_ref() else {
+        return Err(IdentifyError::Optimizer("trajectory missing".into()));
+    };
+    // the forward sensitivities need every step's fields: a checkpointed trajectory is
+    // recorded again in full for them (the memory of one unbounded run)
+    let full;
+    let traj = if traj.fields.len() == traj.steps.len() + 1 {
+        traj
+    } else {
+        let opts = SolverOptions {
+            record_fields: true,
+            checkpoint_every: 0,
+            ..t.solver_options.clone()
+        };
+        full = w
+            .solver
+            .run(&t.model, p.law, c, &t.schedule, &opts)
+            .map_err(|source| IdentifyError::Forward {
+                params: c.to_vec(),
+                source,
+            })?;
+        &full
+    };
+    let sens = w
+        .adjoint
+        .sensitivities(&t.model, p.law, c, traj)
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
+    let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
+    for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
+        if s.on_schedule {
+            jac[s.schedule_index].clone_from(row);
+        }
+    }
+    Ok(jac)
+}
+
+/// Runs the forward runs (`forward`) and follow-ups of `kind` of every test through the
+/// task scheduler; `needed`: the follow-ups are asked for, otherwise speculative.
+/// Returns how many speculative follow-ups ran.
+fn run_tests(
+    p: &Problem,
+    c: &[f64],
+    work: &mut [Work],
+    entries: &mut [TestEntry],
+    forward: bool,
+    kind: Option<Kind>,
+    needed: bool,
+) -> usize {
+    let slot = |k: Kind| match k {
+        Kind::Gradient => 1,
+        Kind::Jacobian => 2,
+    };
+    let todo: Vec<Todo> = work
+        .iter()
+        .zip(entries.iter())
+        .map(|(w, te)| Todo {
+            forward,
+            follow: match kind {
+                Some(k) if !te.has(k) && needed => Follow::Needed,
+                Some(k) if !te.has(k) => Follow::Speculative,
+                _ => Follow::None,
+            },
+            expected: (w.seconds[0], kind.and_then(|k| w.seconds[slot(k)])),
+        })
+        .collect();
+    let mut slots: Vec<(&mut Work, &mut TestEntry)> =
+        work.iter_mut().zip(entries.iter_mut()).collect();
+    let done = tasks::run(
+        p.pool.as_deref(),
+        &mut slots,
+        &todo,
+        |k, (w, te)| forward_task(p, c, k, w, te),
+        |k, (w, te)| match kind {
+            Some(Kind::Gradient) => match gradient_task(p, c, k, w, te) {
+                Ok(g) => te.gradient = Some(g),
+                Err(e) => te.gradient_error = Some(e),
+            },
+            Some(Kind::Jacobian) => match jacobian_task(p, c, k, w, te) {
+                Ok(j) => te.jacobian = Some(j),
+                Err(e) => te.jacobian_error = Some(e),
+            },
+            None => {}
+        },
+    );
+    let mut speculated = 0;
+    for ((w, d), t) in work.iter_mut().zip(&done).zip(&todo) {
+        if let Some(s) = d.forward {
+            w.seconds[0] = Some(s);
+        }
+        if let (Some(s), Some(k)) = (d.follow, kind) {
+            w.seconds[slot(k)] = Some(s);
+            if t.follow == Follow::Speculative {
+                speculated += 1;
+            }
+        }
+    }
+    speculated
 }
 
 impl<'p> Evaluator<'p> {
@@ -434,7 +626,11 @@ impl<'p> Evaluator<'p> {
                 params: vec![],
                 source,
             })?;
-            work.push(Work { solver, adjoint });
+            work.push(Work {
+                solver,
+                adjoint,
+                seconds: [None; 3],
+            });
         }
         Ok(Evaluator {
             problem,
@@ -444,7 +640,14 @@ impl<'p> Evaluator<'p> {
             best: None,
             start: Instant::now(),
             seen: HashSet::new(),
+            prefetch: Prefetch::None,
         })
+    }
+
+    /// What to compute ahead of a request on cores left idle ([`Prefetch`]; the
+    /// optimizers of [`crate::optimize`] set it for their method).
+    pub fn set_prefetch(&mut self, prefetch: Prefetch) {
+        self.prefetch = prefetch;
     }
 
     /// The problem.
@@ -469,52 +672,56 @@ impl<'p> Evaluator<'p> {
     }
 
     /// Makes sure the cache holds point `c` with its trajectories (one forward solve per
-    /// test unless already there). A failed forward solve caches `J = +inf`.
-    fn ensure(&mut self, c: &[f64], need_traj: bool) -> Result<&mut Entry, IdentifyError> {
+    /// test unless already there), and, with `want`, every test's follow-up of that kind
+    /// (scheduled together with the forwards). A failed forward solve caches `J = +inf`.
+    fn ensure(
+        &mut self,
+        c: &[f64],
+        need_traj: bool,
+        want: Option<Kind>,
+    ) -> Result<&mut Entry, IdentifyError> {
         let key = key_of(c);
         if self.seen.insert(key.clone()) {
             self.counts.distinct_points += 1;
         }
+        let p = self.problem;
         let hit = self
             .entry
             .as_ref()
             .is_some_and(|e| e.key == key && (!need_traj || e.forces.is_some()));
         if hit {
             self.counts.cache_hits += 1;
+            if let (Some(kind), Some(e)) = (want, self.entry.as_mut())
+                && e.forces.is_some()
+                && e.tests.iter().any(|t| !t.has(kind))
+            {
+                run_tests(p, c, &mut self.work, &mut e.tests, false, want, true);
+            }
         } else {
-            let p = self.problem;
             let n = p.tests.len();
             self.counts.forward += n;
             self.entry = None;
             let mut tests: Vec<TestEntry> = (0..n).map(|_| TestEntry::default()).collect();
-            let runs = per_test(
-                p.pool.as_deref(),
-                &mut self.work,
-                &p.tests,
-                &mut tests,
-                |w, t, _| {
-                    w.solver
-                        .run(&t.model, p.law, c, &t.schedule, &t.solver_options)
-                },
-            );
+            let (kind, needed) = match (want, self.prefetch) {
+                (Some(k), _) => (Some(k), true),
+                (None, Prefetch::Gradient) => (Some(Kind::Gradient), false),
+                (None, Prefetch::Jacobian) => (Some(Kind::Jacobian), false),
+                (None, Prefetch::None) => (None, false),
+            };
+            self.counts.prefetched +=
+                run_tests(p, c, &mut self.work, &mut tests, true, kind, needed);
             let mut failed = None;
             let mut error = None;
-            for (k, run) in runs.into_iter().enumerate() {
-                match run {
-                    Ok(traj) => {
-                        tests[k].forces = Some(traj.forces());
-                        tests[k].traj = Some(traj);
+            for (k, te) in tests.iter_mut().enumerate() {
+                if let Some(source) = te.forward_error.take() {
+                    let step_failed = matches!(source, ContactError::StepFailed { .. });
+                    if step_failed {
+                        self.counts.forward_failed += 1;
                     }
-                    Err(source) => {
-                        let step_failed = matches!(source, ContactError::StepFailed { .. });
-                        if step_failed {
-                            self.counts.forward_failed += 1;
-                        }
-                        if step_failed && !need_traj {
-                            failed.get_or_insert(k);
-                        } else if error.is_none() {
-                            error = Some(source);
-                        }
+                    if step_failed && !need_traj {
+                        failed.get_or_insert(k);
+                    } else if error.is_none() {
+                        error = Some(source);
                     }
                 }
             }
@@ -565,7 +772,7 @@ impl<'p> Evaluator<'p> {
     /// # Errors
     /// [`IdentifyError::Forward`] for inadmissible parameters.
     pub fn cost(&mut self, c: &[f64]) -> Result<f64, IdentifyError> {
-        Ok(self.ensure(c, false)?.cost)
+        Ok(self.ensure(c, false, None)?.cost)
     }
 
     /// Forces `F_i(c)` at the schedule times (index 0 = initial state), every test's laid
@@ -574,7 +781,7 @@ impl<'p> Evaluator<'p> {
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
     pub fn forces(&mut self, c: &[f64]) -> Result<Vec<f64>, IdentifyError> {
-        let e = self.ensure(c, true)?;
+        let e = self.ensure(c, true, None)?;
         Ok(e.forces.clone().unwrap_or_default())
     }
 
@@ -600,7 +807,7 @@ impl<'p> Evaluator<'p> {
                 why: format!("test index {k} is out of range: the problem has {n} tests"),
             });
         }
-        let e = self.ensure(c, true)?;
+        let e = self.ensure(c, true, None)?;
         e.tests[k]
             .traj
             .as_ref()
@@ -614,61 +821,31 @@ impl<'p> Evaluator<'p> {
     /// [`IdentifyError::Forward`] when the direct problem fails, [`IdentifyError::Adjoint`]
     /// when the adjoint does (e.g. Norton-Hoff with `m <= 1`).
     pub fn cost_and_gradient(&mut self, c: &[f64]) -> Result<(f64, Vec<f64>), IdentifyError> {
-        let p = self.problem;
-        // hit or miss, `ensure` counts it; a gradient already there is a second hit
-        let has_grad = {
-            let e = self.ensure(c, true)?;
-            e.gradient.clone().map(|g| (e.cost, g))
-        };
-        if let Some(r) = has_grad {
-            return Ok(r);
+        let n = self.problem.tests.len();
+        let cached = self
+            .entry
+            .as_ref()
+            .is_some_and(|e| e.key == key_of(c) && e.gradient.is_some());
+        if !cached {
+            self.counts.adjoint += n;
         }
-        self.counts.adjoint += p.tests.len();
-        let Some(e) = self.entry.as_mut() else {
-            return Err(IdentifyError::Optimizer("cache entry vanished".into()));
-        };
-        let grads = per_test(
-            p.pool.as_deref(),
-            &mut self.work,
-            &p.tests,
-            &mut e.tests,
-            |w, t, te| {
-                if let Some(g) = &te.gradient {
-                    return Ok(g.clone());
-                }
-                let Some(traj) = te.traj.as_ref() else {
-                    return Err(IdentifyError::Optimizer("trajectory missing".into()));
-                };
-                let rho = t.dj_df(traj);
-                let g = if t.solver_options.checkpoint_every > 0 {
-                    w.adjoint.gradient_replayed(
-                        &t.model,
-                        p.law,
-                        c,
-                        traj,
-                        &rho,
-                        &mut w.solver,
-                        &t.schedule,
-                        &t.solver_options,
-                    )
-                } else {
-                    w.adjoint.gradient(&t.model, p.law, c, traj, &rho)
-                }
-                .map_err(|source| IdentifyError::Adjoint {
-                    params: c.to_vec(),
-                    source,
-                })?;
-                te.gradient = Some(g.dj_dc.clone());
-                Ok(g.dj_dc)
-            },
-        );
+        // hit or miss, `ensure` counts it; a gradient already there is a second hit
+        let e = self.ensure(c, true, Some(Kind::Gradient))?;
+        if let Some(g) = &e.gradient {
+            return Ok((e.cost, g.clone()));
+        }
         // summed in test order (bit-identical for any number of threads)
         let mut total: Option<Vec<f64>> = None;
-        for g in grads {
-            let g = g?;
+        for te in &mut e.tests {
+            if let Some(err) = te.gradient_error.take() {
+                return Err(err);
+            }
+            let Some(g) = &te.gradient else {
+                return Err(IdentifyError::Optimizer("gradient missing".into()));
+            };
             match total.as_mut() {
-                None => total = Some(g),
-                Some(t) => t.iter_mut().zip(&g).for_each(|(a, b)| *a += b),
+                None => total = Some(g.clone()),
+                Some(t) => t.iter_mut().zip(g).for_each(|(a, b)| *a += b),
             }
         }
         let g = total.unwrap_or_default();
@@ -684,67 +861,27 @@ impl<'p> Evaluator<'p> {
     /// As [`Evaluator::cost_and_gradient`].
     pub fn jacobian(&mut self, c: &[f64]) -> Result<Vec<Vec<f64>>, IdentifyError> {
         let p = self.problem;
-        let np = c.len();
-        let cached = self.ensure(c, true)?.jacobian.clone();
-        if let Some(j) = cached {
-            return Ok(j);
+        let n = p.tests.len();
+        let cached = self
+            .entry
+            .as_ref()
+            .is_some_and(|e| e.key == key_of(c) && e.jacobian.is_some());
+        if !cached {
+            self.counts.sensitivities += n;
         }
-        self.counts.sensitivities += p.tests.len();
-        let Some(e) = self.entry.as_mut() else {
-            return Err(IdentifyError::Optimizer("cache entry vanished".into()));
-        };
-        let jacs = per_test(
-            p.pool.as_deref(),
-            &mut self.work,
-            &p.tests,
-            &mut e.tests,
-            |w, t, te| {
-                if let Some(j) = &te.jacobian {
-                    return Ok(j.clone());
-                }
-                let Some(traj) = te.traj.as_ref() else {
-                    return Err(IdentifyError::Optimizer("trajectory missing".into()));
-                };
-                // the forward sensitivities need every step's fields: a checkpointed trajectory
-                // is recorded again in full for them (the memory of one unbounded run)
-                let full;
-                let traj = if traj.fields.len() == traj.steps.len() + 1 {
-                    traj
-                } else {
-                    let opts = SolverOptions {
-                        record_fields: true,
-                        checkpoint_every: 0,
-                        ..t.solver_options.clone()
-                    };
-                    full = w
-                        .solver
-                        .run(&t.model, p.law, c, &t.schedule, &opts)
-                        .map_err(|source| IdentifyError::Forward {
-                            params: c.to_vec(),
-                            source,
-                        })?;
-                    &full
-                };
-                let sens = w
-                    .adjoint
-                    .sensitivities(&t.model, p.law, c, traj)
-                    .map_err(|source| IdentifyError::Adjoint {
-                        params: c.to_vec(),
-                        source,
-                    })?;
-                let mut jac = vec![vec![0.0; np]; t.schedule.t.len()];
-                for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
-                    if s.on_schedule {
-                        jac[s.schedule_index].clone_from(row);
-                    }
-                }
-                te.jacobian = Some(jac.clone());
-                Ok(jac)
-            },
-        );
+        let e = self.ensure(c, true, Some(Kind::Jacobian))?;
+        if let Some(j) = &e.jacobian {
+            return Ok(j.clone());
+        }
         let mut jac = Vec::with_capacity(p.target.len());
-        for j in jacs {
-            jac.extend(j?);
+        for te in &mut e.tests {
+            if let Some(err) = te.jacobian_error.take() {
+                return Err(err);
+            }
+            let Some(j) = &te.jacobian else {
+                return Err(IdentifyError::Optimizer("Jacobian missing".into()));
+            };
+            jac.extend(j.iter().cloned());
         }
         e.jacobian = Some(jac.clone());
         Ok(jac)

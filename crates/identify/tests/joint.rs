@@ -1,7 +1,8 @@
 //! Joint fits of several tests sharing one law's parameters: the joint cost, gradient and
 //! Jacobian against the separate one-test problems and against central finite
 //! differences over whole histories, recovery of Maxwell's (E, eta) from two loading rates,
-//! bit-identical results for 1 and 2 threads, and the bad-input errors.
+//! bit-identical results for 1 and 2 threads and with or without prefetching, and the
+//! bad-input errors.
 //!
 //! Reference: the one-test problems (J = sum_k w_k J_k, dJ/dc = sum_k w_k dJ_k/dc, the
 //! Jacobian rows stacked), central finite differences of J, and the truth that generated
@@ -19,8 +20,8 @@
 
 use indentify_contact::{DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, ParamSpec, Problem, Test,
-    identify,
+    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, ParamSpec, Prefetch, Problem,
+    Test, identify,
 };
 use indentify_laws::Maxwell;
 use indentify_mesh::CylinderMesher;
@@ -168,6 +169,97 @@ fn joint_gradient_matches_finite_differences() {
         let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * h);
         println!("dJ/dc[{i}]: adjoint {:.10e}, fd {fd:.10e}", g[i]);
         assert!(rel(g[i], fd) < 1e-5, "dJ/dc[{i}] = {} vs fd {fd}", g[i]);
+    }
+}
+
+/// Three tests on two threads (the case the task scheduler exists for: a follow-up fills
+/// the core the third forward leaves idle) shall give, with and without prefetching and
+/// on 1, 2 and 3 threads, the same bits of every cost, gradient, force and Jacobian entry
+/// along a line-search-like sequence of requests (cost, then gradient or Jacobian at the
+/// accepted point), and the same counts of requested work; whatever was prefetched was
+/// computed on an idle core only, at most once per test and point.
+#[test]
+fn scheduling_and_prefetch_never_change_a_bit() {
+    let mut tests = Vec::new();
+    for s in [schedule(0.2, 0.1), schedule(2.0, 0.05), schedule(0.5, 0.08)] {
+        let r = record(&s);
+        let w = Test::default_weight(&s, &r).unwrap();
+        tests.push(Test::new(model(), s, &r, None, SolverOptions::default(), w).unwrap());
+    }
+    let p = Problem::joint(&Maxwell, tests).unwrap();
+    let points: Vec<[f64; 3]> = (0..6)
+        .map(|i| {
+            [
+                15000.0 + 1000.0 * i as f64,
+                0.3,
+                45000.0 - 2000.0 * i as f64,
+            ]
+        })
+        .collect();
+    let run = |threads: usize, prefetch: Prefetch| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut ev = Evaluator::new(&p).unwrap();
+            ev.set_prefetch(prefetch);
+            let mut bits: Vec<u64> = Vec::new();
+            for (i, c) in points.iter().enumerate() {
+                bits.push(ev.cost(c).unwrap().to_bits());
+                if i % 2 == 0 {
+                    let (j, g) = ev.cost_and_gradient(c).unwrap();
+                    bits.push(j.to_bits());
+                    bits.extend(g.iter().map(|v| v.to_bits()));
+                } else {
+                    bits.extend(ev.forces(c).unwrap().iter().map(|v| v.to_bits()));
+                    for row in ev.jacobian(c).unwrap() {
+                        bits.extend(row.iter().map(|v| v.to_bits()));
+                    }
+                }
+            }
+            // a gradient and a Jacobian at a new point asked for at once (no cost first)
+            let c = [21000.0, 0.3, 28000.0];
+            let (j, g) = ev.cost_and_gradient(&c).unwrap();
+            bits.push(j.to_bits());
+            bits.extend(g.iter().map(|v| v.to_bits()));
+            for row in ev.jacobian(&c).unwrap() {
+                bits.extend(row.iter().map(|v| v.to_bits()));
+            }
+            (bits, ev.counts())
+        })
+    };
+    let (reference, counts) = run(1, Prefetch::None);
+    assert_eq!(
+        (
+            counts.forward,
+            counts.adjoint,
+            counts.sensitivities,
+            counts.prefetched
+        ),
+        (21, 12, 12, 0)
+    );
+    for threads in [1, 2, 3] {
+        for prefetch in [Prefetch::None, Prefetch::Gradient, Prefetch::Jacobian] {
+            let (bits, n) = run(threads, prefetch);
+            println!("{threads} threads, {prefetch:?}: {n:?}");
+            assert_eq!(bits, reference, "{threads} threads, {prefetch:?}");
+            assert_eq!(
+                (n.forward, n.adjoint, n.sensitivities, n.cache_hits),
+                (
+                    counts.forward,
+                    counts.adjoint,
+                    counts.sensitivities,
+                    counts.cache_hits
+                ),
+                "{threads} threads, {prefetch:?}"
+            );
+            // one thread has no idle core; a prefetch only after a cost request
+            if threads == 1 || prefetch == Prefetch::None {
+                assert_eq!(n.prefetched, 0);
+            }
+            assert!(n.prefetched <= 3 * points.len());
+        }
     }
 }
 
