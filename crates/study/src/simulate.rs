@@ -71,7 +71,7 @@ pub struct SimulateOutcome {
     /// The schedule's own sub-steps in words (`data.substeps`), `None` without.
     pub substeps: Option<String>,
     /// The steps the solver took beyond the schedule's steps and their own sub-steps: the
-    /// sub-steps of cut steps (over the schedule steps reached).
+    /// sub-steps of cut steps (also those of a step the run stopped in).
     pub cut_substeps: usize,
     /// The curve at the schedule times reached (noise applied).
     pub rows: Vec<CurveRow>,
@@ -197,11 +197,7 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         size: (model.mesh.nodes.len(), model.mesh.elements.len()),
         schedule_steps: schedule.n_steps(),
         substeps: schedule.substeps_summary(),
-        cut_substeps: trajectory.steps.len().saturating_sub(
-            schedule
-                .prefix(trajectory.schedule_steps().count())
-                .n_solver_steps(),
-        ),
+        cut_substeps: cut_substeps(&schedule, &trajectory),
         rows,
         trajectory,
         measured: prepared.measured,
@@ -210,6 +206,25 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         failure,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The steps of `traj` that a cut inserted: those ending at none of the times its
+/// schedule step plans (the step's own sub-steps and its end, [`indentify_contact::Schedule::step_targets`];
+/// a cut's times lie strictly between the last converged time and the next planned one,
+/// so they never coincide). Exact also when the run stopped inside a step.
+fn cut_substeps(
+    schedule: &indentify_contact::Schedule,
+    traj: &indentify_contact::Trajectory,
+) -> usize {
+    traj.steps
+        .iter()
+        .filter(|s| {
+            !schedule
+                .step_targets(s.schedule_index)
+                .iter()
+                .any(|t| t.to_bits() == s.t.to_bits())
+        })
+        .count()
 }
 
 /// Runs the first `step` schedule steps again and writes the constrained tangent of the
@@ -258,4 +273,55 @@ fn write_matrix(
     }
     crate::atomic::write(&dir.join("equations.csv"), eqs).kind(ErrorKind::Io)?;
     Ok((path, k.rows(), k.nnz()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cut_substeps;
+    use indentify_contact::{Schedule, StepRecord, Trajectory};
+
+    fn step(t: f64, j: usize, on_schedule: bool) -> StepRecord {
+        StepRecord {
+            t,
+            dt: 0.0,
+            depth: 0.0,
+            force: 0.0,
+            contact_radius: 0.0,
+            active: Vec::new(),
+            lambda: Vec::new(),
+            slip: Vec::new(),
+            iterations: 1,
+            active_set_changes: 0,
+            on_schedule,
+            schedule_index: j,
+        }
+    }
+
+    /// Two sub-steps per step, one cut in step 2, and a run that stopped after the first
+    /// sub-step of step 3: one cut step, not two (the planned sub-step of the step the run
+    /// stopped in is not a cut).
+    #[test]
+    fn cuts_are_the_steps_at_unplanned_times() {
+        let s = Schedule::from_record(&[0.0, 1.0, 2.0, 3.0], &[0.0, 0.1, 0.2, 0.1])
+            .unwrap()
+            .with_uniform_substeps(2)
+            .unwrap();
+        let traj = Trajectory {
+            steps: vec![
+                step(0.5, 1, false),
+                step(1.0, 1, true),
+                step(1.25, 2, false),
+                step(1.5, 2, false),
+                step(2.0, 2, true),
+                step(2.5, 3, false),
+            ],
+            ..Default::default()
+        };
+        assert_eq!(cut_substeps(&s, &traj), 1);
+        let whole = Trajectory {
+            steps: traj.steps[..5].to_vec(),
+            ..Default::default()
+        };
+        assert_eq!(cut_substeps(&s, &whole), 1);
+    }
 }
