@@ -1648,13 +1648,8 @@ struct TestJson {
 /// The discretization error in result.json.
 #[derive(Debug, Serialize)]
 struct DiscretizationJson {
-    mesh: String,
-    steps: String,
-    elements: [usize; 2],
-    n_steps: [usize; 2],
-    rms: f64,
-    rms_rel: f64,
-    max_abs: f64,
+    #[serde(flatten)]
+    run: RefinedJson,
     /// Per free parameter: `c_refined - c_fit` predicted (null: undetermined).
     shift: Named<Option<f64>>,
     relative_shift: Named<Option<f64>>,
@@ -1671,6 +1666,14 @@ struct DiscretizationJson {
 #[derive(Debug, Serialize)]
 struct TestDiscretizationJson {
     name: String,
+    #[serde(flatten)]
+    run: RefinedJson,
+}
+
+/// A refined run against the fit's in result.json: the discretizations (fit, refined) and
+/// the force change between them.
+#[derive(Debug, Serialize)]
+struct RefinedJson {
     mesh: String,
     steps: String,
     elements: [usize; 2],
@@ -1678,6 +1681,22 @@ struct TestDiscretizationJson {
     rms: f64,
     rms_rel: f64,
     max_abs: f64,
+}
+
+/// [`RefinedJson`] of anything with the seven fields (the whole fit's discretization error
+/// and each test's).
+macro_rules! refined_json {
+    ($d:expr) => {
+        RefinedJson {
+            mesh: $d.mesh.clone(),
+            steps: $d.steps.clone(),
+            elements: [$d.elements.0, $d.elements.1],
+            n_steps: [$d.n_steps.0, $d.n_steps.1],
+            rms: $d.rms,
+            rms_rel: $d.rms_rel,
+            max_abs: $d.max_abs,
+        }
+    };
 }
 
 impl DiscretizationJson {
@@ -1692,13 +1711,7 @@ impl DiscretizationJson {
             .collect();
         let named = |v: &[Option<f64>]| Named::new(free.iter().map(|&(k, n)| (n, v[k])));
         DiscretizationJson {
-            mesh: d.mesh.clone(),
-            steps: d.steps.clone(),
-            elements: [d.elements.0, d.elements.1],
-            n_steps: [d.n_steps.0, d.n_steps.1],
-            rms: d.rms,
-            rms_rel: d.rms_rel,
-            max_abs: d.max_abs,
+            run: refined_json!(d),
             shift: named(&d.shift),
             relative_shift: named(&d.relative_shift),
             std_dev: Named::new(free.iter().map(|&(_, n)| (n, o.std_dev(n)))),
@@ -1709,13 +1722,7 @@ impl DiscretizationJson {
                     .iter()
                     .map(|t| TestDiscretizationJson {
                         name: t.name.clone(),
-                        mesh: t.mesh.clone(),
-                        steps: t.steps.clone(),
-                        elements: [t.elements.0, t.elements.1],
-                        n_steps: [t.n_steps.0, t.n_steps.1],
-                        rms: t.rms,
-                        rms_rel: t.rms_rel,
-                        max_abs: t.max_abs,
+                        run: refined_json!(t),
                     })
                     .collect()
             } else {

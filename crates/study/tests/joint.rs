@@ -509,6 +509,21 @@ fn joint_refine_gives_each_tests_force_change_and_the_joint_shift() {
         d.tests[0].rms_rel.max(d.tests[1].rms_rel),
         "the largest of the tests'"
     );
+    // result.json: the whole fit's refined run and each test's, with the same fields
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("result.json")).unwrap())
+            .unwrap();
+    let disc = &json["discretization"];
+    assert_eq!(disc["elements"], serde_json::json!([128, 512]), "{disc}");
+    for (k, t) in d.tests.iter().enumerate() {
+        let j = &disc["tests"][k];
+        for key in [
+            "name", "mesh", "steps", "elements", "n_steps", "rms", "max_abs",
+        ] {
+            assert!(!j[key].is_null(), "tests[{k}] lacks {key}: {j}");
+        }
+        assert_eq!(j["rms_rel"].as_f64(), Some(t.rms_rel), "{j}");
+    }
     // (2) the refined joint identification from the same data
     let (coarse_problem, _) = identify::problem(&o).unwrap();
     let mut fine_opts = o.clone();
