@@ -31,10 +31,11 @@ use indentify_mesh::Mesh;
 use crate::ContactError;
 use crate::friction::{self, Status};
 use crate::history::Schedule;
-use crate::kinematics::{self, FiniteFailure, FiniteOut, Kinematics};
+use crate::kinematics::{self, ELEMENT_CHUNK, FiniteFailure, FiniteOut, Kinematics};
 use crate::normal::{ContactKind, Projection, Surface};
 use crate::punch::Punch;
 use crate::system::{ConstrainedSystem, NodeFrame};
+use rayon::prelude::*;
 
 /// Numerical options of the direct solver.
 #[derive(Clone, Debug, PartialEq)]
@@ -611,6 +612,13 @@ impl std::fmt::Debug for Checkpoint {
     }
 }
 
+/// One chunk of the small-strain Gauss-point pass: its index, and its elements' forces,
+/// stresses and tangents.
+type PassChunk<'a> = (
+    usize,
+    ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut [Mat4]),
+);
+
 /// Reusable solver workspace: the symbolic factorization and scratch vectors, so that
 /// repeated runs (an optimizer's iterations) allocate and analyse nothing new.
 #[derive(Debug)]
@@ -632,6 +640,9 @@ pub struct DirectSolver {
     /// Finite strain: each Gauss point's deformation and Hencky strain of the last
     /// evaluation, from which its element tangents are formed.
     finite_points: Vec<kinematics::Point>,
+    /// Small strain: each element's internal force of the last evaluation (summed into
+    /// `f_int` in element order).
+    element_forces: Vec<[f64; 16]>,
 }
 
 impl DirectSolver {
@@ -658,6 +669,7 @@ impl DirectSolver {
             finite_ke: Vec::new(),
             finite_e0: Vec::new(),
             finite_points: Vec::new(),
+            element_forces: Vec::new(),
         })
     }
 
@@ -919,54 +931,85 @@ impl DirectSolver {
             sigma_out.copy_from_slice(&state.sigma);
             return Ok(());
         }
-        // one pass: strains, local updates and the internal force while the stresses are hot;
-        // points whose elastic trial stays below yield skip the law's update
+        // one pass: strains, local updates and each element's internal force while the
+        // stresses are hot, on rayon over fixed chunks of elements (each point's update is
+        // independent); points whose elastic trial stays below yield skip the law's update.
+        // The element forces are then summed serially in element order, as a serial pass
+        // would: the result is the same bits for any number of threads.
         let domain = law.elastic_domain(c, dt);
-        self.f_int.fill(0.0);
-        for e in 0..disc.elements.len() {
-            let dofs = disc.element_dofs(e);
-            let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
-            let mut fe = [0.0; 16];
-            if let Some((a, cm)) = affine {
+        let ne = disc.elements.len();
+        let nq = QP_PER_ELEMENT * ne;
+        self.element_forces.resize(ne, [0.0; 16]);
+        let chunk_qp = QP_PER_ELEMENT * ELEMENT_CHUNK;
+        let tangents = &mut self.tangents[..nq];
+        let work = |(chunk, ((fes, sig), tan)): PassChunk<'_>| {
+            for (i, fe) in fes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let dofs = disc.element_dofs(e);
+                let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
+                *fe = [0.0; 16];
                 for g in 0..QP_PER_ELEMENT {
                     let q = QP_PER_ELEMENT * e + g;
+                    let l = QP_PER_ELEMENT * i + g;
                     let qp = &disc.qp[q];
-                    let mut s = a.mul_vec(&state.sigma[q]);
-                    if !at_start {
-                        s += cm.mul_vec(&Vec4(qp.strain(&due)));
-                    }
-                    qp.add_bt(&s.0, qp.w, &mut fe);
-                    sigma_out[q] = s;
-                }
-                for (d, v) in dofs.iter().zip(fe) {
-                    self.f_int[*d] += v;
-                }
-                continue;
-            }
-            for g in 0..QP_PER_ELEMENT {
-                let q = QP_PER_ELEMENT * e + g;
-                let qp = &disc.qp[q];
-                let deps = Vec4(qp.strain(&due));
-                if let Some(dom) = &domain {
-                    if let Some(s1) = dom.update(&state.sigma[q], &deps) {
-                        qp.add_bt(&s1.0, qp.w, &mut fe);
-                        sigma_out[q] = s1;
-                        self.tangents[q] = dom.stiffness;
+                    if let Some((a, cm)) = affine {
+                        let mut s = a.mul_vec(&state.sigma[q]);
+                        if !at_start {
+                            s += cm.mul_vec(&Vec4(qp.strain(&due)));
+                        }
+                        qp.add_bt(&s.0, qp.w, fe);
+                        sig[l] = s;
                         continue;
                     }
+                    let deps = Vec4(qp.strain(&due));
+                    if let Some(dom) = &domain {
+                        if let Some(s1) = dom.update(&state.sigma[q], &deps) {
+                            qp.add_bt(&s1.0, qp.w, fe);
+                            sig[l] = s1;
+                            tan[l] = dom.stiffness;
+                            continue;
+                        }
+                    }
+                    match law.update(c, &state.sigma[q], &deps, dt) {
+                        Ok(up) => {
+                            qp.add_bt(&up.sigma.0, qp.w, fe);
+                            sig[l] = up.sigma;
+                            tan[l] = up.tangent;
+                        }
+                        Err(f) => {
+                            return Some(StepFailure::Local {
+                                qp: q,
+                                reason: f.reason,
+                                factor: f.suggested_dt_factor,
+                            });
+                        }
+                    }
                 }
-                let up =
-                    law.update(c, &state.sigma[q], &deps, dt)
-                        .map_err(|f| StepFailure::Local {
-                            qp: q,
-                            reason: f.reason,
-                            factor: f.suggested_dt_factor,
-                        })?;
-                qp.add_bt(&up.sigma.0, qp.w, &mut fe);
-                sigma_out[q] = up.sigma;
-                self.tangents[q] = up.tangent;
             }
-            for (d, v) in dofs.iter().zip(fe) {
+            None
+        };
+        // on one thread, in place (handing a pass to a pool of one costs more than it does)
+        let failure = if rayon::current_num_threads() > 1 {
+            self.element_forces
+                .par_chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].par_chunks_mut(chunk_qp))
+                .zip(tangents.par_chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map_first(work)
+        } else {
+            self.element_forces
+                .chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].chunks_mut(chunk_qp))
+                .zip(tangents.chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map(work)
+        };
+        if let Some(f) = failure {
+            return Err(f);
+        }
+        self.f_int.fill(0.0);
+        for (e, fe) in self.element_forces.iter().enumerate() {
+            for (d, v) in disc.element_dofs(e).iter().zip(fe) {
                 self.f_int[*d] += v;
             }
         }

@@ -81,9 +81,10 @@ impl FiniteFailure {
 }
 
 /// Elements per parallel task of the Gauss-point passes ([`evaluate`],
-/// [`element_tangents`]): fixed, so the work split, and with the assembly in element
-/// order the results, do not depend on the number of threads.
-const ELEMENT_CHUNK: usize = 8;
+/// [`element_tangents`], and the small-strain pass of `DirectSolver`): fixed, so the work
+/// split, and with the assembly in element order the results, do not depend on the number
+/// of threads.
+pub(crate) const ELEMENT_CHUNK: usize = 8;
 
 /// Output buffers of [`evaluate`].
 pub(crate) struct FiniteOut<'a> {
