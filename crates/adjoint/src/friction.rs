@@ -199,7 +199,7 @@ impl Adjoint {
         let start = std::time::Instant::now();
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
-        self.system.forget_assembly();
+        self.system.forget_factorizations();
         let s = law.compliance(c);
         let np = c.len();
         let nq = model.disc.n_qp();

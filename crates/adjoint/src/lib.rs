@@ -288,8 +288,9 @@ impl Adjoint {
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
         check_inputs(law, c, traj, dj_df.len())?;
-        // every sweep from a full assembly sum: the gradient depends on its inputs alone
-        self.system.forget_assembly();
+        // every sweep from a new system's state (no factorization, no assembly sum kept):
+        // the gradient depends on its inputs alone, not on what ran before on this workspace
+        self.system.forget_factorizations();
         let mut sweep = Sweep::new(law, c);
         self.field_a.fill(Vec4::ZERO);
         for i in (0..traj.steps.len()).rev() {
@@ -328,7 +329,7 @@ impl Adjoint {
         }
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
-        self.system.forget_assembly();
+        self.system.forget_factorizations();
         let n = traj.steps.len();
         if dj_df.len() != n {
             return Err(AdjointError::Length {
@@ -491,7 +492,7 @@ impl Adjoint {
         let start = std::time::Instant::now();
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
-        self.system.forget_assembly();
+        self.system.forget_factorizations();
         let s = law.compliance(c);
         let np = c.len();
         let nq = model.disc.n_qp();

@@ -440,6 +440,37 @@ impl ConstrainedSystem {
         self.elements.forget_sum();
     }
 
+    /// Drops every cached factorization, capacitance column and assembly sum, as a new
+    /// system would have none (the symbolic analysis stays): what follows depends on its
+    /// inputs alone, not on the tangents, active sets and order of an earlier computation
+    /// on this workspace. (A reusable tangent's factor and capacitance columns otherwise
+    /// carry over to the next computation with the same key, and the Schur factor grown in
+    /// one order rounds differently from one grown in another.) The adjoint sweep and the
+    /// forward sensitivities start with it, so that their bits do not depend on which of
+    /// them ran first at a point.
+    pub fn forget_factorizations(&mut self) {
+        self.forget_assembly();
+        self.k_key = None;
+        self.factor_for = None;
+        self.base = false;
+        self.columns.clear();
+        self.schur_set.clear();
+        self.schur.clear();
+        self.capacitance = false;
+        self.factor_ok = false;
+        self.pcg = false;
+        self.last_pcg = 0;
+        self.frames.clear();
+        self.frames_factored.clear();
+        self.cap_frames = None;
+        self.cap_lu.clear();
+        self.cap_piv.clear();
+        self.slip_idx.clear();
+        self.slip_z.clear();
+        self.slip_lu.clear();
+        self.slip_piv.clear();
+    }
+
     /// Makes the next [`ConstrainedSystem::prepare_inexact`] factorize and the next
     /// assembly sum every element afresh: a time step that starts with this depends on its
     /// initial state alone, not on the factor or the assembly updates an earlier step left

@@ -38,21 +38,33 @@ fn hash(model: &Model, law: &dyn Law, c: &[f64]) -> u64 {
 /// recorded with the serial pass).
 #[test]
 fn reference_problems_are_unchanged() {
-    let cone = Punch::Cone {
+    let got = hashes_on_1_and_2_threads(|| {
+        [ContactKind::Vertical, ContactKind::Normal]
+            .into_iter()
+            .map(|kind| {
+                Model::with_contact(CylinderMesher::REFERENCE.build().unwrap(), cone(), kind)
+            })
+            .collect::<Result<_, _>>()
+            .unwrap()
+    });
+    assert_eq!(got, EXPECTED);
+}
+
+fn cone() -> Punch {
+    Punch::Cone {
         half_angle_deg: 68.0,
-    };
+    }
+}
+
+/// R0, R1 and R2 (DESIGN.md §5) on each of the `models`, hashed on a pool of one thread
+/// and on one of two, which must agree.
+fn hashes_on_1_and_2_threads(models: impl Fn() -> Vec<Model> + Sync) -> Vec<u64> {
     let r0 = vec![20000.0, 0.3];
     let r1 = vec![20000.0, 0.3, 30000.0];
     let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
     let run = || {
         let mut got = Vec::new();
-        for kind in [ContactKind::Vertical, ContactKind::Normal] {
-            let model = Model::with_contact(
-                CylinderMesher::REFERENCE.build().unwrap(),
-                cone.clone(),
-                kind,
-            )
-            .unwrap();
+        for model in models() {
             for (law, c) in [
                 (&Elastic as &dyn Law, &r0),
                 (&Maxwell, &r1),
@@ -63,18 +75,16 @@ fn reference_problems_are_unchanged() {
         }
         got
     };
-    for threads in [1, 2] {
-        let got = pool(threads).install(run);
-        println!("hashes on {threads} threads {got:#x?}");
-        assert_eq!(got, EXPECTED, "{threads} threads");
-    }
-}
-
-fn pool(n: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
+    let pool = |n: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    let one = pool(1).install(run);
+    println!("hashes {one:#x?}");
+    assert_eq!(pool(2).install(run), one, "1 and 2 threads differ");
+    one
 }
 
 /// Printed by this test at commit f148430 (before friction): vertical R0, R1, R2, then
@@ -96,37 +106,21 @@ const EXPECTED: [u64; 6] = [
 /// count (checked on 1 and 2 threads here).
 #[test]
 fn finite_strain_paths_are_pinned() {
-    let cone = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
-    let r0 = vec![20000.0, 0.3];
-    let r1 = vec![20000.0, 0.3, 30000.0];
-    let r2 = vec![1e5, 0.3, 1500.0, 5.0, 500.0];
-    let run = || {
-        let mut got = Vec::new();
-        for mu in [0.0, 0.1] {
-            let model = Model::with_contact(
-                CylinderMesher::REFERENCE.build().unwrap(),
-                cone.clone(),
-                ContactKind::normal_with_friction(mu).unwrap(),
-            )
+    let got = hashes_on_1_and_2_threads(|| {
+        [0.0, 0.1]
+            .into_iter()
+            .map(|mu| {
+                Model::with_contact(
+                    CylinderMesher::REFERENCE.build().unwrap(),
+                    cone(),
+                    ContactKind::normal_with_friction(mu).unwrap(),
+                )
+                .and_then(|m| m.with_kinematics(Kinematics::Finite))
+            })
+            .collect::<Result<_, _>>()
             .unwrap()
-            .with_kinematics(Kinematics::Finite)
-            .unwrap();
-            for (law, c) in [
-                (&Elastic as &dyn Law, &r0),
-                (&Maxwell, &r1),
-                (&NortonHoff, &r2),
-            ] {
-                got.push(hash(&model, law, c));
-            }
-        }
-        got
-    };
-    let one = pool(1).install(run);
-    println!("hashes {one:#x?}");
-    assert_eq!(pool(2).install(run), one, "1 and 2 threads differ");
-    assert_eq!(one, EXPECTED_FINITE);
+    });
+    assert_eq!(got, EXPECTED_FINITE);
 }
 
 /// Printed by this test at commit e461c8d: finite strain, frictionless normal contact R0,

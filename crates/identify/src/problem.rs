@@ -766,6 +766,25 @@ impl<'p> Evaluator<'p> {
         }
     }
 
+    /// Counts a request of `kind` at `c` (one adjoint sweep or sensitivity pass per test)
+    /// unless the cache already holds its combined result.
+    fn count_request(&mut self, c: &[f64], kind: Kind) {
+        let cached = self.entry.as_ref().is_some_and(|e| {
+            e.key == key_of(c)
+                && match kind {
+                    Kind::Gradient => e.gradient.is_some(),
+                    Kind::Jacobian => e.jacobian.is_some(),
+                }
+        });
+        if !cached {
+            let n = self.problem.tests.len();
+            match kind {
+                Kind::Gradient => self.counts.adjoint += n,
+                Kind::Jacobian => self.counts.sensitivities += n,
+            }
+        }
+    }
+
     /// `J(c)`; `+inf` when the direct problem of a test fails even after step cutting (so
     /// that a line search backs off).
     ///
@@ -821,14 +840,7 @@ impl<'p> Evaluator<'p> {
     /// [`IdentifyError::Forward`] when the direct problem fails, [`IdentifyError::Adjoint`]
     /// when the adjoint does (e.g. Norton-Hoff with `m <= 1`).
     pub fn cost_and_gradient(&mut self, c: &[f64]) -> Result<(f64, Vec<f64>), IdentifyError> {
-        let n = self.problem.tests.len();
-        let cached = self
-            .entry
-            .as_ref()
-            .is_some_and(|e| e.key == key_of(c) && e.gradient.is_some());
-        if !cached {
-            self.counts.adjoint += n;
-        }
+        self.count_request(c, Kind::Gradient);
         // hit or miss, `ensure` counts it; a gradient already there is a second hit
         let e = self.ensure(c, true, Some(Kind::Gradient))?;
         if let Some(g) = &e.gradient {
@@ -861,14 +873,7 @@ impl<'p> Evaluator<'p> {
     /// As [`Evaluator::cost_and_gradient`].
     pub fn jacobian(&mut self, c: &[f64]) -> Result<Vec<Vec<f64>>, IdentifyError> {
         let p = self.problem;
-        let n = p.tests.len();
-        let cached = self
-            .entry
-            .as_ref()
-            .is_some_and(|e| e.key == key_of(c) && e.jacobian.is_some());
-        if !cached {
-            self.counts.sensitivities += n;
-        }
+        self.count_request(c, Kind::Jacobian);
         let e = self.ensure(c, true, Some(Kind::Jacobian))?;
         if let Some(j) = &e.jacobian {
             return Ok(j.clone());
