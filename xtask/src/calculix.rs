@@ -38,6 +38,10 @@
 //!   (Simo 1988) viscoplasticity of `incplas.f`: the overstress `q = sigma_eq - sY` of the
 //!   Kirchhoff stress drives `eps_dot_eq = A q^n`; elasticity is hyperelastic (neo-Hooke
 //!   deviatoric part, `K (J^2 - 1)/2` volumetric).
+//! - `--elastic hencky-umat` under `NLGEOM`: our own finite-strain law for every law
+//!   (Hencky-linear elasticity, Maxwell, Norton-Hoff in the Hencky strain, backward
+//!   Euler), the user material `USERHENCKY` of `validation/calculix/umat/umat_user.f`,
+//!   run by a `ccx` built with it (`--ccx PATH`; [`FiniteElastic::HenckyUmat`]).
 
 use std::fmt::Write as _;
 
@@ -158,10 +162,21 @@ pub enum FiniteElastic {
     /// volumetric parts still differ (`kappa (J - 1)` against `kappa ln(J)/J` for the
     /// pressure), which vanishes as `nu -> 1/2`.
     MooneyRivlin,
+    /// Our own law, exactly: the user material of `validation/calculix/umat/umat_user.f`
+    /// (`*MATERIAL, NAME=USERHENCKY`, `*USER MATERIAL` with `E, nu` (elastic),
+    /// `E, nu, eta` (Maxwell) or `E, nu, K, m, sY` (Norton-Hoff), `*DEPVAR 6`: the
+    /// viscous strain): `T = C : (E - E_v)` in the Hencky strain `E = ln(C)/2`, the
+    /// small-strain update of `crates/laws` by backward Euler, `S = P : T`. Unlike the
+    /// others it also replaces the viscoplastic materials under `NLGEOM` (CalculiX's
+    /// creep material fixes Simo's neo-Hookean elasticity). It needs a `ccx` linked with
+    /// that user material (`validation/calculix/umat/build.sh`, `--ccx PATH`): the
+    /// stock `ccx` stops on it. Such a run checks the kinematics, element, contact and
+    /// time integration, not the law (the same formulation on both sides).
+    HenckyUmat,
 }
 
 impl FiniteElastic {
-    /// Parses `neo-hooke` or `mooney-rivlin`.
+    /// Parses `neo-hooke`, `mooney-rivlin` or `hencky-umat`.
     ///
     /// # Errors
     /// Any other spelling, named.
@@ -169,15 +184,29 @@ impl FiniteElastic {
         match name {
             "neo-hooke" => Ok(FiniteElastic::NeoHooke),
             "mooney-rivlin" => Ok(FiniteElastic::MooneyRivlin),
-            _ => bail!("--elastic: `{name}` is not neo-hooke or mooney-rivlin"),
+            "hencky-umat" => Ok(FiniteElastic::HenckyUmat),
+            _ => bail!("--elastic: `{name}` is not neo-hooke, mooney-rivlin or hencky-umat"),
         }
     }
 
-    /// The suffix of a run's file stem (`-mr` for Mooney-Rivlin, none for the default).
+    /// The suffix of a run's file stem (`-mr` for Mooney-Rivlin, `-hencky` for the user
+    /// material, none for the default).
     pub fn suffix(self) -> &'static str {
         match self {
             FiniteElastic::NeoHooke => "",
             FiniteElastic::MooneyRivlin => "-mr",
+            FiniteElastic::HenckyUmat => "-hencky",
+        }
+    }
+
+    /// Whether it changes the `NLGEOM` deck of `material` (the hyperelastic solids
+    /// replace only the elastic law; the user material replaces every law).
+    pub fn applies_to(self, material: &Material) -> bool {
+        match self {
+            FiniteElastic::HenckyUmat => true,
+            FiniteElastic::NeoHooke | FiniteElastic::MooneyRivlin => {
+                matches!(material, Material::Elastic { .. })
+            }
         }
     }
 }
@@ -399,6 +428,24 @@ pub fn deck(
     }
     // materials
     match *material {
+        _ if o.nlgeom && o.finite_elastic == FiniteElastic::HenckyUmat => {
+            let constants = hencky_umat_constants(material);
+            writeln!(
+                w,
+                "** finite strain: our own law as the user material of validation/calculix/umat/umat_user.f"
+            )?;
+            writeln!(
+                w,
+                "** (Hencky strain, the small-strain update of crates/laws, S = P : T; needs ccx built by its build.sh)"
+            )?;
+            writeln!(w, "*MATERIAL, NAME=USERHENCKY")?;
+            writeln!(w, "*USER MATERIAL, CONSTANTS={}", constants.len())?;
+            let line: Vec<String> = constants.iter().map(|c| format!("{c:.15e}")).collect();
+            writeln!(w, "{}", line.join(", "))?;
+            writeln!(w, "*DEPVAR")?;
+            writeln!(w, "6")?;
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=USERHENCKY")?;
+        }
         Material::Elastic { e, nu } if o.nlgeom => {
             // CalculiX's *ELASTIC with NLGEOM is St. Venant-Kirchhoff (PK2 linear in the
             // Green strain), which softens under the compression at the cone's tip (its
@@ -411,7 +458,8 @@ pub fn deck(
             let kappa = e / (3.0 * (1.0 - 2.0 * nu));
             writeln!(w, "*MATERIAL, NAME=SPEC")?;
             match o.finite_elastic {
-                FiniteElastic::NeoHooke => {
+                // (the user material is written by the first arm above)
+                FiniteElastic::NeoHooke | FiniteElastic::HenckyUmat => {
                     writeln!(w, "*HYPERELASTIC, NEO HOOKE")?;
                     writeln!(w, "{:.12e}, {:.12e}", mu / 2.0, 2.0 / kappa)?;
                 }
@@ -565,6 +613,21 @@ pub fn deck(
         writeln!(w, "*END STEP")?;
     }
     Ok(s)
+}
+
+/// The constants of the user material `USERHENCKY` (`validation/calculix/umat/umat_user.f`)
+/// for `material`: `[E, nu]` (elastic), `[E, nu, eta]` (Maxwell: `n = 1`, no yield stress,
+/// `eta = 2/(3 A)`) or `[E, nu, K, m, sY]` (Norton-Hoff: `K = A^(-1/n)`, `m = n`), the
+/// parameters of our laws back from CalculiX's creep constants ([`Material::maxwell`],
+/// [`Material::norton_hoff`]).
+pub fn hencky_umat_constants(material: &Material) -> Vec<f64> {
+    match *material {
+        Material::Elastic { e, nu } => vec![e, nu],
+        Material::Viscoplastic { e, nu, a, n, sy } if n == 1.0 && sy == 0.0 => {
+            vec![e, nu, 2.0 / (3.0 * a)]
+        }
+        Material::Viscoplastic { e, nu, a, n, sy } => vec![e, nu, a.powf(-1.0 / n), n, sy],
+    }
 }
 
 fn write_ids(w: &mut String, ids: impl Iterator<Item = usize>) -> std::fmt::Result {
@@ -733,6 +796,9 @@ pub struct RunOptions {
     /// Never run `ccx`: compare with the CalculiX curves already in `out` (runs without
     /// one are listed as not run); our curves are computed (or reused).
     pub no_ccx: bool,
+    /// The CalculiX executable (`ccx` on the path by default; the one linked with our
+    /// user material for `--elastic hencky-umat`).
+    pub ccx: std::path::PathBuf,
 }
 
 /// A case loaded: the configuration resolved to our mesh, punch, law and schedule.
@@ -787,11 +853,16 @@ pub type Curve = Vec<(f64, f64)>;
 ///
 /// # Errors
 /// `ccx` missing, a `.dat` file without forces.
-pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<(Curve, Option<String>)> {
+pub fn run_ccx(
+    ccx: &std::path::Path,
+    out: &std::path::Path,
+    stem: &str,
+    deck: &str,
+) -> Result<(Curve, Option<String>)> {
     let work = out.join(format!(".work-{stem}"));
     std::fs::create_dir_all(&work)?;
     std::fs::write(work.join(format!("{stem}.inp")), deck)?;
-    let status = std::process::Command::new("ccx")
+    let status = std::process::Command::new(ccx)
         .arg("-i")
         .arg(stem)
         .current_dir(&work)
@@ -801,7 +872,8 @@ pub fn run_ccx(out: &std::path::Path, stem: &str, deck: &str) -> Result<(Curve, 
         .status()
         .map_err(|e| {
             anyhow::anyhow!(
-                "cannot start `ccx` ({e}): install it with `apt-get install calculix-ccx`"
+                "cannot start `{}` ({e}): install ccx with `apt-get install calculix-ccx`, or build the one with our user material by validation/calculix/umat/build.sh (--ccx PATH)",
+                ccx.display()
             )
         })?;
     let dat = std::fs::read_to_string(work.join(format!("{stem}.dat"))).unwrap_or_default();
@@ -919,7 +991,7 @@ pub fn run(o: &RunOptions) -> Result<String> {
             let mut frictionless: Option<Vec<(f64, f64)>> = None;
             for &mu in &o.frictions {
                 let mut stem = stem(case.name, mu, nlgeom);
-                if nlgeom && matches!(loaded.material, Material::Elastic { .. }) {
+                if nlgeom && o.deck.finite_elastic.applies_to(&loaded.material) {
                     stem.push_str(o.deck.finite_elastic.suffix());
                 }
                 let opts = DeckOptions {
@@ -973,7 +1045,7 @@ pub fn run(o: &RunOptions) -> Result<String> {
                     continue;
                 } else {
                     let t0 = std::time::Instant::now();
-                    match run_ccx(&o.out, &stem, &text) {
+                    match run_ccx(&o.ccx, &o.out, &stem, &text) {
                         Ok((c, stopped)) => {
                             eprintln!(
                                 "{stem}: ccx in {:.1} s, {} increments{}",

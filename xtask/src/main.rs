@@ -26,7 +26,7 @@ fn main() -> Result<()> {
         Some("joint-cost") => jointcost::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin|hencky-umat] [--ccx PATH] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)"
             );
             bail!("unknown or missing command")
         }
@@ -219,6 +219,7 @@ fn calculix(args: &[String]) -> Result<()> {
         decks_only: false,
         reuse: false,
         no_ccx: false,
+        ccx: "ccx".into(),
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -265,6 +266,20 @@ fn calculix(args: &[String]) -> Result<()> {
             "--reuse" => o.reuse = true,
             "--no-ccx" => o.no_ccx = true,
             "--split-load" => o.deck.split_load = true,
+            "--ccx" => {
+                let v = val();
+                if v.is_empty() {
+                    bail!("--ccx: expected the path of a CalculiX executable");
+                }
+                // a path (not a bare name looked up on PATH) is made absolute: ccx runs
+                // in a scratch folder
+                let p = std::path::PathBuf::from(&v);
+                o.ccx = if p.components().count() > 1 {
+                    std::path::absolute(&p).map_err(|e| anyhow::anyhow!("--ccx: `{v}`: {e}"))?
+                } else {
+                    p
+                };
+            }
             "--elastic" => {
                 o.deck.finite_elastic = xtask::calculix::FiniteElastic::from_name(&val())?;
             }

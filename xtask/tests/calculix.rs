@@ -381,3 +381,119 @@ fn mooney_rivlin_deck_states_hencky_s_shear_modulus_in_both_invariants() {
     assert!(deck.contains("*HYPERELASTIC, NEO HOOKE\n"));
     assert!(calculix::FiniteElastic::from_name("ogden").is_err());
 }
+
+#[test]
+fn hencky_umat_constants_are_our_laws_parameters() {
+    // back from CalculiX's creep constants to our parameters, to round-off
+    let close = |a: &[f64], b: &[f64]| {
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= 1e-14 * y.abs().max(1e-300))
+    };
+    let maxwell = Material::from_law("maxwell", &[2e4, 0.3, 3e4]).unwrap();
+    let c = calculix::hencky_umat_constants(&maxwell);
+    assert!(close(&c, &[2e4, 0.3, 3e4]), "{c:?}");
+    let nh = Material::from_law("norton-hoff", &[1e5, 0.3, 1500.0, 5.0, 500.0]).unwrap();
+    let c = calculix::hencky_umat_constants(&nh);
+    assert!(close(&c, &[1e5, 0.3, 1500.0, 5.0, 500.0]), "{c:?}");
+    // sY = 0 with m = 1 is Maxwell's flow in Norton-Hoff's form: written as Maxwell
+    // (eta = 2 K / 3), the same law (umat/test_point.f checks both forms agree)
+    let nh1 = Material::from_law("norton-hoff", &[1e5, 0.3, 1500.0, 1.0, 0.0]).unwrap();
+    let c = calculix::hencky_umat_constants(&nh1);
+    assert!(close(&c, &[1e5, 0.3, 1000.0]), "{c:?}");
+    let el = Material::Elastic { e: 2e4, nu: 0.3 };
+    assert_eq!(calculix::hencky_umat_constants(&el), vec![2e4, 0.3]);
+}
+
+#[test]
+fn hencky_umat_deck_replaces_every_law_under_nlgeom_only() {
+    let (mesh, schedule) = small_problem();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let o = DeckOptions {
+        punch_segments: 4,
+        nlgeom: true,
+        finite_elastic: calculix::FiniteElastic::HenckyUmat,
+        ..DeckOptions::default()
+    };
+    let card = |deck: &str| -> Vec<f64> {
+        let rest = deck
+            .split("*MATERIAL, NAME=USERHENCKY\n")
+            .nth(1)
+            .expect("the user material");
+        let mut lines = rest.lines();
+        let head = lines.next().unwrap();
+        let v: Vec<f64> = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(|x| x.trim().parse().unwrap())
+            .collect();
+        assert_eq!(head, format!("*USER MATERIAL, CONSTANTS={}", v.len()));
+        assert!(rest.contains("*DEPVAR\n6\n*SOLID SECTION, ELSET=ESPEC, MATERIAL=USERHENCKY\n"));
+        v
+    };
+    let maxwell = Material::from_law("maxwell", &[2e4, 0.3, 3e4]).unwrap();
+    let deck = calculix::deck("t", &mesh, &punch, &maxwell, &schedule, &o).unwrap();
+    let v = card(&deck);
+    assert_eq!(v.len(), 3);
+    assert!((v[2] - 3e4).abs() < 1e-9, "{v:?}");
+    assert!(!deck.contains("*CREEP") && deck.contains("*VISCO"));
+    let elastic = Material::Elastic { e: 2e4, nu: 0.3 };
+    let deck = calculix::deck("t", &mesh, &punch, &elastic, &schedule, &o).unwrap();
+    assert_eq!(card(&deck), vec![2e4, 0.3]);
+    assert!(!deck.contains("*HYPERELASTIC") && deck.contains("*STATIC"));
+    // small strain keeps its materials
+    let small = DeckOptions { nlgeom: false, ..o };
+    let deck = calculix::deck("t", &mesh, &punch, &maxwell, &schedule, &small).unwrap();
+    assert!(!deck.contains("USERHENCKY") && deck.contains("ANISO_PLAS_SPEC"));
+    // the stems: every law gets -hencky, the hyperelastic suffixes only the elastic law
+    let hu = calculix::FiniteElastic::from_name("hencky-umat").unwrap();
+    assert_eq!(hu.suffix(), "-hencky");
+    assert!(hu.applies_to(&maxwell) && hu.applies_to(&elastic));
+    let mr = calculix::FiniteElastic::MooneyRivlin;
+    assert!(mr.applies_to(&elastic) && !mr.applies_to(&maxwell));
+    let e = calculix::FiniteElastic::from_name("hencky").unwrap_err();
+    assert!(e.to_string().contains("hencky-umat"), "{e}");
+}
+
+#[test]
+fn decks_only_run_names_the_hencky_umat_decks_and_a_missing_ccx_is_named() {
+    let out = std::env::temp_dir().join(format!("indentify-umat-decks-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = calculix::RunOptions {
+        root: root(),
+        out: out.clone(),
+        cases: vec!["r0".into(), "r1".into()],
+        frictions: vec![0.0],
+        kinematics: vec![true],
+        deck: DeckOptions {
+            finite_elastic: calculix::FiniteElastic::HenckyUmat,
+            split_load: true,
+            ..DeckOptions::default()
+        },
+        decks_only: true,
+        reuse: false,
+        no_ccx: false,
+        ccx: "/nonexistent/ccx_hencky".into(),
+    };
+    calculix::run(&o).unwrap();
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["r0-nlgeom-hencky.inp", "r1-nlgeom-hencky.inp"]);
+    let r1 = std::fs::read_to_string(out.join("r1-nlgeom-hencky.inp")).unwrap();
+    assert!(r1.contains("*MATERIAL, NAME=USERHENCKY\n*USER MATERIAL, CONSTANTS=3\n"));
+    // the executable of --ccx is the one started, and a missing one is named
+    let e = calculix::run_ccx(&o.ccx, &out, "r1-nlgeom-hencky", &r1).unwrap_err();
+    let text = format!("{e:#}");
+    assert!(
+        text.contains("/nonexistent/ccx_hencky") && text.contains("build.sh"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
