@@ -16,21 +16,6 @@ use indentify_contact::{
     ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, Trajectory, trapezoid,
 };
 use indentify_laws::{Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-fn small_model(kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, cone(), kind).unwrap()
-}
 
 fn cone() -> Punch {
     Punch::Cone {
@@ -77,11 +62,14 @@ fn a_reused_workspace_gives_a_new_ones_bits() {
     let maxwell = [20000.0, 0.3, 30000.0];
     let norton = [1e5, 0.3, 1500.0, 5.0, 500.0];
     let models = [
-        ("vertical", small_model(ContactKind::Vertical)),
-        ("normal", small_model(ContactKind::Normal)),
+        (
+            "vertical",
+            common::small_model(cone(), ContactKind::Vertical),
+        ),
+        ("normal", common::small_model(cone(), ContactKind::Normal)),
         (
             "friction 0.2",
-            small_model(ContactKind::normal_with_friction(0.2).unwrap()),
+            common::small_model(cone(), ContactKind::normal_with_friction(0.2).unwrap()),
         ),
         ("finite", common::finite_model(cone())),
     ];

@@ -23,6 +23,16 @@ pub fn finite_model(punch: Punch) -> Model {
 /// [`finite_model`] with Coulomb friction `mu` (frictionless `Normal` for `mu = 0`).
 #[allow(dead_code)]
 pub fn finite_model_with_friction(punch: Punch, mu: f64) -> Model {
+    let kind = ContactKind::normal_with_friction(mu).unwrap();
+    small_model(punch, kind)
+        .with_kinematics(Kinematics::Finite)
+        .unwrap()
+}
+
+/// The test cylinder (4 x 4 mm, 8 x 8 Q8 graded 1.45 towards the axis and the top) under
+/// `punch` with contact `kind`, small strain.
+#[allow(dead_code)]
+pub fn small_model(punch: Punch, kind: ContactKind) -> Model {
     let mesh = CylinderMesher {
         radius: 4.0,
         height: 4.0,
@@ -33,11 +43,7 @@ pub fn finite_model_with_friction(punch: Punch, mu: f64) -> Model {
     }
     .build()
     .unwrap();
-    let kind = ContactKind::normal_with_friction(mu).unwrap();
-    Model::with_contact(mesh, punch, kind)
-        .unwrap()
-        .with_kinematics(Kinematics::Finite)
-        .unwrap()
+    Model::with_contact(mesh, punch, kind).unwrap()
 }
 
 /// On `model`, the trapezoid 0 -> 0.1 mm -> hold -> 0 in `steps` steps per segment with
