@@ -766,6 +766,13 @@ impl<'p> Evaluator<'p> {
         }
     }
 
+    /// The cache entry [`Evaluator::ensure`] just made or found.
+    fn entry_mut(&mut self) -> Result<&mut Entry, IdentifyError> {
+        self.entry
+            .as_mut()
+            .ok_or_else(|| IdentifyError::Optimizer("cache entry vanished".into()))
+    }
+
     /// Counts a request of `kind` at `c` (one adjoint sweep or sensitivity pass per test)
     /// unless the cache already holds its combined result.
     fn count_request(&mut self, c: &[f64], kind: Kind) {
@@ -840,9 +847,11 @@ impl<'p> Evaluator<'p> {
     /// [`IdentifyError::Forward`] when the direct problem fails, [`IdentifyError::Adjoint`]
     /// when the adjoint does (e.g. Norton-Hoff with `m <= 1`).
     pub fn cost_and_gradient(&mut self, c: &[f64]) -> Result<(f64, Vec<f64>), IdentifyError> {
-        self.count_request(c, Kind::Gradient);
         // hit or miss, `ensure` counts it; a gradient already there is a second hit
-        let e = self.ensure(c, true, Some(Kind::Gradient))?;
+        self.ensure(c, true, Some(Kind::Gradient))?;
+        // counted once the forward runs succeeded (a failed forward sweeps nothing)
+        self.count_request(c, Kind::Gradient);
+        let e = self.entry_mut()?;
         if let Some(g) = &e.gradient {
             return Ok((e.cost, g.clone()));
         }
@@ -873,8 +882,9 @@ impl<'p> Evaluator<'p> {
     /// As [`Evaluator::cost_and_gradient`].
     pub fn jacobian(&mut self, c: &[f64]) -> Result<Vec<Vec<f64>>, IdentifyError> {
         let p = self.problem;
+        self.ensure(c, true, Some(Kind::Jacobian))?;
         self.count_request(c, Kind::Jacobian);
-        let e = self.ensure(c, true, Some(Kind::Jacobian))?;
+        let e = self.entry_mut()?;
         if let Some(j) = &e.jacobian {
             return Ok(j.clone());
         }

@@ -8,9 +8,10 @@
 //! the other (`F1 F2 | F3 - | A1 A2 | A3 -`). A follow-up may also be *speculative*
 //! (computed ahead of a request that an optimizer usually makes next, e.g. the gradient
 //! after the line search's cost): it then only runs on a core that would otherwise wait
-//! for a forward still running, and only when its expected duration (from the previous
-//! evaluation) ends by the time that forward is expected to, so it never delays the
-//! request that was made.
+//! for a forward still running, and only when it is expected (from the previous
+//! evaluation's durations, with a 10% margin) to end before that forward does, so that it
+//! should not delay the request that was made. It can when the estimates are wrong: the
+//! evaluation returns when every task it started has ended, a speculative one included.
 //!
 //! Which task runs where and when depends on timing; what each task computes does not (it
 //! owns its test's workspace and cache entry, and the caller combines the results in test
@@ -95,8 +96,9 @@ impl Queue {
             .filter_map(|&(j, start)| todo[j].expected.0.map(|e| start + e))
             .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
         match (horizon, todo[k].expected.1) {
-            // a tenth of slack for the noise of the estimates
-            (Some(h), Some(e)) if now + 0.9 * e <= h => Some(Task::Follow(k)),
+            // a tenth of margin for the noise of the estimates: it must be expected to end
+            // before the forward does, with room to spare
+            (Some(h), Some(e)) if now + 1.1 * e <= h => Some(Task::Follow(k)),
             _ => None,
         }
     }
@@ -190,23 +192,31 @@ where
     // one test, or one thread: in order on this thread (no speculation: nothing is idle)
     let threads = pool.map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
     if tasks <= 1 || threads == 1 {
-        let mut done = vec![Done::default(); n];
-        for (k, (slot, t)) in slots.iter_mut().zip(todo).enumerate() {
-            let clock = Instant::now();
-            let ok = if t.forward {
-                let ok = forward(k, slot);
-                done[k].forward = Some(clock.elapsed().as_secs_f64());
-                ok
-            } else {
-                true
-            };
-            if ok && t.follow == Follow::Needed {
+        // inside the pool all the same: the tasks' own parallel passes (the Gauss-point
+        // loops) then use the pool's threads, not the caller's
+        let mut serial = || {
+            let mut done = vec![Done::default(); n];
+            for (k, (slot, t)) in slots.iter_mut().zip(todo).enumerate() {
                 let clock = Instant::now();
-                follow(k, slot);
-                done[k].follow = Some(clock.elapsed().as_secs_f64());
+                let ok = if t.forward {
+                    let ok = forward(k, slot);
+                    done[k].forward = Some(clock.elapsed().as_secs_f64());
+                    ok
+                } else {
+                    true
+                };
+                if ok && t.follow == Follow::Needed {
+                    let clock = Instant::now();
+                    follow(k, slot);
+                    done[k].follow = Some(clock.elapsed().as_secs_f64());
+                }
             }
-        }
-        return done;
+            done
+        };
+        return match pool {
+            Some(p) => p.install(serial),
+            None => serial(),
+        };
     }
     let shared = Shared {
         clock: Instant::now(),
@@ -276,6 +286,30 @@ mod tests {
                 assert!(done[k].forward.is_some());
                 assert_eq!(done[k].follow.is_some(), k != 3);
             }
+        }
+    }
+
+    /// The serial path (one task, or one thread) runs inside the given pool too, so that
+    /// the tasks' own parallel passes use its threads, not the caller's.
+    #[test]
+    fn serial_runs_use_the_pool_they_are_given() {
+        for (threads, tests) in [(1, 3), (3, 1)] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut seen = vec![(0_usize, 0_usize); tests];
+            run(
+                Some(&pool),
+                &mut seen,
+                &todo(tests, true, Follow::Needed),
+                |_, s: &mut (usize, usize)| {
+                    s.0 = rayon::current_num_threads();
+                    true
+                },
+                |_, s| s.1 = rayon::current_num_threads(),
+            );
+            assert_eq!(seen, vec![(threads, threads); tests], "{threads} threads");
         }
     }
 
