@@ -6,7 +6,11 @@
 //! columns) faer's general kernels spend more on dispatch than on arithmetic. The block
 //! products take four columns per pass in the widest SIMD the CPU offers (pulp's runtime
 //! dispatch: AVX2 with FMA on x86-64-v3, plain scalar code otherwise), so results may
-//! differ in the last bits between CPUs, as faer's factorization itself does.
+//! differ in the last bits between CPUs, as faer's factorization itself does. The matrix's
+//! permutation into the factor's ordering is worked out once, at the analysis, as a map of
+//! value positions: a numeric factorization gathers the values through it and calls faer's
+//! supernodal kernel directly, instead of faer permuting the whole matrix every time (the
+//! same matrix reaches the same kernel, so the factor is the same, bit for bit).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SparseColMatRef;
@@ -14,8 +18,9 @@ use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    factorize_symbolic_cholesky, supernodal,
 };
+use faer::sparse::utils::{permute_self_adjoint_scratch, permute_self_adjoint_to_unsorted};
 use faer::{Par, Side, Spec};
 use pulp::{Arch, Simd, WithSimd};
 
@@ -27,6 +32,14 @@ pub struct SparseCholesky {
     symbolic: SymbolicCholesky<usize>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
+    /// The lower triangle permuted into the factor's ordering: its column pointers, row
+    /// indices (unsorted within a column, as faer's own permutation leaves them), and
+    /// for each of its entries the position of that entry in the pattern's values.
+    perm_col_ptr: Vec<usize>,
+    perm_row_idx: Vec<usize>,
+    perm_source: Vec<usize>,
+    /// The permuted values (scratch of each factorization).
+    perm_values: Vec<f64>,
     l_values: Vec<f64>,
     layout: Layout,
     work: Vec<f64>,
@@ -71,7 +84,12 @@ impl SparseCholesky {
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, llt_params());
         let l_values = vec![0.0; symbolic.len_val()];
         let layout = Layout::new(&symbolic)?;
+        let (perm_col_ptr, perm_row_idx, perm_source) = permuted_positions(pattern, &symbolic);
         Ok(SparseCholesky {
+            perm_values: vec![0.0; perm_source.len()],
+            perm_col_ptr,
+            perm_row_idx,
+            perm_source,
             symbolic,
             col_ptr: pattern.col_ptr.clone(),
             row_idx: pattern.row_idx.clone(),
@@ -97,21 +115,33 @@ impl SparseCholesky {
     /// rigid-body mode left free).
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), FeError> {
         let n = self.col_ptr.len() - 1;
-        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
-        let a = SparseColMatRef::new(sym, values);
+        assert_eq!(values.len(), self.row_idx.len(), "values of the pattern");
         self.factorized = false;
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.symbolic.raw() else {
+            unreachable!("the analysis forces a supernodal factor (checked by Layout::new)");
+        };
+        for (v, &src) in self.perm_values.iter_mut().zip(&self.perm_source) {
+            *v = values[src];
+        }
+        let sym = SymbolicSparseColMatRef::new_unsorted_checked(
+            n,
+            n,
+            &self.perm_col_ptr,
+            None,
+            &self.perm_row_idx,
+        );
+        let a = SparseColMatRef::new(sym, &self.perm_values);
         let stack = MemStack::new(&mut self.mem);
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.l_values,
-                a,
-                Side::Lower,
-                Default::default(),
-                Par::Seq,
-                stack,
-                llt_params(),
-            )
-            .map_err(|e| FeError::NotPositiveDefinite(format!("{e:?}")))?;
+        supernodal::factorize_supernodal_numeric_llt(
+            &mut self.l_values,
+            a,
+            Default::default(),
+            sn,
+            Par::Seq,
+            stack,
+            llt_params(),
+        )
+        .map_err(|e| FeError::NotPositiveDefinite(format!("{e:?}")))?;
         self.factorized = true;
         self.n_factorizations += 1;
         Ok(())
@@ -130,6 +160,47 @@ impl SparseCholesky {
         self.layout.solve(&self.l_values, rhs, x, tmp, dots);
         self.n_solves += 1;
     }
+}
+
+/// The pattern's lower triangle permuted into the factor's ordering, as faer's numeric
+/// factorization would permute it: column pointers, row indices and, per entry, the
+/// position of its value in the pattern's values (found by permuting the positions
+/// themselves, exact as `f64` below 2^53).
+fn permuted_positions(
+    pattern: &Pattern,
+    symbolic: &SymbolicCholesky<usize>,
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let n = pattern.n;
+    let nnz = pattern.row_idx.len();
+    let Some(perm) = symbolic.perm() else {
+        // no ordering: the pattern is the factor's ordering already
+        return (
+            pattern.col_ptr.clone(),
+            pattern.row_idx.clone(),
+            (0..nnz).collect(),
+        );
+    };
+    let positions: Vec<f64> = (0..nnz).map(|p| p as f64).collect();
+    let sym = SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+    let a = SparseColMatRef::new(sym, &positions);
+    let mut values = vec![0.0; nnz];
+    let mut col_ptr = vec![0usize; n + 1];
+    let mut row_idx = vec![0usize; nnz];
+    let mut mem = MemBuffer::new(permute_self_adjoint_scratch::<usize>(n));
+    permute_self_adjoint_to_unsorted(
+        &mut values,
+        &mut col_ptr,
+        &mut row_idx,
+        a,
+        perm,
+        Side::Lower,
+        Side::Lower,
+        MemStack::new(&mut mem),
+    );
+    let used = col_ptr[n];
+    row_idx.truncate(used);
+    let source = values[..used].iter().map(|&v| v as usize).collect();
+    (col_ptr, row_idx, source)
 }
 
 /// One supernode: columns `start..start + ncols` of the permuted factor, stored from
@@ -376,6 +447,63 @@ mod tests {
     use faer::{Conj, MatMut};
     use indentify_laws::elastic::isotropic_stiffness;
     use indentify_mesh::CylinderMesher;
+
+    /// The factorization through the precomputed permutation is faer's own numeric
+    /// factorization (which permutes the matrix itself), bit for bit, on a matrix whose
+    /// values all differ (a wrong position in the map changes the factor).
+    #[test]
+    fn prepermuted_factorization_is_faers_bit_for_bit() {
+        let mesh = CylinderMesher {
+            radius: 2.0,
+            height: 1.5,
+            nr: 8,
+            nz: 6,
+            grading_r: 1.2,
+            grading_z: 1.1,
+        }
+        .build()
+        .unwrap();
+        let disc = Discretization::new(&mesh);
+        let dofs = DofMap::cylinder(&mesh);
+        let pattern = Pattern::new(&disc, &dofs);
+        let mut k = vec![0.0; pattern.nnz()];
+        pattern.assemble_b_c_b_uniform(&disc, &isotropic_stiffness(2e4, 0.3), &mut k);
+        // a distinct perturbation of every stored value (small: the matrix stays SPD)
+        for (p, v) in k.iter_mut().enumerate() {
+            *v *= 1.0 + 1e-3 * ((p * 7919) % 101) as f64 / 101.0;
+        }
+        let mut chol = SparseCholesky::analyse(&pattern).unwrap();
+        assert!(chol.symbolic.perm().is_some(), "AMD orders the pattern");
+        chol.factorize(&k).unwrap();
+        let n = pattern.n;
+        let sym =
+            SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+        let mut faer_l = vec![0.0; chol.l_values.len()];
+        let mut mem = MemBuffer::new(
+            chol.symbolic
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, llt_params()),
+        );
+        chol.symbolic
+            .factorize_numeric_llt(
+                &mut faer_l,
+                SparseColMatRef::new(sym, &k),
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                llt_params(),
+            )
+            .unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&chol.l_values), bits(&faer_l));
+        // and a matrix that is not positive definite is refused, not factorized
+        let mut bad = k.clone();
+        bad[pattern.col_ptr[3]] = -1.0;
+        assert!(matches!(
+            chol.factorize(&bad),
+            Err(FeError::NotPositiveDefinite(_))
+        ));
+    }
 
     /// The block solve equals faer's own supernodal solve to round-off and solves the
     /// system (residual), on an elastic stiffness of a graded mesh.
