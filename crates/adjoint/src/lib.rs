@@ -467,8 +467,9 @@ impl Adjoint {
                 }
             }
             if sig1[q].max_abs() > 0.0 {
-                for (k, g) in sweep.grad.iter_mut().enumerate() {
-                    *g -= dt * wmu.dot(&law.flow_param_derivative(c, &sig1[q], k));
+                law.flow_param_derivatives(c, &sig1[q], &mut sweep.dflow);
+                for (g, d) in sweep.grad.iter_mut().zip(&sweep.dflow) {
+                    *g -= dt * wmu.dot(d);
                 }
             }
         }
@@ -544,6 +545,8 @@ impl Adjoint {
 struct Sweep {
     s: Mat4,
     grad: Vec<f64>,
+    /// Scratch: `dg/dc_k` at one Gauss point, every `k`.
+    dflow: Vec<Vec4>,
     m_acc: Mat4,
     mu_zero: bool,
     /// Friction: the cotangents of the sticking nodes' prescribed tangential values of
@@ -556,6 +559,7 @@ impl Sweep {
         Sweep {
             s: law.compliance(c),
             grad: vec![0.0; c.len()],
+            dflow: vec![Vec4::ZERO; c.len()],
             m_acc: Mat4::ZERO,
             mu_zero: true,
             stick: Vec::new(),

@@ -131,6 +131,16 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     /// `dg/dc_k` at fixed stress.
     fn flow_param_derivative(&self, c: &[f64], sigma: &Vec4, k: usize) -> Vec4;
 
+    /// `dg/dc_k` at fixed stress for every `k < out.len()` at once, into `out`: equal, bit
+    /// for bit, to [`Law::flow_param_derivative`] for each `k` (the adjoint sweep asks
+    /// for all of them at every stressed Gauss point); a law overrides it to share the
+    /// work between the parameters.
+    fn flow_param_derivatives(&self, c: &[f64], sigma: &Vec4, out: &mut [Vec4]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.flow_param_derivative(c, sigma, k);
+        }
+    }
+
     /// `true` when the consistent tangent depends only on `c` and `dt`, not on the state
     /// (elasticity, Maxwell): the global tangent can then be reused across iterations and
     /// steps of equal length.

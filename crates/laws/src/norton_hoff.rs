@@ -253,6 +253,24 @@ impl Law for NortonHoff {
             _ => Vec4::ZERO,
         }
     }
+    /// The overstress and `x^m` once for the three parameters of the flow (the same
+    /// expressions as [`Law::flow_param_derivative`], so the same bits).
+    fn flow_param_derivatives(&self, c: &[f64], sigma: &Vec4, out: &mut [Vec4]) {
+        out.fill(Vec4::ZERO);
+        let Some(o) = overstress(c, sigma) else {
+            return;
+        };
+        let (kk, m) = (c[K], c[M]);
+        let xm = o.x.powf(m);
+        for (k, d) in out.iter_mut().enumerate() {
+            *d = match k {
+                K => o.n * (-(m / kk) * xm),
+                M => o.n * (xm * o.x.ln()),
+                SY => o.n * (-(m / kk) * o.x.powf(m - 1.0)),
+                _ => Vec4::ZERO,
+            };
+        }
+    }
     /// `m > 1` is required: `Phi` must be twice differentiable in `sigma` for the adjoint
     /// state to exist (paper §3.3).
     ///

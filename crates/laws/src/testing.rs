@@ -306,6 +306,18 @@ pub(crate) fn check_flow_param_derivative(p: &Profile, k: &Case) -> Result<(), T
                 law.flow(&c, &sigma)
             };
             let exact = law.flow_param_derivative(&k.c, &sigma, i);
+            // the batched form gives the same bits
+            let mut all = vec![Vec4::ZERO; k.c.len()];
+            law.flow_param_derivatives(&k.c, &sigma, &mut all);
+            prop_assert!(
+                all[i]
+                    .0
+                    .iter()
+                    .zip(&exact.0)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "flow_param_derivatives[{i}] {:?} differs from flow_param_derivative {exact:?}",
+                all[i]
+            );
             let approx = fd(g, h);
             let noise = fd_noise(law.flow(&k.c, &sigma).max_abs(), h);
             let err = rel_err(&exact.0, &approx.0, noise);
