@@ -1,6 +1,6 @@
 //! Benchmarks of the adjoint sweep against the forward solve on R1 (Maxwell) and R2
-//! (Norton-Hoff) of DESIGN.md §5. `cargo bench -p indentify-adjoint`; the ratio
-//! adjoint / forward is printed.
+//! (Norton-Hoff) of DESIGN.md §5, and the forward sensitivities of every parameter.
+//! `cargo bench -p indentify-adjoint`; the ratio adjoint / forward is printed.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use indentify_adjoint::Adjoint;
@@ -51,6 +51,13 @@ fn bench_adjoint(c: &mut Criterion) {
             b.iter(|| {
                 adj.gradient(&model, law, &params, &traj, &rho)
                     .expect("gradient")
+            })
+        });
+        // the forward sensitivities of every parameter (what Levenberg-Marquardt asks for)
+        group.bench_function(format!("{name}_sensitivities"), |b| {
+            b.iter(|| {
+                adj.sensitivities(&model, law, &params, &traj)
+                    .expect("sensitivities")
             })
         });
     }

@@ -209,6 +209,7 @@ impl Adjoint {
         let mut du_prev = vec![vec![0.0; nd]; np];
         let mut df = vec![vec![0.0; np]; n];
         let mut q_field = vec![Vec4::ZERO; nq];
+        let mut r_field = vec![Vec4::ZERO; nq * np];
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -231,10 +232,10 @@ impl Adjoint {
                 }
             }
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
+            crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             for k in 0..np {
                 for qp in 0..nq {
-                    q_field[qp] = y[k][qp]
-                        - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
+                    q_field[qp] = y[k][qp] - r_field[qp * np + k];
                     self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
                 }
                 self.force_of_field_b(model);

@@ -500,16 +500,17 @@ impl Adjoint {
         let mut y = vec![vec![Vec4::ZERO; nq]; np];
         let mut df = vec![vec![0.0; np]; n];
         let mut q_field = vec![Vec4::ZERO; nq];
+        let mut r_field = vec![Vec4::ZERO; nq * np];
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
             let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
+            residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             for k in 0..np {
                 // q = y_{i-1} - R_i e_k
                 for qp in 0..nq {
-                    q_field[qp] = y[k][qp]
-                        - law.residual_param_derivative(c, &sig0[qp], &sig1[qp], rec.dt, k);
+                    q_field[qp] = y[k][qp] - r_field[qp * np + k];
                     self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
                 }
                 self.force_of_field_b(model);
@@ -579,6 +580,22 @@ impl Sweep {
             *g -= acc;
         }
         self.grad
+    }
+}
+
+/// `R_i e_k = dr/dc_k` at every Gauss point of a step, every `k`, into `out` (point-major:
+/// `out[q * np + k]`), as [`Law::residual_param_derivative`] gives them.
+fn residual_param_field(
+    law: &dyn Law,
+    c: &[f64],
+    sig0: &[Vec4],
+    sig1: &[Vec4],
+    dt: f64,
+    out: &mut [Vec4],
+) {
+    let np = c.len();
+    for ((r, s0), s1) in out.chunks_exact_mut(np).zip(sig0).zip(sig1) {
+        law.residual_param_derivatives(c, s0, s1, dt, r);
     }
 }
 

@@ -218,6 +218,26 @@ pub trait Law: Send + Sync + std::fmt::Debug {
             + self.flow_param_derivative(c, s1, k) * dt
     }
 
+    /// [`Law::residual_param_derivative`] for every `k < out.len()` at once, into `out`,
+    /// bit for bit (the forward sensitivities ask for all of them at every Gauss point of
+    /// every step). The default shares the flow's derivatives
+    /// ([`Law::flow_param_derivatives`]) between the parameters; a law that overrides
+    /// [`Law::residual_param_derivative`] must override this too.
+    fn residual_param_derivatives(
+        &self,
+        c: &[f64],
+        s0: &Vec4,
+        s1: &Vec4,
+        dt: f64,
+        out: &mut [Vec4],
+    ) {
+        self.flow_param_derivatives(c, s1, out);
+        let ds = *s1 - *s0;
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.compliance_derivative(c, k).mul_vec(&ds) + *o * dt;
+        }
+    }
+
     /// Consistent tangent `C = (S + dt H(sigma))^-1` at a given end-of-step stress.
     ///
     /// # Errors

@@ -255,6 +255,18 @@ pub(crate) fn check_residual_param_derivative(p: &Profile, k: &Case) -> Result<(
             law.compliance(&c).mul_vec(&(s1 - k.s0)) + law.flow(&c, &s1) * k.dt - k.deps
         };
         let exact = law.residual_param_derivative(&k.c, &k.s0, &s1, k.dt, i);
+        // the batched form gives the same bits
+        let mut all = vec![Vec4::ZERO; k.c.len()];
+        law.residual_param_derivatives(&k.c, &k.s0, &s1, k.dt, &mut all);
+        prop_assert!(
+            all[i]
+                .0
+                .iter()
+                .zip(&exact.0)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "residual_param_derivatives[{i}] {:?} differs from residual_param_derivative {exact:?}",
+            all[i]
+        );
         let approx = fd(r, h);
         let err = rel_err(&exact.0, &approx.0, fd_noise(scale, h));
         report(law, &format!("dr_dc{i}_vs_fd"), err, &exact.0, &approx.0);
