@@ -54,9 +54,11 @@ fn bench_adjoint(c: &mut Criterion) {
             })
         });
         // the forward sensitivities of every parameter (what Levenberg-Marquardt asks for)
+        // inside a pool, as an identification runs it (its parameters in parallel)
+        let pool = rayon::ThreadPoolBuilder::new().build().expect("pool");
         group.bench_function(format!("{name}_sensitivities"), |b| {
             b.iter(|| {
-                adj.sensitivities(&model, law, &params, &traj)
+                pool.install(|| adj.sensitivities(&model, law, &params, &traj))
                     .expect("sensitivities")
             })
         });

@@ -138,10 +138,23 @@ impl FiniteStep {
     /// dofs) for `cq = C q` and the displacement variation `du`, which `f` holds on entry
     /// and receives on exit.
     pub(crate) fn delta_force(&mut self, model: &Model, cq: &[Vec4], f: &mut [f64]) {
-        self.du.copy_from_slice(f);
-        self.force(model, cq, f);
-        let du = std::mem::take(&mut self.du);
-        self.add_k_times(model, &du, f);
+        let mut du = std::mem::take(&mut self.du);
+        self.delta_force_with(model, cq, f, &mut du);
         self.du = du;
+    }
+
+    /// [`FiniteStep::delta_force`] with its scratch (`du`, all dofs) given: the step's
+    /// operators shared between threads.
+    pub(crate) fn delta_force_with(
+        &self,
+        model: &Model,
+        cq: &[Vec4],
+        f: &mut [f64],
+        du: &mut Vec<f64>,
+    ) {
+        du.clear();
+        du.extend_from_slice(f);
+        self.force(model, cq, f);
+        self.add_k_times(model, du, f);
     }
 }

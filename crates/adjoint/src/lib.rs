@@ -499,46 +499,166 @@ impl Adjoint {
         let nq = model.disc.n_qp();
         let mut y = vec![vec![Vec4::ZERO; nq]; np];
         let mut df = vec![vec![0.0; np]; n];
-        let mut q_field = vec![Vec4::ZERO; nq];
         let mut r_field = vec![Vec4::ZERO; nq * np];
+        // given a step's factorized system, the parameters' solves are independent: each
+        // has its own work space (the same arithmetic on any thread, so the same bits)
+        let mut work: Vec<ParamWork> = (0..np)
+            .map(|_| ParamWork::new(model, &self.system))
+            .collect();
+        let zero = vec![0.0; model.dofs.n_eq];
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
-            let (sig0, sig1) = (&traj.fields[i].sigma, &traj.fields[i + 1].sigma);
+            let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
-            for k in 0..np {
-                // q = y_{i-1} - R_i e_k
-                for qp in 0..nq {
-                    q_field[qp] = y[k][qp] - r_field[qp * np + k];
-                    self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
-                }
-                self.force_of_field_b(model);
-                self.restrict(model);
-                self.xbar.fill(0.0);
-                let mut eq = std::mem::take(&mut self.eq);
-                self.system.solve_dirichlet(model, &mut eq, &self.xbar);
-                self.eq = eq;
-                self.expand(model);
-                self.strains_of_full(model);
-                for qp in 0..nq {
-                    let bv = Vec4(self.strain[qp]);
-                    let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
-                    self.field_b[qp] = dsig;
-                    y[k][qp] = s.mul_vec(&dsig) - bv;
-                }
-                self.delta_force(model, &q_field);
-                df[i][k] = -rec
-                    .active
-                    .iter()
-                    .map(|&a| self.full[2 * model.candidates[a as usize] + 1])
-                    .sum::<f64>();
-            }
+            let step = ParamStep {
+                model,
+                tangents: &self.tangents,
+                system: &self.system,
+                finite: self.finite.as_ref(),
+                s: &s,
+                r_field: &r_field,
+                np,
+                zero: &zero,
+                active: &rec.active,
+            };
+            let one =
+                |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
+                    step.solve(k, yk, dfk, w)
+                };
+            // in parallel on a pool's worker (an identification's tasks, or a caller's
+            // `ThreadPool::install`); from any other thread the parameters' solves are too
+            // short to gain from being handed to the pool (measured: no gain on 2 threads)
+            let on_pool = rayon::current_thread_index().is_some();
+            let done = if np > 1 && on_pool && rayon::current_num_threads() > 1 {
+                use rayon::prelude::*;
+                y.par_iter_mut()
+                    .zip(df[i].par_iter_mut())
+                    .zip(work.par_iter_mut())
+                    .enumerate()
+                    .with_max_len(1)
+                    .try_for_each(one)
+            } else {
+                y.iter_mut()
+                    .zip(df[i].iter_mut())
+                    .zip(work.iter_mut())
+                    .enumerate()
+                    .try_for_each(one)
+            };
+            done.map_err(|e| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: e.to_string(),
+            })?;
         }
         Ok(Sensitivities {
             df_dc: df,
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// The work space of one parameter's forward sensitivity in a step.
+struct ParamWork {
+    q: Vec<Vec4>,
+    field_b: Vec<Vec4>,
+    full: Vec<f64>,
+    eq: Vec<f64>,
+    strain: Vec<[f64; 4]>,
+    /// Finite strain: the displacement variation (all dofs).
+    du: Vec<f64>,
+    solve: indentify_fe::SolveScratch,
+}
+
+impl ParamWork {
+    fn new(model: &Model, system: &ConstrainedSystem) -> ParamWork {
+        let nq = model.disc.n_qp();
+        ParamWork {
+            q: vec![Vec4::ZERO; nq],
+            field_b: vec![Vec4::ZERO; nq],
+            full: vec![0.0; model.disc.n_dofs()],
+            eq: vec![0.0; model.dofs.n_eq],
+            strain: vec![[0.0; 4]; nq],
+            du: Vec::new(),
+            solve: system.solve_scratch(),
+        }
+    }
+}
+
+/// What a step's forward sensitivities share between the parameters (read only).
+struct ParamStep<'a> {
+    model: &'a Model,
+    tangents: &'a [Mat4],
+    system: &'a ConstrainedSystem,
+    finite: Option<&'a finite::FiniteStep>,
+    s: &'a Mat4,
+    /// `R_i e_k` at every point, point-major ([`residual_param_field`]).
+    r_field: &'a [Vec4],
+    /// Number of parameters.
+    np: usize,
+    /// Zero prescribed values (equations).
+    zero: &'a [f64],
+    active: &'a [u32],
+}
+
+impl ParamStep<'_> {
+    /// Parameter `k`'s step: from `y_{i-1}` in `yk`, `K du = -sum w B^T C q` with
+    /// `q = y_{i-1} - R_i e_k` (`du = 0` on the active contact dofs), `y_i` into `yk`
+    /// and `dF_i/dc_k` into `dfk`.
+    fn solve(
+        &self,
+        k: usize,
+        yk: &mut [Vec4],
+        dfk: &mut f64,
+        w: &mut ParamWork,
+    ) -> Result<(), indentify_fe::FeError> {
+        let (model, np) = (self.model, self.np);
+        for (qp, ((q, b), t)) in
+            w.q.iter_mut()
+                .zip(w.field_b.iter_mut())
+                .zip(self.tangents)
+                .enumerate()
+        {
+            *q = yk[qp] - self.r_field[qp * np + k];
+            *b = t.mul_vec(q) * -1.0;
+        }
+        match self.finite {
+            None => model.disc.internal_force(&w.field_b, &mut w.full),
+            Some(fs) => fs.force(model, &w.field_b, &mut w.full),
+        }
+        model.dofs.restrict(&w.full, &mut w.eq);
+        self.system
+            .solve_dirichlet_with(model, &mut w.eq, self.zero, &mut w.solve)?;
+        for (d, &e) in model.dofs.eq.iter().enumerate() {
+            w.full[d] = if e == NO_EQ { 0.0 } else { w.eq[e as usize] };
+        }
+        match self.finite {
+            None => model.disc.strains(&w.full, &mut w.strain),
+            Some(fs) => fs.strains(model, &w.full, &mut w.strain),
+        }
+        for (qp, y) in yk.iter_mut().enumerate() {
+            let bv = Vec4(w.strain[qp]);
+            let dsig = self.tangents[qp].mul_vec(&(bv + w.q[qp]));
+            w.field_b[qp] = dsig;
+            *y = self.s.mul_vec(&dsig) - bv;
+        }
+        // the variation of the internal force (finite strain: K du + sum w0 G^T C q)
+        match self.finite {
+            None => model.disc.internal_force(&w.field_b, &mut w.full),
+            Some(fs) => {
+                for (b, (t, q)) in w.field_b.iter_mut().zip(self.tangents.iter().zip(&w.q)) {
+                    *b = t.mul_vec(q);
+                }
+                fs.delta_force_with(model, &w.field_b, &mut w.full, &mut w.du);
+            }
+        }
+        *dfk = -self
+            .active
+            .iter()
+            .map(|&a| w.full[2 * model.candidates[a as usize] + 1])
+            .sum::<f64>();
+        Ok(())
     }
 }
 

@@ -144,3 +144,40 @@ fn a_reused_workspace_gives_a_new_ones_bits() {
         }
     }
 }
+
+/// The forward sensitivities run their parameters in parallel on a pool with threads:
+/// the same bits on 1 and 3 threads (each parameter's solve has its own work space and
+/// the same arithmetic).
+#[test]
+fn sensitivities_do_not_depend_on_the_thread_count() {
+    let norton = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    let maxwell = [20000.0, 0.3, 30000.0];
+    let models = [
+        (
+            "vertical",
+            common::small_model(cone(), ContactKind::Vertical),
+        ),
+        ("normal", common::small_model(cone(), ContactKind::Normal)),
+        ("finite", common::finite_model(cone())),
+    ];
+    for (name, model) in &models {
+        for (law, c) in [
+            (&Maxwell as &dyn Law, &maxwell[..]),
+            (&NortonHoff, &norton[..]),
+        ] {
+            let t = run(model, law, c);
+            let on = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| {
+                        sensitivity_bits(&mut Adjoint::new(model).unwrap(), model, law, c, &t)
+                    })
+            };
+            let one = on(1);
+            assert!(one.iter().any(|&b| f64::from_bits(b) != 0.0), "{name}");
+            assert_eq!(on(3), one, "{name}, {}", law.name());
+        }
+    }
+}

@@ -28,7 +28,7 @@
 
 use std::collections::HashMap;
 
-use indentify_fe::{ElementCache, FeError, Pattern, SparseCholesky};
+use indentify_fe::{ElementCache, FeError, Pattern, SolveScratch, SparseCholesky};
 use indentify_laws::Mat4;
 
 use crate::direct::Model;
@@ -89,6 +89,8 @@ pub struct ConstrainedSystem {
     slip_z: Vec<Vec<f64>>,
     slip_lu: Vec<f64>,
     slip_piv: Vec<usize>,
+    /// The work space of this system's own solves.
+    scratch: SolveScratch,
 }
 
 /// The local frame of an active node under normal contact: its equations, the unit
@@ -153,6 +155,7 @@ impl ConstrainedSystem {
             slip_z: Vec::new(),
             slip_lu: Vec::new(),
             slip_piv: Vec::new(),
+            scratch: SolveScratch::default(),
         })
     }
 
@@ -682,24 +685,62 @@ impl ConstrainedSystem {
     /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
     pub fn solve_dirichlet(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         let t0 = std::time::Instant::now();
+        if self.capacitance || self.slip_idx.is_empty() {
+            let mut scratch = std::mem::take(&mut self.scratch);
+            self.solve_dirichlet_with(model, b, xbar, &mut scratch)
+                .expect("no slipping frame on this path");
+            self.scratch = scratch;
+            self.chol.n_solves += 1;
+        } else {
+            rotate_in(&self.frames, b);
+            self.solve_slip(model, b, xbar);
+            rotate_out(&self.frames, b);
+        }
+        self.seconds[2] += t0.elapsed().as_secs_f64();
+    }
+
+    /// The work space of [`ConstrainedSystem::solve_dirichlet_with`].
+    pub fn solve_scratch(&self) -> SolveScratch {
+        self.chol.scratch()
+    }
+
+    /// [`ConstrainedSystem::solve_dirichlet`] with the system shared and the solve's work
+    /// space given (from [`ConstrainedSystem::solve_scratch`]): several threads may solve
+    /// with one factorized system at once, with the same arithmetic, so the same bits.
+    /// These solves are neither timed nor counted.
+    ///
+    /// # Errors
+    /// [`FeError::Factorization`] with slipping frames (Coulomb friction in direct mode),
+    /// whose solve needs the system's own work space: use
+    /// [`ConstrainedSystem::solve_dirichlet`].
+    ///
+    /// # Panics
+    /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
+    pub fn solve_dirichlet_with(
+        &self,
+        model: &Model,
+        b: &mut [f64],
+        xbar: &[f64],
+        scratch: &mut SolveScratch,
+    ) -> Result<(), FeError> {
         if self.capacitance {
             if self.frames.is_empty() {
-                self.solve_capacitance(b, xbar);
+                self.solve_capacitance(b, xbar, scratch);
             } else {
-                self.solve_capacitance_frames(b, xbar);
+                self.solve_capacitance_frames(b, xbar, scratch);
             }
-            self.seconds[2] += t0.elapsed().as_secs_f64();
-            return;
+            return Ok(());
+        }
+        if !self.slip_idx.is_empty() {
+            return Err(FeError::Factorization(
+                "a shared solve with slipping frames: use solve_dirichlet".into(),
+            ));
         }
         rotate_in(&self.frames, b);
-        if self.slip_idx.is_empty() {
-            self.dirichlet_rhs(model, b, xbar);
-            self.chol.solve_in_place(b);
-        } else {
-            self.solve_slip(model, b, xbar);
-        }
+        self.dirichlet_rhs(model, b, xbar);
+        self.chol.solve_with(b, scratch);
         rotate_out(&self.frames, b);
-        self.seconds[2] += t0.elapsed().as_secs_f64();
+        Ok(())
     }
 
     /// The direct solve with slipping frames (`b` rotated): the slipping rows' right-hand
@@ -752,19 +793,11 @@ impl ConstrainedSystem {
         if self.capacitance || !self.friction() {
             // symmetric, no sticking dof: the cotangent of b is the solve with xbar = 0
             let zero = vec![0.0; b.len()];
-            let (cap, frames_empty) = (self.capacitance, self.frames.is_empty());
-            if cap {
-                if frames_empty {
-                    self.solve_capacitance(b, &zero);
-                } else {
-                    self.solve_capacitance_frames(b, &zero);
-                }
-            } else {
-                rotate_in(&self.frames, b);
-                self.dirichlet_rhs(model, b, &zero);
-                self.chol.solve_in_place(b);
-                rotate_out(&self.frames, b);
-            }
+            let mut scratch = std::mem::take(&mut self.scratch);
+            self.solve_dirichlet_with(model, b, &zero, &mut scratch)
+                .expect("no slipping frame on this path");
+            self.scratch = scratch;
+            self.chol.n_solves += 1;
             self.seconds[2] += t0.elapsed().as_secs_f64();
             return stick;
         }
@@ -897,7 +930,7 @@ impl ConstrainedSystem {
     /// is `b` without its normal components at the active nodes, which are reactions), and
     /// `(alpha, beta)` such that `m_k . x_k = xbar_k` and the tangential equation
     /// `alpha_k + d_k t_k . x_k = 0` hold at every active node.
-    fn solve_capacitance_frames(&mut self, b: &mut [f64], xbar: &[f64]) {
+    fn solve_capacitance_frames(&self, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
         for f in &self.frames {
             match f.er {
                 Some(er) => {
@@ -908,7 +941,7 @@ impl ConstrainedSystem {
                 None => b[f.ez] = 0.0,
             }
         }
-        self.chol.solve_in_place(b);
+        self.chol.solve_with(b, scratch);
         let nf = self.frames.len();
         let alpha_idx = alpha_indices(&self.frames);
         let nu = self.cap_piv.len();
@@ -942,7 +975,7 @@ impl ConstrainedSystem {
 
     /// `b - K xbar` on the unconstrained equations, `K_cc xbar_c` on the constrained ones:
     /// the right-hand side of the constrained matrix for the prescribed values `xbar`.
-    fn dirichlet_rhs(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+    fn dirichlet_rhs(&self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         // K xbar has the columns of the few constrained equations only
         let k = if self.frames.is_empty() {
             &self.k_values
@@ -966,12 +999,12 @@ impl ConstrainedSystem {
     }
 
     /// `x = K^-1 b - sum_c mu_c z_c` with `S mu = (K^-1 b)_C - xbar_C`, `b_C = 0`.
-    fn solve_capacitance(&mut self, b: &mut [f64], xbar: &[f64]) {
+    fn solve_capacitance(&self, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
         let set = &self.schur_set;
         for &c in set {
             b[c] = 0.0;
         }
-        self.chol.solve_in_place(b);
+        self.chol.solve_with(b, scratch);
         if set.is_empty() {
             return;
         }

@@ -18,7 +18,7 @@ pub use assembly::{ElementCache, Pattern};
 pub use dofs::DofMap;
 pub use finite::Deformation;
 pub use geometry::{Discretization, QP_PER_ELEMENT, QuadPoint};
-pub use solver::SparseCholesky;
+pub use solver::{SolveScratch, SparseCholesky};
 
 /// Errors of assembly and linear solves.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]

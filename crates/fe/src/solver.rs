@@ -42,7 +42,7 @@ pub struct SparseCholesky {
     perm_values: Vec<f64>,
     l_values: Vec<f64>,
     layout: Layout,
-    work: Vec<f64>,
+    scratch: SolveScratch,
     mem: MemBuffer,
     factorized: bool,
     /// Number of numeric factorizations done so far.
@@ -94,7 +94,9 @@ impl SparseCholesky {
             col_ptr: pattern.col_ptr.clone(),
             row_idx: pattern.row_idx.clone(),
             l_values,
-            work: vec![0.0; n + layout.max_pattern + layout.max_ncols],
+            scratch: SolveScratch {
+                work: vec![0.0; n + layout.max_pattern + layout.max_ncols],
+            },
             layout,
             mem: MemBuffer::new(req),
             factorized: false,
@@ -152,14 +154,42 @@ impl SparseCholesky {
     /// # Panics
     /// If no factorization succeeded yet, or `rhs` has the wrong length.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.solve_with(rhs, &mut scratch);
+        self.scratch = scratch;
+        self.n_solves += 1;
+    }
+
+    /// The work space of one solve ([`SparseCholesky::solve_with`]).
+    pub fn scratch(&self) -> SolveScratch {
+        self.scratch.clone()
+    }
+
+    /// Solves `K x = b` in place with the last factorization and the given work space
+    /// (from [`SparseCholesky::scratch`]), the factorization shared: several threads may
+    /// solve with it at once, each with its own scratch. The same arithmetic as
+    /// [`SparseCholesky::solve_in_place`] (which does not count these solves).
+    ///
+    /// # Panics
+    /// If no factorization succeeded yet, or `rhs` has the wrong length.
+    pub fn solve_with(&self, rhs: &mut [f64], scratch: &mut SolveScratch) {
         assert!(self.factorized, "solve before a successful factorization");
         let n = self.col_ptr.len() - 1;
         assert_eq!(rhs.len(), n, "right-hand side length");
-        let (x, tmp) = self.work.split_at_mut(n);
+        // a default or another factorization's scratch is sized here
+        scratch
+            .work
+            .resize(n + self.layout.max_pattern + self.layout.max_ncols, 0.0);
+        let (x, tmp) = scratch.work.split_at_mut(n);
         let (tmp, dots) = tmp.split_at_mut(self.layout.max_pattern);
         self.layout.solve(&self.l_values, rhs, x, tmp, dots);
-        self.n_solves += 1;
     }
+}
+
+/// The work space of a solve with a shared [`SparseCholesky`].
+#[derive(Clone, Debug, Default)]
+pub struct SolveScratch {
+    work: Vec<f64>,
 }
 
 /// The pattern's lower triangle permuted into the factor's ordering, as faer's numeric
@@ -448,18 +478,16 @@ mod tests {
     use indentify_laws::elastic::isotropic_stiffness;
     use indentify_mesh::CylinderMesher;
 
-    /// The factorization through the precomputed permutation is faer's own numeric
-    /// factorization (which permutes the matrix itself), bit for bit, on a matrix whose
-    /// values all differ (a wrong position in the map changes the factor).
-    #[test]
-    fn prepermuted_factorization_is_faers_bit_for_bit() {
+    /// The pattern and the elastic stiffness (E = 2e4 MPa, nu = 0.3) of a graded
+    /// `nr x nz` cylinder mesh.
+    fn graded_stiffness(nr: usize, nz: usize) -> (Pattern, Vec<f64>) {
         let mesh = CylinderMesher {
             radius: 2.0,
             height: 1.5,
-            nr: 8,
-            nz: 6,
-            grading_r: 1.2,
-            grading_z: 1.1,
+            nr,
+            nz,
+            grading_r: 1.3,
+            grading_z: 1.2,
         }
         .build()
         .unwrap();
@@ -468,6 +496,15 @@ mod tests {
         let pattern = Pattern::new(&disc, &dofs);
         let mut k = vec![0.0; pattern.nnz()];
         pattern.assemble_b_c_b_uniform(&disc, &isotropic_stiffness(2e4, 0.3), &mut k);
+        (pattern, k)
+    }
+
+    /// The factorization through the precomputed permutation is faer's own numeric
+    /// factorization (which permutes the matrix itself), bit for bit, on a matrix whose
+    /// values all differ (a wrong position in the map changes the factor).
+    #[test]
+    fn prepermuted_factorization_is_faers_bit_for_bit() {
+        let (pattern, mut k) = graded_stiffness(8, 6);
         // a distinct perturbation of every stored value (small: the matrix stays SPD)
         for (p, v) in k.iter_mut().enumerate() {
             *v *= 1.0 + 1e-3 * ((p * 7919) % 101) as f64 / 101.0;
@@ -509,21 +546,7 @@ mod tests {
     /// system (residual), on an elastic stiffness of a graded mesh.
     #[test]
     fn block_solve_matches_faer_and_solves() {
-        let mesh = CylinderMesher {
-            radius: 2.0,
-            height: 1.5,
-            nr: 9,
-            nz: 7,
-            grading_r: 1.3,
-            grading_z: 1.2,
-        }
-        .build()
-        .unwrap();
-        let disc = Discretization::new(&mesh);
-        let dofs = DofMap::cylinder(&mesh);
-        let pattern = Pattern::new(&disc, &dofs);
-        let mut k = vec![0.0; pattern.nnz()];
-        pattern.assemble_b_c_b_uniform(&disc, &isotropic_stiffness(2e4, 0.3), &mut k);
+        let (pattern, k) = graded_stiffness(9, 7);
         let mut chol = SparseCholesky::analyse(&pattern).unwrap();
         chol.factorize(&k).unwrap();
         let n = pattern.n;
