@@ -179,23 +179,9 @@
 !
       subroutine hencky_point_log(el,eh)
       implicit none
-      integer i,ierr
-      real*8 el(6),eh(3,3),am(3,3),w(3),v(3,3),ep(3),x(6),
-     &  hencky_log1p
-      am(1,1)=2.d0*el(1)
-      am(2,2)=2.d0*el(2)
-      am(3,3)=2.d0*el(3)
-      am(1,2)=2.d0*el(4)
-      am(2,1)=am(1,2)
-      am(1,3)=2.d0*el(5)
-      am(3,1)=am(1,3)
-      am(2,3)=2.d0*el(6)
-      am(3,2)=am(2,3)
-      call hencky_jacobi(am,w,v,ierr)
-      do i=1,3
-         ep(i)=0.5d0*hencky_log1p(w(i))
-      enddo
-      call hencky_from_principal(v,ep,x)
+      integer ierr
+      real*8 el(6),eh(3,3),w(3),v(3,3),ep(3),x(6)
+      call hencky_principal(el,w,v,ep,x,ierr)
       eh(1,1)=x(1)
       eh(2,2)=x(2)
       eh(3,3)=x(3)

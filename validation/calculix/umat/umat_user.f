@@ -143,33 +143,13 @@
       subroutine hencky_update(c,nc,el,ev0,dt,s,ev1,ierr)
       implicit none
       integer nc,ierr,i,j,k,l
-      real*8 c(*),el(6),ev0(6),dt,s(6),ev1(6),am(3,3),w(3),v(3,3),
+      real*8 c(*),el(6),ev0(6),dt,s(6),ev1(6),w(3),v(3,3),
      &  ep(3),eh(6),ee(6),tr,g2,bk,t(6),tm(3,3),tt(3,3),st(3,3),
-     &  th(3,3),sm(3,3),hencky_log1p,hencky_dlog,x,q,d,xx,
+     &  th(3,3),sm(3,3),hencky_dlog,x,q,d,xx,
      &  eta,fac,qt
 !
-      ierr=0
-!     C - 1 = 2 E_GL
-      am(1,1)=2.d0*el(1)
-      am(2,2)=2.d0*el(2)
-      am(3,3)=2.d0*el(3)
-      am(1,2)=2.d0*el(4)
-      am(2,1)=am(1,2)
-      am(1,3)=2.d0*el(5)
-      am(3,1)=am(1,3)
-      am(2,3)=2.d0*el(6)
-      am(3,2)=am(2,3)
-      call hencky_jacobi(am,w,v,ierr)
+      call hencky_principal(el,w,v,ep,eh,ierr)
       if(ierr.ne.0) return
-      do i=1,3
-         if(w(i).le.-1.d0) then
-            ierr=1
-            return
-         endif
-         ep(i)=0.5d0*hencky_log1p(w(i))
-      enddo
-!     E = ln(C)/2 (11,22,33,12,13,23)
-      call hencky_from_principal(v,ep,eh)
 !
       g2=c(1)/(1.d0+c(2))
       bk=c(1)/(3.d0*(1.d0-2.d0*c(2)))
@@ -255,6 +235,37 @@
       s(5)=(sm(1,3)+sm(3,1))/2.d0
       s(6)=(sm(2,3)+sm(3,2))/2.d0
       return
+      end
+!
+!     The Hencky strain E = ln(C)/2 from the Lagrange strain el (11,22,33,
+!     12,13,23, tensor shear): the eigenvalues w of C - 1 = 2 E_GL, the
+!     eigenvectors v (columns), ep = ln(1 + w)/2 and eh = E (same order as
+!     el); ierr /= 0 if the decomposition fails or C is not positive definite.
+!
+      subroutine hencky_principal(el,w,v,ep,eh,ierr)
+      implicit none
+      integer i,ierr
+      real*8 el(6),w(3),v(3,3),ep(3),eh(6),am(3,3),hencky_log1p
+      ierr=0
+      am(1,1)=2.d0*el(1)
+      am(2,2)=2.d0*el(2)
+      am(3,3)=2.d0*el(3)
+      am(1,2)=2.d0*el(4)
+      am(2,1)=am(1,2)
+      am(1,3)=2.d0*el(5)
+      am(3,1)=am(1,3)
+      am(2,3)=2.d0*el(6)
+      am(3,2)=am(2,3)
+      call hencky_jacobi(am,w,v,ierr)
+      if(ierr.ne.0) return
+      do i=1,3
+         if(w(i).le.-1.d0) then
+            ierr=1
+            return
+         endif
+         ep(i)=0.5d0*hencky_log1p(w(i))
+      enddo
+      call hencky_from_principal(v,ep,eh)
       end
 !
 !     x >= 0 with k x + a x^m = d (d > 0): Newton from the bracket
