@@ -192,8 +192,9 @@ where
     // one test, or one thread: in order on this thread (no speculation: nothing is idle)
     let threads = pool.map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
     if tasks <= 1 || threads == 1 {
-        // inside the pool all the same: the tasks' own parallel passes (the Gauss-point
-        // loops) then use the pool's threads, not the caller's
+        // inside the pool all the same (the global one without a pool of the problem's
+        // own): the tasks' own parallel passes (the Gauss-point loops, the parameters of
+        // the sensitivities) then run on the pool's workers with its threads
         let mut serial = || {
             let mut done = vec![Done::default(); n];
             for (k, (slot, t)) in slots.iter_mut().zip(todo).enumerate() {
@@ -215,7 +216,7 @@ where
         };
         return match pool {
             Some(p) => p.install(serial),
-            None => serial(),
+            None => rayon::scope(|_| serial()),
         };
     }
     let shared = Shared {
@@ -290,7 +291,8 @@ mod tests {
     }
 
     /// The serial path (one task, or one thread) runs inside the given pool too, so that
-    /// the tasks' own parallel passes use its threads, not the caller's.
+    /// the tasks' own parallel passes use its threads, not the caller's; without a pool,
+    /// on a worker of the global pool.
     #[test]
     fn serial_runs_use_the_pool_they_are_given() {
         for (threads, tests) in [(1, 3), (3, 1)] {
@@ -311,6 +313,19 @@ mod tests {
             );
             assert_eq!(seen, vec![(threads, threads); tests], "{threads} threads");
         }
+        // without a pool: on a worker of the global pool, whatever thread called
+        let mut on_worker = vec![false; 1];
+        run(
+            None,
+            &mut on_worker,
+            &todo(1, true, Follow::None),
+            |_, s: &mut bool| {
+                *s = rayon::current_thread_index().is_some();
+                true
+            },
+            |_, _| {},
+        );
+        assert_eq!(on_worker, [true]);
     }
 
     /// Follow-ups without a forward run at once; speculative ones never run when nothing
