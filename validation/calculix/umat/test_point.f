@@ -182,15 +182,7 @@
       integer ierr
       real*8 el(6),eh(3,3),w(3),v(3,3),ep(3),x(6)
       call hencky_principal(el,w,v,ep,x,ierr)
-      eh(1,1)=x(1)
-      eh(2,2)=x(2)
-      eh(3,3)=x(3)
-      eh(1,2)=x(4)
-      eh(2,1)=x(4)
-      eh(1,3)=x(5)
-      eh(3,1)=x(5)
-      eh(2,3)=x(6)
-      eh(3,2)=x(6)
+      call hencky_unpack(x,eh)
       end
 !
       real*8 function hencky_energy(c,el)

@@ -197,15 +197,7 @@
          t(i)=t(i)+bk*tr
       enddo
 !     S = P : T in the eigenbasis of C
-      tm(1,1)=t(1)
-      tm(2,2)=t(2)
-      tm(3,3)=t(3)
-      tm(1,2)=t(4)
-      tm(2,1)=t(4)
-      tm(1,3)=t(5)
-      tm(3,1)=t(5)
-      tm(2,3)=t(6)
-      tm(3,2)=t(6)
+      call hencky_unpack(t,tm)
       do i=1,3
          do j=1,3
             tt(i,j)=0.d0
@@ -266,6 +258,22 @@
          ep(i)=0.5d0*hencky_log1p(w(i))
       enddo
       call hencky_from_principal(v,ep,eh)
+      end
+!
+!     The symmetric 3x3 matrix a of the 6-vector x (11,22,33,12,13,23)
+!
+      subroutine hencky_unpack(x,a)
+      implicit none
+      real*8 x(6),a(3,3)
+      a(1,1)=x(1)
+      a(2,2)=x(2)
+      a(3,3)=x(3)
+      a(1,2)=x(4)
+      a(2,1)=x(4)
+      a(1,3)=x(5)
+      a(3,1)=x(5)
+      a(2,3)=x(6)
+      a(3,2)=x(6)
       end
 !
 !     x >= 0 with k x + a x^m = d (d > 0): Newton from the bracket
