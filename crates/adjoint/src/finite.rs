@@ -24,8 +24,6 @@ pub(crate) struct FiniteStep {
     p: Vec<Mat4>,
     /// Element tangents `K_e` (lower triangles, row >= column).
     pub(crate) ke: Vec<[[f64; 16]; 16]>,
-    /// Scratch: a copy of the displacement variation.
-    du: Vec<f64>,
 }
 
 impl FiniteStep {
@@ -36,7 +34,6 @@ impl FiniteStep {
             b: vec![[[[0.0; 2]; 4]; 8]; nq],
             p: vec![Mat4::ZERO; nq],
             ke: vec![[[0.0; 16]; 16]; ne],
-            du: vec![0.0; model.disc.n_dofs()],
         }
     }
 
@@ -137,21 +134,8 @@ impl FiniteStep {
     /// The variation of the internal force `delta f = K du + sum_g w0 G_g^T cq_g` (all
     /// dofs) for `cq = C q` and the displacement variation `du`, which `f` holds on entry
     /// and receives on exit.
-    pub(crate) fn delta_force(&mut self, model: &Model, cq: &[Vec4], f: &mut [f64]) {
-        let mut du = std::mem::take(&mut self.du);
-        self.delta_force_with(model, cq, f, &mut du);
-        self.du = du;
-    }
-
-    /// [`FiniteStep::delta_force`] with its scratch (`du`, all dofs) given: the step's
-    /// operators shared between threads.
-    pub(crate) fn delta_force_with(
-        &self,
-        model: &Model,
-        cq: &[Vec4],
-        f: &mut [f64],
-        du: &mut Vec<f64>,
-    ) {
+    /// `du` is the caller's scratch (all dofs), so that threads can share the step.
+    pub(crate) fn delta_force(&self, model: &Model, cq: &[Vec4], f: &mut [f64], du: &mut Vec<f64>) {
         du.clear();
         du.extend_from_slice(f);
         self.force(model, cq, f);

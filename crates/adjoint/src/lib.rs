@@ -137,6 +137,8 @@ pub struct Adjoint {
     frames: Vec<NodeFrame>,
     /// The step's finite-strain operators (`Kinematics::Finite` only).
     finite: Option<finite::FiniteStep>,
+    /// Scratch of all dofs: a copy of the displacement variation (finite strain).
+    du: Vec<f64>,
 }
 
 impl Adjoint {
@@ -160,6 +162,7 @@ impl Adjoint {
             xbar_full: Vec::new(),
             frames: Vec::new(),
             finite,
+            du: Vec::new(),
         })
     }
 
@@ -223,47 +226,33 @@ impl Adjoint {
             .map_err(|e| fail(e.to_string()))
     }
 
-    /// Scatters an equation vector into the full dof vector `self.full` (0 on fixed dofs).
+    /// Scatters `self.eq` into the full dof vector `self.full` ([`expand_into`]).
     fn expand(&mut self, model: &Model) {
-        for (d, &e) in model.dofs.eq.iter().enumerate() {
-            self.full[d] = if e == NO_EQ { 0.0 } else { self.eq[e as usize] };
-        }
+        expand_into(model, &self.eq, &mut self.full);
     }
 
-    /// `self.full = sum_g w B^T field_b` (`G_i` in place of `B` under finite strain).
+    /// `self.full = sum_g w B^T field_b` ([`force_into`]).
     fn force_of_field_b(&mut self, model: &Model) {
-        match &self.finite {
-            None => model.disc.internal_force(&self.field_b, &mut self.full),
-            Some(fs) => fs.force(model, &self.field_b, &mut self.full),
-        }
+        force_into(model, self.finite.as_ref(), &self.field_b, &mut self.full);
     }
 
-    /// `self.strain = B self.full` (`G_i` in place of `B` under finite strain).
+    /// `self.strain = B self.full` ([`strains_into`]).
     fn strains_of_full(&mut self, model: &Model) {
-        match &self.finite {
-            None => model.disc.strains(&self.full, &mut self.strain),
-            Some(fs) => fs.strains(model, &self.full, &mut self.strain),
-        }
+        strains_into(model, self.finite.as_ref(), &self.full, &mut self.strain);
     }
 
-    /// The variation of the internal force into `self.full`, which holds the
-    /// displacement variation `du` on entry, with `self.field_b` holding `dsigma = C (B du
-    /// + q)`: `sum_g w B^T dsigma` (small strain), `K du + sum_g w0 G^T C q` under finite
-    /// strain (geometric part included; `field_b` is overwritten with `C q`).
+    /// The variation of the internal force into `self.full` ([`delta_force_into`]), with
+    /// `self.field_b` holding `dsigma`.
     fn delta_force(&mut self, model: &Model, q_field: &[Vec4]) {
-        match &mut self.finite {
-            None => model.disc.internal_force(&self.field_b, &mut self.full),
-            Some(fs) => {
-                for (b, (t, q)) in self
-                    .field_b
-                    .iter_mut()
-                    .zip(self.tangents.iter().zip(q_field))
-                {
-                    *b = t.mul_vec(q);
-                }
-                fs.delta_force(model, &self.field_b, &mut self.full);
-            }
-        }
+        delta_force_into(
+            model,
+            self.finite.as_ref(),
+            &self.tangents,
+            q_field,
+            &mut self.field_b,
+            &mut self.full,
+            &mut self.du,
+        );
     }
 
     /// Restricts `self.full` to equations into `self.eq`.
@@ -623,36 +612,27 @@ impl ParamStep<'_> {
             *q = yk[qp] - self.r_field[qp * np + k];
             *b = t.mul_vec(q) * -1.0;
         }
-        match self.finite {
-            None => model.disc.internal_force(&w.field_b, &mut w.full),
-            Some(fs) => fs.force(model, &w.field_b, &mut w.full),
-        }
+        force_into(model, self.finite, &w.field_b, &mut w.full);
         model.dofs.restrict(&w.full, &mut w.eq);
         self.system
             .solve_dirichlet_with(model, &mut w.eq, self.zero, &mut w.solve)?;
-        for (d, &e) in model.dofs.eq.iter().enumerate() {
-            w.full[d] = if e == NO_EQ { 0.0 } else { w.eq[e as usize] };
-        }
-        match self.finite {
-            None => model.disc.strains(&w.full, &mut w.strain),
-            Some(fs) => fs.strains(model, &w.full, &mut w.strain),
-        }
+        expand_into(model, &w.eq, &mut w.full);
+        strains_into(model, self.finite, &w.full, &mut w.strain);
         for (qp, y) in yk.iter_mut().enumerate() {
             let bv = Vec4(w.strain[qp]);
             let dsig = self.tangents[qp].mul_vec(&(bv + w.q[qp]));
             w.field_b[qp] = dsig;
             *y = self.s.mul_vec(&dsig) - bv;
         }
-        // the variation of the internal force (finite strain: K du + sum w0 G^T C q)
-        match self.finite {
-            None => model.disc.internal_force(&w.field_b, &mut w.full),
-            Some(fs) => {
-                for (b, (t, q)) in w.field_b.iter_mut().zip(self.tangents.iter().zip(&w.q)) {
-                    *b = t.mul_vec(q);
-                }
-                fs.delta_force_with(model, &w.field_b, &mut w.full, &mut w.du);
-            }
-        }
+        delta_force_into(
+            model,
+            self.finite,
+            self.tangents,
+            &w.q,
+            &mut w.field_b,
+            &mut w.full,
+            &mut w.du,
+        );
         *dfk = -self
             .active
             .iter()
@@ -700,6 +680,58 @@ impl Sweep {
             *g -= acc;
         }
         self.grad
+    }
+}
+
+/// Scatters an equation vector `eq` into the full dof vector `full` (0 on fixed dofs).
+fn expand_into(model: &Model, eq: &[f64], full: &mut [f64]) {
+    for (d, &e) in model.dofs.eq.iter().enumerate() {
+        full[d] = if e == NO_EQ { 0.0 } else { eq[e as usize] };
+    }
+}
+
+/// `full = sum_g w B^T v` (`G_i` in place of `B` under finite strain).
+fn force_into(model: &Model, finite: Option<&finite::FiniteStep>, v: &[Vec4], full: &mut [f64]) {
+    match finite {
+        None => model.disc.internal_force(v, full),
+        Some(fs) => fs.force(model, v, full),
+    }
+}
+
+/// `strain = B full` (`G_i` in place of `B` under finite strain).
+fn strains_into(
+    model: &Model,
+    finite: Option<&finite::FiniteStep>,
+    full: &[f64],
+    strain: &mut [[f64; 4]],
+) {
+    match finite {
+        None => model.disc.strains(full, strain),
+        Some(fs) => fs.strains(model, full, strain),
+    }
+}
+
+/// The variation of the internal force into `full`, which holds the displacement
+/// variation `du` on entry, with `field_b` holding `dsigma = C (B du + q)`:
+/// `sum_g w B^T dsigma` (small strain), `K du + sum_g w0 G^T C q` under finite strain
+/// (geometric part included; `field_b` is overwritten with `C q`, `du` is scratch).
+fn delta_force_into(
+    model: &Model,
+    finite: Option<&finite::FiniteStep>,
+    tangents: &[Mat4],
+    q: &[Vec4],
+    field_b: &mut [Vec4],
+    full: &mut [f64],
+    du: &mut Vec<f64>,
+) {
+    match finite {
+        None => model.disc.internal_force(field_b, full),
+        Some(fs) => {
+            for (b, (t, q)) in field_b.iter_mut().zip(tangents.iter().zip(q)) {
+                *b = t.mul_vec(q);
+            }
+            fs.delta_force(model, field_b, full, du);
+        }
     }
 }
 

@@ -686,17 +686,23 @@ impl ConstrainedSystem {
     pub fn solve_dirichlet(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         let t0 = std::time::Instant::now();
         if self.capacitance || self.slip_idx.is_empty() {
-            let mut scratch = std::mem::take(&mut self.scratch);
-            self.solve_dirichlet_with(model, b, xbar, &mut scratch)
-                .expect("no slipping frame on this path");
-            self.scratch = scratch;
-            self.chol.n_solves += 1;
+            self.solve_symmetric(model, b, xbar);
         } else {
             rotate_in(&self.frames, b);
             self.solve_slip(model, b, xbar);
             rotate_out(&self.frames, b);
         }
         self.seconds[2] += t0.elapsed().as_secs_f64();
+    }
+
+    /// [`ConstrainedSystem::solve_dirichlet_with`] with the system's own work space,
+    /// counted; the caller has checked there is no slipping frame (or capacitance mode).
+    fn solve_symmetric(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.solve_dirichlet_with(model, b, xbar, &mut scratch)
+            .expect("callers take this path only without slipping frames");
+        self.scratch = scratch;
+        self.chol.n_solves += 1;
     }
 
     /// The work space of [`ConstrainedSystem::solve_dirichlet_with`].
@@ -793,11 +799,7 @@ impl ConstrainedSystem {
         if self.capacitance || !self.friction() {
             // symmetric, no sticking dof: the cotangent of b is the solve with xbar = 0
             let zero = vec![0.0; b.len()];
-            let mut scratch = std::mem::take(&mut self.scratch);
-            self.solve_dirichlet_with(model, b, &zero, &mut scratch)
-                .expect("no slipping frame on this path");
-            self.scratch = scratch;
-            self.chol.n_solves += 1;
+            self.solve_symmetric(model, b, &zero);
             self.seconds[2] += t0.elapsed().as_secs_f64();
             return stick;
         }
