@@ -345,9 +345,11 @@ pub struct Counts {
 /// What an [`Evaluator`] may compute ahead of a request, on cores that the forward runs of
 /// a joint problem leave idle (fewer tests left than cores while the last forwards run):
 /// the follow-up an optimizer usually asks for next at the point whose cost it just asked
-/// for. It never delays the request that was made (a follow-up only starts when it is
-/// expected, from the previous evaluation's timings, to end by the time the last running
-/// forward does) and never changes a result (bit-identical with or without).
+/// for. A follow-up only starts when it is expected (from the previous evaluation's
+/// timings, with a 10% margin) to end before the last running forward does, so that it
+/// should not delay the request that was made (it can when that estimate is wrong: an
+/// evaluation waits for every task it started); it never changes a result (bit-identical
+/// with or without).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Prefetch {
     /// Compute nothing ahead (the default).
