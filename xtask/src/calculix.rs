@@ -426,7 +426,50 @@ pub fn deck(
     for j in 0..np {
         writeln!(w, "{}, S1", e0 + 1 + j)?;
     }
-    // materials
+    write_material(w, material, o)?;
+    writeln!(w, "*MATERIAL, NAME=RIGID")?;
+    writeln!(w, "*ELASTIC")?;
+    writeln!(w, "1e7, 0.3")?;
+    writeln!(w, "*SOLID SECTION, ELSET=EPUNCH, MATERIAL=RIGID")?;
+    // contact
+    writeln!(w, "*SURFACE INTERACTION, NAME=SI")?;
+    writeln!(w, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR")?;
+    writeln!(w, "{:e}", o.penalty)?;
+    if o.friction > 0.0 {
+        writeln!(w, "*FRICTION")?;
+        writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
+    }
+    writeln!(
+        w,
+        "*CONTACT PAIR, INTERACTION=SI, TYPE={}",
+        o.contact.keyword()
+    )?;
+    writeln!(w, "STOP, SPUNCH")?;
+    // amplitude and time points in total time when the history spans several steps
+    let total = if o.split_load {
+        ", TIME=TOTAL TIME"
+    } else {
+        ""
+    };
+    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
+    for (t, h) in corners(schedule) {
+        writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
+    }
+    writeln!(w, "*BOUNDARY")?;
+    writeln!(w, "AXIS, 1, 1")?;
+    writeln!(w, "BOTTOM, 2, 2")?;
+    writeln!(w, "PUNCH, 1, 1")?;
+    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
+    for t in &schedule.t[1..] {
+        writeln!(w, "{t:.12e}")?;
+    }
+    write_steps(w, schedule, material, o, [dt, t_end, h_ref])?;
+    Ok(s)
+}
+
+/// The specimen's material section of the deck (see [`FiniteElastic`] for the finite-strain
+/// choices).
+fn write_material(w: &mut String, material: &Material, o: &DeckOptions) -> Result<()> {
     match *material {
         _ if o.nlgeom && o.finite_elastic == FiniteElastic::HenckyUmat => {
             let constants = hencky_umat_constants(material);
@@ -522,42 +565,18 @@ pub fn deck(
             writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=ANISO_PLAS_SPEC")?;
         }
     }
-    writeln!(w, "*MATERIAL, NAME=RIGID")?;
-    writeln!(w, "*ELASTIC")?;
-    writeln!(w, "1e7, 0.3")?;
-    writeln!(w, "*SOLID SECTION, ELSET=EPUNCH, MATERIAL=RIGID")?;
-    // contact
-    writeln!(w, "*SURFACE INTERACTION, NAME=SI")?;
-    writeln!(w, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR")?;
-    writeln!(w, "{:e}", o.penalty)?;
-    if o.friction > 0.0 {
-        writeln!(w, "*FRICTION")?;
-        writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
-    }
-    writeln!(
-        w,
-        "*CONTACT PAIR, INTERACTION=SI, TYPE={}",
-        o.contact.keyword()
-    )?;
-    writeln!(w, "STOP, SPUNCH")?;
-    // amplitude and time points in total time when the history spans several steps
-    let total = if o.split_load {
-        ", TIME=TOTAL TIME"
-    } else {
-        ""
-    };
-    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
-    for (t, h) in corners(schedule) {
-        writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
-    }
-    writeln!(w, "*BOUNDARY")?;
-    writeln!(w, "AXIS, 1, 1")?;
-    writeln!(w, "BOTTOM, 2, 2")?;
-    writeln!(w, "PUNCH, 1, 1")?;
-    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
-    for t in &schedule.t[1..] {
-        writeln!(w, "{t:.12e}")?;
-    }
+    Ok(())
+}
+
+/// The analysis steps: `[dt, t_end, h_ref]` are the schedule's uniform step, end time and
+/// deepest depth.
+fn write_steps(
+    w: &mut String,
+    schedule: &Schedule,
+    material: &Material,
+    o: &DeckOptions,
+    [dt, t_end, h_ref]: [f64; 3],
+) -> Result<()> {
     let n_inc = 20 * schedule.t.len();
     let procedure = match material {
         Material::Elastic { .. } => "*STATIC",
@@ -612,7 +631,7 @@ pub fn deck(
         writeln!(w, "RF")?;
         writeln!(w, "*END STEP")?;
     }
-    Ok(s)
+    Ok(())
 }
 
 /// The constants of the user material `USERHENCKY` (`validation/calculix/umat/umat_user.f`)

@@ -167,7 +167,7 @@ Paper: A. Constantinescu, N. Tardieu, *On the identification of elastoviscoplast
 from indentation tests*, Inverse Problems in Engineering 9 (2001) — §4.3-4.4 (Maxwell, Tables I-II)
 and §5.3 (Norton-Hoff, Table III).
 
-Set-up (DESIGN.md §5, problems R1 and R2): {setup}. The "experimental" curves are computed with the
+Set-up (problems R1 and R2: `examples/r1-maxwell.ron`, `examples/r2-norton-hoff.ron`): {setup}. The "experimental" curves are computed with the
 same discretization (the paper did the same with CASTEM2000), on the schedule's 91 times; the cost is
 `J = 1/2 sum_i (F_i - F_i^exp)^2` over them, unit weights. Free parameters are log-scaled; nu = 0.3 is
 fixed; bounds E in [1e3, 1e6], eta in [1e3, 1e7] (R1) and E in [1e4, 1e6], K in [10, 1e5],
@@ -246,11 +246,24 @@ Table II's deviations are of the order of the actual errors of Table II, as they
 the correlations of K, m and sY close to ±1 and the large condition number are the valley of the
 paper's Fig. 11 in numbers: the curve constrains a combination of them much better than each one.
 
-## What differs from the paper's set-up, and why the numbers differ
+"#,
+        fig_links = fig_links,
+        valleys = render_valleys(outcomes),
+        valley_summary = valley_summary(outcomes),
+        ident = identifiability_text(outcomes),
+    );
+    s.push_str(&differences(opts));
+    s
+}
+
+/// The closing sections: what differs from the paper's set-up, and the snapshot test.
+fn differences(opts: &Options) -> String {
+    format!(
+        r#"## What differs from the paper's set-up, and why the numbers differ
 
 - **Finite-element code.** The paper used CASTEM2000 (2001), we use our own axisymmetric Q8 code:
   small strains, frictionless contact with the gap taken at the undeformed radius and a vertical
-  contact force (DESIGN.md §1), primal-dual active set, backward-Euler local integration. Codes that
+  contact force (docs/theory.md §1), primal-dual active set, backward-Euler local integration. Codes that
   detect contact at the deformed radius with the traction normal to the cone flank come out about 5%
   stiffer; the paper's absolute forces (its Fig. 3) are not reproduced to that level, and need not
   be: each table compares the identification with the truth *of the same model*.
@@ -259,7 +272,7 @@ paper's Fig. 11 in numbers: the curve constrains a combination of them much bett
   elements lie under the 0.16 mm contact radius. Table III of the paper mixes two meshes (tests 1-5
   and 6-8); we use one.
 - **Loading history.** The paper's Fig. 2 gives the shape (load, hold, unload) but not the
-  durations, the depth or the number of steps; ours is DESIGN.md §5's trapezoid with 30 steps per
+  durations, the depth or the number of steps; ours is the trapezoid of `examples/r2-norton-hoff.ron`, 30 steps per
   segment, so 91 data points.
 - **Gradient.** The paper compared its adjoint gradient with finite differences "within 10%"; ours is
   the exact gradient of the discrete scheme (adjoint and forward sensitivities agree with central
@@ -292,16 +305,11 @@ file snapshot. It takes a few seconds in the dev profile; the full tables above 
 left to this command. After a deliberate change: `INSTA_UPDATE=always cargo test -p xtask` and
 `cargo xtask paper-tables`, then commit both.
 "#,
-        fig_links = fig_links,
-        valleys = render_valleys(outcomes),
-        valley_summary = valley_summary(outcomes),
-        ident = identifiability_text(outcomes),
         s1 = paper::NOISE_SEEDS[0],
         s2 = paper::NOISE_SEEDS[1],
         threads = opts.threads,
         coarse = paper::Setup::COARSE.describe(),
-    );
-    s
+    )
 }
 
 /// The sentence under the valley table, with the measured range at the paper's end points.

@@ -62,59 +62,13 @@ pub fn run(args: &[String]) -> Result<()> {
         p.set_threads(st)?;
         singles.push(p);
     }
-    // a new point for every evaluation: every law value scaled by 1 + 1e-4 (r + 1)
-    let point = |r: usize| -> Vec<f64> {
-        c0.iter()
-            .map(|v| v * (1.0 + 1e-4 * (r as f64 + 1.0)))
-            .collect()
-    };
-    let mut ev_joint = Evaluator::new(&joint)?;
-    // the line-search pattern of BFGS: the cost at a point, then its gradient, with the
-    // adjoint sweeps prefetched on idle cores (as `identify` sets it)
-    let mut ev_search = Evaluator::new(&joint)?;
-    ev_search.set_prefetch(Prefetch::Gradient);
-    // the same without prefetching: the forwards, then the adjoints, one phase after the
-    // other (what every joint evaluation did before the task scheduler)
-    let mut ev_phases = Evaluator::new(&joint)?;
-    let mut ev_single: Vec<Evaluator> = singles
-        .iter()
-        .map(Evaluator::new)
-        .collect::<Result<_, _>>()?;
-    // one warm-up of each
-    ev_joint.cost_and_gradient(&point(rounds))?;
-    ev_search.cost(&point(rounds))?;
-    ev_search.cost_and_gradient(&point(rounds))?;
-    ev_phases.cost(&point(rounds))?;
-    ev_phases.cost_and_gradient(&point(rounds))?;
-    for e in &mut ev_single {
-        e.cost_and_gradient(&point(rounds))?;
-    }
-    let mut t_joint = Vec::new();
-    let mut t_search = Vec::new();
-    let mut t_phases = Vec::new();
-    let mut t_single = vec![Vec::new(); singles.len()];
-    let mut t_forward = vec![Vec::new(); singles.len()];
-    for r in 0..rounds {
-        let c = point(r);
-        let clock = Instant::now();
-        ev_joint.cost_and_gradient(&c)?;
-        t_joint.push(clock.elapsed().as_secs_f64());
-        let clock = Instant::now();
-        ev_search.cost(&c)?;
-        ev_search.cost_and_gradient(&c)?;
-        t_search.push(clock.elapsed().as_secs_f64());
-        let clock = Instant::now();
-        ev_phases.cost(&c)?;
-        ev_phases.cost_and_gradient(&c)?;
-        t_phases.push(clock.elapsed().as_secs_f64());
-        for (k, e) in ev_single.iter_mut().enumerate() {
-            let clock = Instant::now();
-            e.cost(&c)?;
-            t_forward[k].push(clock.elapsed().as_secs_f64());
-            e.cost_and_gradient(&c)?;
-            t_single[k].push(clock.elapsed().as_secs_f64());
-        }
-    }
+    let Timings {
+        t_joint,
+        t_search,
+        t_phases,
+        t_single,
+        t_forward,
+    } = measure(&joint, &singles, &c0, rounds)?;
     let median = |v: &[f64]| {
         let mut v = v.to_vec();
         v.sort_by(f64::total_cmp);
@@ -193,4 +147,78 @@ pub fn run(args: &[String]) -> Result<()> {
             .trim()
     );
     Ok(())
+}
+
+/// Wall times of every round, in seconds.
+struct Timings {
+    t_joint: Vec<f64>,
+    t_search: Vec<f64>,
+    t_phases: Vec<f64>,
+    t_single: Vec<Vec<f64>>,
+    t_forward: Vec<Vec<f64>>,
+}
+
+/// The joint evaluations (together, cost then gradient prefetched, in two phases) and every
+/// single test, `rounds` times back to back after one warm-up, each at a new point.
+fn measure(joint: &Problem, singles: &[Problem], c0: &[f64], rounds: usize) -> Result<Timings> {
+    // a new point for every evaluation: every law value scaled by 1 + 1e-4 (r + 1)
+    let point = |r: usize| -> Vec<f64> {
+        c0.iter()
+            .map(|v| v * (1.0 + 1e-4 * (r as f64 + 1.0)))
+            .collect()
+    };
+    let mut ev_joint = Evaluator::new(joint)?;
+    // the line-search pattern of BFGS: the cost at a point, then its gradient, with the
+    // adjoint sweeps prefetched on idle cores (as `identify` sets it)
+    let mut ev_search = Evaluator::new(joint)?;
+    ev_search.set_prefetch(Prefetch::Gradient);
+    // the same without prefetching: the forwards, then the adjoints, one phase after the
+    // other (what every joint evaluation did before the task scheduler)
+    let mut ev_phases = Evaluator::new(joint)?;
+    let mut ev_single: Vec<Evaluator> = singles
+        .iter()
+        .map(Evaluator::new)
+        .collect::<Result<_, _>>()?;
+    // one warm-up of each
+    ev_joint.cost_and_gradient(&point(rounds))?;
+    ev_search.cost(&point(rounds))?;
+    ev_search.cost_and_gradient(&point(rounds))?;
+    ev_phases.cost(&point(rounds))?;
+    ev_phases.cost_and_gradient(&point(rounds))?;
+    for e in &mut ev_single {
+        e.cost_and_gradient(&point(rounds))?;
+    }
+    let mut t_joint = Vec::new();
+    let mut t_search = Vec::new();
+    let mut t_phases = Vec::new();
+    let mut t_single = vec![Vec::new(); singles.len()];
+    let mut t_forward = vec![Vec::new(); singles.len()];
+    for r in 0..rounds {
+        let c = point(r);
+        let clock = Instant::now();
+        ev_joint.cost_and_gradient(&c)?;
+        t_joint.push(clock.elapsed().as_secs_f64());
+        let clock = Instant::now();
+        ev_search.cost(&c)?;
+        ev_search.cost_and_gradient(&c)?;
+        t_search.push(clock.elapsed().as_secs_f64());
+        let clock = Instant::now();
+        ev_phases.cost(&c)?;
+        ev_phases.cost_and_gradient(&c)?;
+        t_phases.push(clock.elapsed().as_secs_f64());
+        for (k, e) in ev_single.iter_mut().enumerate() {
+            let clock = Instant::now();
+            e.cost(&c)?;
+            t_forward[k].push(clock.elapsed().as_secs_f64());
+            e.cost_and_gradient(&c)?;
+            t_single[k].push(clock.elapsed().as_secs_f64());
+        }
+    }
+    Ok(Timings {
+        t_joint,
+        t_search,
+        t_phases,
+        t_single,
+        t_forward,
+    })
 }

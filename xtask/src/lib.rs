@@ -7,3 +7,4 @@ pub mod doc;
 pub mod mesh_study;
 pub mod paper;
 pub mod svg;
+pub mod tidy;

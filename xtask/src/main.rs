@@ -24,12 +24,32 @@ fn main() -> Result<()> {
         Some("mesh-study") => mesh_study(&args[1..]),
         Some("multi-rate") => multirate::run(&args[1..]),
         Some("joint-cost") => jointcost::run(&args[1..]),
+        Some("tidy") => tidy(),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin|hencky-umat] [--ccx PATH] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin|hencky-umat] [--ccx PATH] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)\n       cargo xtask tidy   (the repository's rules: layers, unused dependencies, //! lines, no outside references, function lengths)"
             );
             bail!("unknown or missing command")
         }
+    }
+}
+
+/// `cargo xtask tidy`: every finding on its own line, exit 1 when there is any.
+fn tidy() -> Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .context("workspace root")?;
+    let found = xtask::tidy::run(root).context("reading the workspace")?;
+    for f in &found {
+        println!("{f}");
+    }
+    if found.is_empty() {
+        println!(
+            "tidy: layers, dependencies, //! lines, references and function lengths all clean"
+        );
+        Ok(())
+    } else {
+        bail!("tidy: {} finding(s)", found.len())
     }
 }
 

@@ -205,46 +205,50 @@ impl Plot {
                     );
                 }
             }
-            // legend
-            // legend in the upper left corner, where rising curves leave room
-            let ly = mt + 16.0 + 16.0 * k as f64;
-            let lx = ml + 10.0;
-            match ser.style {
-                Style::Markers => {
-                    let _ = writeln!(
-                        s,
-                        r#"<circle cx="{}" cy="{}" r="2.5" fill="none" stroke="{}"/>"#,
-                        lx + 12.0,
-                        ly - 4.0,
-                        ser.color
-                    );
-                }
-                _ => {
-                    let dash = if ser.style == Style::Dashed {
-                        r#" stroke-dasharray="6 4""#
-                    } else {
-                        ""
-                    };
-                    let _ = writeln!(
-                        s,
-                        r#"<line x1="{lx}" y1="{}" x2="{}" y2="{}" stroke="{}" stroke-width="1.6"{dash}/>"#,
-                        ly - 4.0,
-                        lx + 24.0,
-                        ly - 4.0,
-                        ser.color
-                    );
-                }
-            }
-            let _ = writeln!(
-                s,
-                r#"<text x="{}" y="{ly}">{}</text>"#,
-                lx + 30.0,
-                esc(&ser.name)
-            );
+            legend_entry(&mut s, k, ser, ml, mt);
         }
         s.push_str("</svg>\n");
         s
     }
+}
+
+/// The legend line of series `k`, in the upper left corner where rising curves leave room.
+fn legend_entry(s: &mut String, k: usize, ser: &Series, ml: f64, mt: f64) {
+    // legend in the upper left corner, where rising curves leave room
+    let ly = mt + 16.0 + 16.0 * k as f64;
+    let lx = ml + 10.0;
+    match ser.style {
+        Style::Markers => {
+            let _ = writeln!(
+                s,
+                r#"<circle cx="{}" cy="{}" r="2.5" fill="none" stroke="{}"/>"#,
+                lx + 12.0,
+                ly - 4.0,
+                ser.color
+            );
+        }
+        _ => {
+            let dash = if ser.style == Style::Dashed {
+                r#" stroke-dasharray="6 4""#
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                s,
+                r#"<line x1="{lx}" y1="{}" x2="{}" y2="{}" stroke="{}" stroke-width="1.6"{dash}/>"#,
+                ly - 4.0,
+                lx + 24.0,
+                ly - 4.0,
+                ser.color
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{ly}">{}</text>"#,
+        lx + 30.0,
+        esc(&ser.name)
+    );
 }
 
 fn esc(t: &str) -> String {
