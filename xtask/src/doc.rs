@@ -167,7 +167,7 @@ Paper: A. Constantinescu, N. Tardieu, *On the identification of elastoviscoplast
 from indentation tests*, Inverse Problems in Engineering 9 (2001) — §4.3-4.4 (Maxwell, Tables I-II)
 and §5.3 (Norton-Hoff, Table III).
 
-Set-up (DESIGN.md §5, problems R1 and R2): {setup}. The "experimental" curves are computed with the
+Set-up (docs/theory.md §11, problems R1 and R2): {setup}. The "experimental" curves are computed with the
 same discretization (the paper did the same with CASTEM2000), on the schedule's 91 times; the cost is
 `J = 1/2 sum_i (F_i - F_i^exp)^2` over them, unit weights. Free parameters are log-scaled; nu = 0.3 is
 fixed; bounds E in [1e3, 1e6], eta in [1e3, 1e7] (R1) and E in [1e4, 1e6], K in [10, 1e5],
@@ -250,7 +250,7 @@ paper's Fig. 11 in numbers: the curve constrains a combination of them much bett
 
 - **Finite-element code.** The paper used CASTEM2000 (2001), we use our own axisymmetric Q8 code:
   small strains, frictionless contact with the gap taken at the undeformed radius and a vertical
-  contact force (DESIGN.md §1), primal-dual active set, backward-Euler local integration. Codes that
+  contact force (docs/theory.md §1), primal-dual active set, backward-Euler local integration. Codes that
   detect contact at the deformed radius with the traction normal to the cone flank come out about 5%
   stiffer; the paper's absolute forces (its Fig. 3) are not reproduced to that level, and need not
   be: each table compares the identification with the truth *of the same model*.
@@ -259,7 +259,7 @@ paper's Fig. 11 in numbers: the curve constrains a combination of them much bett
   elements lie under the 0.16 mm contact radius. Table III of the paper mixes two meshes (tests 1-5
   and 6-8); we use one.
 - **Loading history.** The paper's Fig. 2 gives the shape (load, hold, unload) but not the
-  durations, the depth or the number of steps; ours is DESIGN.md §5's trapezoid with 30 steps per
+  durations, the depth or the number of steps; ours is the trapezoid of docs/theory.md §11, with 30 steps per
   segment, so 91 data points.
 - **Gradient.** The paper compared its adjoint gradient with finite differences "within 10%"; ours is
   the exact gradient of the discrete scheme (adjoint and forward sensitivities agree with central

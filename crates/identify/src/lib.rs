@@ -1,4 +1,4 @@
-//! Parameter identification from indentation curves (paper §3-5, DESIGN.md §2): the
+//! Parameter identification from indentation curves (paper §3-5, docs/theory.md §6): the
 //! least-squares force misfit `J(c) = 1/2 sum_i w_i (F_i(c) - F_i^exp)^2` at the
 //! simulation's schedule times, its exact adjoint gradient, and the optimizers that
 //! minimize it over a box of admissible parameters.

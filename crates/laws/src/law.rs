@@ -106,7 +106,7 @@ impl std::fmt::Display for LocalFailure {
 /// Parameters `c` are an *input* of every method, never a field of the law, so that an
 /// optimizer only swaps the slice. Components follow [`Vec4`]'s Mandel order.
 ///
-/// The backward-Euler local residual at step i (DESIGN.md §1) is
+/// The backward-Euler local residual at step i (docs/theory.md §1) is
 /// `r(sigma_i) = S (sigma_i - sigma_{i-1}) + dt g(sigma_i) - deps = 0`, with Jacobian
 /// `A = S + dt H` and consistent tangent `C = A^-1`.
 pub trait Law: Send + Sync + std::fmt::Debug {
