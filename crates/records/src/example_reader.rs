@@ -1,15 +1,16 @@
 //! The worked example of docs/adding-a-reader.md, compiled and tested so that the guide
 //! cannot drift from the crate: a reader of a made-up "ExampleIndenter" export. Test-only:
 //! it is not dispatched by [`crate::read`] (the guide lists what dispatching it takes).
+//! Columns are separated by tabs (shown here as spaces):
 //!
 //! ```text
 //! ExampleIndenter export v1
 //! Tip: Berkovich
 //! Date: 2026-11-26 10:00
 //! [data]
-//! Time (s)	Depth (nm)	Load (µN)
-//! 0.0	0.0	0.0
-//! 0.5	120.5	35.2
+//! Time (s)    Depth (nm)    Load (µN)
+//! 0.0    0.0    0.0
+//! 0.5    120.5    35.2
 //! ```
 
 use crate::error::{ReadError, ReadErrorKind as K};
