@@ -1,5 +1,5 @@
-//! Viscoelastic indentation of the Maxwell material (reference problem R1 of DESIGN.md
-//! §5) against the correspondence-principle solutions for a half-space: Lee & Radok while
+//! Viscoelastic indentation of the Maxwell material (reference problem R1 of
+//! docs/theory.md §11) against the correspondence-principle solutions for a half-space: Lee & Radok while
 //! the contact grows or holds, Ting while it shrinks, and the flat punch at all times.
 //!
 //! References: E. H. Lee & J. R. M. Radok, "The contact problem for viscoelastic bodies",
@@ -46,7 +46,7 @@
 //!               0 /  1 s   1 s   \ 1 s                  0 /      \/  0.06 mm
 //! ```
 //!
-//! Parameters: R1 of DESIGN.md §5: E = 20000 MPa, nu = 0.3, eta = 30000 MPa s
+//! Parameters: R1 of docs/theory.md §11: E = 20000 MPa, nu = 0.3, eta = 30000 MPa s
 //! (tau = 1.95 s, tau2 = 3.15 s), 10 x 10 mm cylinder, 20 x 20 Q8 graded 1.3, cone of
 //! half-angle 68 deg, trapezoid 0.1 mm with 1 s ramp, 1 s hold, 1 s unload, 30 steps per
 //! segment. Flat punch: load 0 -> 0.1 mm in 1 s, hold 1 s, unload to 0.06 mm in 0.5 s,
@@ -160,7 +160,7 @@ impl Runs {
     }
 }
 
-/// R1 of DESIGN.md §5, with `steps` per segment on the `n x n` mesh of ratio `q`.
+/// R1 of docs/theory.md §11, with `steps` per segment on the `n x n` mesh of ratio `q`.
 fn r1_runs(n: usize, q: f64, steps: usize) -> Runs {
     let schedule = Schedule::from_segments(&trapezoid(H_MAX, 1.0, 1.0, 1.0, steps)).unwrap();
     Runs::new(cylinder(n, q), cone(), schedule)

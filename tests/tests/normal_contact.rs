@@ -19,7 +19,7 @@
 //! the small-depth limit where vertical and normal contact meet (the radial effect grows
 //! with a/R).
 //!
-//! Mesh: R0's (DESIGN.md §5: 10 mm cylinder, 20 x 20 Q8 graded 1.3), the finite-cylinder
+//! Mesh: R0's (docs/theory.md §11: 10 mm cylinder, 20 x 20 Q8 graded 1.3), the finite-cylinder
 //! effect removed by prolonging the graded grid to sides 48.5 and 234 mm and
 //! extrapolating linearly in 1/L (as `sneddon.rs`).
 //!
@@ -192,7 +192,7 @@ fn flat_punch_matches_boussinesq() {
     assert!(rel(f_n, f_v).abs() < 1e-9);
 }
 
-/// The R0/R1/R2 run of DESIGN.md §5 with contact `kind`.
+/// The R0/R1/R2 run of docs/theory.md §11 with contact `kind`.
 fn reference_run(law: &dyn Law, c: &[f64], kind: ContactKind) -> Trajectory {
     let model = Model::with_contact(cylinder(SIDE0, N0, Q0), cone(), kind).unwrap();
     let mut solver = DirectSolver::new(&model).unwrap();

@@ -3,7 +3,7 @@
 //! m = 1 without yield being Maxwell's, withdrawal past the loss of contact, and a run
 //! repeated bit for bit by the same or a fresh solver.
 //!
-//! References: the paper's discrete scheme (§2.2, eqs. 41-46; DESIGN.md §1). With
+//! References: the paper's discrete scheme (§2.2, eqs. 41-46; docs/theory.md §1). With
 //! backward Euler, step i solves `S (sigma_i - sigma_i-1) + dt_i g(sigma_i, c) = B (u_i -
 //! u_i-1)` with contact on the depth `U_i`. Hence, exactly (up to the solver's tolerance):
 //!

@@ -1,5 +1,5 @@
 //! Elastic indentation by rigid frictionless punches against Sneddon's half-space
-//! solutions: the reference problem R0 of DESIGN.md §5 (cone), the exact sphere, the flat
+//! solutions: the reference problem R0 of docs/theory.md §11 (cone), the exact sphere, the flat
 //! punch, and the elastic properties of the time-stepped contact solver.
 //!
 //! References: I. N. Sneddon, "The relation between load and penetration in the
@@ -37,7 +37,7 @@
 //!          bottom: u_z = 0       R0: 20 x 20 Q8, cone 68 deg, E = 20000 MPa, nu = 0.3
 //! ```
 //!
-//! Parameters: R0 of DESIGN.md §5 (30 steps per segment); sphere R = 0.5 mm and flat
+//! Parameters: R0 of docs/theory.md §11 (30 steps per segment); sphere R = 0.5 mm and flat
 //! punch a = 0.2024 mm (the radius of an element corner, with quarter-point elements
 //! around it, see `flat_punch_...`), both at h = 0.1 mm.
 
@@ -73,7 +73,7 @@ fn flat_radius() -> f64 {
     graded_positions(SIDE0, N0, Q0)[6]
 }
 
-/// The R0 run of DESIGN.md §5, shared by the tests of this file.
+/// The R0 run of docs/theory.md §11, shared by the tests of this file.
 fn r0() -> &'static Trajectory {
     static R0: OnceLock<Trajectory> = OnceLock::new();
     R0.get_or_init(|| {

@@ -167,7 +167,7 @@ Paper: A. Constantinescu, N. Tardieu, *On the identification of elastoviscoplast
 from indentation tests*, Inverse Problems in Engineering 9 (2001) — §4.3-4.4 (Maxwell, Tables I-II)
 and §5.3 (Norton-Hoff, Table III).
 
-Set-up (problems R1 and R2: `examples/r1-maxwell.ron`, `examples/r2-norton-hoff.ron`): {setup}. The "experimental" curves are computed with the
+Set-up (docs/theory.md §11, problems R1 and R2): {setup}. The "experimental" curves are computed with the
 same discretization (the paper did the same with CASTEM2000), on the schedule's 91 times; the cost is
 `J = 1/2 sum_i (F_i - F_i^exp)^2` over them, unit weights. Free parameters are log-scaled; nu = 0.3 is
 fixed; bounds E in [1e3, 1e6], eta in [1e3, 1e7] (R1) and E in [1e4, 1e6], K in [10, 1e5],
@@ -272,7 +272,7 @@ fn differences(opts: &Options) -> String {
   elements lie under the 0.16 mm contact radius. Table III of the paper mixes two meshes (tests 1-5
   and 6-8); we use one.
 - **Loading history.** The paper's Fig. 2 gives the shape (load, hold, unload) but not the
-  durations, the depth or the number of steps; ours is the trapezoid of `examples/r2-norton-hoff.ron`, 30 steps per
+  durations, the depth or the number of steps; ours is the trapezoid of docs/theory.md §11, with 30 steps per
   segment, so 91 data points.
 - **Gradient.** The paper compared its adjoint gradient with finite differences "within 10%"; ours is
   the exact gradient of the discrete scheme (adjoint and forward sensitivities agree with central

@@ -1,4 +1,4 @@
-//! The default mesh and step study (issue 12, item 5): the force of a configuration on its
+//! The default mesh and step study (docs/discretization.md): the force of a configuration on its
 //! own mesh and time grid against the same problem refined 2x and 4x in the mesh (each
 //! refinement as `indentify_study::discretization::refine_mesher`: counts doubled, gradings
 //! square-rooted, nested) and in the steps (`refine_schedule`: segments' steps doubled, or

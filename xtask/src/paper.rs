@@ -1,5 +1,5 @@
 //! The paper's Tables I-III (Constantinescu & Tardieu 2001) regenerated with indentify:
-//! the reference problems R1 / R2 (examples/r1-maxwell.ron, r2-norton-hoff.ron), synthetic data, the paper's starting
+//! the reference problems R1 / R2 of docs/theory.md §11, synthetic data, the paper's starting
 //! points, the identification runs (in parallel threads), the cost valley of Table III's
 //! runs that stay off, and the markdown / SVG rendering.
 //!
@@ -39,7 +39,7 @@ pub struct Setup {
 }
 
 impl Setup {
-    /// The paper's set-up as we read it: 10 x 10 mm, 20 x 20 Q8 graded 1.3, 30 steps per segment.
+    /// docs/theory.md §11: 10 x 10 mm, 20 x 20 Q8 graded 1.3, 30 steps per segment.
     pub const REFERENCE: Setup = Setup {
         radius: 10.0,
         height: 10.0,

@@ -1,6 +1,6 @@
-//! The sample outputs shown in README.md and docs/tutorial-real-data.md are the tool's own:
-//! each block marked `<!-- sample: NAME -->` is compared with what the command of NAME
-//! prints today, so the documentation cannot drift from the code.
+//! The sample outputs shown in README.md, docs/cli.md and docs/tutorial-real-data.md are the
+//! tool's own: each block marked `<!-- sample: NAME -->` is compared with what the command
+//! of NAME prints today, so the documentation cannot drift from the code.
 //!
 //! Wall times (a number followed by ` s` after `, `, `; `, `time `, `forward ` or
 //! `sweep `: see [`VOLATILE`]) differ from run to run and machine to machine; they are masked
@@ -30,12 +30,12 @@ const SAMPLES: &[Sample] = &[
         name: "identify-default",
         doc: "README.md",
         setup: &[],
-        command: &["identify"],
+        command: &["identify", "--out", "out/default", "--force"],
         stderr: false,
     },
     Sample {
         name: "gradient-r1",
-        doc: "README.md",
+        doc: "docs/cli.md",
         setup: &[&["simulate", "examples/r1-maxwell.ron", "--out", "curve.csv"]],
         command: &[
             "gradient",

@@ -1,5 +1,5 @@
 //! The experimental force record `(t_j, F_j)` and its linear interpolation onto the
-//! simulation's schedule times (DESIGN.md §2: the cost lives on the simulation times).
+//! simulation's schedule times (docs/theory.md §6: the cost lives on the simulation times).
 
 use crate::IdentifyError;
 

@@ -1,4 +1,4 @@
-//! Parameter identification from indentation curves (paper §3-5, DESIGN.md §2): the
+//! Parameter identification from indentation curves (paper §3-5, docs/theory.md §6): the
 //! least-squares force misfit `J(c) = 1/2 sum_i w_i (F_i(c) - F_i^exp)^2` at the
 //! simulation's schedule times, its exact adjoint gradient, and the optimizers that
 //! minimize it over a box of admissible parameters.
@@ -11,11 +11,11 @@
 //!   adjoint solve per parameter point, keyed on the exact parameter bits).
 //! - [`params`]: free and fixed parameters, bounds and scaling ([`ParamSpec`],
 //!   [`Parameterization`]).
-//! - [`optimize`]: [`IdentifyConfig`], [`identify`], [`resume`], [`multistart`]: argmin
+//! - [`optimize`]: [`IdentifyConfig`], [`identify`], [`resume`], [`multistart()`]: argmin
 //!   BFGS with Armijo backtracking (the paper's algorithm), L-BFGS with More-Thuente,
 //!   L-BFGS-B (bounds, feature `lbfgsb`), Levenberg-Marquardt on the sensitivity
 //!   Jacobian; stopping rules, iteration history through an observer callback.
-//! - [`multistart`]: seeded Latin-hypercube starts in the scaled box and the clustering
+//! - [`mod@multistart`]: seeded Latin-hypercube starts in the scaled box and the clustering
 //!   of the runs' end points into distinct local minima.
 //! - [`profile`]: profile-likelihood chains (constrained re-fits stepping away from the
 //!   optimum) and their chi-square intervals.

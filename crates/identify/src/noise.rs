@@ -1,4 +1,4 @@
-//! Seeded synthetic noise for "experimental" curves (paper §4.4, DESIGN.md §5):
+//! Seeded synthetic noise for "experimental" curves (paper §4.4, docs/theory.md §11):
 //! `F_i (1 + a xi_i)`, `xi_i` uniform in `[-1, 1]`, from SplitMix64.
 //!
 //! The generator is part of the specification, not an implementation detail: a given

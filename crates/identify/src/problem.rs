@@ -20,7 +20,7 @@ use crate::tasks::{self, Follow, Todo};
 /// One test of an identification: the direct problem (model, depth schedule, solver
 /// options) and the data it is compared with, weighted.
 ///
-/// Its cost (DESIGN.md §2, paper eq. 16) is
+/// Its cost (docs/theory.md §6, paper eq. 16) is
 /// `J_k(c) = 1/2 sum_{i=0..I} w_i (F_i(c) - F_i^exp)^2` over the schedule times `t_i`
 /// (index 0 is the stress-free initial state, `F_0 = 0`); `F^exp` is the record
 /// interpolated at `t_i`; `w_i` = the point weight times the test's [`Test::weight`].
@@ -152,7 +152,7 @@ impl Test {
 /// Everything fixed during an identification: the law whose parameters are identified and
 /// one or more tests ([`Test`]) sharing them.
 ///
-/// The cost (DESIGN.md §2, paper eq. 16) is `J(c) = sum_k J_k(c)`, the sum of the tests'
+/// The cost (docs/theory.md §6, paper eq. 16) is `J(c) = sum_k J_k(c)`, the sum of the tests'
 /// weighted least-squares misfits. The data of all tests are laid end to end, test after
 /// test, in [`Problem::target`] and [`Problem::weights`] (and the forces and Jacobian rows
 /// of [`Evaluator`]): `J = 1/2 sum_i w_i (F_i - F_i^exp)^2` over that concatenation, so

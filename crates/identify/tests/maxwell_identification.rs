@@ -299,7 +299,7 @@ fn a_record_on_other_times_is_interpolated() {
 }
 
 /// Noise shall be reproducible: seed 42, amplitude 0.1 on 100 N gives these exact values
-/// (SplitMix64 is the specification, DESIGN.md §5).
+/// (SplitMix64 is the specification, docs/theory.md §11).
 #[test]
 fn noise_is_reproducible_from_its_seed() {
     let f = multiplicative_noise(&[100.0, 100.0, 100.0, 0.0], 0.1, 42);

@@ -106,7 +106,7 @@ impl std::fmt::Display for LocalFailure {
 /// Parameters `c` are an *input* of every method, never a field of the law, so that an
 /// optimizer only swaps the slice. Components follow [`Vec4`]'s Mandel order.
 ///
-/// The backward-Euler local residual at step i (DESIGN.md §1) is
+/// The backward-Euler local residual at step i (docs/theory.md §1) is
 /// `r(sigma_i) = S (sigma_i - sigma_{i-1}) + dt g(sigma_i) - deps = 0`, with Jacobian
 /// `A = S + dt H` and consistent tangent `C = A^-1`.
 pub trait Law: Send + Sync + std::fmt::Debug {
@@ -269,7 +269,9 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     }
 }
 
-/// Generic backward-Euler Newton update used by [`Law::update`]'s default.
+/// Generic backward-Euler Newton update used by [`Law::update`]'s default: Newton on
+/// `r(sigma)` from the elastic trial stress, converged when `|r|` is below 1e-12 of the
+/// size of its terms (`|S sigma| + |S s0| + |deps| + dt |g(sigma)| + dt |H| |sigma|`).
 ///
 /// # Errors
 /// [`LocalFailure`] after 50 iterations or on a singular Jacobian.
@@ -287,10 +289,21 @@ pub fn default_newton_update<L: Law + ?Sized>(
     })?;
     let mut sigma = *s0 + stiff.mul_vec(deps);
     let residual = |sig: &Vec4| s.mul_vec(&(*sig - *s0)) + law.flow(c, sig) * dt - *deps;
-    let scale = s.mul_vec(&sigma).max_abs().max(deps.max_abs()).max(1e-300);
+    // the size of the residual's terms at `sig`, and of the round-off the stress's own
+    // last bits put into the flow term (`dt |H| |sigma| eps`): the residual cannot go below
+    // a few ulps of it, while a scale of the trial stress alone can (when the flow term
+    // dominates), and Newton would never stop
+    let scale = |sig: &Vec4| {
+        (s.mul_vec(sig).max_abs()
+            + s.mul_vec(s0).max_abs()
+            + deps.max_abs()
+            + dt * law.flow(c, sig).max_abs()
+            + dt * law.flow_hessian(c, sig).max_abs() * sig.max_abs())
+        .max(1e-300)
+    };
     let mut r = residual(&sigma);
     for it in 0..50 {
-        if r.max_abs() <= 1e-12 * scale {
+        if r.max_abs() <= 1e-12 * scale(&sigma) {
             let tangent = law.tangent(c, &sigma, dt)?;
             return Ok(LocalUpdate {
                 sigma,

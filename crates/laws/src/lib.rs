@@ -6,6 +6,8 @@
 //! elements, meshes or contact: it works at one material point.
 
 pub mod elastic;
+#[cfg(test)]
+mod example_law;
 pub mod law;
 pub mod logstrain;
 pub mod mandel;

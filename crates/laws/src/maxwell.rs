@@ -227,7 +227,7 @@ mod tests {
         //! Axially, with `P sigma = sigma (-1/3, 2/3, -1/3)`, the law reads
         //! `d eps_zz/dt = (d sigma/dt)/E + 2 sigma/(3 eta)`: a spring `E` in series with a
         //! dashpot `3 eta/2`, relaxation time `tau = 3 eta/(2E)`. Parameters of R1
-        //! (DESIGN.md §5): `E = 20000 MPa, nu = 0.3, eta = 30000 MPa s`, `tau = 1.125 s`.
+        //! (docs/theory.md §11): `E = 20000 MPa, nu = 0.3, eta = 30000 MPa s`, `tau = 1.125 s`.
         use super::*;
         use crate::testing::{Axial, assert_first_order, uniaxial_history};
 

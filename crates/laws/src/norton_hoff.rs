@@ -22,7 +22,7 @@ use crate::mandel::{Mat4, Vec4};
 ///   Maxwell with `eta = 2K/3` and `H = 3P/(2K)` also at `sigma = 0`);
 /// - parameter derivatives at fixed stress, from `dx/dK = -x/K` and `dx/dsY = -1/K`:
 ///   `dg/dK = -(m/K) x^m n`, `dg/dm = x^m ln(x) n` (0 at `x = 0`),
-///   `dg/dsY = -(m/K) x^(m-1) n`, as in DESIGN.md §3 (checked against finite
+///   `dg/dsY = -(m/K) x^(m-1) n`, as in docs/theory.md §1 (checked against finite
 ///   differences by the shared consistency tests). `dS/dE`, `dS/dnu` as for elasticity.
 ///
 /// `m = 1` is admitted for forward runs, but the adjoint needs `m > 1`
@@ -407,7 +407,7 @@ mod tests {
     }
     law_consistency_tests!(consistency, PROFILE, params());
 
-    /// Reference problem R2 (DESIGN.md §5).
+    /// Reference problem R2 (docs/theory.md §11).
     const C: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
 
     fn residual(c: &[f64], s0: &Vec4, s1: &Vec4, deps: &Vec4, dt: f64) -> Vec4 {
@@ -626,7 +626,7 @@ mod tests {
         //! In uniaxial stress `sigma > 0`: `s_eq = sigma`, `n_zz = 1`,
         //! `n_rr = n_tt = -1/2`, so `d eps_zz/dt = (d sigma/dt)/E + <(sigma - sY)/K>_+^m`
         //! and the plastic flow is incompressible. Backward Euler on the 3D law reduces to
-        //! backward Euler on this scalar equation. Parameters of R2 (DESIGN.md §5):
+        //! backward Euler on this scalar equation. Parameters of R2 (docs/theory.md §11):
         //! `E = 1e5 MPa, nu = 0.3, K = 1500 MPa s^(1/5), m = 5, sY = 500 MPa`.
         use super::*;
         use crate::testing::{Axial, assert_first_order, uniaxial_history};

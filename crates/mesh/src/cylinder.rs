@@ -10,7 +10,7 @@ use crate::{Mesh, MeshError};
 ///
 /// Element sizes grow geometrically by `grading_r` from the axis outwards and by
 /// `grading_z` from the top surface downwards (1 = uniform): the first size is
-/// `h0 = L (q - 1) / (q^n - 1)`. DESIGN.md §5's default (10 x 10 mm, 20 x 20, q = 1.3)
+/// `h0 = L (q - 1) / (q^n - 1)`. docs/theory.md §11's default (10 x 10 mm, 20 x 20, q = 1.3)
 /// gives a smallest element of 0.016 mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CylinderMesher {
@@ -29,7 +29,7 @@ pub struct CylinderMesher {
 }
 
 impl CylinderMesher {
-    /// The mesh of DESIGN.md §5's reference problems R0-R2: a 10 x 10 mm cylinder, 20 x 20
+    /// The mesh of the reference problems R0-R2: a 10 x 10 mm cylinder, 20 x 20
     /// elements graded 1.3 towards the axis and the top.
     pub const REFERENCE: CylinderMesher = CylinderMesher {
         radius: 10.0,

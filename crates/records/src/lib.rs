@@ -83,6 +83,8 @@
 mod anton_paar;
 mod csv;
 mod error;
+#[cfg(test)]
+mod example_reader;
 pub mod fuzzing;
 mod hysitron;
 pub mod prep;

@@ -15,7 +15,7 @@ use indentify_contact::{DirectSolver, Model, Punch, Schedule, Segment, SolverOpt
 use indentify_laws::Elastic;
 use indentify_mesh::{CylinderMesher, Mesh};
 
-/// Young's modulus of R0 (MPa), DESIGN.md §5.
+/// Young's modulus of R0 (MPa), docs/theory.md §11.
 pub const E: f64 = 20000.0;
 /// Poisson's ratio of R0.
 pub const NU: f64 = 0.3;
@@ -114,7 +114,7 @@ pub fn sneddon_integrals(df: impl Fn(f64) -> f64, a: f64, e_star: f64) -> (f64, 
 // Meshes
 // ---------------------------------------------------------------------------------------
 
-/// The cylinder of DESIGN.md §5 family: side `size` (mm) both ways, `n x n` elements,
+/// The cylinder family of docs/theory.md §11: side `size` (mm) both ways, `n x n` elements,
 /// grading `q` towards the axis and the top.
 pub fn cylinder(size: f64, n: usize, q: f64) -> Mesh {
     CylinderMesher {

@@ -12,7 +12,7 @@
 
 use std::f64::consts::PI;
 
-/// Young's modulus of R1 (MPa), DESIGN.md §5.
+/// Young's modulus of R1 (MPa), docs/theory.md §11.
 pub const E: f64 = 20000.0;
 /// Poisson's ratio of R1.
 pub const NU: f64 = 0.3;
