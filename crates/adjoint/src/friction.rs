@@ -50,23 +50,6 @@ fn arc_rate(model: &Model, k: usize, u: &[f64], depth: f64, active: bool) -> (f6
 }
 
 impl Adjoint<'_> {
-    /// The frames of step `rec` with friction, from the converged stresses `sigma1` (their
-    /// internal force gives the reactions) and displacement `u1`.
-    pub(crate) fn friction_frames(
-        &mut self,
-        rec: &StepRecord,
-        sigma1: &[Vec4],
-        u1: &[f64],
-    ) -> Vec<indentify_contact::NodeFrame> {
-        let model = self.model;
-        match &self.finite {
-            None => model.disc.internal_force(sigma1, &mut self.full),
-            // finite strain: sum w0 B_L^T P T at the step's displacement (prepared)
-            Some(fs) => fs.force(model, sigma1, &mut self.full),
-        }
-        model.friction_frames(&rec.active, &rec.slip, &self.full, u1, rec.depth)
-    }
-
     /// The active candidates of `rec` paired with their frames in `self.frames` (index
     /// into `frames` per active candidate).
     fn frame_of_active(&self, rec: &StepRecord, i: usize) -> Result<Vec<usize>, AdjointError> {

@@ -38,8 +38,8 @@ mod finite;
 mod friction;
 
 use indentify_contact::{
-    ConstrainedSystem, DirectSolver, Model, NodeFrame, Schedule, SolverOptions, StepFields,
-    StepRecord, Trajectory,
+    ConstrainedSystem, DirectSolver, Model, NodeFrame, RecordedContact, Schedule, SolverOptions,
+    StepFields, StepRecord, Trajectory,
 };
 use indentify_fe::dofs::NO_EQ;
 use indentify_laws::{Law, LawError, Mat4, Vec4};
@@ -138,6 +138,8 @@ pub struct Replay<'a, 'm> {
 #[derive(Debug)]
 pub struct Adjoint<'m> {
     model: &'m Model,
+    /// The model's contact constraint (the frames of each recorded step).
+    contact: RecordedContact<'m>,
     system: ConstrainedSystem,
     tangents: Vec<Mat4>,
     field_a: Vec<Vec4>,
@@ -167,6 +169,7 @@ impl<'m> Adjoint<'m> {
         let nq = model.disc.n_qp();
         Ok(Adjoint {
             model,
+            contact: RecordedContact::new(model),
             system: ConstrainedSystem::new(model)?,
             tangents: vec![Mat4::ZERO; nq],
             field_a: vec![Vec4::ZERO; nq],
@@ -230,11 +233,15 @@ impl<'m> Adjoint<'m> {
             active[k as usize] = true;
         }
         self.system.set_active(model, &active);
-        self.frames = if model.contact.friction() > 0.0 {
-            self.friction_frames(rec, sigma1, u1)
+        // the step's frames from the contact constraint (the forward's piece); with
+        // friction the reactions come from the internal force of the converged stresses
+        let f_int = if self.contact.needs_internal_force() {
+            force_into(model, self.finite.as_ref(), sigma1, &mut self.full);
+            Some(self.full.as_slice())
         } else {
-            model.frames(&rec.active, &rec.lambda, u1, rec.depth)
+            None
         };
+        self.frames = self.contact.frames(rec, u1, f_int);
         self.system.set_frames(&self.frames);
         self.system
             .factorize(model)

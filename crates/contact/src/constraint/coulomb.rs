@@ -10,7 +10,7 @@ use crate::StepRecord;
 use crate::friction;
 use crate::model::Model;
 use crate::newton::StepFailure;
-use crate::system::ConstrainedSystem;
+use crate::system::{ConstrainedSystem, NodeFrame};
 
 /// Normal contact with friction coefficient `mu` (> 0).
 #[derive(Debug)]
@@ -153,5 +153,20 @@ impl Constraint for Coulomb<'_> {
                 xbar[e] = friction::stick_increment(&self.normal.proj[k], it.xi[k]);
             }
         }
+    }
+
+    fn frames_need_force(&self) -> bool {
+        true
+    }
+
+    fn recorded_frames(
+        &self,
+        rec: &StepRecord,
+        u: &[f64],
+        f_int: Option<&[f64]>,
+    ) -> Vec<NodeFrame> {
+        let f_int = f_int.expect("the frames with friction need the internal force");
+        let model = self.normal.model;
+        model.friction_frames(&rec.active, &rec.slip, f_int, u, rec.depth)
     }
 }

@@ -140,6 +140,15 @@ impl Constraint for Frictionless<'_> {
             }
         }
     }
+
+    fn recorded_frames(
+        &self,
+        rec: &StepRecord,
+        u: &[f64],
+        _f_int: Option<&[f64]>,
+    ) -> Vec<NodeFrame> {
+        self.model.frames(&rec.active, &rec.lambda, u, rec.depth)
+    }
 }
 
 /// Why a node in normal contact beyond the surface's end stops the run.

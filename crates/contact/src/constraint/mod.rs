@@ -30,7 +30,7 @@ use crate::friction::Status;
 use crate::model::Model;
 use crate::newton::StepFailure;
 use crate::normal::ContactKind;
-use crate::system::ConstrainedSystem;
+use crate::system::{ConstrainedSystem, NodeFrame};
 
 /// The contact set of a state: which candidates are active, and with Coulomb friction
 /// the stick/slip status of every candidate (meaningful for the active ones; empty
@@ -190,6 +190,48 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
     /// The prescribed increments of the constrained equations into `xbar` (zero
     /// elsewhere on entry).
     fn prescribe(&self, set: &ContactSet, it: &Iterate<'_>, xbar: &mut [f64]);
+
+    /// Whether [`Constraint::recorded_frames`] needs the step's internal force.
+    fn frames_need_force(&self) -> bool {
+        false
+    }
+
+    /// The frames of the active nodes of a converged recorded step `rec` at its
+    /// displacement `u` (all dofs), with its internal force `f_int` (all dofs; given when
+    /// [`Constraint::frames_need_force`]): the system the adjoint and the sensitivities
+    /// transpose. Empty for vertical contact.
+    fn recorded_frames(&self, rec: &StepRecord, u: &[f64], f_int: Option<&[f64]>)
+    -> Vec<NodeFrame>;
+}
+
+/// The contact constraint of a model as the adjoint and the sensitivities see a
+/// converged recorded step: the frames its system is transposed with (the same piece
+/// as the direct solver's, [`Constraint`]).
+#[derive(Debug)]
+pub struct RecordedContact<'m>(Box<dyn Constraint + 'm>);
+
+impl<'m> RecordedContact<'m> {
+    /// The constraint of `model`'s contact kind.
+    pub fn new(model: &'m Model) -> RecordedContact<'m> {
+        RecordedContact(for_model(model))
+    }
+
+    /// Whether [`RecordedContact::frames`] needs the step's internal force (Coulomb
+    /// friction: the reactions and the slipping nodes' curvature stiffness come from it).
+    pub fn needs_internal_force(&self) -> bool {
+        self.0.frames_need_force()
+    }
+
+    /// The frames of the active nodes of the converged step `rec` at its displacement
+    /// `u` (all dofs), with its internal force `f_int` (all dofs, N) when
+    /// [`RecordedContact::needs_internal_force`] ([`Model::frames`],
+    /// [`Model::friction_frames`]; empty for vertical contact).
+    ///
+    /// # Panics
+    /// If the internal force is needed and `f_int` is `None`.
+    pub fn frames(&self, rec: &StepRecord, u: &[f64], f_int: Option<&[f64]>) -> Vec<NodeFrame> {
+        self.0.recorded_frames(rec, u, f_int)
+    }
 }
 
 /// The constraint of `model`'s contact kind.

@@ -4,8 +4,9 @@
 //! `lambda_k = -f_int,z,k`.
 
 use super::{Constraint, ContactSet, Iterate};
+use crate::StepRecord;
 use crate::model::Model;
-use crate::system::ConstrainedSystem;
+use crate::system::{ConstrainedSystem, NodeFrame};
 
 /// Vertical contact on `model`'s candidates.
 #[derive(Debug)]
@@ -72,5 +73,14 @@ impl Constraint for Vertical<'_> {
                 xbar[e] = self.model.candidate_profile[k] - it.depth - it.u[self.zdof(k)];
             }
         }
+    }
+
+    fn recorded_frames(
+        &self,
+        _rec: &StepRecord,
+        _u: &[f64],
+        _f_int: Option<&[f64]>,
+    ) -> Vec<NodeFrame> {
+        Vec::new()
     }
 }
