@@ -288,8 +288,7 @@ pub struct Data {
 
 fn simulate(model: &Model, law: &dyn Law, c: &[f64], schedule: &Schedule) -> Result<Vec<f64>> {
     let mut s = DirectSolver::new(model)?;
-    Ok(s.run(model, law, c, schedule, &SolverOptions::default())?
-        .forces())
+    Ok(s.run(law, c, schedule, &SolverOptions::default())?.forces())
 }
 
 impl Data {

@@ -31,14 +31,12 @@ fn bench_adjoint(c: &mut Criterion) {
     for (name, law, params) in cases {
         let mut solver = DirectSolver::new(&model).expect("solver");
         let traj = solver
-            .run(&model, law, &params, &schedule, &SolverOptions::default())
+            .run(law, &params, &schedule, &SolverOptions::default())
             .expect("run");
         // a cost with rho_i = F_i (data = 0): every step contributes
         let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
         let mut adj = Adjoint::new(&model).expect("adjoint");
-        let g = adj
-            .gradient(&model, law, &params, &traj, &rho)
-            .expect("gradient");
+        let g = adj.gradient(law, &params, &traj, &rho).expect("gradient");
         eprintln!(
             "{name}: forward {:.1} ms, adjoint {:.1} ms (ratio {:.2}), adjoint factorizations {}, trajectory {:.1} MB",
             1e3 * traj.timing.total,
@@ -48,17 +46,14 @@ fn bench_adjoint(c: &mut Criterion) {
             traj.recorded_bytes() as f64 / 1e6
         );
         group.bench_function(format!("{name}_gradient"), |b| {
-            b.iter(|| {
-                adj.gradient(&model, law, &params, &traj, &rho)
-                    .expect("gradient")
-            })
+            b.iter(|| adj.gradient(law, &params, &traj, &rho).expect("gradient"))
         });
         // the forward sensitivities of every parameter (what Levenberg-Marquardt asks for)
         // inside a pool, as an identification runs it (its parameters in parallel)
         let pool = rayon::ThreadPoolBuilder::new().build().expect("pool");
         group.bench_function(format!("{name}_sensitivities"), |b| {
             b.iter(|| {
-                pool.install(|| adj.sensitivities(&model, law, &params, &traj))
+                pool.install(|| adj.sensitivities(law, &params, &traj))
                     .expect("sensitivities")
             })
         });

@@ -35,10 +35,10 @@
 //! `mu_i = C (S mu_{i+1} - G (V + rho e_A))`; the reactions that form the frames are the
 //! finite internal force `sum w0 B_L^T P T`.
 
-use indentify_contact::{Model, StepFields, StepRecord, Trajectory};
+use indentify_contact::{Model, StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};
 
-use crate::{Adjoint, AdjointError, Sensitivities, Sweep, check_inputs};
+use crate::{Adjoint, AdjointError, Recorded, Sensitivities, Sweep, check_inputs};
 
 /// `1 + g kappa` of candidate `k`'s closest point at displacement `u` and depth `depth`
 /// (`active`: measured as a node in contact), with its tangent: the closest point moves by
@@ -49,32 +49,11 @@ fn arc_rate(model: &Model, k: usize, u: &[f64], depth: f64, active: bool) -> (f6
     (1.0 + p.gap * p.kappa, p.t)
 }
 
-impl Adjoint {
-    /// The frames of step `rec` with friction, from the converged stresses `sigma1` (their
-    /// internal force gives the reactions) and displacement `u1`.
-    pub(crate) fn friction_frames(
-        &mut self,
-        model: &Model,
-        rec: &StepRecord,
-        sigma1: &[Vec4],
-        u1: &[f64],
-    ) -> Vec<indentify_contact::NodeFrame> {
-        match &self.finite {
-            None => model.disc.internal_force(sigma1, &mut self.full),
-            // finite strain: sum w0 B_L^T P T at the step's displacement (prepared)
-            Some(fs) => fs.force(model, sigma1, &mut self.full),
-        }
-        model.friction_frames(&rec.active, &rec.slip, &self.full, u1, rec.depth)
-    }
-
+impl Adjoint<'_> {
     /// The active candidates of `rec` paired with their frames in `self.frames` (index
     /// into `frames` per active candidate).
-    fn frame_of_active(
-        &self,
-        model: &Model,
-        rec: &StepRecord,
-        i: usize,
-    ) -> Result<Vec<usize>, AdjointError> {
+    fn frame_of_active(&self, rec: &StepRecord, i: usize) -> Result<Vec<usize>, AdjointError> {
+        let model = self.model;
         let mut out = Vec::with_capacity(rec.active.len());
         for (j, &k) in rec.active.iter().enumerate() {
             let ez = model.dofs.equation(2 * model.candidates[k as usize] + 1);
@@ -106,26 +85,28 @@ impl Adjoint {
     /// One step of the reversed-time sweep with friction: `self.field_a` holds `mu_{i+1}`
     /// on entry and `mu_i` on exit; `sweep.stick` holds step `i + 1`'s sticking loads on
     /// entry and step `i`'s on exit.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn sweep_step_friction(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         sweep: &mut Sweep,
-        rec: &StepRecord,
-        f0: &StepFields,
-        f1: &StepFields,
-        rho: f64,
-        i: usize,
+        step: &Recorded<'_>,
     ) -> Result<(), AdjointError> {
+        let model = self.model;
+        let Recorded {
+            i,
+            rec,
+            f0,
+            f1,
+            rho,
+        } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() && sweep.stick.is_empty() {
             return Ok(());
         }
         sweep.mu_zero = false;
-        self.prepare_step(model, law, c, rec, sig1, &f1.u, i)?;
-        let pairs = self.frame_of_active(model, rec, i)?;
+        self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
+        let pairs = self.frame_of_active(rec, i)?;
         let s = sweep.s;
         if self.finite.is_none() {
             // e_A: 1 on the vertical dof of every active node
@@ -147,7 +128,7 @@ impl Adjoint {
                 let sm = s.mul_vec(&self.field_a[q]);
                 self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
             }
-            self.force_of_field_b(model);
+            self.force_of_field_b();
             let mut e_a = std::mem::take(&mut self.xbar_full);
             e_a.clear();
             e_a.resize(self.full.len(), 0.0);
@@ -167,7 +148,7 @@ impl Adjoint {
             self.full[2 * n] += pi / rate * t[0];
             self.full[2 * n + 1] += pi / rate * t[1];
         }
-        self.restrict(model);
+        self.restrict();
         let mut eq = std::mem::take(&mut self.eq);
         let pi = self.system.solve_transposed(model, &mut eq);
         self.eq = eq;
@@ -180,22 +161,22 @@ impl Adjoint {
             }
         }
         // V' = V + rho e_A
-        self.expand(model);
+        self.expand();
         for &k in &rec.active {
             self.full[2 * model.candidates[k as usize] + 1] += rho;
         }
-        self.back_substitute(model, law, c, sweep, rec.dt, sig0, sig1);
+        self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
         Ok(())
     }
 
     /// Forward sensitivities with friction (see the module's documentation).
     pub(crate) fn sensitivities_friction(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
+        let model = self.model;
         let start = std::time::Instant::now();
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
@@ -213,8 +194,8 @@ impl Adjoint {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
-            let pairs = self.frame_of_active(model, rec, i)?;
+            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            let pairs = self.frame_of_active(rec, i)?;
             // sticking nodes: t_i . du_i = coef t_{i-1} . du_{i-1}
             let mut stick: Vec<(usize, usize, f64, [f64; 2])> = Vec::new();
             if i > 0 {
@@ -238,8 +219,8 @@ impl Adjoint {
                     q_field[qp] = y[k][qp] - r_field[qp * np + k];
                     self.field_b[qp] = self.tangents[qp].mul_vec(&q_field[qp]) * -1.0;
                 }
-                self.force_of_field_b(model);
-                self.restrict(model);
+                self.force_of_field_b();
+                self.restrict();
                 self.xbar.fill(0.0);
                 for &(er, node, coef, t0) in &stick {
                     let d = &du_prev[k];
@@ -248,16 +229,16 @@ impl Adjoint {
                 let mut eq = std::mem::take(&mut self.eq);
                 self.system.solve_dirichlet(model, &mut eq, &self.xbar);
                 self.eq = eq;
-                self.expand(model);
+                self.expand();
                 du_prev[k].copy_from_slice(&self.full);
-                self.strains_of_full(model);
+                self.strains_of_full();
                 for qp in 0..nq {
                     let bv = Vec4(self.strain[qp]);
                     let dsig = self.tangents[qp].mul_vec(&(bv + q_field[qp]));
                     self.field_b[qp] = dsig;
                     y[k][qp] = s.mul_vec(&dsig) - bv;
                 }
-                self.delta_force(model, &q_field);
+                self.delta_force(&q_field);
                 df[i][k] = -rec
                     .active
                     .iter()

@@ -38,8 +38,8 @@ mod finite;
 mod friction;
 
 use indentify_contact::{
-    ConstrainedSystem, DirectSolver, Model, NodeFrame, Schedule, SolverOptions, StepFields,
-    StepRecord, Trajectory,
+    ConstrainedSystem, DirectSolver, Model, NodeFrame, RecordedContact, Schedule, SolverOptions,
+    StepFields, StepRecord, Trajectory,
 };
 use indentify_fe::dofs::NO_EQ;
 use indentify_laws::{Law, LawError, Mat4, Vec4};
@@ -120,9 +120,26 @@ impl Sensitivities {
     }
 }
 
-/// Workspace for adjoint sweeps and sensitivities on one model (symbolic analysis once).
+/// The forward run with which [`Adjoint::gradient_replayed`] replays a checkpointed
+/// trajectory: the solver (built on the adjoint's model), and the schedule and options of
+/// the recorded run.
 #[derive(Debug)]
-pub struct Adjoint {
+pub struct Replay<'a, 'm> {
+    /// The direct solver on the adjoint's model.
+    pub solver: &'a mut DirectSolver<'m>,
+    /// The schedule of the recorded run.
+    pub schedule: &'a Schedule,
+    /// The options of the recorded run (with its `checkpoint_every`).
+    pub opts: &'a SolverOptions,
+}
+
+/// Workspace for adjoint sweeps and sensitivities on one model (borrowed once, at
+/// construction; symbolic analysis once).
+#[derive(Debug)]
+pub struct Adjoint<'m> {
+    model: &'m Model,
+    /// The model's contact constraint (the frames of each recorded step).
+    contact: RecordedContact<'m>,
     system: ConstrainedSystem,
     tangents: Vec<Mat4>,
     field_a: Vec<Vec4>,
@@ -141,16 +158,18 @@ pub struct Adjoint {
     du: Vec<f64>,
 }
 
-impl Adjoint {
-    /// Prepares the workspace for `model`.
+impl<'m> Adjoint<'m> {
+    /// Prepares the workspace for `model`, which it keeps for every sweep.
     ///
     /// # Errors
     /// [`AdjointError::Fe`] if the symbolic analysis fails.
-    pub fn new(model: &Model) -> Result<Adjoint, AdjointError> {
+    pub fn new(model: &'m Model) -> Result<Adjoint<'m>, AdjointError> {
         let finite = (model.kinematics == indentify_contact::Kinematics::Finite)
             .then(|| finite::FiniteStep::new(model));
         let nq = model.disc.n_qp();
         Ok(Adjoint {
+            model,
+            contact: RecordedContact::new(model),
             system: ConstrainedSystem::new(model)?,
             tangents: vec![Mat4::ZERO; nq],
             field_a: vec![Vec4::ZERO; nq],
@@ -169,10 +188,8 @@ impl Adjoint {
     /// Forms `C_i` at every Gauss point, sets the tangent, the active set of step `i` (and
     /// its frames under normal contact, from the step's displacement `u1`), and
     /// factorizes.
-    #[allow(clippy::too_many_arguments)]
     fn prepare_step(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         rec: &StepRecord,
@@ -180,6 +197,7 @@ impl Adjoint {
         u1: &[f64],
         i: usize,
     ) -> Result<(), AdjointError> {
+        let model = self.model;
         let fail = |reason: String| AdjointError::Step {
             step: i,
             t: rec.t,
@@ -215,11 +233,15 @@ impl Adjoint {
             active[k as usize] = true;
         }
         self.system.set_active(model, &active);
-        self.frames = if model.contact.friction() > 0.0 {
-            self.friction_frames(model, rec, sigma1, u1)
+        // the step's frames from the contact constraint (the forward's piece); with
+        // friction the reactions come from the internal force of the converged stresses
+        let f_int = if self.contact.needs_internal_force() {
+            force_into(model, self.finite.as_ref(), sigma1, &mut self.full);
+            Some(self.full.as_slice())
         } else {
-            model.frames(&rec.active, &rec.lambda, u1, rec.depth)
+            None
         };
+        self.frames = self.contact.frames(rec, u1, f_int);
         self.system.set_frames(&self.frames);
         self.system
             .factorize(model)
@@ -227,23 +249,27 @@ impl Adjoint {
     }
 
     /// Scatters `self.eq` into the full dof vector `self.full` ([`expand_into`]).
-    fn expand(&mut self, model: &Model) {
+    fn expand(&mut self) {
+        let model = self.model;
         expand_into(model, &self.eq, &mut self.full);
     }
 
     /// `self.full = sum_g w B^T field_b` ([`force_into`]).
-    fn force_of_field_b(&mut self, model: &Model) {
+    fn force_of_field_b(&mut self) {
+        let model = self.model;
         force_into(model, self.finite.as_ref(), &self.field_b, &mut self.full);
     }
 
     /// `self.strain = B self.full` ([`strains_into`]).
-    fn strains_of_full(&mut self, model: &Model) {
+    fn strains_of_full(&mut self) {
+        let model = self.model;
         strains_into(model, self.finite.as_ref(), &self.full, &mut self.strain);
     }
 
     /// The variation of the internal force into `self.full` ([`delta_force_into`]), with
     /// `self.field_b` holding `dsigma`.
-    fn delta_force(&mut self, model: &Model, q_field: &[Vec4]) {
+    fn delta_force(&mut self, q_field: &[Vec4]) {
+        let model = self.model;
         delta_force_into(
             model,
             self.finite.as_ref(),
@@ -256,7 +282,8 @@ impl Adjoint {
     }
 
     /// Restricts `self.full` to equations into `self.eq`.
-    fn restrict(&mut self, model: &Model) {
+    fn restrict(&mut self) {
+        let model = self.model;
         model.dofs.restrict(&self.full, &mut self.eq);
     }
 
@@ -268,7 +295,6 @@ impl Adjoint {
     /// [`AdjointError::NotDifferentiable`] (e.g. Norton-Hoff with m <= 1), or a step failure.
     pub fn gradient(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
@@ -284,7 +310,14 @@ impl Adjoint {
         self.field_a.fill(Vec4::ZERO);
         for i in (0..traj.steps.len()).rev() {
             let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
-            self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[i], i)?;
+            let step = Recorded {
+                i,
+                rec,
+                f0: s0,
+                f1: s1,
+                rho: dj_df[i],
+            };
+            self.sweep_step(law, c, &mut sweep, &step)?;
         }
         Ok(Gradient {
             dj_dc: sweep.finish(law, c),
@@ -300,21 +333,30 @@ impl Adjoint {
     ///
     /// # Errors
     /// As [`Adjoint::gradient`]; [`AdjointError::Replay`] if a replay fails or does not
-    /// reproduce the recorded steps.
-    #[allow(clippy::too_many_arguments)]
+    /// reproduce the recorded steps, or if the replaying solver runs another model than
+    /// this adjoint's.
     pub fn gradient_replayed(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
         dj_df: &[f64],
-        solver: &mut DirectSolver,
-        schedule: &Schedule,
-        opts: &SolverOptions,
+        replay: Replay<'_, '_>,
     ) -> Result<Gradient, AdjointError> {
         if traj.fields.len() == traj.steps.len() + 1 {
-            return self.gradient(model, law, c, traj, dj_df);
+            return self.gradient(law, c, traj, dj_df);
+        }
+        let Replay {
+            solver,
+            schedule,
+            opts,
+        } = replay;
+        if !std::ptr::eq(solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
         }
         let start = std::time::Instant::now();
         let f0 = self.system.factorizations();
@@ -343,7 +385,7 @@ impl Adjoint {
                 None => (last, n),
             };
             let seg = solver
-                .replay(model, law, c, schedule, opts, cp, j_end)
+                .replay(law, c, schedule, opts, cp, j_end)
                 .map_err(|e| AdjointError::Replay(e.to_string()))?;
             if seg.steps.len() != steps_end - cp.steps_done {
                 return Err(AdjointError::Replay(format!(
@@ -356,7 +398,14 @@ impl Adjoint {
             for i in (0..seg.steps.len()).rev() {
                 let (rec, s0, s1) = (&seg.steps[i], &seg.fields[i], &seg.fields[i + 1]);
                 let g = cp.steps_done + i;
-                self.sweep_step(model, law, c, &mut sweep, rec, s0, s1, dj_df[g], g)?;
+                let step = Recorded {
+                    i: g,
+                    rec,
+                    f0: s0,
+                    f1: s1,
+                    rho: dj_df[g],
+                };
+                self.sweep_step(law, c, &mut sweep, &step)?;
             }
         }
         Ok(Gradient {
@@ -368,37 +417,39 @@ impl Adjoint {
 
     /// One step of the reversed-time sweep: `self.field_a` holds `mu_{i+1}` on entry and
     /// `mu_i` on exit.
-    #[allow(clippy::too_many_arguments)]
     fn sweep_step(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         sweep: &mut Sweep,
-        rec: &StepRecord,
-        f0: &StepFields,
-        f1: &StepFields,
-        rho: f64,
-        i: usize,
+        step: &Recorded<'_>,
     ) -> Result<(), AdjointError> {
+        let model = self.model;
         if model.contact.friction() > 0.0 {
-            return self.sweep_step_friction(model, law, c, sweep, rec, f0, f1, rho, i);
+            return self.sweep_step_friction(law, c, sweep, step);
         }
+        let Recorded {
+            i,
+            rec,
+            f0,
+            f1,
+            rho,
+        } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data and no contact, mu_i = 0: nothing to do
         if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() {
             return Ok(());
         }
         sweep.mu_zero = false;
-        self.prepare_step(model, law, c, rec, sig1, &f1.u, i)?;
+        self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
         let s = sweep.s;
         // b = sum_g w B^T (C S - I) mu_{i+1}
         for q in 0..self.field_b.len() {
             let sm = s.mul_vec(&self.field_a[q]);
             self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
         }
-        self.force_of_field_b(model);
-        self.restrict(model);
+        self.force_of_field_b();
+        self.restrict();
         // V = dJ/dF_i on the active contact dofs (normal contact: m . V = rho m_z, and the
         // source rho d t_z along t on the tangential dofs)
         if self.frames.is_empty() {
@@ -421,8 +472,8 @@ impl Adjoint {
         self.system.solve_dirichlet(model, &mut eq, &self.xbar);
         self.eq = eq;
         self.xbar.fill(0.0);
-        self.expand(model);
-        self.back_substitute(model, law, c, sweep, rec.dt, sig0, sig1);
+        self.expand();
+        self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
         Ok(())
     }
 
@@ -431,10 +482,8 @@ impl Adjoint {
     /// `gradient -= sum w mu_i . R_i` with `R_i = dS/dc (s1 - s0) + dt dg/dc(s1)`; the
     /// `dS/dc` part is accumulated as `M = sum w mu (x) (s1 - s0)` and contracted with
     /// `dS/dc` once at the end.
-    #[allow(clippy::too_many_arguments)]
     fn back_substitute(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         sweep: &mut Sweep,
@@ -442,7 +491,8 @@ impl Adjoint {
         sig0: &[Vec4],
         sig1: &[Vec4],
     ) {
-        self.strains_of_full(model);
+        let model = self.model;
+        self.strains_of_full();
         let s = sweep.s;
         for q in 0..self.field_b.len() {
             let sm = s.mul_vec(&self.field_a[q]);
@@ -471,13 +521,13 @@ impl Adjoint {
     /// As [`Adjoint::gradient`].
     pub fn sensitivities(
         &mut self,
-        model: &Model,
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
+        let model = self.model;
         if model.contact.friction() > 0.0 {
-            return self.sensitivities_friction(model, law, c, traj);
+            return self.sensitivities_friction(law, c, traj);
         }
         let start = std::time::Instant::now();
         let n = traj.steps.len();
@@ -498,7 +548,7 @@ impl Adjoint {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(model, law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             let step = ParamStep {
@@ -640,6 +690,17 @@ impl ParamStep<'_> {
             .sum::<f64>();
         Ok(())
     }
+}
+
+/// One recorded step as the sweep reads it: its index in the trajectory, its record, the
+/// fields before (`f0`) and after (`f1`) it, and the cost's `dJ/dF_i` there.
+#[derive(Clone, Copy)]
+struct Recorded<'a> {
+    i: usize,
+    rec: &'a StepRecord,
+    f0: &'a StepFields,
+    f1: &'a StepFields,
+    rho: f64,
 }
 
 /// Accumulators of one reversed-time sweep.

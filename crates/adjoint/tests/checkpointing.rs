@@ -7,8 +7,8 @@
 //! gradient_fd.rs). Norton-Hoff on a 10 x 10 graded cylinder, cone 68 deg, trapezoid with
 //! 8 steps per segment (the first unloading step of the perturbed run is cut).
 
-use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::relative_difference;
+use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
@@ -34,13 +34,13 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 8)).unwrap();
     let full_opts = SolverOptions::default();
     let mut solver = DirectSolver::new(&model).unwrap();
-    let full = solver.run(&model, law, c, &sched, &full_opts).unwrap();
+    let full = solver.run(law, c, &sched, &full_opts).unwrap();
     let cp_opts = SolverOptions {
         record_fields: false,
         checkpoint_every: every,
         ..Default::default()
     };
-    let light = solver.run(&model, law, c, &sched, &cp_opts).unwrap();
+    let light = solver.run(law, c, &sched, &cp_opts).unwrap();
     // the same forward run: a checkpoint restarts the inexact solves' preconditioner with
     // a fresh factorization (so that replays repeat the checkpointed run bit for bit),
     // which moves the converged iterates by round-off only
@@ -67,9 +67,19 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
         })
         .collect();
     let mut adj = Adjoint::new(&model).unwrap();
-    let g_full = adj.gradient(&model, law, c, &full, &rho).unwrap();
+    let g_full = adj.gradient(law, c, &full, &rho).unwrap();
     let g_cp = adj
-        .gradient_replayed(&model, law, c, &light, &rho, &mut solver, &sched, &cp_opts)
+        .gradient_replayed(
+            law,
+            c,
+            &light,
+            &rho,
+            Replay {
+                solver: &mut solver,
+                schedule: &sched,
+                opts: &cp_opts,
+            },
+        )
         .unwrap();
     println!(
         "{}: full {} bytes, checkpointed {} bytes; gradients {:?} vs {:?}",
@@ -84,13 +94,13 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
         assert!(relative_difference(*a, *b) < 1e-12, "{a} vs {b}");
     } // the adjoint's assembly restarts from a full sum at every sweep: the same gradient,
     // and the same sensitivities, bit for bit after other computations
-    let again = adj.gradient(&model, law, c, &full, &rho).unwrap();
+    let again = adj.gradient(law, c, &full, &rho).unwrap();
     assert_eq!(
         again.dj_dc, g_full.dj_dc,
         "gradient repeats after a replayed sweep"
     );
-    let s1 = adj.sensitivities(&model, law, c, &full).unwrap();
-    let s2 = adj.sensitivities(&model, law, c, &full).unwrap();
+    let s1 = adj.sensitivities(law, c, &full).unwrap();
+    let s2 = adj.sensitivities(law, c, &full).unwrap();
     assert_eq!(s1.df_dc, s2.df_dc, "sensitivities repeat");
 }
 

@@ -27,31 +27,19 @@ fn run(model: &Model, law: &dyn Law, c: &[f64]) -> Trajectory {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 0.5, 0.5, 0.5, 6)).unwrap();
     DirectSolver::new(model)
         .unwrap()
-        .run(model, law, c, &schedule, &SolverOptions::default())
+        .run(law, c, &schedule, &SolverOptions::default())
         .unwrap()
 }
 
 /// The bits of the gradient (for `rho = F`) and of every sensitivity.
-fn gradient_bits(
-    a: &mut Adjoint,
-    model: &Model,
-    law: &dyn Law,
-    c: &[f64],
-    t: &Trajectory,
-) -> Vec<u64> {
+fn gradient_bits(a: &mut Adjoint, law: &dyn Law, c: &[f64], t: &Trajectory) -> Vec<u64> {
     let rho: Vec<f64> = t.steps.iter().map(|s| s.force).collect();
-    let g = a.gradient(model, law, c, t, &rho).unwrap();
+    let g = a.gradient(law, c, t, &rho).unwrap();
     g.dj_dc.iter().map(|v| v.to_bits()).collect()
 }
 
-fn sensitivity_bits(
-    a: &mut Adjoint,
-    model: &Model,
-    law: &dyn Law,
-    c: &[f64],
-    t: &Trajectory,
-) -> Vec<u64> {
-    let s = a.sensitivities(model, law, c, t).unwrap();
+fn sensitivity_bits(a: &mut Adjoint, law: &dyn Law, c: &[f64], t: &Trajectory) -> Vec<u64> {
+    let s = a.sensitivities(law, c, t).unwrap();
     s.df_dc.iter().flatten().map(|v| v.to_bits()).collect()
 }
 
@@ -81,29 +69,29 @@ fn a_reused_workspace_gives_a_new_ones_bits() {
             let other: Vec<f64> = c.iter().map(|v| v * 1.1).collect();
             let t = run(model, law, c);
             let t_other = run(model, law, &other);
-            let g_new = gradient_bits(&mut Adjoint::new(model).unwrap(), model, law, c, &t);
-            let s_new = sensitivity_bits(&mut Adjoint::new(model).unwrap(), model, law, c, &t);
+            let g_new = gradient_bits(&mut Adjoint::new(model).unwrap(), law, c, &t);
+            let s_new = sensitivity_bits(&mut Adjoint::new(model).unwrap(), law, c, &t);
             let case = format!("{name}, {}", law.name());
             // sensitivities after the gradient at the same point, and the reverse
             let mut a = Adjoint::new(model).unwrap();
-            assert_eq!(gradient_bits(&mut a, model, law, c, &t), g_new, "{case}");
+            assert_eq!(gradient_bits(&mut a, law, c, &t), g_new, "{case}");
             assert_eq!(
-                sensitivity_bits(&mut a, model, law, c, &t),
+                sensitivity_bits(&mut a, law, c, &t),
                 s_new,
                 "{case}: sensitivities after the gradient"
             );
             assert_eq!(
-                gradient_bits(&mut a, model, law, c, &t),
+                gradient_bits(&mut a, law, c, &t),
                 g_new,
                 "{case}: gradient after the sensitivities"
             );
             // the sequence of a line search with the adjoint computed ahead: the gradient
             // at the previous point, the gradient here, then the sensitivities here
             let mut d = Adjoint::new(model).unwrap();
-            gradient_bits(&mut d, model, law, &other, &t_other);
-            assert_eq!(gradient_bits(&mut d, model, law, c, &t), g_new, "{case}");
+            gradient_bits(&mut d, law, &other, &t_other);
+            assert_eq!(gradient_bits(&mut d, law, c, &t), g_new, "{case}");
             assert_eq!(
-                sensitivity_bits(&mut d, model, law, c, &t),
+                sensitivity_bits(&mut d, law, c, &t),
                 s_new,
                 "{case}: sensitivities after two gradients"
             );
@@ -111,33 +99,28 @@ fn a_reused_workspace_gives_a_new_ones_bits() {
             // next, then the gradient (computed ahead) and the sensitivities at a third
             let third: Vec<f64> = c.iter().map(|v| v * 0.95).collect();
             let t_third = run(model, law, &third);
-            let s_third = sensitivity_bits(
-                &mut Adjoint::new(model).unwrap(),
-                model,
-                law,
-                &third,
-                &t_third,
-            );
+            let s_third =
+                sensitivity_bits(&mut Adjoint::new(model).unwrap(), law, &third, &t_third);
             let mut e = Adjoint::new(model).unwrap();
-            sensitivity_bits(&mut e, model, law, c, &t);
-            gradient_bits(&mut e, model, law, &other, &t_other);
-            gradient_bits(&mut e, model, law, &third, &t_third);
+            sensitivity_bits(&mut e, law, c, &t);
+            gradient_bits(&mut e, law, &other, &t_other);
+            gradient_bits(&mut e, law, &third, &t_third);
             assert_eq!(
-                sensitivity_bits(&mut e, model, law, &third, &t_third),
+                sensitivity_bits(&mut e, law, &third, &t_third),
                 s_third,
                 "{case}: an optimizer's sequence"
             );
             // after either at another point
             let mut b = Adjoint::new(model).unwrap();
-            sensitivity_bits(&mut b, model, law, &other, &t_other);
+            sensitivity_bits(&mut b, law, &other, &t_other);
             assert_eq!(
-                gradient_bits(&mut b, model, law, c, &t),
+                gradient_bits(&mut b, law, c, &t),
                 g_new,
                 "{case}: gradient after another point"
             );
-            gradient_bits(&mut b, model, law, &other, &t_other);
+            gradient_bits(&mut b, law, &other, &t_other);
             assert_eq!(
-                sensitivity_bits(&mut b, model, law, c, &t),
+                sensitivity_bits(&mut b, law, c, &t),
                 s_new,
                 "{case}: sensitivities after another point"
             );
@@ -171,9 +154,7 @@ fn sensitivities_do_not_depend_on_the_thread_count() {
                     .num_threads(threads)
                     .build()
                     .unwrap()
-                    .install(|| {
-                        sensitivity_bits(&mut Adjoint::new(model).unwrap(), model, law, c, &t)
-                    })
+                    .install(|| sensitivity_bits(&mut Adjoint::new(model).unwrap(), law, c, &t))
             };
             let one = on(1);
             assert!(one.iter().any(|&b| f64::from_bits(b) != 0.0), "{name}");

@@ -63,9 +63,7 @@ fn bench_forward(c: &mut Criterion) {
         let mut solver = DirectSolver::new(model).expect("solver");
         let opts = SolverOptions::default();
         // one run to report the split, then the timed runs
-        let t = solver
-            .run(model, law, &params, &schedule, &opts)
-            .expect("run");
+        let t = solver.run(law, &params, &schedule, &opts).expect("run");
         eprintln!(
             "{name}: {} steps, {} iterations, {}",
             t.steps.len(),
@@ -73,11 +71,7 @@ fn bench_forward(c: &mut Criterion) {
             t.timing
         );
         group.bench_function(name, |b| {
-            b.iter(|| {
-                solver
-                    .run(model, law, &params, &schedule, &opts)
-                    .expect("run")
-            })
+            b.iter(|| solver.run(law, &params, &schedule, &opts).expect("run"))
         });
     }
     group.finish();

@@ -22,7 +22,7 @@
 //! node whose increment runs against `sigma` turns to stick. Nodes entering contact start
 //! sticking. The axis node has no tangential dof and no friction.
 
-use crate::direct::Model;
+use crate::model::Model;
 use crate::normal::Projection;
 use crate::system::NodeFrame;
 
@@ -82,21 +82,33 @@ pub(crate) fn tangential_residual(p: &Projection, f: [f64; 2], status: Status, m
     (p.t[0] + c * p.m[0]) * f[0] + (p.t[1] + c * p.m[1]) * f[1]
 }
 
+/// The tolerances of [`check`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CheckTolerances {
+    /// On the Coulomb cone and on tension (N).
+    pub cone: f64,
+    /// On the slip direction (mm).
+    pub slip: f64,
+    /// The force that scales a cone violation (N, > 0).
+    pub scale: f64,
+}
+
 /// The stick/slip check of an active off-axis node: `Some((new status, violation))` when
-/// its status is inadmissible (`violation` > 0, relative to `scale`), `None` otherwise.
-/// `ltol` (N) and `stol` (mm) are the tolerances on the Coulomb cone and on the slip
-/// direction.
-#[allow(clippy::too_many_arguments)]
+/// its status is inadmissible (`violation` > 0, relative to `tol.scale`), `None`
+/// otherwise.
 pub(crate) fn check(
     p: &Projection,
     f: [f64; 2],
     xi: f64,
     status: Status,
     mu: f64,
-    ltol: f64,
-    stol: f64,
-    scale: f64,
+    tol: CheckTolerances,
 ) -> Option<(Status, f64)> {
+    let CheckTolerances {
+        cone: ltol,
+        slip: stol,
+        scale,
+    } = tol;
     let lambda = -(f[0] * p.m[0] + f[1] * p.m[1]);
     let tau = f[0] * p.t[0] + f[1] * p.t[1];
     if status == 0 {

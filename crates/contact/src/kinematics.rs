@@ -86,6 +86,25 @@ impl FiniteFailure {
 /// of threads.
 pub(crate) const ELEMENT_CHUNK: usize = 8;
 
+/// Inputs of [`evaluate`]: the law, its parameters and the step length, the initial
+/// state's stresses `t0` and Hencky strains `e0` (every Gauss point), and the law's
+/// elastic domain when it has one.
+#[derive(Clone, Copy)]
+pub(crate) struct FiniteIn<'a> {
+    /// The law.
+    pub law: &'a dyn Law,
+    /// Its parameters.
+    pub c: &'a [f64],
+    /// Step length (s).
+    pub dt: f64,
+    /// Stresses `T` of the initial state.
+    pub t0: &'a [Vec4],
+    /// Hencky strains of the initial state.
+    pub e0: &'a [Vec4],
+    /// Where the law's update is the elastic one ([`Law::elastic_domain`]).
+    pub domain: Option<&'a ElasticDomain>,
+}
+
 /// Output buffers of [`evaluate`].
 pub(crate) struct FiniteOut<'a> {
     /// The stresses `T` (every Gauss point).
@@ -160,18 +179,20 @@ pub(crate) fn smallest_det(disc: &Discretization, u: &[f64]) -> (usize, f64) {
 ///
 /// # Errors
 /// The first inverted Gauss point or failed local update.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn evaluate(
     disc: &Discretization,
-    law: &dyn Law,
-    c: &[f64],
-    dt: f64,
-    t0: &[Vec4],
-    e0: &[Vec4],
+    input: &FiniteIn<'_>,
     u: &[f64],
-    domain: Option<&ElasticDomain>,
     out: FiniteOut<'_>,
 ) -> Result<(), FiniteFailure> {
+    let FiniteIn {
+        law,
+        c,
+        dt,
+        t0,
+        e0,
+        domain,
+    } = *input;
     let ne = disc.elements.len();
     let nq = QP_PER_ELEMENT * ne;
     // element forces in parallel over fixed chunks of elements, each element's arithmetic
@@ -335,7 +356,15 @@ mod tests {
                         tangents: &mut a,
                         points: &mut points,
                     };
-                    evaluate(&disc, *law, c, 0.1, &t0, &e0, u, None, out).unwrap();
+                    let input = FiniteIn {
+                        law: *law,
+                        c,
+                        dt: 0.1,
+                        t0: &t0,
+                        e0: &e0,
+                        domain: None,
+                    };
+                    evaluate(&disc, &input, u, out).unwrap();
                     element_tangents(&disc, &points, &sigma, &a, &mut ke);
                     (f, ke)
                 };

@@ -6,20 +6,27 @@
 //! into the body, which lies below z = 0). This crate owns time stepping; it knows
 //! nothing of adjoints, costs or optimizers.
 
+mod body;
+mod constraint;
 pub mod direct;
+mod drive;
 pub mod friction;
 pub mod history;
 pub mod kinematics;
+pub mod model;
+mod newton;
 pub mod normal;
 pub mod punch;
 pub mod system;
 
+pub use constraint::RecordedContact;
 pub use direct::{
-    Checkpoint, DirectSolver, Model, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
+    Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
     nodal_pressures,
 };
 pub use history::{MAX_SUBSTEPS, Schedule, Segment, trapezoid};
 pub use kinematics::Kinematics;
+pub use model::Model;
 pub use normal::ContactKind;
 pub use punch::Punch;
 pub use system::{ConstrainedSystem, NodeFrame};

@@ -31,7 +31,7 @@ use std::collections::HashMap;
 use indentify_fe::{ElementCache, FeError, Pattern, SolveScratch, SparseCholesky};
 use indentify_laws::Mat4;
 
-use crate::direct::Model;
+use crate::model::Model;
 
 /// `K` with Dirichlet rows/columns on a set of equations, factorized on demand.
 #[derive(Debug)]

@@ -50,7 +50,6 @@ fn elastic_compression_matches_the_hencky_closed_form() {
     let traj = DirectSolver::new(&model)
         .unwrap()
         .run(
-            &model,
             &Elastic,
             &[e, nu],
             &ramp(1.0, 0.4, 20),
@@ -117,7 +116,6 @@ fn norton_hoff_compression_matches_the_log_strain_ode() {
             let traj = DirectSolver::new(&model)
                 .unwrap()
                 .run(
-                    &model,
                     &NortonHoff,
                     &c,
                     &ramp(duration, depth, steps),
@@ -176,7 +174,6 @@ fn newton_is_quadratic_under_finite_strain() {
     };
     solver
         .run(
-            &model,
             &NortonHoff,
             &[1e5, 0.3, 1500.0, 5.0, 0.0],
             &ramp(1.0, 0.1, 10),
@@ -206,7 +203,7 @@ fn the_small_depth_limit_is_small_strain() {
         let model = cone_model(kin);
         let traj = DirectSolver::new(&model)
             .unwrap()
-            .run(&model, &NortonHoff, &c, &sched, &SolverOptions::default())
+            .run(&NortonHoff, &c, &sched, &SolverOptions::default())
             .unwrap();
         traj.forces()
     };
@@ -220,7 +217,7 @@ fn the_small_depth_limit_is_small_strain() {
         let model = cone_model(kin);
         DirectSolver::new(&model)
             .unwrap()
-            .run(&model, &NortonHoff, &c, &sched, &SolverOptions::default())
+            .run(&NortonHoff, &c, &sched, &SolverOptions::default())
             .unwrap()
             .forces()
     };
@@ -291,7 +288,7 @@ fn an_inverted_element_is_reported() {
     };
     let err = DirectSolver::new(&model)
         .unwrap()
-        .run(&model, &Elastic, &[1000.0, 0.3], &ramp(1.0, 1.2, 4), &opts)
+        .run(&Elastic, &[1000.0, 0.3], &ramp(1.0, 1.2, 4), &opts)
         .unwrap_err();
     let text = err.to_string();
     println!("{text}");
@@ -336,7 +333,7 @@ fn the_finite_forward_is_the_same_for_any_number_of_threads() {
             pool.install(|| {
                 DirectSolver::new(&model)
                     .unwrap()
-                    .run(&model, &NortonHoff, &c, &sched, &SolverOptions::default())
+                    .run(&NortonHoff, &c, &sched, &SolverOptions::default())
                     .unwrap()
             })
         };
@@ -414,8 +411,8 @@ fn the_release_at_depth_zero_does_not_depend_on_round_off() {
         assert_eq!(model.gap_length(), width);
         let mut solver = DirectSolver::new(&model).unwrap();
         for c in [[17000.0, 0.27], [20000.0, 0.3]] {
-            let plain = solver.run(&model, &Elastic, &c, &sched, &opts).unwrap();
-            let ck = solver.run(&model, &Elastic, &c, &sched, &ck_opts).unwrap();
+            let plain = solver.run(&Elastic, &c, &sched, &opts).unwrap();
+            let ck = solver.run(&Elastic, &c, &sched, &ck_opts).unwrap();
             for t in [&plain, &ck] {
                 let n: Vec<usize> = t.steps.iter().map(|s| s.active.len()).collect();
                 assert_eq!(t.steps.len(), 18, "{c:?}: {n:?}");

@@ -78,7 +78,7 @@ fn newton_converges_quadratically_on_a_sphere() {
             residual_tol: 1e-13,
             ..Default::default()
         };
-        let traj = solver.run(&model, law, &c, &ramp(0.05, 10), &opts).unwrap();
+        let traj = solver.run(law, &c, &ramp(0.05, 10), &opts).unwrap();
         let r = solver.last_residuals();
         println!("{}: residuals of the last step {r:?}", law.name());
         assert!(traj.steps.last().unwrap().active.len() >= 4);
@@ -140,7 +140,7 @@ fn every_profile_runs_with_normal_contact() {
             let m = model(punch.clone(), kind);
             let mut solver = DirectSolver::new(&m).unwrap();
             let traj = solver
-                .run(&m, &Elastic, &c, &sched, &SolverOptions::default())
+                .run(&Elastic, &c, &sched, &SolverOptions::default())
                 .unwrap_or_else(|e| panic!("{punch:?} {kind:?}: {e}"));
             fmax[j] = traj.forces().iter().fold(0.0f64, |a, &b| a.max(b));
             if kind == ContactKind::Normal {
@@ -187,7 +187,6 @@ fn flat_punch_with_normal_contact() {
         let mut solver = DirectSolver::new(&m).unwrap();
         let traj = solver
             .run(
-                &m,
                 &Elastic,
                 &[20000.0, 0.3],
                 &ramp(0.002, 4),
@@ -215,7 +214,6 @@ fn tabulated_profile_too_short_is_a_clear_error() {
     let mut solver = DirectSolver::new(&m).unwrap();
     let err = solver
         .run(
-            &m,
             &Elastic,
             &[20000.0, 0.3],
             &ramp(0.05, 5),
@@ -296,7 +294,7 @@ fn norton_hoff_runs_on_every_profile() {
             };
             let mut solver = DirectSolver::new(&m).unwrap();
             let traj = solver
-                .run(&m, &NortonHoff, &c, &sched, &SolverOptions::default())
+                .run(&NortonHoff, &c, &sched, &SolverOptions::default())
                 .unwrap_or_else(|e| panic!("{punch:?} {kind:?}: {e}"));
             if kind == ContactKind::Normal {
                 check_complementarity(&m, &traj);
@@ -345,11 +343,11 @@ fn normal_contact_runs_repeat_bit_for_bit() {
             ..SolverOptions::default()
         };
         let mut solver = DirectSolver::new(&m).unwrap();
-        let first = solver.run(&m, law, &c, &sched, &opts).unwrap();
-        let again = solver.run(&m, law, &c, &sched, &opts).unwrap();
+        let first = solver.run(law, &c, &sched, &opts).unwrap();
+        let again = solver.run(law, &c, &sched, &opts).unwrap();
         let fresh = DirectSolver::new(&m)
             .unwrap()
-            .run(&m, law, &c, &sched, &opts)
+            .run(law, &c, &sched, &opts)
             .unwrap();
         for other in [&again, &fresh] {
             assert_eq!(first.steps, other.steps, "{}", law.name());
@@ -358,12 +356,12 @@ fn normal_contact_runs_repeat_bit_for_bit() {
         // the stretch between two checkpoints, as the adjoint replays it
         let (cp, next) = (&first.checkpoints[1], &first.checkpoints[2]);
         let seg = solver
-            .replay(&m, law, &c, &sched, &opts, cp, next.schedule_index)
+            .replay(law, &c, &sched, &opts, cp, next.schedule_index)
             .unwrap();
         let steps = &first.steps[cp.steps_done..next.steps_done];
         assert_eq!(seg.steps[..], steps[..], "{}", law.name());
         let again = solver
-            .replay(&m, law, &c, &sched, &opts, cp, next.schedule_index)
+            .replay(law, &c, &sched, &opts, cp, next.schedule_index)
             .unwrap();
         assert_eq!(seg.fields, again.fields, "{}", law.name());
     }

@@ -15,7 +15,7 @@ fn hash(model: &Model, law: &dyn Law, c: &[f64]) -> u64 {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).unwrap();
     let mut solver = DirectSolver::new(model).unwrap();
     let t = solver
-        .run(model, law, c, &schedule, &SolverOptions::default())
+        .run(law, c, &schedule, &SolverOptions::default())
         .unwrap();
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |x: f64| {
@@ -133,3 +133,23 @@ const EXPECTED_FINITE: [u64; 6] = [
     0x783a3ad948a246a2,
     0x2085e3ae4f921262,
 ];
+
+/// Small-strain Coulomb friction (mu = 0.1) shall give R0, R1 and R2 bit for bit as
+/// before the solver was split into a Newton driver and constraint pieces.
+#[test]
+fn small_strain_friction_is_pinned() {
+    let got = hashes_on_1_and_2_threads(|| {
+        vec![
+            Model::with_contact(
+                CylinderMesher::REFERENCE.build().unwrap(),
+                cone(),
+                ContactKind::normal_with_friction(0.1).unwrap(),
+            )
+            .unwrap(),
+        ]
+    });
+    assert_eq!(got, EXPECTED_FRICTION);
+}
+
+/// Printed by this test at cbe5990: small strain, Coulomb friction mu = 0.1, R0, R1, R2.
+const EXPECTED_FRICTION: [u64; 3] = [0x8479262eb0274515, 0x8c75de9abf014666, 0x6f7cb4ca4da63de1];

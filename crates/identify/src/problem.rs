@@ -9,7 +9,7 @@ use std::collections::HashSet;
 use std::sync::Arc;
 use std::time::Instant;
 
-use indentify_adjoint::Adjoint;
+use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
 use indentify_laws::Law;
 
@@ -409,9 +409,9 @@ struct Entry {
 /// The forward and adjoint workspaces of one test, and how long its last forward run,
 /// adjoint sweep and sensitivity pass took (for the scheduling of [`Prefetch`]).
 #[derive(Debug)]
-struct Work {
-    solver: DirectSolver,
-    adjoint: Adjoint,
+struct Work<'p> {
+    solver: DirectSolver<'p>,
+    adjoint: Adjoint<'p>,
     seconds: [Option<f64>; 3],
 }
 
@@ -433,7 +433,7 @@ struct Work {
 #[derive(Debug)]
 pub struct Evaluator<'p> {
     problem: &'p Problem,
-    work: Vec<Work>,
+    work: Vec<Work<'p>>,
     entry: Option<Entry>,
     counts: Counts,
     best: Option<(f64, Vec<f64>)>,
@@ -449,10 +449,7 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    match w
-        .solver
-        .run(&t.model, p.law, c, &t.schedule, &t.solver_options)
-    {
+    match w.solver.run(p.law, c, &t.schedule, &t.solver_options) {
         Ok(traj) => {
             te.forces = Some(traj.forces());
             te.traj = Some(traj);
@@ -480,17 +477,18 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
-            &t.model,
             p.law,
             c,
             traj,
             &rho,
-            &mut w.solver,
-            &t.schedule,
-            &t.solver_options,
+            Replay {
+                solver: &mut w.solver,
+                schedule: &t.schedule,
+                opts: &t.solver_options,
+            },
         )
     } else {
-        w.adjoint.gradient(&t.model, p.law, c, traj, &rho)
+        w.adjoint.gradient(p.law, c, traj, &rho)
     }
     .map_err(|source| IdentifyError::Adjoint {
         params: c.to_vec(),
@@ -525,20 +523,20 @@ fn jacobian_task(
         };
         full = w
             .solver
-            .run(&t.model, p.law, c, &t.schedule, &opts)
+            .run(p.law, c, &t.schedule, &opts)
             .map_err(|source| IdentifyError::Forward {
                 params: c.to_vec(),
                 source,
             })?;
         &full
     };
-    let sens = w
-        .adjoint
-        .sensitivities(&t.model, p.law, c, traj)
-        .map_err(|source| IdentifyError::Adjoint {
-            params: c.to_vec(),
-            source,
-        })?;
+    let sens =
+        w.adjoint
+            .sensitivities(p.law, c, traj)
+            .map_err(|source| IdentifyError::Adjoint {
+                params: c.to_vec(),
+                source,
+            })?;
     let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
     for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
         if s.on_schedule {

@@ -73,7 +73,7 @@ fn record(s: &Schedule) -> ForceRecord {
     let m = model();
     let f = DirectSolver::new(&m)
         .unwrap()
-        .run(&m, &Maxwell, &TRUTH, s, &SolverOptions::default())
+        .run(&Maxwell, &TRUTH, s, &SolverOptions::default())
         .unwrap()
         .forces();
     ForceRecord::new(s.t.clone(), f).unwrap()

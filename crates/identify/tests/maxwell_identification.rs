@@ -56,7 +56,7 @@ fn exact_record() -> ForceRecord {
     let s = schedule();
     let f = DirectSolver::new(&m)
         .unwrap()
-        .run(&m, &Maxwell, &TRUTH, &s, &SolverOptions::default())
+        .run(&Maxwell, &TRUTH, &s, &SolverOptions::default())
         .unwrap()
         .forces();
     ForceRecord::new(s.t.clone(), f).unwrap()

@@ -211,7 +211,6 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         record_fields: false,
         ..opts.clone()
     };
-    let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
 
     // data and check point
     let (record, data_name, point, synthesized) = match &args.data {
@@ -227,7 +226,8 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             )
         }
         None => {
-            let traj = forward(&mut solver, &model, law, &truth, &schedule, &fd_opts, &name)
+            let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
+            let traj = forward(&mut solver, law, &truth, &schedule, &fd_opts, &name)
                 .kind(ErrorKind::Solver)?;
             let record = ForceRecord::new(schedule.t.clone(), traj.forces())
                 .context("cannot use the simulated curve as data")
@@ -288,29 +288,22 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         .with_context(|| format!("cannot compare `{data_name}` with `{name}`"))
         .kind(ErrorKind::Data)?;
     let model = &problem.model();
+    let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
 
     // adjoint and sensitivities at the check point
     let start = Instant::now();
-    let traj = forward(
-        &mut solver,
-        model,
-        law,
-        &point,
-        problem.schedule(),
-        &opts,
-        &name,
-    )
-    .kind(ErrorKind::Solver)?;
+    let traj = forward(&mut solver, law, &point, problem.schedule(), &opts, &name)
+        .kind(ErrorKind::Solver)?;
     let forward_seconds = start.elapsed().as_secs_f64();
     let j = problem.cost_of(&traj.forces());
     let rho = problem.dj_df(&traj);
     let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
     let grad = adjoint
-        .gradient(model, law, &point, &traj, &rho)
+        .gradient(law, &point, &traj, &rho)
         .context("the adjoint sweep failed")
         .kind(ErrorKind::Solver)?;
     let sens = adjoint
-        .sensitivities(model, law, &point, &traj)
+        .sensitivities(law, &point, &traj)
         .context("the forward sensitivities failed")
         .kind(ErrorKind::Solver)?;
     let jt_rho = sens.transpose_mul(&rho);
@@ -330,16 +323,8 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
     let mut solves = 0usize;
     let mut cost = |c: &[f64]| -> Result<f64> {
         solves += 1;
-        let t = forward(
-            &mut solver,
-            model,
-            law,
-            c,
-            problem.schedule(),
-            &fd_opts,
-            &name,
-        )
-        .kind(ErrorKind::Solver)?;
+        let t = forward(&mut solver, law, c, problem.schedule(), &fd_opts, &name)
+            .kind(ErrorKind::Solver)?;
         if base_statuses.as_ref().is_some_and(|b| *b != statuses(&t)) {
             flipped.set(true);
         }

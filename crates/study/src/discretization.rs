@@ -275,7 +275,7 @@ fn refine_test(
         ..t.solver.clone()
     };
     let mut direct = DirectSolver::new(&model)?;
-    let traj = forward(&mut direct, &model, law, c, &schedule, &opts, name)
+    let traj = forward(&mut direct, law, c, &schedule, &opts, name)
         .context("the refined run for the discretization error failed")?;
     let f_fine = traj.forces();
     if f_fine.len() != schedule.t.len() || f_fit.len() != n {

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use indentify_adjoint::{Adjoint, Gradient};
+use indentify_adjoint::{Adjoint, Gradient, Replay};
 use indentify_contact::DirectSolver;
 use indentify_identify::Problem;
 use serde::Serialize;
@@ -160,7 +160,6 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let start = Instant::now();
     let traj = forward(
         &mut solver,
-        model,
         law,
         &params,
         problem.schedule(),
@@ -174,17 +173,18 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
     let grad: Gradient = if opts.checkpoint.is_some() {
         adjoint.gradient_replayed(
-            model,
             law,
             &params,
             &traj,
             &rho,
-            &mut solver,
-            problem.schedule(),
-            &solver_opts,
+            Replay {
+                solver: &mut solver,
+                schedule: problem.schedule(),
+                opts: &solver_opts,
+            },
         )
     } else {
-        adjoint.gradient(model, law, &params, &traj, &rho)
+        adjoint.gradient(law, &params, &traj, &rho)
     }
     .with_context(|| format!("the adjoint sweep of `{name}` failed"))
     .kind(ErrorKind::Solver)?;

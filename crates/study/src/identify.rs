@@ -709,7 +709,6 @@ fn run_joint(
         let mut solver = DirectSolver::new(&test.model).kind(ErrorKind::Solver)?;
         let f_start = forward(
             &mut solver,
-            &test.model,
             law,
             &start_params,
             &test.schedule,
@@ -1264,16 +1263,8 @@ fn load_data(
         (None, None) => {
             let model = &prepared.model;
             let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
-            let traj = forward(
-                &mut solver,
-                model,
-                law,
-                law_values,
-                schedule,
-                solver_opts,
-                name,
-            )
-            .kind(ErrorKind::Solver)?;
+            let traj = forward(&mut solver, law, law_values, schedule, solver_opts, name)
+                .kind(ErrorKind::Solver)?;
             let mut forces = traj.forces();
             let names = param_names(law);
             let mut describe = format!(
@@ -1370,17 +1361,11 @@ fn fit_curves(
         ..opts.clone()
     };
     let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
-        Ok(forward(
-            &mut solver,
-            problem.model(),
-            law,
-            c,
-            problem.schedule(),
-            &quiet,
-            name,
+        Ok(
+            forward(&mut solver, law, c, problem.schedule(), &quiet, name)
+                .kind(ErrorKind::Solver)?
+                .forces(),
         )
-        .kind(ErrorKind::Solver)?
-        .forces())
     };
     let f_start = curve_at(&start_params)?;
     let f_final = curve_at(&result.c)?;

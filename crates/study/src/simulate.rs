@@ -142,7 +142,7 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
     }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
-    let (trajectory, failure) = match solver.run(&model, law, &params, &schedule, &solver_opts) {
+    let (trajectory, failure) = match solver.run(law, &params, &schedule, &solver_opts) {
         Ok(t) => (t, None),
         Err(ContactError::StepFailed {
             step,
@@ -244,7 +244,7 @@ fn write_matrix(
         ..Default::default()
     };
     solver
-        .run(model, law, params, &prefix, &opts)
+        .run(law, params, &prefix, &opts)
         .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
     let (k, constrained) = solver.system().matrix(model);
     let path = dir.join(format!("K_step_{step}.mtx"));

@@ -2,7 +2,7 @@
 //! into messages that name the configuration and what to change.
 
 use anyhow::{Result, anyhow};
-use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
+use indentify_contact::{ContactError, DirectSolver, Schedule, SolverOptions, Trajectory};
 use indentify_laws::{Law, LawError};
 
 /// Fails unless the law is differentiable at `params` (Norton-Hoff needs `m > 1`), with a
@@ -33,7 +33,6 @@ pub fn ensure_differentiable(law: &dyn Law, params: &[f64], what: &str) -> Resul
 /// The solver's error, with context.
 pub fn forward(
     solver: &mut DirectSolver,
-    model: &Model,
     law: &dyn Law,
     params: &[f64],
     schedule: &Schedule,
@@ -41,7 +40,7 @@ pub fn forward(
     config: &str,
 ) -> Result<Trajectory> {
     solver
-        .run(model, law, params, schedule, opts)
+        .run(law, params, schedule, opts)
         .map_err(|e| match e {
             ContactError::StepFailed {
                 step,

@@ -4,8 +4,8 @@
 //! with Coulomb friction, the same with the finite-difference rule that every step's
 //! contact set and stick/slip statuses of the +-h runs equal the base run's.
 
-use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference};
+use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
     trapezoid,
@@ -84,13 +84,10 @@ pub fn whole_history_check_on(
         ..Default::default()
     };
     let mut solver = DirectSolver::new(model).unwrap();
-    let data: Vec<f64> = solver
-        .run(model, law, truth, &sched, &opts)
-        .unwrap()
-        .forces();
+    let data: Vec<f64> = solver.run(law, truth, &sched, &opts).unwrap().forces();
     let mut cost = |p: &[f64]| -> Result<f64, String> {
         let t = solver
-            .run(model, law, p, &sched, &opts)
+            .run(law, p, &sched, &opts)
             .map_err(|e| e.to_string())?;
         Ok(0.5
             * t.forces()
@@ -103,7 +100,7 @@ pub fn whole_history_check_on(
         .map(|k| central_difference(&mut cost, c, k, 1e-5).unwrap())
         .collect();
     let mut solver = DirectSolver::new(model).unwrap();
-    let traj = solver.run(model, law, c, &sched, &opts).unwrap();
+    let traj = solver.run(law, c, &sched, &opts).unwrap();
     // the contact zone grows, holds and is lost
     let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
     let most = *sizes.iter().max().unwrap();
@@ -120,8 +117,8 @@ pub fn whole_history_check_on(
         })
         .collect();
     let mut adj = Adjoint::new(model).unwrap();
-    let g = adj.gradient(model, law, c, &traj, &rho).unwrap();
-    let sens = adj.sensitivities(model, law, c, &traj).unwrap();
+    let g = adj.gradient(law, c, &traj, &rho).unwrap();
+    let sens = adj.sensitivities(law, c, &traj).unwrap();
     let jt = sens.transpose_mul(&rho);
     // the same gradient from a checkpointed run replayed segment by segment
     let ck_opts = SolverOptions {
@@ -129,9 +126,19 @@ pub fn whole_history_check_on(
         checkpoint_every: 5,
         ..opts.clone()
     };
-    let ck = solver.run(model, law, c, &sched, &ck_opts).unwrap();
+    let ck = solver.run(law, c, &sched, &ck_opts).unwrap();
     let g_ck = adj
-        .gradient_replayed(model, law, c, &ck, &rho, &mut solver, &sched, &ck_opts)
+        .gradient_replayed(
+            law,
+            c,
+            &ck,
+            &rho,
+            Replay {
+                solver: &mut solver,
+                schedule: &sched,
+                opts: &ck_opts,
+            },
+        )
         .unwrap();
     let (mut worst_fd, mut worst_sens) = (0.0f64, 0.0f64);
     for k in 0..checked {
@@ -243,11 +250,8 @@ pub fn friction_history_check(
         ..Default::default()
     };
     let mut solver = DirectSolver::new(model).unwrap();
-    let data: Vec<f64> = solver
-        .run(model, law, truth, &sched, &opts)
-        .unwrap()
-        .forces();
-    let traj = solver.run(model, law, c, &sched, &opts).unwrap();
+    let data: Vec<f64> = solver.run(law, truth, &sched, &opts).unwrap().forces();
+    let traj = solver.run(law, c, &sched, &opts).unwrap();
     let base = statuses(&traj);
     // the contact zone grows, holds and is lost; sticking and slipping node-steps
     let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
@@ -286,7 +290,7 @@ pub fn friction_history_check(
             let mut run = |x: f64| {
                 let mut p = c.to_vec();
                 p[k] = x;
-                solver.run(model, law, &p, &sched, &opts).unwrap()
+                solver.run(law, &p, &sched, &opts).unwrap()
             };
             let (tp, tm) = (run(c[k] + h), run(c[k] - h));
             if statuses(&tp) == base && statuses(&tm) == base {
@@ -322,8 +326,8 @@ pub fn friction_history_check(
         })
         .collect();
     let mut adj = Adjoint::new(model).unwrap();
-    let g = adj.gradient(model, law, c, &traj, &rho).unwrap();
-    let sens = adj.sensitivities(model, law, c, &traj).unwrap();
+    let g = adj.gradient(law, c, &traj, &rho).unwrap();
+    let sens = adj.sensitivities(law, c, &traj).unwrap();
     let jt = sens.transpose_mul(&rho);
     // the same gradient from a checkpointed run replayed segment by segment
     let ck_opts = SolverOptions {
@@ -331,9 +335,19 @@ pub fn friction_history_check(
         checkpoint_every: 5,
         ..opts.clone()
     };
-    let ck = solver.run(model, law, c, &sched, &ck_opts).unwrap();
+    let ck = solver.run(law, c, &sched, &ck_opts).unwrap();
     let g_ck = adj
-        .gradient_replayed(model, law, c, &ck, &rho, &mut solver, &sched, &ck_opts)
+        .gradient_replayed(
+            law,
+            c,
+            &ck,
+            &rho,
+            Replay {
+                solver: &mut solver,
+                schedule: &sched,
+                opts: &ck_opts,
+            },
+        )
         .unwrap();
     let mut out = Outcome {
         stick,

@@ -1,0 +1,281 @@
+//! The body's piece of a Newton pass under the model's kinematics: the Gauss-point pass
+//! (local updates, stresses, the internal force, the laws' tangents) and the tangent
+//! matrix of a Newton solve, small strain or finite strain ([`Kinematics`]). The Newton
+//! driver (`newton.rs`) calls [`Body::begin_step`] once per step, [`Body::evaluate`] once
+//! per pass and [`Body::set_tangent`] before each solve; it never looks at the
+//! kinematics itself.
+//!
+//! Small strain: affine laws (`sigma_1 = A sigma_0 + C deps`, [`Law::affine_update`]) are
+//! updated in one product per point and assembled once per parameters and step length;
+//! other laws update every point (those whose elastic trial stays below yield with one
+//! 4x4 product, [`Law::elastic_domain`]) and re-assemble the elements whose tangents
+//! changed. Finite strain (`kinematics.rs`): the laws on the Hencky strain, the element
+//! tangents formed only for passes that solve.
+
+use indentify_fe::QP_PER_ELEMENT;
+use indentify_laws::{Law, Mat4, Vec4};
+use rayon::prelude::*;
+
+use crate::kinematics::{self, ELEMENT_CHUNK, FiniteIn, FiniteOut, Kinematics};
+use crate::model::Model;
+use crate::newton::{State, StepFailure, finite_failure};
+use crate::system::ConstrainedSystem;
+
+/// A step's data for the Gauss-point passes: the law and its parameters, the step's
+/// initial state, its length, and the affine form of the law's update when it has one
+/// (small strain only).
+pub(crate) struct StepLaw<'a> {
+    /// The law.
+    pub law: &'a dyn Law,
+    /// Its parameters.
+    pub c: &'a [f64],
+    /// The converged state the step starts from.
+    pub state: &'a State,
+    /// Step length (s).
+    pub dt: f64,
+    /// `(A, C)` of `sigma_1 = A sigma_0 + C deps` (affine laws under small strain).
+    pub affine: Option<(Mat4, Mat4)>,
+}
+
+/// One chunk of the small-strain Gauss-point pass: its index, and its elements' forces,
+/// stresses and tangents.
+type PassChunk<'a> = (
+    usize,
+    ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut [Mat4]),
+);
+
+/// The buffers of the body's Gauss-point passes (allocated once per solver).
+#[derive(Debug)]
+pub(crate) struct Body {
+    /// The laws' consistent tangents of the last evaluation (every Gauss point; under
+    /// finite strain `dT/dE`, from which the element tangents are formed).
+    pub(crate) tangents: Vec<Mat4>,
+    /// The internal force of the last evaluation (all dofs, N).
+    pub(crate) f_int: Vec<f64>,
+    /// Finite strain: the element tangents of the last Newton solve, and the Hencky strains
+    /// of the step's initial state (empty under small strain).
+    finite_ke: Vec<[[f64; 16]; 16]>,
+    finite_e0: Vec<Vec4>,
+    /// Finite strain: each Gauss point's deformation and Hencky strain of the last
+    /// evaluation, from which its element tangents are formed.
+    finite_points: Vec<kinematics::Point>,
+    /// Small strain: each element's internal force of the last evaluation (summed into
+    /// `f_int` in element order).
+    element_forces: Vec<[f64; 16]>,
+}
+
+impl Body {
+    /// Buffers for `model`.
+    pub(crate) fn new(model: &Model) -> Body {
+        Body {
+            tangents: vec![Mat4::ZERO; model.disc.n_qp()],
+            f_int: vec![0.0; model.disc.n_dofs()],
+            finite_ke: Vec::new(),
+            finite_e0: Vec::new(),
+            finite_points: Vec::new(),
+            element_forces: Vec::new(),
+        }
+    }
+
+    /// The start of a step from `state`: under finite strain the Hencky strains of the
+    /// initial state, from which the laws' increments run. Returns the affine form of the
+    /// law's update for the step (small strain only: under finite strain the tangent
+    /// depends on the displacement).
+    ///
+    /// # Errors
+    /// [`StepFailure::Inverted`] if the initial state has an inverted element.
+    pub(crate) fn begin_step(
+        &mut self,
+        model: &Model,
+        law: &dyn Law,
+        c: &[f64],
+        state: &State,
+        dt: f64,
+    ) -> Result<Option<(Mat4, Mat4)>, StepFailure> {
+        if model.kinematics != Kinematics::Finite {
+            return Ok(law.affine_update(c, dt));
+        }
+        let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
+        self.finite_e0.resize(nq, Vec4::ZERO);
+        self.finite_ke.resize(ne, [[0.0; 16]; 16]);
+        if self.finite_points.len() != nq {
+            self.finite_points = vec![kinematics::undeformed_point(&model.disc); nq];
+        }
+        kinematics::log_strains(&model.disc, &state.u, &mut self.finite_e0)
+            .map_err(|f| finite_failure(f, state.depth))?;
+        Ok(None)
+    }
+
+    /// Local updates at every Gauss point for displacement `u` from the step's initial
+    /// state; fills `sigma_out` and `self.f_int`, and `self.tangents` unless the law is
+    /// affine (`sigma_1 = A sigma_0 + C deps` everywhere: its one tangent is `C`). With an
+    /// affine law and `u` the state's own displacement (a step's first pass) the strain
+    /// increments vanish and `sigma_1 = A sigma_0`; with `A = I` besides (elasticity) the
+    /// internal force is the state's own and nothing is computed.
+    ///
+    /// # Errors
+    /// The first failed local update ([`StepFailure::Local`]) or, under finite strain,
+    /// inverted element.
+    pub(crate) fn evaluate(
+        &mut self,
+        model: &Model,
+        step: &StepLaw<'_>,
+        u: &[f64],
+        sigma_out: &mut [Vec4],
+    ) -> Result<(), StepFailure> {
+        let (law, c, state, dt) = (step.law, step.c, step.state, step.dt);
+        let affine = step.affine.as_ref();
+        let disc = &model.disc;
+        if model.kinematics == Kinematics::Finite {
+            let domain = law.elastic_domain(c, dt);
+            let input = FiniteIn {
+                law,
+                c,
+                dt,
+                t0: &state.sigma,
+                e0: &self.finite_e0,
+                domain: domain.as_ref(),
+            };
+            let out = FiniteOut {
+                sigma: sigma_out,
+                f_int: &mut self.f_int,
+                tangents: &mut self.tangents,
+                points: &mut self.finite_points,
+            };
+            return kinematics::evaluate(disc, &input, u, out)
+                .map_err(|f| finite_failure(f, state.depth));
+        }
+        // (only affine laws use it: a nonlinear law's iterate is never compared)
+        let at_start = affine.is_some() && u == state.u.as_slice();
+        if at_start && affine.is_some_and(|(a, _)| *a == Mat4::IDENTITY) {
+            self.f_int.copy_from_slice(&state.f_int);
+            sigma_out.copy_from_slice(&state.sigma);
+            return Ok(());
+        }
+        // one pass: strains, local updates and each element's internal force while the
+        // stresses are hot, on rayon over fixed chunks of elements (each point's update is
+        // independent); points whose elastic trial stays below yield skip the law's update.
+        // The element forces are then summed serially in element order, as a serial pass
+        // would: the result is the same bits for any number of threads.
+        let domain = law.elastic_domain(c, dt);
+        let ne = disc.elements.len();
+        let nq = QP_PER_ELEMENT * ne;
+        self.element_forces.resize(ne, [0.0; 16]);
+        let chunk_qp = QP_PER_ELEMENT * ELEMENT_CHUNK;
+        let tangents = &mut self.tangents[..nq];
+        let work = |(chunk, ((fes, sig), tan)): PassChunk<'_>| {
+            for (i, fe) in fes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let dofs = disc.element_dofs(e);
+                let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
+                *fe = [0.0; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let l = QP_PER_ELEMENT * i + g;
+                    let qp = &disc.qp[q];
+                    if let Some((a, cm)) = affine {
+                        let mut s = a.mul_vec(&state.sigma[q]);
+                        if !at_start {
+                            s += cm.mul_vec(&Vec4(qp.strain(&due)));
+                        }
+                        qp.add_bt(&s.0, qp.w, fe);
+                        sig[l] = s;
+                        continue;
+                    }
+                    let deps = Vec4(qp.strain(&due));
+                    if let Some(dom) = &domain {
+                        if let Some(s1) = dom.update(&state.sigma[q], &deps) {
+                            qp.add_bt(&s1.0, qp.w, fe);
+                            sig[l] = s1;
+                            tan[l] = dom.stiffness;
+                            continue;
+                        }
+                    }
+                    match law.update(c, &state.sigma[q], &deps, dt) {
+                        Ok(up) => {
+                            qp.add_bt(&up.sigma.0, qp.w, fe);
+                            sig[l] = up.sigma;
+                            tan[l] = up.tangent;
+                        }
+                        Err(f) => {
+                            return Some(StepFailure::Local {
+                                qp: q,
+                                reason: f.reason,
+                                factor: f.suggested_dt_factor,
+                            });
+                        }
+                    }
+                }
+            }
+            None
+        };
+        // on one thread, in place (handing a pass to a pool of one costs more than it does)
+        let failure = if rayon::current_num_threads() > 1 {
+            self.element_forces
+                .par_chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].par_chunks_mut(chunk_qp))
+                .zip(tangents.par_chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map_first(work)
+        } else {
+            self.element_forces
+                .chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].chunks_mut(chunk_qp))
+                .zip(tangents.chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map(work)
+        };
+        if let Some(f) = failure {
+            return Err(f);
+        }
+        self.f_int.fill(0.0);
+        for (e, fe) in self.element_forces.iter().enumerate() {
+            for (d, v) in disc.element_dofs(e).iter().zip(fe) {
+                self.f_int[*d] += v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the tangent of the last evaluation (at the stresses `sigma` it gave) in
+    /// `system` for a Newton solve: an affine law's one tangent (reused while the
+    /// parameters and the step length are), the element tangents under finite strain
+    /// (formed only now that a solve needs them), or the laws' Gauss-point tangents
+    /// (reused by a linear law). Returns the seconds spent forming element tangents (a
+    /// part of the local work).
+    pub(crate) fn set_tangent(
+        &mut self,
+        model: &Model,
+        step: &StepLaw<'_>,
+        sigma: &[Vec4],
+        system: &mut ConstrainedSystem,
+    ) -> f64 {
+        let (c, dt) = (step.c, step.dt);
+        match &step.affine {
+            Some((_, cm)) => {
+                system.set_tangent_uniform(model, cm, (c, dt));
+                0.0
+            }
+            None if model.kinematics == Kinematics::Finite => {
+                let tl = std::time::Instant::now();
+                // (from the deformations and Hencky strains the evaluation of this
+                // iterate kept: the same `u`)
+                kinematics::element_tangents(
+                    &model.disc,
+                    &self.finite_points,
+                    sigma,
+                    &self.tangents,
+                    &mut self.finite_ke,
+                );
+                let seconds = tl.elapsed().as_secs_f64();
+                system.set_tangent_elements(model, &self.finite_ke);
+                seconds
+            }
+            None => {
+                let reuse = step.law.is_linear().then_some((c, dt));
+                system.set_tangent(model, &self.tangents, reuse);
+                0.0
+            }
+        }
+    }
+}

@@ -1,0 +1,744 @@
+//! The Newton driver of one time step: global Newton on equilibrium with a primal-dual
+//! active set (semi-smooth Newton on equilibrium and complementarity together), the
+//! pieces it calls at fixed points — the body's Gauss-point passes under the model's
+//! kinematics (`body.rs`), the contact constraint of the model's kind
+//! (`constraint/`), the constrained linear system (`system.rs`) — and the state carried
+//! from step to step. The punch depth of the step comes from the drive (`drive.rs`);
+//! the time stepping, step cutting and checkpoints are the direct solver's
+//! (`direct.rs`). docs/solver.md describes the split.
+//!
+//! A pass evaluates the iterate once (stresses, internal force), measures the residual
+//! on the equations the constraint does not replace plus the constraint's own rows, and
+//! either checks the contact set (once equilibrium is loosely met), accepts the step, or
+//! solves: tangent, constraints, prescribed increments, an inexact linear solve (forcing
+//! term = the relative residual).
+
+use indentify_fe::dofs::NO_EQ;
+use indentify_fe::{FeError, QP_PER_ELEMENT};
+use indentify_laws::{Law, Vec4};
+
+use crate::body::{Body, StepLaw};
+use crate::constraint::{self, Constraint, ContactSet, Iterate, StatusFlip, Tolerances};
+use crate::direct::{SolverOptions, StepRecord, Timing};
+use crate::kinematics::{self, FiniteFailure, Kinematics};
+use crate::model::Model;
+use crate::system::ConstrainedSystem;
+
+/// A step failure the driver reacts to by cutting the step.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum StepFailure {
+    Local {
+        qp: usize,
+        reason: String,
+        factor: f64,
+    },
+    Newton {
+        residual: f64,
+    },
+    Cycling {
+        changes: u32,
+    },
+    Linear(String),
+    /// A node in normal contact beyond the end of the punch surface: not cured by cutting.
+    Geometry(String),
+    /// Finite strain: an element inverted (`det F <= 0`) at Gauss point `qp`.
+    Inverted {
+        qp: usize,
+        det: f64,
+        depth: f64,
+    },
+}
+
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StepFailure::Local { qp, reason, .. } => {
+                write!(
+                    f,
+                    "local update failed at Gauss point {qp} (element {}): {reason}",
+                    qp / QP_PER_ELEMENT
+                )
+            }
+            StepFailure::Newton { residual } => write!(
+                f,
+                "global Newton did not converge (relative residual {residual:.3e})"
+            ),
+            StepFailure::Cycling { changes } => {
+                write!(f, "active set cycling after {changes} changes")
+            }
+            StepFailure::Linear(m) => write!(f, "linear solve failed: {m}"),
+            StepFailure::Geometry(m) => write!(f, "{m}"),
+            StepFailure::Inverted { qp, det, depth } => write!(
+                f,
+                "element {} is inverted (det F = {det:.3e} at its Gauss point {}) at the \
+                 depth {depth} mm: the mesh cannot follow the deformation under the punch; \
+                 refine it there (specimen nr and nz, or elements_in_contact) or reduce \
+                 the maximum depth",
+                qp / QP_PER_ELEMENT,
+                qp % QP_PER_ELEMENT
+            ),
+        }
+    }
+}
+
+/// The state carried from step to step.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct State {
+    pub(crate) t: f64,
+    /// Largest internal-force component seen in converged steps: the residual's scale
+    /// when the current forces vanish (full unloading).
+    pub(crate) f_scale: f64,
+    pub(crate) u: Vec<f64>,
+    pub(crate) sigma: Vec<Vec4>,
+    /// Internal force `sum_g w_g B^T sigma_g` of the converged state, all dofs (N).
+    pub(crate) f_int: Vec<f64>,
+    /// The contact set (and stick/slip statuses) of the state.
+    pub(crate) set: ContactSet,
+    /// The last three steps' displacement increments (all dofs), lengths and depth rates,
+    /// the latest first (a zero length: no such step).
+    pub(crate) past: [Increment; 3],
+    /// The degree (1 to 3) of the time extrapolation that predicted the last step best.
+    pub(crate) order: usize,
+    /// Punch depth of the state (mm).
+    pub(crate) depth: f64,
+    /// Coulomb friction (empty without): the arc coordinate of every candidate's closest
+    /// point at this state (the stick points of the next step).
+    pub(crate) xi: Vec<f64>,
+}
+
+/// One past step of a [`State`] (`du` empty where it is never read).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Increment {
+    pub(crate) du: Vec<f64>,
+    pub(crate) dt: f64,
+    pub(crate) rate: f64,
+}
+
+impl State {
+    /// The undeformed state at time `t0` and depth `depth0`, nothing in contact.
+    pub(crate) fn initial(model: &Model, t0: f64, depth0: f64) -> State {
+        let nc = model.candidates.len();
+        State {
+            t: t0,
+            f_scale: 0.0,
+            u: vec![0.0; model.disc.n_dofs()],
+            sigma: vec![Vec4::ZERO; model.disc.n_qp()],
+            f_int: vec![0.0; model.disc.n_dofs()],
+            set: ContactSet::initial(model),
+            // steps of zero length: only the latest increment is ever read (times 0)
+            past: std::array::from_fn(|k| Increment {
+                du: if k == 0 {
+                    vec![0.0; model.disc.n_dofs()]
+                } else {
+                    Vec::new()
+                },
+                dt: 0.0,
+                rate: 0.0,
+            }),
+            order: 1,
+            depth: depth0,
+            xi: if model.contact.friction() > 0.0 {
+                let u0 = vec![0.0; model.disc.n_dofs()];
+                (0..nc).map(|k| model.project(k, &u0, depth0).s).collect()
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
+    /// Bytes held by the state (a checkpoint's memory).
+    pub(crate) fn bytes(&self) -> usize {
+        // u and f_int per dof, the past increments kept; stress per Gauss point; active flag
+        // and more per candidate
+        16 * self.u.len()
+            + 8 * self.past.iter().map(|p| p.du.len()).sum::<usize>()
+            + 32 * self.sigma.len()
+            + 17 * self.set.active.len()
+            + 9 * self.xi.len()
+    }
+}
+
+/// A step to solve: the law and its parameters, the options, the converged state it
+/// starts from, its end time and the punch depth there (from the drive).
+pub(crate) struct StepSpec<'a> {
+    pub law: &'a dyn Law,
+    pub c: &'a [f64],
+    pub opts: &'a SolverOptions,
+    pub state: &'a State,
+    pub t1: f64,
+    pub depth: f64,
+}
+
+/// The time extrapolation of a nonlinear law's first iterate: the polynomial of degree 1
+/// to 3 through the last states, while the depth keeps its rate (within a segment).
+struct Extrapolation {
+    /// The highest degree the segment's past steps allow (0: no extrapolation).
+    degrees: usize,
+    /// The weights of the increments for each degree ([`extrapolation_weights`]).
+    weights: [[f64; 3]; 3],
+}
+
+impl Extrapolation {
+    /// For a step of length `dt` at the depth rate `rate` from `state`; `affine` laws
+    /// converge in one solve from anywhere and keep their cheap first pass (no
+    /// extrapolation).
+    fn new(state: &State, dt: f64, rate: f64, affine: bool, n: usize) -> Extrapolation {
+        let last = &state.past[0];
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        // the highest degree the segment's past steps allow (0: no extrapolation; 1 for a
+        // step more than twice the last one, after a cut, where the higher degrees' weights
+        // grow like (dt / h_1)^degree)
+        let degrees = if affine {
+            0
+        } else {
+            let kept = state
+                .past
+                .iter()
+                .take_while(|p| p.dt > 0.0 && p.du.len() == n && same(rate, p.rate))
+                .count();
+            if dt > 2.0 * last.dt {
+                kept.min(1)
+            } else {
+                kept
+            }
+        };
+        let h = state.past.each_ref().map(|p| p.dt);
+        let weights: [[f64; 3]; 3] = std::array::from_fn(|k| extrapolation_weights(dt, h, k + 1));
+        Extrapolation { degrees, weights }
+    }
+
+    /// The increment predicted by degree `d` at dof `i` (reads the `d` latest steps only).
+    fn predict(&self, past: &[Increment; 3], d: usize, i: usize) -> f64 {
+        let w = &self.weights[d - 1];
+        (0..d).map(|k| w[k] * past[k].du[i]).sum()
+    }
+
+    /// Adds the predicted increment of the state's best degree to `u`.
+    fn apply(&self, state: &State, u: &mut [f64]) {
+        if self.degrees > 0 {
+            let d = state.order.min(self.degrees);
+            for (i, x) in u.iter_mut().enumerate() {
+                *x += self.predict(&state.past, d, i);
+            }
+        }
+    }
+
+    /// Hindsight: the degree that would have predicted the increment `du` best.
+    fn best_order(&self, state: &State, du: &[f64]) -> usize {
+        let degrees = self.degrees;
+        let mut err = [0.0f64; 3];
+        if degrees > 1 {
+            for (i, &d) in du.iter().enumerate() {
+                for (k, e) in err.iter_mut().enumerate().take(degrees) {
+                    *e += (d - self.predict(&state.past, k + 1, i)).powi(2);
+                }
+            }
+        }
+        (1..=degrees.max(1))
+            .min_by(|&a, &b| err[a - 1].total_cmp(&err[b - 1]))
+            .unwrap_or(1)
+    }
+}
+
+/// The iterate of a step and its bookkeeping.
+struct Iteration {
+    u: Vec<f64>,
+    sigma: Vec<Vec4>,
+    set: ContactSet,
+    /// The contact sets tried so far (cycling detection).
+    seen: Vec<ContactSet>,
+    changes: u32,
+    iterations: u32,
+    /// After a repeated set: change one node at a time.
+    single_change: bool,
+}
+
+/// The residual of a pass: the largest free component (N), the largest internal-force
+/// component (N) and the relative residual.
+#[derive(Clone, Copy)]
+struct Residual {
+    res: f64,
+    fmax: f64,
+    rel: f64,
+}
+
+/// What the complementarity check of a pass found.
+enum Check {
+    /// The sets hold and equilibrium has converged: the step is done.
+    Converged,
+    /// The sets changed (or hold without converged equilibrium): solve again.
+    Continue,
+}
+
+/// The Newton driver's pieces and work space on one model.
+#[derive(Debug)]
+pub(crate) struct Newton<'m> {
+    model: &'m Model,
+    pub(crate) system: ConstrainedSystem,
+    body: Body,
+    constraint: Box<dyn Constraint + 'm>,
+    /// Work space of the equation-sized vectors: right-hand side and prescribed values.
+    rhs: Vec<f64>,
+    aux: Vec<f64>,
+    /// Marks of the equations the constraint replaces (work space).
+    constrained: Vec<bool>,
+    /// Relative residual of every pass of the last step attempted, with the active-set
+    /// changes made before it.
+    pub(crate) residuals: Vec<(f64, u32)>,
+    /// Status changes proposed by the constraint (work space).
+    flips: Vec<StatusFlip>,
+}
+
+impl<'m> Newton<'m> {
+    /// The driver on `model`: analyses its pattern once.
+    ///
+    /// # Errors
+    /// [`FeError`] if the symbolic factorization fails.
+    pub(crate) fn new(model: &'m Model) -> Result<Newton<'m>, FeError> {
+        let n = model.dofs.n_eq;
+        Ok(Newton {
+            model,
+            system: ConstrainedSystem::new(model)?,
+            body: Body::new(model),
+            constraint: constraint::for_model(model),
+            rhs: vec![0.0; n],
+            aux: vec![0.0; n],
+            constrained: vec![false; n],
+            residuals: Vec::new(),
+            flips: Vec::new(),
+        })
+    }
+
+    /// Solves one step: from `spec.state` to `spec.t1` at the depth `spec.depth`.
+    ///
+    /// # Errors
+    /// A [`StepFailure`] the caller answers by cutting the step.
+    pub(crate) fn step(
+        &mut self,
+        spec: &StepSpec<'_>,
+        timing: &mut Timing,
+    ) -> Result<(State, StepRecord), StepFailure> {
+        let state = spec.state;
+        let dt = spec.t1 - state.t;
+        let mut it = Iteration {
+            u: state.u.clone(),
+            sigma: state.sigma.clone(),
+            set: state.set.clone(),
+            seen: Vec::new(),
+            changes: 0,
+            iterations: 0,
+            single_change: false,
+        };
+        // predictor: activate nodes that the new depth makes penetrate, with the surface
+        // displacement extrapolated from the last increment
+        let last = &state.past[0];
+        let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
+        self.constraint
+            .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
+        let affine = self
+            .body
+            .begin_step(self.model, spec.law, spec.c, state, dt)?;
+        let law = StepLaw {
+            law: spec.law,
+            c: spec.c,
+            state,
+            dt,
+            affine,
+        };
+        // a nonlinear law starts Newton from the displacement extrapolated in time, while
+        // the depth keeps its rate (within a segment): by the polynomial of degree 1 to 3
+        // through the last states that predicted the last step best (in R2's settled creep
+        // and relaxation the higher degrees predict 5-15 times closer: a Newton iteration
+        // fewer per step). Affine laws converge in one solve from anywhere and keep their
+        // cheap first pass.
+        let rate = if dt > 0.0 {
+            (spec.depth - state.depth) / dt
+        } else {
+            0.0
+        };
+        let extra = Extrapolation::new(state, dt, rate, law.affine.is_some(), it.u.len());
+        extra.apply(state, &mut it.u);
+        it.seen.push(it.set.clone());
+        self.residuals.clear();
+        loop {
+            // every pass evaluates the current iterate once, then checks or solves
+            let r = self.evaluate(spec, &law, &mut it, timing)?;
+            if it.iterations > 0 {
+                let view = iterate(&self.body.f_int, spec, &it);
+                let targets_met = self.constraint.targets_met(&it.set, &view);
+                let converged = r.rel <= spec.opts.residual_tol || r.res == 0.0;
+                // complementarity is checked once equilibrium for the current set is loosely
+                // met (semi-smooth Newton): a wrong set is corrected without a full solve
+                if targets_met && (converged || r.rel <= spec.opts.active_set_check_tol) {
+                    if let Check::Converged = self.check_sets(spec, &mut it, converged)? {
+                        return Ok(self.finish(spec, &law, it, r, rate, &extra));
+                    }
+                }
+            }
+            if it.iterations as usize >= spec.opts.max_iterations {
+                return Err(StepFailure::Newton { residual: r.rel });
+            }
+            it.iterations += 1;
+            self.solve(spec, &law, &mut it, r, timing)?;
+        }
+    }
+
+    /// Evaluates the iterate (stresses, internal force, the constraint's gaps) and its
+    /// residual on the equations the constraint does not replace, plus the constraint's
+    /// own rows, relative to the largest internal force (or the largest seen in converged
+    /// steps when the forces vanish); records it in `self.residuals`.
+    fn evaluate(
+        &mut self,
+        spec: &StepSpec<'_>,
+        law: &StepLaw<'_>,
+        it: &mut Iteration,
+        timing: &mut Timing,
+    ) -> Result<Residual, StepFailure> {
+        let model = self.model;
+        let tl = std::time::Instant::now();
+        self.body
+            .evaluate(model, law, &it.u, &mut it.sigma)
+            .map_err(|f| match f {
+                StepFailure::Inverted { qp, det, .. } => StepFailure::Inverted {
+                    qp,
+                    det,
+                    depth: spec.depth,
+                },
+                other => other,
+            })?;
+        timing.local += tl.elapsed().as_secs_f64();
+        let view = iterate(&self.body.f_int, spec, it);
+        self.constraint.update(&it.set, &view);
+        // residual on free, unconstrained equations (normal contact: the tangential
+        // component at the active nodes)
+        self.constrained.fill(false);
+        self.constraint
+            .constrained_equations(&it.set, &mut self.constrained);
+        let mut res: f64 = 0.0;
+        let mut fmax: f64 = 0.0;
+        for (d, &e) in model.dofs.eq.iter().enumerate() {
+            if e != NO_EQ {
+                fmax = fmax.max(self.body.f_int[d].abs());
+                if !self.constrained[e as usize] {
+                    res = res.max(self.body.f_int[d].abs());
+                }
+            }
+        }
+        res = res.max(self.constraint.residual(&it.set, &view));
+        let scale = fmax.max(spec.state.f_scale);
+        let rel = if scale > 0.0 { res / scale } else { res };
+        self.residuals.push((rel, it.changes));
+        Ok(Residual { res, fmax, rel })
+    }
+
+    /// The complementarity check of a pass: tensile reactions and penetrating gaps change
+    /// the contact set (all of them, or after a repeated set the worst one only), and once
+    /// the set holds the constraint's second partition (stick/slip) may change.
+    ///
+    /// # Errors
+    /// [`StepFailure::Cycling`] when a set repeats while changing one node at a time;
+    /// the constraint's [`Constraint::accept`] failure.
+    fn check_sets(
+        &mut self,
+        spec: &StepSpec<'_>,
+        it: &mut Iteration,
+        converged: bool,
+    ) -> Result<Check, StepFailure> {
+        let model = self.model;
+        let view = iterate(&self.body.f_int, spec, it);
+        let depth = spec.depth;
+        let force = punch_force(model, &it.set, view.f_int);
+        let tol = Tolerances {
+            lambda: spec.opts.lambda_tol * force.abs().max(1e-300),
+            gap: spec.opts.gap_tol * depth.abs().max(model.gap_length()),
+            force: force.abs().max(1e-300),
+        };
+        let mut worst: Option<(usize, f64)> = None;
+        let mut violations = Vec::new();
+        for k in 0..it.set.active.len() {
+            let v = if it.set.active[k] {
+                let lam = self.constraint.lambda(k, &view);
+                if lam < -tol.lambda && !self.constraint.holds_under_tension(&it.set, k) {
+                    -lam / tol.force
+                } else {
+                    0.0
+                }
+            } else {
+                let g = self.constraint.gap(k, &view);
+                if g < -tol.gap {
+                    -g / depth.abs().max(1e-12)
+                } else {
+                    0.0
+                }
+            };
+            if v > 0.0 {
+                violations.push(k);
+                if worst.is_none_or(|(_, w)| v > w) {
+                    worst = Some((k, v));
+                }
+            }
+        }
+        // the second partition (stick/slip), checked once the contact set holds
+        self.flips.clear();
+        if violations.is_empty() {
+            self.constraint
+                .check_status(&it.set, &view, &tol, &mut self.flips);
+        }
+        if violations.is_empty() && self.flips.is_empty() && converged {
+            self.constraint.accept(&it.set, &view)?;
+            return Ok(Check::Converged);
+        }
+        if !violations.is_empty() {
+            if it.single_change {
+                it.set.toggle(worst.map_or(0, |w| w.0));
+            } else {
+                for k in violations {
+                    it.set.toggle(k);
+                }
+            }
+        } else if !self.flips.is_empty() {
+            if it.single_change {
+                let flip = self
+                    .flips
+                    .iter()
+                    .copied()
+                    .max_by(|a, b| a.2.total_cmp(&b.2));
+                if let Some((k, st, _)) = flip {
+                    it.set.slip[k] = st;
+                }
+            } else {
+                for &(k, st, _) in &self.flips {
+                    it.set.slip[k] = st;
+                }
+            }
+        } else {
+            return Ok(Check::Continue);
+        }
+        it.changes += 1;
+        if it.seen.contains(&it.set) {
+            if it.single_change {
+                return Err(StepFailure::Cycling {
+                    changes: it.changes,
+                });
+            }
+            it.single_change = true;
+        }
+        it.seen.push(it.set.clone());
+        Ok(Check::Continue)
+    }
+
+    /// The converged step: its record, and the next state with the increment's history
+    /// for the extrapolation.
+    fn finish(
+        &self,
+        spec: &StepSpec<'_>,
+        law: &StepLaw<'_>,
+        it: Iteration,
+        r: Residual,
+        rate: f64,
+        extra: &Extrapolation,
+    ) -> (State, StepRecord) {
+        let model = self.model;
+        let state = spec.state;
+        let dt = spec.t1 - state.t;
+        let view = iterate(&self.body.f_int, spec, &it);
+        let mut rec = record(
+            model,
+            &it.set,
+            view.f_int,
+            [spec.t1, dt, spec.depth],
+            [it.iterations, it.changes],
+        );
+        self.constraint.record(&it.set, &view, &mut rec);
+        let f_scale = state.f_scale.max(r.fmax);
+        let du: Vec<f64> = it.u.iter().zip(&state.u).map(|(a, b)| a - b).collect();
+        let order = extra.best_order(state, &du);
+        // the older increments serve the extrapolation of nonlinear laws only
+        let older = |p: &Increment| Increment {
+            du: if law.affine.is_none() {
+                p.du.clone()
+            } else {
+                Vec::new()
+            },
+            ..*p
+        };
+        let (p0, p1) = (older(&state.past[0]), older(&state.past[1]));
+        let next = State {
+            t: spec.t1,
+            f_scale,
+            u: it.u,
+            sigma: it.sigma,
+            f_int: self.body.f_int.clone(),
+            set: it.set,
+            past: [Increment { du, dt, rate }, p0, p1],
+            order,
+            depth: spec.depth,
+            xi: self.constraint.stick_points(),
+        };
+        (next, rec)
+    }
+
+    /// One Newton solve: the tangent, the constraints and their prescribed increments, an
+    /// inexact solve to the forcing term `eta = |R|` (relative), and the update of the
+    /// iterate.
+    ///
+    /// # Errors
+    /// [`StepFailure::Linear`] when the factorization or the solve fails or the iterate
+    /// is no longer finite.
+    fn solve(
+        &mut self,
+        spec: &StepSpec<'_>,
+        law: &StepLaw<'_>,
+        it: &mut Iteration,
+        r: Residual,
+        timing: &mut Timing,
+    ) -> Result<(), StepFailure> {
+        let model = self.model;
+        let depth = spec.depth;
+        // the element tangents of this iterate (finite strain) are formed only now that a
+        // solve needs them (a converged pass returned before)
+        timing.local += self
+            .body
+            .set_tangent(model, law, &it.sigma, &mut self.system);
+        self.system.set_active(model, &it.set.active);
+        let view = iterate(&self.body.f_int, spec, it);
+        self.constraint.impose(&it.set, &view, &mut self.system);
+        // reusable tangents factorize (or reuse) exactly; others prepare inexact solves
+        self.system
+            .prepare_inexact(model)
+            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
+            .map_err(|f| distortion(model, f, &it.u, depth))?;
+        // right-hand side: -R on free equations, prescribed increments on active ones
+        self.aux.fill(0.0);
+        self.constraint.prescribe(&it.set, &view, &mut self.aux);
+        for (d, &e) in model.dofs.eq.iter().enumerate() {
+            if e != NO_EQ {
+                self.rhs[e as usize] = -self.body.f_int[d];
+            }
+        }
+        // forcing term eta = |R| (relative): inexact Newton stays quadratic
+        // (Dembo, Eisenstat & Steihaug 1982); near convergence no tighter than
+        // what brings the residual a decade below the tolerance (no oversolving)
+        let rel = r.rel;
+        let eta = rel
+            .max(0.1 * spec.opts.residual_tol / rel.max(1e-300))
+            .clamp(1e-12, 0.1);
+        self.system
+            .solve_inexact(model, &mut self.rhs, &self.aux, eta)
+            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
+            .map_err(|f| distortion(model, f, &it.u, depth))?;
+        for (d, &e) in model.dofs.eq.iter().enumerate() {
+            if e != NO_EQ {
+                it.u[d] += self.rhs[e as usize];
+            }
+        }
+        if it.u.iter().any(|v| !v.is_finite()) {
+            return Err(StepFailure::Linear("non-finite displacement".into()));
+        }
+        Ok(())
+    }
+}
+
+/// The constraint's view of the iterate `it` of step `spec` with the internal force
+/// `f_int`.
+fn iterate<'a>(f_int: &'a [f64], spec: &StepSpec<'a>, it: &'a Iteration) -> Iterate<'a> {
+    Iterate {
+        u: &it.u,
+        f_int,
+        depth: spec.depth,
+        xi: &spec.state.xi,
+    }
+}
+
+/// The punch force `F = -sum_k f_int,z,k` over the active candidates (N): always the
+/// vertical one, whatever the contact direction.
+fn punch_force(model: &Model, set: &ContactSet, f_int: &[f64]) -> f64 {
+    set.active()
+        .map(|k| -f_int[2 * model.candidates[k] + 1])
+        .sum()
+}
+
+/// The record of a converged step with the vertical reactions `-f_int,z` of the active
+/// candidates, their sum as the force and the reference radius of the outermost as the
+/// contact radius (the constraint completes it, [`Constraint::record`]); `[t, dt, depth]`
+/// and `[iterations, changes]`.
+fn record(
+    model: &Model,
+    set: &ContactSet,
+    f_int: &[f64],
+    [t, dt, depth]: [f64; 3],
+    [iterations, changes]: [u32; 2],
+) -> StepRecord {
+    let idx: Vec<u32> = set.active().map(|k| k as u32).collect();
+    let lambda: Vec<f64> = idx
+        .iter()
+        .map(|&k| -f_int[2 * model.candidates[k as usize] + 1])
+        .collect();
+    StepRecord {
+        t,
+        dt,
+        depth,
+        force: lambda.iter().sum(),
+        contact_radius: idx.last().map_or(0.0, |&k| model.candidate_r(k as usize)),
+        active: idx,
+        lambda,
+        slip: Vec::new(),
+        iterations,
+        active_set_changes: changes,
+        on_schedule: true,
+        schedule_index: 0,
+    }
+}
+
+/// Weights `w` of the increment `w_1 du_1 + w_2 du_2 + w_3 du_3` predicted over the next
+/// step `dt` from the last increments `du_1` (latest), `du_2`, `du_3` of lengths
+/// `h = [h_1, h_2, h_3]`: the polynomial of degree `order` (1 to 3) in time through the
+/// last `order + 1` states, in Lagrange form with nodes `0, -h_1, -h_1 - h_2, ...` (the
+/// current time at 0). Exact for a displacement polynomial of that degree, whatever the
+/// step lengths; unused steps get weight 0.
+pub(crate) fn extrapolation_weights(dt: f64, h: [f64; 3], order: usize) -> [f64; 3] {
+    let tau = [0.0, -h[0], -h[0] - h[1], -h[0] - h[1] - h[2]];
+    let lagrange: [f64; 4] = std::array::from_fn(|k| {
+        if k > order {
+            return 0.0;
+        }
+        (0..=order)
+            .filter(|&j| j != k)
+            .map(|j| (dt - tau[j]) / (tau[k] - tau[j]))
+            .product()
+    });
+    // u_(n-k) = u_n - du_1 - ... - du_k, and the weights sum to 1
+    [
+        -(lagrange[1] + lagrange[2] + lagrange[3]),
+        -(lagrange[2] + lagrange[3]),
+        -lagrange[3],
+    ]
+}
+
+/// Under finite strain a tangent that is no longer positive definite means extreme
+/// distortion (or a loss of stability): the failure then names the most distorted element
+/// of the iterate `u` at the depth `depth` and what to do.
+fn distortion(model: &Model, f: StepFailure, u: &[f64], depth: f64) -> StepFailure {
+    match f {
+        StepFailure::Linear(m) if model.kinematics == Kinematics::Finite => {
+            let (qp, det) = kinematics::smallest_det(&model.disc, u);
+            StepFailure::Linear(format!(
+                "{m}; under finite strain: extreme distortion at the depth {depth} mm, \
+                 smallest det F = {det:.3e} in element {} (Gauss point {}): refine the mesh \
+                 under the punch (specimen nr and nz, or elements_in_contact) or reduce the \
+                 maximum depth",
+                qp / QP_PER_ELEMENT,
+                qp % QP_PER_ELEMENT
+            ))
+        }
+        other => other,
+    }
+}
+
+/// The step failure of a finite-strain evaluation at the depth `depth`.
+pub(crate) fn finite_failure(f: FiniteFailure, depth: f64) -> StepFailure {
+    match f {
+        FiniteFailure::Inverted { qp, det } => StepFailure::Inverted { qp, det, depth },
+        FiniteFailure::Local { qp, reason, factor } => StepFailure::Local { qp, reason, factor },
+    }
+}
