@@ -18,16 +18,7 @@ use serde::Serialize;
 
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::format::sig;
-use crate::identify::{IdentifyOptions, joint_problem, resolve, setup};
-
-/// What a cost map needs of a configuration (one test or a joint `tests` list).
-struct Slice {
-    name: String,
-    law: &'static dyn indentify_laws::Law,
-    law_values: Vec<f64>,
-    id_cfg: indentify_identify::IdentifyConfig,
-    problem: indentify_identify::Problem,
-}
+use crate::identify::{IdentifyOptions, resolve, setup};
 
 /// Where the slice passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -199,31 +190,7 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
     }
     let through = opts.through;
     // a joint configuration's slice is through its joint cost sum_k w_k J_k
-    let s = if resolved.cfg.tests.is_some() {
-        let (problem, ..) = joint_problem(
-            &opts.identify,
-            &resolved.cfg,
-            &resolved.name,
-            resolved.law,
-            &resolved.law_values,
-        )?;
-        Slice {
-            name: resolved.name,
-            law: resolved.law,
-            law_values: resolved.law_values,
-            id_cfg: resolved.id_cfg,
-            problem,
-        }
-    } else {
-        let s = setup(resolved, &opts.identify)?;
-        Slice {
-            name: s.name,
-            law: s.law,
-            law_values: s.law_values,
-            id_cfg: s.id_cfg,
-            problem: s.problem,
-        }
-    };
+    let s = setup(resolved, &opts.identify)?;
     let param = Parameterization::new(s.law, &s.id_cfg.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
     let centre: Vec<f64> = match through {

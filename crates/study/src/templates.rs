@@ -2,6 +2,8 @@
 //! (the files in `examples/` are exactly this output), and the template for a measured
 //! record. `indentify init` prints them.
 
+use std::path::{Path, PathBuf};
+
 use serde_json::Value;
 
 use indentify_contact::punch::AutoOptions;
@@ -620,11 +622,66 @@ fn ron_inline(v: &Value) -> String {
     }
 }
 
+/// How a configuration saved as `config` names the data file `file` (both as given, from
+/// the working directory): relative to the configuration's folder, where `data.file` is
+/// looked up ([`crate::config::DataSection::path`]), or absolute when the two share no
+/// root.
+///
+/// # Errors
+/// A file or folder that does not exist.
+pub fn data_path_for(file: &Path, config: &Path) -> std::io::Result<String> {
+    let file = std::fs::canonicalize(file)?;
+    let dir = config
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let dir = std::fs::canonicalize(dir)?;
+    let f: Vec<_> = file.components().collect();
+    let d: Vec<_> = dir.components().collect();
+    let common = f.iter().zip(&d).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return Ok(file.display().to_string());
+    }
+    let mut relative = PathBuf::new();
+    for _ in common..d.len() {
+        relative.push("..");
+    }
+    for c in &f[common..] {
+        relative.push(c);
+    }
+    Ok(relative.display().to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::parse;
     use indentify_contact::Punch;
+
+    /// `init --data FILE --out CONFIG` names the record relative to the configuration's
+    /// folder, where `data.file` is looked up: found again from there.
+    #[test]
+    fn data_paths_are_relative_to_the_configuration() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path();
+        std::fs::create_dir_all(root.join("a/data")).unwrap();
+        std::fs::create_dir_all(root.join("b/c")).unwrap();
+        let file = root.join("a/data/x.txt");
+        std::fs::write(&file, "t,F\n").unwrap();
+        let config = root.join("b/c/cfg.ron");
+        let written = data_path_for(&file, &config).unwrap();
+        assert_eq!(
+            written,
+            format!("..{0}..{0}a{0}data{0}x.txt", std::path::MAIN_SEPARATOR)
+        );
+        let found = std::fs::canonicalize(root.join("b/c").join(&written)).unwrap();
+        assert_eq!(found, std::fs::canonicalize(&file).unwrap());
+        assert_eq!(
+            data_path_for(&file, &root.join("a/data/cfg.ron")).unwrap(),
+            "x.txt"
+        );
+        assert!(data_path_for(&root.join("missing.txt"), &config).is_err());
+    }
 
     #[test]
     fn every_template_parses_back_exactly() {
