@@ -49,6 +49,32 @@ struct Options {
 /// [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts] [--set K=V]
 /// [--bfgs-start scaled|gauss-newton]`.
 pub fn run(args: &[String]) -> Result<()> {
+    let o = parse_options(args)?;
+    let clock = Instant::now();
+    println!(
+        "## Joint fit of `{}` ({} iterations at most){}\n",
+        o.config.display(),
+        o.max_iterations,
+        if o.sets.is_empty() {
+            String::new()
+        } else {
+            format!(", --set {}", o.sets.join(" --set "))
+        }
+    );
+    println!("Exact data; truth E = 100000 MPa, K = 1500 MPa s^(1/m), m = 5, sY = 500 MPa.\n");
+    starts_table(&o)?;
+    if o.coverage {
+        coverage(&o)?;
+    }
+    println!(
+        "\n(cargo xtask multi-rate, {:.0} s wall time)",
+        clock.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The options of `cargo xtask multi-rate`.
+fn parse_options(args: &[String]) -> Result<Options> {
     let mut o = Options {
         config: PathBuf::from("examples/r2-multi-rate.ron"),
         sets: Vec::new(),
@@ -121,18 +147,11 @@ pub fn run(args: &[String]) -> Result<()> {
             other => bail!("unknown option {other}"),
         }
     }
-    let clock = Instant::now();
-    println!(
-        "## Joint fit of `{}` ({} iterations at most){}\n",
-        o.config.display(),
-        o.max_iterations,
-        if o.sets.is_empty() {
-            String::new()
-        } else {
-            format!(", --set {}", o.sets.join(" --set "))
-        }
-    );
-    println!("Exact data; truth E = 100000 MPa, K = 1500 MPa s^(1/m), m = 5, sY = 500 MPa.\n");
+    Ok(o)
+}
+
+/// The joint fit from each of Table III's starts by each method, a table row each.
+fn starts_table(o: &Options) -> Result<()> {
     println!(
         "| method | start (E, K, m, sY) | iterations | stop | E | K | m | sY | all within 1% |"
     );
@@ -142,7 +161,7 @@ pub fn run(args: &[String]) -> Result<()> {
         let mut ok = 0;
         for &row in &o.starts {
             let start = PAPER_III[row - 1].0;
-            let out = fit(&o, method, &start, None)?;
+            let out = fit(o, method, &start, None)?;
             let errs = rel_errors(&out);
             let within = errs.iter().all(|e| e.abs() <= 0.01);
             ok += usize::from(within);
@@ -172,103 +191,103 @@ pub fn run(args: &[String]) -> Result<()> {
             o.starts.len()
         );
     }
-    if o.coverage {
+    Ok(())
+}
+
+/// The noise coverage: LM from Table III's start 1 on noisy data, one row per seed, the
+/// 2-sigma intervals' coverage of the truth.
+fn coverage(o: &Options) -> Result<()> {
+    println!(
+        "\n### Coverage: {}% multiplicative noise, {} seeds, LM from Table III start 1\n",
+        100.0 * o.noise,
+        o.seeds
+    );
+    let stated = o.noise / 3f64.sqrt();
+    if o.relative {
         println!(
-            "\n### Coverage: {}% multiplicative noise, {} seeds, LM from Table III start 1\n",
-            100.0 * o.noise,
-            o.seeds
+            "Deviations: `identify.noise = RelativeEstimated` (multiplicative noise, level \
+             estimated from the residuals, sandwich covariance); z = (value - truth) / \
+             sigma with that level, z_stated with the stated level a/sqrt(3) = {:.4}%.\n",
+            100.0 * stated
         );
-        let stated = o.noise / 3f64.sqrt();
-        if o.relative {
-            println!(
-                "Deviations: `identify.noise = RelativeEstimated` (multiplicative noise, level \
-                 estimated from the residuals, sandwich covariance); z = (value - truth) / \
-                 sigma with that level, z_stated with the stated level a/sqrt(3) = {:.4}%.\n",
-                100.0 * stated
-            );
-            println!(
-                "| seed | iterations | stop | E | K | m | sY | estimated level | z (E, K, m, sY) | z_stated |"
-            );
-            println!("|---|---|---|---|---|---|---|---|---|---|");
-        } else {
-            println!("Deviations: `identify.noise = Residual` (one variance, 2J/(n-p)).\n");
-            println!("| seed | iterations | stop | E | K | m | sY | z (E, K, m, sY) |");
-            println!("|---|---|---|---|---|---|---|---|");
-        }
-        let mut covered_all = [0usize; 2];
-        let mut covered = [[0usize; 4]; 2];
-        for seed in o.first_seed..o.first_seed + o.seeds {
-            let out = fit(&o, MethodName::Lm, &PAPER_III[0].0, Some((o.noise, seed)))?;
-            let errs = rel_errors(&out);
-            let level = out
-                .result
-                .identifiability
-                .as_ref()
-                .map_or(f64::NAN, |i| i.noise_level);
-            let z: Vec<f64> = FREE
-                .iter()
-                .map(|&(n, t)| {
-                    let v = out.value(n).unwrap_or(f64::NAN);
-                    out.std_dev(n).map_or(f64::INFINITY, |s| (v - t) / s)
-                })
-                .collect();
-            // the sandwich covariance scales with the square of the level
-            let z_stated: Vec<f64> = z.iter().map(|z| z * level / stated).collect();
-            for (k, zs) in [&z, &z_stated].into_iter().enumerate() {
-                let cov: Vec<bool> = zs.iter().map(|z| z.abs() <= 2.0).collect();
-                for (c, &b) in covered[k].iter_mut().zip(&cov) {
-                    *c += usize::from(b);
-                }
-                covered_all[k] += usize::from(cov.iter().all(|&b| b));
+        println!(
+            "| seed | iterations | stop | E | K | m | sY | estimated level | z (E, K, m, sY) | z_stated |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|");
+    } else {
+        println!("Deviations: `identify.noise = Residual` (one variance, 2J/(n-p)).\n");
+        println!("| seed | iterations | stop | E | K | m | sY | z (E, K, m, sY) |");
+        println!("|---|---|---|---|---|---|---|---|");
+    }
+    let mut covered_all = [0usize; 2];
+    let mut covered = [[0usize; 4]; 2];
+    for seed in o.first_seed..o.first_seed + o.seeds {
+        let out = fit(o, MethodName::Lm, &PAPER_III[0].0, Some((o.noise, seed)))?;
+        let errs = rel_errors(&out);
+        let level = out
+            .result
+            .identifiability
+            .as_ref()
+            .map_or(f64::NAN, |i| i.noise_level);
+        let z: Vec<f64> = FREE
+            .iter()
+            .map(|&(n, t)| {
+                let v = out.value(n).unwrap_or(f64::NAN);
+                out.std_dev(n).map_or(f64::INFINITY, |s| (v - t) / s)
+            })
+            .collect();
+        // the sandwich covariance scales with the square of the level
+        let z_stated: Vec<f64> = z.iter().map(|z| z * level / stated).collect();
+        for (k, zs) in [&z, &z_stated].into_iter().enumerate() {
+            let cov: Vec<bool> = zs.iter().map(|z| z.abs() <= 2.0).collect();
+            for (c, &b) in covered[k].iter_mut().zip(&cov) {
+                *c += usize::from(b);
             }
-            let show = |z: &[f64]| {
-                z.iter()
-                    .map(|z| format!("{z:+.2}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            };
-            let errs = errs
-                .iter()
-                .map(|e| format!("{:+.2e}", e))
+            covered_all[k] += usize::from(cov.iter().all(|&b| b));
+        }
+        let show = |z: &[f64]| {
+            z.iter()
+                .map(|z| format!("{z:+.2}"))
                 .collect::<Vec<_>>()
-                .join(" | ");
-            if o.relative {
-                println!(
-                    "| {seed} | {} | {} | {errs} | {:.3}% | {} | {} |",
-                    out.result.iterations,
-                    out.result.stop_reason,
-                    100.0 * level,
-                    show(&z),
-                    show(&z_stated)
-                );
-            } else {
-                println!(
-                    "| {seed} | {} | {} | {errs} | {} |",
-                    out.result.iterations,
-                    out.result.stop_reason,
-                    show(&z)
-                );
-            }
-        }
-        let c = &covered[0];
-        println!(
-            "\n- 2-sigma intervals cover the truth: all four parameters in {} of {} seeds; per \
-             parameter E {}, K {}, m {}, sY {}.",
-            covered_all[0], o.seeds, c[0], c[1], c[2], c[3]
-        );
+                .join(", ")
+        };
+        let errs = errs
+            .iter()
+            .map(|e| format!("{:+.2e}", e))
+            .collect::<Vec<_>>()
+            .join(" | ");
         if o.relative {
-            let c = &covered[1];
             println!(
-                "- With the stated level: all four in {} of {} seeds; per parameter E {}, K {}, \
-                 m {}, sY {}.",
-                covered_all[1], o.seeds, c[0], c[1], c[2], c[3]
+                "| {seed} | {} | {} | {errs} | {:.3}% | {} | {} |",
+                out.result.iterations,
+                out.result.stop_reason,
+                100.0 * level,
+                show(&z),
+                show(&z_stated)
+            );
+        } else {
+            println!(
+                "| {seed} | {} | {} | {errs} | {} |",
+                out.result.iterations,
+                out.result.stop_reason,
+                show(&z)
             );
         }
     }
+    let c = &covered[0];
     println!(
-        "\n(cargo xtask multi-rate, {:.0} s wall time)",
-        clock.elapsed().as_secs_f64()
+        "\n- 2-sigma intervals cover the truth: all four parameters in {} of {} seeds; per \
+         parameter E {}, K {}, m {}, sY {}.",
+        covered_all[0], o.seeds, c[0], c[1], c[2], c[3]
     );
+    if o.relative {
+        let c = &covered[1];
+        println!(
+            "- With the stated level: all four in {} of {} seeds; per parameter E {}, K {}, \
+             m {}, sY {}.",
+            covered_all[1], o.seeds, c[0], c[1], c[2], c[3]
+        );
+    }
     Ok(())
 }
 

@@ -32,32 +32,7 @@ struct Options {
 }
 
 pub fn run(args: &[String]) -> Result<()> {
-    let mut o = Options {
-        keep: false,
-        array: 4,
-        timeout: Duration::from_secs(600),
-        indentify: None,
-    };
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || {
-            it.next()
-                .cloned()
-                .ok_or_else(|| anyhow!("{a} needs a value"))
-        };
-        match a.as_str() {
-            "--keep" => o.keep = true,
-            "--array" => o.array = val()?.parse().context("--array N")?,
-            "--timeout" => {
-                o.timeout = Duration::from_secs(val()?.parse().context("--timeout SECONDS")?);
-            }
-            "--indentify" => o.indentify = Some(PathBuf::from(val()?)),
-            other => bail!(
-                "unknown option {other} (cargo xtask slurm-check [--keep] [--array N] \
-                 [--timeout SECONDS] [--indentify PATH])"
-            ),
-        }
-    }
+    let o = parse_options(args)?;
     if o.array == 0 {
         bail!("--array must be at least 1");
     }
@@ -125,41 +100,11 @@ pub fn run(args: &[String]) -> Result<()> {
 
     // the same batch on this machine
     let local = dir.join("local");
-    let t0 = Instant::now();
-    let text = run_checked(
-        Command::new(&indentify)
-            .arg("batch")
-            .arg(&map.manifest)
-            .arg("--out")
-            .arg(&local)
-            .arg("--config")
-            .arg(&map.base)
-            .arg("--quiet"),
-        "indentify batch (local)",
-    )?;
-    let local_seconds = t0.elapsed().as_secs_f64();
-    print_indented("local batch", &text);
+    let local_seconds = local_batch(&indentify, &map, &local)?;
 
     // as a Slurm job array
     let shared = dir.join("slurm");
-    let text = run_checked(
-        Command::new(&indentify)
-            .arg("batch")
-            .arg("slurm")
-            .arg(&map.manifest)
-            .arg("--out")
-            .arg(&shared)
-            .arg("--config")
-            .arg(&map.base)
-            .arg("--array")
-            .arg(o.array.to_string())
-            .arg("--partition")
-            .arg("check")
-            .arg("--time")
-            .arg("00:15:00"),
-        "indentify batch slurm",
-    )?;
-    print_indented("batch slurm", &text);
+    write_scripts(&indentify, &map, &shared, o.array)?;
     let script = shared.join("batch.sbatch");
     let t0 = Instant::now();
     let job = slurm.submit(&script, &shared)?;
@@ -181,26 +126,7 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     // the node is idle again once every task's step has ended
     wait_for_node(&slurm, &host, &dir, &mut daemons)?;
-    println!("slurm-check: per-task logs:");
-    let mut logs: Vec<PathBuf> = fs::read_dir(&shared)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with("slurm-"))
-        })
-        .collect();
-    logs.sort();
-    for p in &logs {
-        let name = p.file_name().unwrap_or_default().to_string_lossy();
-        let text = fs::read_to_string(p).unwrap_or_default();
-        if text.trim().is_empty() {
-            println!("  {name}: (empty)");
-        }
-        for line in text.lines() {
-            println!("  {name}: {line}");
-        }
-    }
-
+    print_task_logs(&shared)?;
     let text = run_checked(
         Command::new(&indentify)
             .arg("batch")
@@ -224,31 +150,7 @@ pub fn run(args: &[String]) -> Result<()> {
         tb.rows.len(),
         tb.header.len()
     );
-    let failed_tasks: Vec<&String> = tasks
-        .iter()
-        .filter(|t| !t.contains("JobState=COMPLETED") || !t.contains("ExitCode=0:0"))
-        .collect();
-    let mut problems = compare(&ta, &tb);
-    if ta.rows.len() != map.indents.len() {
-        problems.push(format!(
-            "the local results.csv has {} rows for {} indents",
-            ta.rows.len(),
-            map.indents.len()
-        ));
-    }
-    if tasks.len() != o.array {
-        problems.push(format!(
-            "scontrol reported {} array tasks, not {}",
-            tasks.len(),
-            o.array
-        ));
-    }
-    if !failed_tasks.is_empty() {
-        problems.push(format!(
-            "{} array tasks did not complete",
-            failed_tasks.len()
-        ));
-    }
+    let problems = problems(&ta, &tb, map.indents.len(), &tasks, o.array);
     let states = ta.column("status");
     let mut counts = std::collections::BTreeMap::<&str, usize>::new();
     for s in &states {
@@ -288,6 +190,143 @@ pub fn run(args: &[String]) -> Result<()> {
             dir.display()
         )
     }
+}
+
+/// The map's batch on this machine, into `local`; its wall time (s).
+fn local_batch(
+    indentify: &Path,
+    map: &indentify_study::synthetic::MapFiles,
+    local: &Path,
+) -> Result<f64> {
+    let t0 = Instant::now();
+    let text = run_checked(
+        Command::new(indentify)
+            .arg("batch")
+            .arg(&map.manifest)
+            .arg("--out")
+            .arg(local)
+            .arg("--config")
+            .arg(&map.base)
+            .arg("--quiet"),
+        "indentify batch (local)",
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    print_indented("local batch", &text);
+    Ok(seconds)
+}
+
+/// `indentify batch slurm`: the job array's scripts for `array` tasks, into `shared`.
+fn write_scripts(
+    indentify: &Path,
+    map: &indentify_study::synthetic::MapFiles,
+    shared: &Path,
+    array: usize,
+) -> Result<()> {
+    let text = run_checked(
+        Command::new(indentify)
+            .arg("batch")
+            .arg("slurm")
+            .arg(&map.manifest)
+            .arg("--out")
+            .arg(shared)
+            .arg("--config")
+            .arg(&map.base)
+            .arg("--array")
+            .arg(array.to_string())
+            .arg("--partition")
+            .arg("check")
+            .arg("--time")
+            .arg("00:15:00"),
+        "indentify batch slurm",
+    )?;
+    print_indented("batch slurm", &text);
+    Ok(())
+}
+
+/// Prints every array task's log (`slurm-*` in `shared`).
+fn print_task_logs(shared: &Path) -> Result<()> {
+    println!("slurm-check: per-task logs:");
+    let mut logs: Vec<PathBuf> = fs::read_dir(shared)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("slurm-"))
+        })
+        .collect();
+    logs.sort();
+    for p in &logs {
+        let name = p.file_name().unwrap_or_default().to_string_lossy();
+        let text = fs::read_to_string(p).unwrap_or_default();
+        if text.trim().is_empty() {
+            println!("  {name}: (empty)");
+        }
+        for line in text.lines() {
+            println!("  {name}: {line}");
+        }
+    }
+    Ok(())
+}
+
+/// The options of `cargo xtask slurm-check`.
+fn parse_options(args: &[String]) -> Result<Options> {
+    let mut o = Options {
+        keep: false,
+        array: 4,
+        timeout: Duration::from_secs(600),
+        indentify: None,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || {
+            it.next()
+                .cloned()
+                .ok_or_else(|| anyhow!("{a} needs a value"))
+        };
+        match a.as_str() {
+            "--keep" => o.keep = true,
+            "--array" => o.array = val()?.parse().context("--array N")?,
+            "--timeout" => {
+                o.timeout = Duration::from_secs(val()?.parse().context("--timeout SECONDS")?);
+            }
+            "--indentify" => o.indentify = Some(PathBuf::from(val()?)),
+            other => bail!(
+                "unknown option {other} (cargo xtask slurm-check [--keep] [--array N] \
+                 [--timeout SECONDS] [--indentify PATH])"
+            ),
+        }
+    }
+    Ok(o)
+}
+
+/// What differs between the local results `ta` and the merged ones `tb` of a map of
+/// `indents` indents, and array tasks (of `array`) missing or not completed.
+fn problems(ta: &Table, tb: &Table, indents: usize, tasks: &[String], array: usize) -> Vec<String> {
+    let failed_tasks: Vec<&String> = tasks
+        .iter()
+        .filter(|t| !t.contains("JobState=COMPLETED") || !t.contains("ExitCode=0:0"))
+        .collect();
+    let mut problems = compare(ta, tb);
+    if ta.rows.len() != indents {
+        problems.push(format!(
+            "the local results.csv has {} rows for {} indents",
+            ta.rows.len(),
+            indents
+        ));
+    }
+    if tasks.len() != array {
+        problems.push(format!(
+            "scontrol reported {} array tasks, not {}",
+            tasks.len(),
+            array
+        ));
+    }
+    if !failed_tasks.is_empty() {
+        problems.push(format!(
+            "{} array tasks did not complete",
+            failed_tasks.len()
+        ));
+    }
+    problems
 }
 
 /// The executables the check needs.
