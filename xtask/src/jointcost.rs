@@ -115,6 +115,37 @@ pub fn run(args: &[String]) -> Result<()> {
             t_single[k].push(clock.elapsed().as_secs_f64());
         }
     }
+    let timings = Timings {
+        joint: t_joint,
+        search: t_search,
+        phases: t_phases,
+        single: t_single,
+        forward: t_forward,
+    };
+    report(&config, n, threads, rounds, &single_threads, &timings);
+    Ok(())
+}
+
+/// The wall times of each round (s).
+struct Timings {
+    joint: Vec<f64>,
+    search: Vec<f64>,
+    phases: Vec<f64>,
+    single: Vec<Vec<f64>>,
+    forward: Vec<Vec<f64>>,
+}
+
+/// The table and the ratios.
+fn report(
+    config: &std::path::Path,
+    n: usize,
+    threads: usize,
+    rounds: usize,
+    single_threads: &[usize],
+    t: &Timings,
+) {
+    let (t_joint, t_search, t_phases, t_single, t_forward) =
+        (&t.joint, &t.search, &t.phases, &t.single, &t.forward);
     let median = |v: &[f64]| {
         let mut v = v.to_vec();
         v.sort_by(f64::total_cmp);
@@ -148,20 +179,20 @@ pub fn run(args: &[String]) -> Result<()> {
             show(t)
         );
     }
-    let mj = median(&t_joint);
-    let ms = median(&t_search);
-    let mp = median(&t_phases);
+    let mj = median(t_joint);
+    let ms = median(t_search);
+    let mp = median(t_phases);
     println!(
         "| joint, cost and gradient asked together ({n} tests, {threads} threads) | {mj:.3} | | {} |",
-        show(&t_joint)
+        show(t_joint)
     );
     println!(
         "| joint, cost then gradient, adjoints prefetched ({n} tests, {threads} threads) | {ms:.3} | | {} |",
-        show(&t_search)
+        show(t_search)
     );
     println!(
         "| joint, cost then gradient, no prefetching: the forwards, then the adjoints ({n} tests, {threads} threads) | {mp:.3} | | {} |",
-        show(&t_phases)
+        show(t_phases)
     );
     // the least any schedule can take: the one-thread work spread evenly, or the longest
     // test
@@ -192,5 +223,4 @@ pub fn run(args: &[String]) -> Result<()> {
             .unwrap_or_default()
             .trim()
     );
-    Ok(())
 }
