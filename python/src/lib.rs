@@ -18,13 +18,13 @@ mod results;
 
 use std::path::PathBuf;
 
-use indentify_identify::{Cancel, IterationRecord};
 use indentify_study::config::{MethodName, NoiseSetting, Overrides};
 use indentify_study::design::{self as study_design, DesignOptions};
 use indentify_study::gradient::{self as study_gradient, GradientOptions};
 use indentify_study::identify::{self as study_identify, IdentifyOptions, Observer, RunInfo};
 use indentify_study::simulate::{self as study_simulate, SimulateOptions};
 use indentify_study::synthetic::{self, MapOptions};
+use indentify_study::{Cancel, IterationRecord};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -53,8 +53,8 @@ fn read_record(
 ) -> PyResult<Record> {
     let path = path_arg(path, "path")?;
     let format = match format {
-        None => indentify_records::Format::Auto,
-        Some(name) => indentify_records::Format::from_name(name).ok_or_else(|| {
+        None => indentify_study::records::Format::Auto,
+        Some(name) => indentify_study::records::Format::from_name(name).ok_or_else(|| {
             config_error(format!(
                 "unknown format `{name}`: expected one of auto, csv, anton-paar, \
                  anton-paar-multi, hysitron-txt, hld"
@@ -62,11 +62,11 @@ fn read_record(
         })?,
     };
     let prep = match preprocessing {
-        None => Some(indentify_records::Preprocessing::default()),
-        Some(p) if p.is_none() => Some(indentify_records::Preprocessing::default()),
+        None => Some(indentify_study::records::Preprocessing::default()),
+        Some(p) if p.is_none() => Some(indentify_study::records::Preprocessing::default()),
         Some(p) if p.is_exact_instance_of::<pyo3::types::PyBool>() => {
             if p.is_truthy()? {
-                Some(indentify_records::Preprocessing::default())
+                Some(indentify_study::records::Preprocessing::default())
             } else {
                 None
             }
@@ -82,7 +82,7 @@ fn read_record(
             })?)
         }
     };
-    let opts = indentify_records::ReadOptions { format, test };
+    let opts = indentify_study::records::ReadOptions { format, test };
     let read = py.detach(|| -> Result<_, Vec<String>> {
         let shown = path.display().to_string();
         let bytes = std::fs::read(&path).map_err(|e| {
@@ -91,11 +91,11 @@ fn read_record(
                 e.to_string(),
             ]
         })?;
-        let raw = indentify_records::read_one(&bytes, &shown, &opts)
+        let raw = indentify_study::records::read_one(&bytes, &shown, &opts)
             .map_err(|e| vec![format!("cannot read the record `{shown}`"), e.to_string()])?;
         match &prep {
             None => Ok((raw, Vec::new())),
-            Some(p) => indentify_records::apply(&raw, p).map_err(|e| {
+            Some(p) => indentify_study::records::apply(&raw, p).map_err(|e| {
                 vec![
                     format!("cannot preprocess `{shown}` (preprocessing)"),
                     e.to_string(),

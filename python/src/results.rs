@@ -2,7 +2,7 @@
 //! [`GradientResult`] (`J` and `dJ/dc`) and [`IdentifyResult`] (an identification's
 //! parameters, uncertainties, fit and history), their fields numpy arrays, dicts and floats.
 
-use indentify_identify::IterationRecord;
+use indentify_study::IterationRecord;
 use indentify_study::gradient::GradientOutcome;
 use indentify_study::identify::IdentifyOutcome;
 use numpy::{PyArray1, PyArray2};
@@ -31,8 +31,8 @@ impl Record {
     /// The record with its metadata and preprocessing account as Python objects.
     pub fn new(
         py: Python<'_>,
-        r: indentify_records::Record,
-        applied: &[indentify_records::Applied],
+        r: indentify_study::records::Record,
+        applied: &[indentify_study::records::Applied],
     ) -> PyResult<Record> {
         Ok(Record {
             meta: to_python(py, &r.meta)?.unbind(),
@@ -301,7 +301,7 @@ pub struct IdentifyResult {
 }
 
 /// A fit quality as a dict (None when not computable).
-fn quality_dict(py: Python<'_>, q: Option<&indentify_report::FitQuality>) -> PyResult<Py<PyAny>> {
+fn quality_dict(py: Python<'_>, q: Option<&indentify_study::FitQuality>) -> PyResult<Py<PyAny>> {
     Ok(match q {
         Some(q) => {
             let d = PyDict::new(py);

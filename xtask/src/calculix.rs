@@ -1,5 +1,4 @@
-//! CalculiX referee for normal contact, friction and finite strain (docs/validation-contact.md §9,
-//! docs/validation-finite-strain.md §3.1):
+//! CalculiX referee for normal contact, friction (issue 12) and finite strain (issue 13):
 //! input decks of the reference problems R0, R1 and R2 on our own mesh (CAX8, node for
 //! node), a rigid cone in node-to-surface penalty contact (surface-to-surface optional),
 //! the reaction-force parser of the `.dat` file, and the comparison with our `Normal`
@@ -369,7 +368,106 @@ pub fn deck(
         w,
         "** axisymmetric: x = r, y = z; CalculiX's CAX elements model a 2-degree wedge: full force = 180 x RF"
     )?;
-    // nodes
+    // nodes, elements, sets and surfaces
+    geometry_cards(w, mesh, cot, o)?;
+    // materials
+    material_cards(w, material, o)?;
+    writeln!(w, "*MATERIAL, NAME=RIGID")?;
+    writeln!(w, "*ELASTIC")?;
+    writeln!(w, "1e7, 0.3")?;
+    writeln!(w, "*SOLID SECTION, ELSET=EPUNCH, MATERIAL=RIGID")?;
+    // contact
+    writeln!(w, "*SURFACE INTERACTION, NAME=SI")?;
+    writeln!(w, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR")?;
+    writeln!(w, "{:e}", o.penalty)?;
+    if o.friction > 0.0 {
+        writeln!(w, "*FRICTION")?;
+        writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
+    }
+    writeln!(
+        w,
+        "*CONTACT PAIR, INTERACTION=SI, TYPE={}",
+        o.contact.keyword()
+    )?;
+    writeln!(w, "STOP, SPUNCH")?;
+    // amplitude and time points in total time when the history spans several steps
+    let total = if o.split_load {
+        ", TIME=TOTAL TIME"
+    } else {
+        ""
+    };
+    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
+    for (t, h) in corners(schedule) {
+        writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
+    }
+    writeln!(w, "*BOUNDARY")?;
+    writeln!(w, "AXIS, 1, 1")?;
+    writeln!(w, "BOTTOM, 2, 2")?;
+    writeln!(w, "PUNCH, 1, 1")?;
+    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
+    for t in &schedule.t[1..] {
+        writeln!(w, "{t:.12e}")?;
+    }
+    let n_inc = 20 * schedule.t.len();
+    let procedure = match material {
+        Material::Elastic { .. } => "*STATIC",
+        Material::Viscoplastic { .. } => "*VISCO",
+    };
+    // One step, or (split_load) the loading segment and the rest as two steps: a step
+    // starts without extrapolating the previous increment's velocity, which at the
+    // corner of the trapezoid drove the NLGEOM runs' tip nodes off (§3.1 of
+    // docs/validation-finite-strain.md).
+    let steps: Vec<f64> = match corners(schedule).get(1) {
+        Some(&(t1, _)) if o.split_load && t1 < t_end => vec![t1, t_end - t1],
+        _ => vec![t_end],
+    };
+    if o.load_substeps == 0 {
+        bail!("load_substeps = 0: expected at least 1 increment per schedule step");
+    }
+    for (k, duration) in steps.into_iter().enumerate() {
+        // the first step's increments: dt / load_substeps (the minimum stays dt 1e-4)
+        let inc = if k == 0 {
+            dt / o.load_substeps as f64
+        } else {
+            dt
+        };
+        if o.nlgeom {
+            writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
+        } else {
+            writeln!(w, "*STEP, INC={n_inc}")?;
+        }
+        // Automatic incrementation capped at the schedule's step (fixed increments,
+        // DIRECT, stop the viscoplastic runs when CalculiX's divergence check fires); the
+        // time points make every schedule time an increment's end, so the curves share
+        // our time grid (CalculiX cuts an increment where its Newton iteration needs it,
+        // nowhere else). CETOL is required by *VISCO but only used by isotropic creep
+        // with automatic incrementation's creep-strain control: 1.0 switches that
+        // control off. More Newton iterations before CalculiX declares divergence and
+        // cuts the increment (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks).
+        writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
+        writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
+        if procedure == "*VISCO" {
+            writeln!(w, "{procedure}, CETOL=1.0")?;
+        } else {
+            writeln!(w, "{procedure}")?;
+        }
+        writeln!(
+            w,
+            "{inc:.12e}, {duration:.12e}, {:.12e}, {inc:.12e}",
+            dt * 1e-4
+        )?;
+        writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
+        writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
+        writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
+        writeln!(w, "RF")?;
+        writeln!(w, "*END STEP")?;
+    }
+    Ok(s)
+}
+
+/// The nodes and elements of the specimen (CAX8) and of the cone's strip (CAX4), the node
+/// sets and the contact surfaces; `cot` is the cone's `cot(half-angle)`.
+fn geometry_cards(w: &mut String, mesh: &Mesh, cot: f64, o: &DeckOptions) -> Result<()> {
     writeln!(w, "*NODE, NSET=NSPEC")?;
     for (i, p) in mesh.nodes.iter().enumerate() {
         writeln!(w, "{}, {:.12e}, {:.12e}, 0.0", i + 1, p[0], p[1])?;
@@ -427,50 +525,12 @@ pub fn deck(
     for j in 0..np {
         writeln!(w, "{}, S1", e0 + 1 + j)?;
     }
-    write_material(w, material, o)?;
-    writeln!(w, "*MATERIAL, NAME=RIGID")?;
-    writeln!(w, "*ELASTIC")?;
-    writeln!(w, "1e7, 0.3")?;
-    writeln!(w, "*SOLID SECTION, ELSET=EPUNCH, MATERIAL=RIGID")?;
-    // contact
-    writeln!(w, "*SURFACE INTERACTION, NAME=SI")?;
-    writeln!(w, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR")?;
-    writeln!(w, "{:e}", o.penalty)?;
-    if o.friction > 0.0 {
-        writeln!(w, "*FRICTION")?;
-        writeln!(w, "{}, {:e}", o.friction, o.stick_slope)?;
-    }
-    writeln!(
-        w,
-        "*CONTACT PAIR, INTERACTION=SI, TYPE={}",
-        o.contact.keyword()
-    )?;
-    writeln!(w, "STOP, SPUNCH")?;
-    // amplitude and time points in total time when the history spans several steps
-    let total = if o.split_load {
-        ", TIME=TOTAL TIME"
-    } else {
-        ""
-    };
-    writeln!(w, "*AMPLITUDE, NAME=DEPTH{total}")?;
-    for (t, h) in corners(schedule) {
-        writeln!(w, "{t:.12e}, {:.12e}", h / h_ref)?;
-    }
-    writeln!(w, "*BOUNDARY")?;
-    writeln!(w, "AXIS, 1, 1")?;
-    writeln!(w, "BOTTOM, 2, 2")?;
-    writeln!(w, "PUNCH, 1, 1")?;
-    writeln!(w, "*TIME POINTS, NAME=TP{total}")?;
-    for t in &schedule.t[1..] {
-        writeln!(w, "{t:.12e}")?;
-    }
-    write_steps(w, schedule, material, o, [dt, t_end, h_ref])?;
-    Ok(s)
+    Ok(())
 }
 
-/// The specimen's material section of the deck (see [`FiniteElastic`] for the finite-strain
-/// choices).
-fn write_material(w: &mut String, material: &Material, o: &DeckOptions) -> Result<()> {
+/// The specimen's material cards (`*MATERIAL`, its model, `*SOLID SECTION`): small or
+/// finite strain, CalculiX's own models or the user materials.
+fn material_cards(w: &mut String, material: &Material, o: &DeckOptions) -> Result<()> {
     match *material {
         _ if o.nlgeom && o.finite_elastic == FiniteElastic::HenckyUmat => {
             let constants = hencky_umat_constants(material);
@@ -565,72 +625,6 @@ fn write_material(w: &mut String, material: &Material, o: &DeckOptions) -> Resul
             writeln!(w, "14")?;
             writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=ANISO_PLAS_SPEC")?;
         }
-    }
-    Ok(())
-}
-
-/// The analysis steps: `[dt, t_end, h_ref]` are the schedule's uniform step, end time and
-/// deepest depth.
-fn write_steps(
-    w: &mut String,
-    schedule: &Schedule,
-    material: &Material,
-    o: &DeckOptions,
-    [dt, t_end, h_ref]: [f64; 3],
-) -> Result<()> {
-    let n_inc = 20 * schedule.t.len();
-    let procedure = match material {
-        Material::Elastic { .. } => "*STATIC",
-        Material::Viscoplastic { .. } => "*VISCO",
-    };
-    // One step, or (split_load) the loading segment and the rest as two steps: a step
-    // starts without extrapolating the previous increment's velocity, which at the
-    // corner of the trapezoid drove the NLGEOM runs' tip nodes off (§3.1 of
-    // docs/validation-finite-strain.md).
-    let steps: Vec<f64> = match corners(schedule).get(1) {
-        Some(&(t1, _)) if o.split_load && t1 < t_end => vec![t1, t_end - t1],
-        _ => vec![t_end],
-    };
-    if o.load_substeps == 0 {
-        bail!("load_substeps = 0: expected at least 1 increment per schedule step");
-    }
-    for (k, duration) in steps.into_iter().enumerate() {
-        // the first step's increments: dt / load_substeps (the minimum stays dt 1e-4)
-        let inc = if k == 0 {
-            dt / o.load_substeps as f64
-        } else {
-            dt
-        };
-        if o.nlgeom {
-            writeln!(w, "*STEP, NLGEOM, INC={n_inc}")?;
-        } else {
-            writeln!(w, "*STEP, INC={n_inc}")?;
-        }
-        // Automatic incrementation capped at the schedule's step (fixed increments,
-        // DIRECT, stop the viscoplastic runs when CalculiX's divergence check fires); the
-        // time points make every schedule time an increment's end, so the curves share
-        // our time grid (CalculiX cuts an increment where its Newton iteration needs it,
-        // nowhere else). CETOL is required by *VISCO but only used by isotropic creep
-        // with automatic incrementation's creep-strain control: 1.0 switches that
-        // control off. More Newton iterations before CalculiX declares divergence and
-        // cuts the increment (I_0 = 20, I_R = 30, I_A = 200 iterations, 20 cutbacks).
-        writeln!(w, "*CONTROLS, PARAMETERS=TIME INCREMENTATION")?;
-        writeln!(w, "20, 30, 9, 200, 10, 4, , 20")?;
-        if procedure == "*VISCO" {
-            writeln!(w, "{procedure}, CETOL=1.0")?;
-        } else {
-            writeln!(w, "{procedure}")?;
-        }
-        writeln!(
-            w,
-            "{inc:.12e}, {duration:.12e}, {:.12e}, {inc:.12e}",
-            dt * 1e-4
-        )?;
-        writeln!(w, "*BOUNDARY, AMPLITUDE=DEPTH")?;
-        writeln!(w, "PUNCH, 2, 2, {:.12e}", -h_ref)?;
-        writeln!(w, "*NODE PRINT, NSET=PUNCH, TOTALS=ONLY, TIME POINTS=TP")?;
-        writeln!(w, "RF")?;
-        writeln!(w, "*END STEP")?;
     }
     Ok(())
 }

@@ -1,4 +1,4 @@
-//! `cargo xtask fuzz-readers [--cases N] [--seed S]`: feeds `indentify_records::read`,
+//! `cargo xtask fuzz-readers [--cases N] [--seed S]`: feeds `indentify_study::records::read`,
 //! `read_results` and `apply` with random bytes and mutated real files (examples/data) in release and checks
 //! that nothing panics; prints the count, the time and what the inputs read as.
 
@@ -7,8 +7,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_records::fuzzing::{FORMATS, Mutation, mutate};
-use indentify_records::{
+use indentify_study::records::fuzzing::{FORMATS, Mutation, mutate};
+use indentify_study::records::{
     Control, Correction, Format, Preprocessing, ReadOptions, Resample, Segments, ZeroPoint, apply,
     read,
 };
@@ -39,7 +39,7 @@ impl Rng {
     }
 }
 
-/// One random mutation of the shared set (`indentify_records::fuzzing`).
+/// One random mutation of the shared set (`indentify_study::records::fuzzing`).
 fn mutation(rng: &mut Rng) -> Mutation {
     let (x, y, z) = (
         rng.next() as usize,
@@ -182,7 +182,7 @@ pub fn run(args: &[String]) -> Result<()> {
         let p = options(&mut rng);
         let result = std::panic::catch_unwind(|| {
             let mut n = (0, 0);
-            let _ = indentify_records::read_results(&input, "fuzz");
+            let _ = indentify_study::records::read_results(&input, "fuzz");
             let read = read(&input, "fuzz", &opts);
             let key = match &read {
                 Ok(_) => "read ok".to_owned(),

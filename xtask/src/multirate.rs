@@ -73,7 +73,7 @@ pub fn run(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// The command's options from its arguments.
+/// The options of `cargo xtask multi-rate`.
 fn parse_options(args: &[String]) -> Result<Options> {
     let mut o = Options {
         config: PathBuf::from("examples/r2-multi-rate.ron"),
@@ -150,7 +150,7 @@ fn parse_options(args: &[String]) -> Result<Options> {
     Ok(o)
 }
 
-/// The fits from the paper's Table III starts with each method, as a Markdown table.
+/// The joint fit from each of Table III's starts by each method, a table row each.
 fn starts_table(o: &Options) -> Result<()> {
     println!(
         "| method | start (E, K, m, sY) | iterations | stop | E | K | m | sY | all within 1% |"
@@ -194,7 +194,8 @@ fn starts_table(o: &Options) -> Result<()> {
     Ok(())
 }
 
-/// The 2-sigma coverage over noise seeds, LM from Table III start 1.
+/// The noise coverage: LM from Table III's start 1 on noisy data, one row per seed, the
+/// 2-sigma intervals' coverage of the truth.
 fn coverage(o: &Options) -> Result<()> {
     println!(
         "\n### Coverage: {}% multiplicative noise, {} seeds, LM from Table III start 1\n",

@@ -13,7 +13,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use anyhow::{Context, Result, anyhow, bail};
-use indentify_study::synthetic::{MapFiles, MapOptions, make_map};
+use indentify_study::synthetic::{MapOptions, make_map};
 
 /// Where Debian puts the daemons (root's PATH may lack the sbin folders).
 const SEARCH: [&str; 5] = [
@@ -33,6 +33,9 @@ struct Options {
 
 pub fn run(args: &[String]) -> Result<()> {
     let o = parse_options(args)?;
+    if o.array == 0 {
+        bail!("--array must be at least 1");
+    }
     let clock = Instant::now();
     if effective_uid() != Some(0) {
         bail!(
@@ -97,11 +100,24 @@ pub fn run(args: &[String]) -> Result<()> {
 
     // the same batch on this machine
     let local = dir.join("local");
-    let local_seconds = batch_local(&indentify, &map, &local)?;
+    let local_seconds = local_batch(&indentify, &map, &local)?;
 
     // as a Slurm job array
     let shared = dir.join("slurm");
-    let (job, tasks, slurm_seconds) = submit_array(&slurm, &indentify, &map, &shared, &o, &dir)?;
+    write_scripts(&indentify, &map, &shared, o.array)?;
+    let script = shared.join("batch.sbatch");
+    let t0 = Instant::now();
+    let job = slurm.submit(&script, &shared)?;
+    println!("slurm-check: submitted job array {job} ({} tasks)", o.array);
+    let tasks = match slurm.wait(&job, o.timeout) {
+        Ok(t) => t,
+        Err(e) => {
+            let _ = slurm.command("scancel").arg(&job).status();
+            print_logs(&dir);
+            return Err(e);
+        }
+    };
+    let slurm_seconds = t0.elapsed().as_secs_f64();
     println!(
         "slurm-check: job array {job} done in {slurm_seconds:.1} s; tasks (scontrol show job):"
     );
@@ -111,7 +127,6 @@ pub fn run(args: &[String]) -> Result<()> {
     // the node is idle again once every task's step has ended
     wait_for_node(&slurm, &host, &dir, &mut daemons)?;
     print_task_logs(&shared)?;
-
     let text = run_checked(
         Command::new(&indentify)
             .arg("batch")
@@ -175,6 +190,143 @@ pub fn run(args: &[String]) -> Result<()> {
             dir.display()
         )
     }
+}
+
+/// The map's batch on this machine, into `local`; its wall time (s).
+fn local_batch(
+    indentify: &Path,
+    map: &indentify_study::synthetic::MapFiles,
+    local: &Path,
+) -> Result<f64> {
+    let t0 = Instant::now();
+    let text = run_checked(
+        Command::new(indentify)
+            .arg("batch")
+            .arg(&map.manifest)
+            .arg("--out")
+            .arg(local)
+            .arg("--config")
+            .arg(&map.base)
+            .arg("--quiet"),
+        "indentify batch (local)",
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    print_indented("local batch", &text);
+    Ok(seconds)
+}
+
+/// `indentify batch slurm`: the job array's scripts for `array` tasks, into `shared`.
+fn write_scripts(
+    indentify: &Path,
+    map: &indentify_study::synthetic::MapFiles,
+    shared: &Path,
+    array: usize,
+) -> Result<()> {
+    let text = run_checked(
+        Command::new(indentify)
+            .arg("batch")
+            .arg("slurm")
+            .arg(&map.manifest)
+            .arg("--out")
+            .arg(shared)
+            .arg("--config")
+            .arg(&map.base)
+            .arg("--array")
+            .arg(array.to_string())
+            .arg("--partition")
+            .arg("check")
+            .arg("--time")
+            .arg("00:15:00"),
+        "indentify batch slurm",
+    )?;
+    print_indented("batch slurm", &text);
+    Ok(())
+}
+
+/// Prints every array task's log (`slurm-*` in `shared`).
+fn print_task_logs(shared: &Path) -> Result<()> {
+    println!("slurm-check: per-task logs:");
+    let mut logs: Vec<PathBuf> = fs::read_dir(shared)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("slurm-"))
+        })
+        .collect();
+    logs.sort();
+    for p in &logs {
+        let name = p.file_name().unwrap_or_default().to_string_lossy();
+        let text = fs::read_to_string(p).unwrap_or_default();
+        if text.trim().is_empty() {
+            println!("  {name}: (empty)");
+        }
+        for line in text.lines() {
+            println!("  {name}: {line}");
+        }
+    }
+    Ok(())
+}
+
+/// The options of `cargo xtask slurm-check`.
+fn parse_options(args: &[String]) -> Result<Options> {
+    let mut o = Options {
+        keep: false,
+        array: 4,
+        timeout: Duration::from_secs(600),
+        indentify: None,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || {
+            it.next()
+                .cloned()
+                .ok_or_else(|| anyhow!("{a} needs a value"))
+        };
+        match a.as_str() {
+            "--keep" => o.keep = true,
+            "--array" => o.array = val()?.parse().context("--array N")?,
+            "--timeout" => {
+                o.timeout = Duration::from_secs(val()?.parse().context("--timeout SECONDS")?);
+            }
+            "--indentify" => o.indentify = Some(PathBuf::from(val()?)),
+            other => bail!(
+                "unknown option {other} (cargo xtask slurm-check [--keep] [--array N] \
+                 [--timeout SECONDS] [--indentify PATH])"
+            ),
+        }
+    }
+    Ok(o)
+}
+
+/// What differs between the local results `ta` and the merged ones `tb` of a map of
+/// `indents` indents, and array tasks (of `array`) missing or not completed.
+fn problems(ta: &Table, tb: &Table, indents: usize, tasks: &[String], array: usize) -> Vec<String> {
+    let failed_tasks: Vec<&String> = tasks
+        .iter()
+        .filter(|t| !t.contains("JobState=COMPLETED") || !t.contains("ExitCode=0:0"))
+        .collect();
+    let mut problems = compare(ta, tb);
+    if ta.rows.len() != indents {
+        problems.push(format!(
+            "the local results.csv has {} rows for {} indents",
+            ta.rows.len(),
+            indents
+        ));
+    }
+    if tasks.len() != array {
+        problems.push(format!(
+            "scontrol reported {} array tasks, not {}",
+            tasks.len(),
+            array
+        ));
+    }
+    if !failed_tasks.is_empty() {
+        problems.push(format!(
+            "{} array tasks did not complete",
+            failed_tasks.len()
+        ));
+    }
+    problems
 }
 
 /// The executables the check needs.
@@ -917,157 +1069,6 @@ fn compare(a: &Table, b: &Table) -> Vec<String> {
                 sb.join(",")
             ));
         }
-    }
-    problems
-}
-
-/// `indentify batch slurm` of the map into `shared`, submitted and waited for: the job id,
-/// its tasks as `scontrol` shows them, and the seconds from submission to the end.
-fn submit_array(
-    slurm: &Slurm,
-    indentify: &Path,
-    map: &MapFiles,
-    shared: &Path,
-    o: &Options,
-    dir: &Path,
-) -> Result<(String, Vec<String>, f64)> {
-    let text = run_checked(
-        Command::new(indentify)
-            .arg("batch")
-            .arg("slurm")
-            .arg(&map.manifest)
-            .arg("--out")
-            .arg(shared)
-            .arg("--config")
-            .arg(&map.base)
-            .arg("--array")
-            .arg(o.array.to_string())
-            .arg("--partition")
-            .arg("check")
-            .arg("--time")
-            .arg("00:15:00"),
-        "indentify batch slurm",
-    )?;
-    print_indented("batch slurm", &text);
-    let script = shared.join("batch.sbatch");
-    let t0 = Instant::now();
-    let job = slurm.submit(&script, shared)?;
-    println!("slurm-check: submitted job array {job} ({} tasks)", o.array);
-    let tasks = match slurm.wait(&job, o.timeout) {
-        Ok(t) => t,
-        Err(e) => {
-            let _ = slurm.command("scancel").arg(&job).status();
-            print_logs(dir);
-            return Err(e);
-        }
-    };
-    let slurm_seconds = t0.elapsed().as_secs_f64();
-    Ok((job, tasks, slurm_seconds))
-}
-
-/// The command's options from its arguments.
-fn parse_options(args: &[String]) -> Result<Options> {
-    let mut o = Options {
-        keep: false,
-        array: 4,
-        timeout: Duration::from_secs(600),
-        indentify: None,
-    };
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || {
-            it.next()
-                .cloned()
-                .ok_or_else(|| anyhow!("{a} needs a value"))
-        };
-        match a.as_str() {
-            "--keep" => o.keep = true,
-            "--array" => o.array = val()?.parse().context("--array N")?,
-            "--timeout" => {
-                o.timeout = Duration::from_secs(val()?.parse().context("--timeout SECONDS")?);
-            }
-            "--indentify" => o.indentify = Some(PathBuf::from(val()?)),
-            other => bail!(
-                "unknown option {other} (cargo xtask slurm-check [--keep] [--array N] \
-                 [--timeout SECONDS] [--indentify PATH])"
-            ),
-        }
-    }
-    if o.array == 0 {
-        bail!("--array must be at least 1");
-    }
-    Ok(o)
-}
-
-/// `indentify batch` of the map on this machine into `local`; its wall time in seconds.
-fn batch_local(indentify: &Path, map: &MapFiles, local: &Path) -> Result<f64> {
-    let t0 = Instant::now();
-    let text = run_checked(
-        Command::new(indentify)
-            .arg("batch")
-            .arg(&map.manifest)
-            .arg("--out")
-            .arg(local)
-            .arg("--config")
-            .arg(&map.base)
-            .arg("--quiet"),
-        "indentify batch (local)",
-    )?;
-    let seconds = t0.elapsed().as_secs_f64();
-    print_indented("local batch", &text);
-    Ok(seconds)
-}
-
-/// Every array task's log, line by line.
-fn print_task_logs(shared: &Path) -> Result<()> {
-    println!("slurm-check: per-task logs:");
-    let mut logs: Vec<PathBuf> = fs::read_dir(shared)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with("slurm-"))
-        })
-        .collect();
-    logs.sort();
-    for p in &logs {
-        let name = p.file_name().unwrap_or_default().to_string_lossy();
-        let text = fs::read_to_string(p).unwrap_or_default();
-        if text.trim().is_empty() {
-            println!("  {name}: (empty)");
-        }
-        for line in text.lines() {
-            println!("  {name}: {line}");
-        }
-    }
-    Ok(())
-}
-
-/// What differs between the local and the merged results, and what went wrong in the array.
-fn problems(ta: &Table, tb: &Table, indents: usize, tasks: &[String], array: usize) -> Vec<String> {
-    let failed_tasks: Vec<&String> = tasks
-        .iter()
-        .filter(|t| !t.contains("JobState=COMPLETED") || !t.contains("ExitCode=0:0"))
-        .collect();
-    let mut problems = compare(ta, tb);
-    if ta.rows.len() != indents {
-        problems.push(format!(
-            "the local results.csv has {} rows for {} indents",
-            ta.rows.len(),
-            indents
-        ));
-    }
-    if tasks.len() != array {
-        problems.push(format!(
-            "scontrol reported {} array tasks, not {}",
-            tasks.len(),
-            array
-        ));
-    }
-    if !failed_tasks.is_empty() {
-        problems.push(format!(
-            "{} array tasks did not complete",
-            failed_tasks.len()
-        ));
     }
     problems
 }

@@ -74,10 +74,10 @@ fn label(v: f64) -> String {
 }
 
 impl Plot {
-    /// Renders the plot as a standalone SVG document (640 x 420 px).
-    pub fn render(&self) -> String {
-        let (w, h) = (640.0, 420.0);
-        let (ml, mr, mt, mb) = (70.0, 20.0, 40.0, 55.0);
+    /// The axes' ranges `(x0, x1, y0, y1)` over the finite points (`y` as log10 with
+    /// `log_y`): a zero-width range widened by 1, a linear `y` from 0 with 5% headroom, a
+    /// logarithmic one to whole decades.
+    fn range(&self) -> (f64, f64, f64, f64) {
         let ty = |v: f64| if self.log_y { v.max(1e-300).log10() } else { v };
         let pts = self.series.iter().flat_map(|s| s.points.iter());
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -103,6 +103,15 @@ impl Plot {
             y0 = y0.floor();
             y1 = y1.ceil();
         }
+        (x0, x1, y0, y1)
+    }
+
+    /// Renders the plot as a standalone SVG document (640 x 420 px).
+    pub fn render(&self) -> String {
+        let (w, h) = (640.0, 420.0);
+        let (ml, mr, mt, mb) = (70.0, 20.0, 40.0, 55.0);
+        let ty = |v: f64| if self.log_y { v.max(1e-300).log10() } else { v };
+        let (x0, x1, y0, y1) = self.range();
         let px = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
         let py = |y: f64| h - mb - (ty(y) - y0) / (y1 - y0) * (h - mt - mb);
         let pyt = |t: f64| h - mb - (t - y0) / (y1 - y0) * (h - mt - mb);

@@ -2,7 +2,7 @@
 //! progress (its history line written, the partial report written, exit status 130); a
 //! second one ends the process at once.
 
-use indentify_identify::Cancel;
+use indentify_study::Cancel;
 
 /// A stop flag raised by the first Ctrl-C. Installs the handler once per process; where
 /// no handler can be installed, the flag is never raised (Ctrl-C then ends the process as

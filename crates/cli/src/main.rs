@@ -1,5 +1,6 @@
 //! `indentify`: simulate instrumented indentation tests (axisymmetric finite elements,
-//! frictionless rigid punch) from RON configurations. Parsing and dispatch only.
+//! rigid punch, frictionless or Coulomb contact) from RON configurations. Parsing and
+//! dispatch only.
 
 mod commands;
 mod interrupt;
@@ -15,8 +16,8 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "indentify",
     version,
-    about = "Simulate instrumented indentation tests (axisymmetric FE, rigid frictionless punch) \
-             and identify constitutive-law parameters from force-depth curves",
+    about = "Simulate instrumented indentation tests (axisymmetric FE, rigid punch, frictionless \
+             or Coulomb contact) and identify constitutive-law parameters from force-depth curves",
     long_about = None,
     after_help = "Units everywhere: N, mm, s, MPa.\n\n\
                   Examples:\n  \
@@ -53,7 +54,10 @@ enum Command {
     )]
     Simulate(commands::simulate::Args),
     /// Print an annotated template configuration (the reference problem of the chosen law).
-    #[command(after_help = "Example: indentify init norton-hoff > my-test.ron")]
+    #[command(
+        after_help = "Examples:\n  indentify init norton-hoff > my-test.ron\n  \
+                            indentify init maxwell --data examples/data/anton-paar-unht-berkovich/anonNI.TXT --out my-tests/anon.ron"
+    )]
     Init(commands::init::Args),
     /// Validate a configuration and its --set overrides without solving; print it resolved.
     Check(commands::check::Args),

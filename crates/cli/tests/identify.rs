@@ -455,7 +455,7 @@ fn seeded_noise_is_reproducible_and_shared_with_identify() {
     assert_eq!(text, again, "same seed, same curve");
     assert!(err.contains("seed 7"), "{err}");
     let forces: Vec<f64> = exact.iter().map(|r| r[2]).collect();
-    let expected = indentify_identify::multiplicative_noise(&forces, 0.1, 7);
+    let expected = indentify_study::multiplicative_noise(&forces, 0.1, 7);
     for ((n, e), x) in noisy.iter().zip(&expected).zip(&exact) {
         assert_eq!(n[2], *e);
         assert!((n[2] - x[2]).abs() <= 0.1 * x[2].abs());

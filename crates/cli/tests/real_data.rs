@@ -335,3 +335,81 @@ fn init_templates_of_every_shipped_record_check_and_identify() {
     let o = indentify(&["init", "maxwell", "--data", &anon, "--tip", "pyramid"]);
     assert_rejected(&o, &["--tip `pyramid`", "sphere:R"], "bad tip");
 }
+
+/// `init --data FILE --out elsewhere/CONFIG` names the record relative to the
+/// configuration's folder: the configuration checks from any working folder (the record is
+/// found), and the path written is the relative one, not the one given.
+#[test]
+fn init_out_writes_the_data_path_relative_to_the_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = examples()
+        .join("data/anton-paar-unht-berkovich/anonNI.TXT")
+        .display()
+        .to_string();
+    let config = dir.path().join("configs/nested/my.ron");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    let o = indentify(&[
+        "init",
+        "maxwell",
+        "--data",
+        &file,
+        "--out",
+        config.to_str().unwrap(),
+    ]);
+    assert_ok(&o);
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(!text.contains(&file), "{text}");
+    assert!(
+        text.contains("anton-paar-unht-berkovich") && text.contains("file: \"../../"),
+        "{text}"
+    );
+    // from another working folder: the record is found from the configuration's folder
+    let o = common::indentify_in(dir.path(), &["check", config.to_str().unwrap()]);
+    assert_ok(&o);
+    assert!(
+        stderr(&o).contains("1000 samples -> 60 points"),
+        "{}",
+        stderr(&o)
+    );
+    // a folder that does not exist: refused, naming it
+    let missing = dir.path().join("no/such/folder/my.ron");
+    let o = indentify(&[
+        "init",
+        "maxwell",
+        "--data",
+        &file,
+        "--out",
+        missing.to_str().unwrap(),
+    ]);
+    assert_rejected(&o, &["no/such/folder"], "missing --out folder");
+}
+
+/// `check` of a joint configuration (examples/r2-multi-rate.ron) prepares every test, prints
+/// one summary per test, and its resolved output (with `tests`) checks again.
+#[test]
+fn check_accepts_a_joint_configuration() {
+    let o = indentify(&["check", &example("r2-multi-rate.ron")]);
+    assert_ok(&o);
+    let err = stderr(&o);
+    for label in ["load 0.1 s", "load 1 s", "load 10 s"] {
+        assert!(
+            err.contains(&format!("[{label}]: valid; law norton-hoff")),
+            "{err}"
+        );
+    }
+    let text = stdout(&o);
+    assert!(text.contains("tests: ["), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("resolved.ron");
+    std::fs::write(&p, &text).unwrap();
+    let again = indentify(&["check", p.to_str().unwrap()]);
+    assert_ok(&again);
+    let strip = |t: &str| {
+        t.lines()
+            .filter(|l| !l.starts_with("// Resolved from"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(strip(&stdout(&again)), strip(&text));
+}

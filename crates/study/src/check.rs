@@ -17,8 +17,11 @@ use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference, scan};
 use indentify_contact::{DirectSolver, SolverOptions};
 use indentify_identify::{ForceRecord, Problem};
+use indentify_laws::Law;
+use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::config::Config;
 use crate::data;
 use crate::error::{Classify, ErrorKind, Result};
 use crate::format::{Named, assignments};
@@ -171,13 +174,16 @@ pub struct CheckReport {
     pub failures: Vec<String>,
 }
 
-/// Runs the check. A failed comparison is not an error: [`CheckReport::passed`] says so.
+/// Runs the check of a configuration's cost: the one test's, or with a joint configuration
+/// (`tests: [...]`, no `--test`) the joint cost `J = sum_k w_k J_k` over every test's whole
+/// history, each test's adjoint gradient and sensitivities summed in test order (the
+/// tests solved in parallel). A failed comparison is not an error:
+/// [`CheckReport::passed`] says so.
 ///
 /// # Errors
 /// Invalid inputs (a step or tolerance out of range, a check point outside the law's
-/// admissible range), a failing solve.
+/// admissible range, `--data` with a joint configuration), a failing solve.
 pub fn run(args: &CheckOptions) -> Result<CheckReport> {
-    let config_error = |msg: String| Err(crate::Error::msg(ErrorKind::Config, msg));
     if !(args.rel_step > 0.0 && args.rel_step < 1.0) {
         return config_error(format!(
             "--rel-step {} is not allowed: expected a relative step in (0, 1), e.g. 1e-5",
@@ -191,77 +197,233 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let name = args.config.name();
-    let cfg = args.config.load(&args.sets)?;
-    if cfg.tests.is_some() && args.test.is_none() {
-        return run_joint(args, cfg, &name);
+    let mut cfg = args.config.load(&args.sets)?;
+    if args.test.is_some() {
+        cfg = cfg
+            .one_test(args.test, "gradient-check", &name)
+            .kind(ErrorKind::Config)?;
     }
-    let cfg = cfg
-        .one_test(args.test, "gradient-check", &name)
-        .kind(ErrorKind::Config)?;
+    if cfg.tests.is_some() && args.data.is_some() {
+        return config_error(format!(
+            "--data replaces the record of a one-test configuration, and `{name}` is a joint \
+             configuration: give each test's record in tests[K].data, or check one test with \
+             --test K"
+        ));
+    }
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    // tight forward solves for the differences (and the synthesized data)
+    cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
+    let opts = cfg.solver.options(true);
+    let set_up = set_up(args, &cfg, &name, law, &truth)?;
+    let point = check_point(args, law, &truth, set_up.synthesized)?;
+    let SetUp {
+        problem,
+        run_names,
+        data_name,
+        synthesized,
+    } = set_up;
+    // each solver borrows its test's model, which lives in the problem
+    let mut solvers: Vec<DirectSolver> = problem
+        .tests
+        .iter()
+        .map(|t| DirectSolver::new(&t.model))
+        .collect::<std::result::Result<_, _>>()
+        .kind(ErrorKind::Solver)?;
+    let at = at_point(&problem, &mut solvers, &point, &opts, &run_names)?;
+    let fd_start = Instant::now();
+    let (checks, solves) = compare(args, &problem, &mut solvers, &point, &at, &opts, &run_names)?;
+    let fd_seconds = fd_start.elapsed().as_secs_f64();
+    let passed = checks.iter().all(|c| c.passed);
+    let failures: Vec<String> = checks
+        .iter()
+        .filter(|c| !c.passed)
+        .map(|c| {
+            let flip = if c.statuses_held == Some(false) {
+                "; a contact or stick/slip status flips under +-h (the cost is not \
+                 differentiable across it: the difference is not meaningful; try a smaller \
+                 --rel-step)"
+            } else {
+                ""
+            };
+            format!(
+                "{}: adjoint vs central FD {:.1e} (--tol {:.0e}), adjoint vs sensitivities {:.1e} \
+                 (limit {SENSITIVITY_TOL:.0e}){flip}",
+                c.name, c.rel_diff_fd, args.tol, c.rel_diff_sensitivity
+            )
+        })
+        .collect();
     let names = param_names(law);
-    let infos = law.params();
-    let prepared = prepare(&cfg, &name)?;
-    let (schedule, model) = (prepared.schedule, prepared.model);
-    let opts = SolverOptions {
-        residual_tol: cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL),
-        ..cfg.solver.options(true)
-    };
+    Ok(CheckReport {
+        law: law.name(),
+        config: name,
+        data: if synthesized {
+            "synthesized".into()
+        } else {
+            data_name.clone()
+        },
+        truth: synthesized.then(|| Named::new(names.iter().copied().zip(truth.clone()))),
+        params: Named::new(names.iter().copied().zip(point.iter().copied())),
+        j: at.j,
+        rel_step: args.rel_step,
+        tol: args.tol,
+        sensitivity_tol: SENSITIVITY_TOL,
+        residual_tol: opts.residual_tol,
+        checks,
+        passed,
+        forward_seconds: at.forward_seconds,
+        adjoint_seconds: at.adjoint_seconds,
+        sensitivity_seconds: at.sensitivity_seconds,
+        fd_seconds,
+        fd_forward_solves: solves,
+        schedule_times: problem.tests.iter().map(|t| t.schedule.t.len()).sum(),
+        data_name,
+        synthesized,
+        failures,
+    })
+}
+
+/// A [`ErrorKind::Config`] error.
+fn config_error<T>(msg: String) -> Result<T> {
+    Err(crate::Error::msg(ErrorKind::Config, msg))
+}
+
+/// The tests of a check, set up: the problem, a direct solver per test, the data.
+struct SetUp {
+    problem: Problem,
+    /// Each test's name in messages (`config [label]` in a joint configuration).
+    run_names: Vec<String>,
+    data_name: String,
+    synthesized: bool,
+}
+
+/// Every test of `cfg` (the configuration itself without `tests`) prepared, its data read
+/// (`--data`, one test only) or synthesized at `truth`, and weighted (1 for a one-test
+/// configuration, else its `weight` or the default `1 / (n F_max^2)`).
+fn set_up(
+    args: &CheckOptions,
+    cfg: &Config,
+    name: &str,
+    law: &'static dyn Law,
+    truth: &[f64],
+) -> Result<SetUp> {
+    let opts = cfg.solver.options(true);
     let fd_opts = SolverOptions {
         record_fields: false,
         ..opts.clone()
     };
-
-    // data and check point
-    let (record, data_name, point, synthesized) = match &args.data {
-        Some(path) => {
-            let curve = data::read_curve(path).kind(ErrorKind::Data)?;
-            let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
-            curve.check_covers(t0, t1, &name).kind(ErrorKind::Data)?;
-            (
-                curve.record().kind(ErrorKind::Data)?,
-                curve.name.clone(),
-                truth.clone(),
-                false,
-            )
-        }
-        None => {
-            let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
-            let traj = forward(&mut solver, law, &truth, &schedule, &fd_opts, &name)
-                .kind(ErrorKind::Solver)?;
-            let record = ForceRecord::new(schedule.t.clone(), traj.forces())
-                .context("cannot use the simulated curve as data")
+    let names = param_names(law);
+    let mut tests = Vec::with_capacity(cfg.n_tests());
+    let mut run_names = Vec::with_capacity(cfg.n_tests());
+    let mut data_name = String::new();
+    for k in 0..cfg.n_tests() {
+        let (sub, run_name, what) = match &cfg.tests {
+            Some(_) => (
+                cfg.test_config(k)
+                    .with_context(|| format!("in tests[{k}] of `{name}`"))
+                    .kind(ErrorKind::Config)?,
+                format!("{name} [{}]", cfg.test_name(k)),
+                format!("tests[{k}] of `{name}`"),
+            ),
+            None => (cfg.clone(), name.to_string(), format!("`{name}`")),
+        };
+        let prepared = prepare(&sub, &run_name)?;
+        let (schedule, model) = (prepared.schedule, prepared.model);
+        let record = match &args.data {
+            Some(path) => {
+                let curve = data::read_curve(path).kind(ErrorKind::Data)?;
+                let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
+                curve.check_covers(t0, t1, name).kind(ErrorKind::Data)?;
+                data_name = curve.name.clone();
+                curve.record().kind(ErrorKind::Data)?
+            }
+            None => {
+                let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
+                let traj = forward(&mut solver, law, truth, &schedule, &fd_opts, &run_name)
+                    .kind(ErrorKind::Solver)?;
+                ForceRecord::new(schedule.t.clone(), traj.forces())
+                    .context("cannot use the simulated curve as data")
+                    .kind(ErrorKind::Data)?
+            }
+        };
+        let compare = || match &args.data {
+            Some(_) => format!("cannot compare `{data_name}` with {what}"),
+            None => format!("cannot compare the data with {what}"),
+        };
+        let weight = match cfg.tests.as_ref().map(|t| t[k].weight) {
+            None => 1.0,
+            Some(Some(w)) => w,
+            Some(None) => indentify_identify::Test::default_weight(&schedule, &record)
+                .with_context(compare)
+                .kind(ErrorKind::Data)?,
+        };
+        let test =
+            indentify_identify::Test::new(model, schedule, &record, None, opts.clone(), weight)
+                .with_context(compare)
                 .kind(ErrorKind::Data)?;
-            let point: Vec<f64> = names
-                .iter()
-                .zip(&truth)
-                .map(|(n, v)| {
-                    let factor = if *n == "nu" {
-                        NU_PERTURBATION
-                    } else {
-                        PERTURBATION
-                    };
-                    round_significant(v * factor)
-                })
-                .collect();
-            law.check_params(&point)
-                .map_err(|e| {
-                    anyhow!(
-                        "the check point (configuration x {PERTURBATION}, nu x \
-                         {NU_PERTURBATION}) is not admissible: {e}; give --data or other law \
-                         values"
-                    )
-                })
-                .kind(ErrorKind::Config)?;
-            let data = format!(
-                "synthesized from `{name}` at {}",
-                assignments(&names, &truth)
+        tests.push(test);
+        run_names.push(run_name);
+    }
+    let synthesized = args.data.is_none();
+    if synthesized {
+        data_name = format!(
+            "synthesized from `{name}` at {}",
+            assignments(&names, truth)
+        );
+        if cfg.tests.is_some() {
+            data_name = format!(
+                "the joint cost sum_k w_k J_k of {} tests, each {data_name}",
+                tests.len()
             );
-            (record, data, point, true)
         }
+    }
+    let problem =
+        Problem::joint(law, tests).map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
+    Ok(SetUp {
+        problem,
+        run_names,
+        data_name,
+        synthesized,
+    })
+}
+
+/// The check point: with synthesized data the truth perturbed ([`PERTURBATION`],
+/// [`NU_PERTURBATION`]), else the truth; refused where the law is not differentiable or a
+/// difference stencil leaves a parameter's range.
+fn check_point(
+    args: &CheckOptions,
+    law: &'static dyn Law,
+    truth: &[f64],
+    synthesized: bool,
+) -> Result<Vec<f64>> {
+    let names = param_names(law);
+    let point: Vec<f64> = if synthesized {
+        names
+            .iter()
+            .zip(truth)
+            .map(|(n, v)| {
+                let factor = if *n == "nu" {
+                    NU_PERTURBATION
+                } else {
+                    PERTURBATION
+                };
+                round_significant(v * factor)
+            })
+            .collect()
+    } else {
+        truth.to_vec()
     };
+    if synthesized {
+        law.check_params(&point)
+            .map_err(|e| {
+                anyhow!(
+                    "the check point (configuration x {PERTURBATION}, nu x {NU_PERTURBATION}) \
+                     is not admissible: {e}; give --data or other law values"
+                )
+            })
+            .kind(ErrorKind::Config)?;
+    }
     ensure_differentiable(law, &point, "no gradient check").kind(ErrorKind::Config)?;
-    for (k, info) in infos.iter().enumerate() {
+    for (k, info) in law.params().iter().enumerate() {
         let h = if point[k] == 0.0 {
             args.rel_step
         } else {
@@ -284,63 +446,163 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             ));
         }
     }
-    let problem = Problem::new(model, law, schedule, &record, None, opts.clone())
-        .with_context(|| format!("cannot compare `{data_name}` with `{name}`"))
-        .kind(ErrorKind::Data)?;
-    let model = &problem.model();
-    let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
+    Ok(point)
+}
 
-    // adjoint and sensitivities at the check point
-    let start = Instant::now();
-    let traj = forward(&mut solver, law, &point, problem.schedule(), &opts, &name)
-        .kind(ErrorKind::Solver)?;
-    let forward_seconds = start.elapsed().as_secs_f64();
-    let j = problem.cost_of(&traj.forces());
-    let rho = problem.dj_df(&traj);
-    let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
-    let grad = adjoint
-        .gradient(law, &point, &traj, &rho)
-        .context("the adjoint sweep failed")
-        .kind(ErrorKind::Solver)?;
-    let sens = adjoint
-        .sensitivities(law, &point, &traj)
-        .context("the forward sensitivities failed")
-        .kind(ErrorKind::Solver)?;
-    let jt_rho = sens.transpose_mul(&rho);
-    // with friction, the differences are meaningful only where no status flips
-    let statuses = |t: &indentify_contact::Trajectory| -> Vec<(Vec<u32>, Vec<i8>)> {
-        t.steps
-            .iter()
-            .map(|s| (s.active.clone(), s.slip.clone()))
+/// The contact set and stick/slip statuses of every step (with friction, the differences
+/// are meaningful only where none flips).
+type Statuses = Vec<(Vec<u32>, Vec<i8>)>;
+
+fn statuses(t: &indentify_contact::Trajectory) -> Statuses {
+    t.steps
+        .iter()
+        .map(|s| (s.active.clone(), s.slip.clone()))
+        .collect()
+}
+
+/// `f` over the tests with their solvers: inline for one test, in parallel (results in
+/// test order) for several.
+fn each_test<R: Send>(
+    problem: &Problem,
+    solvers: &mut [DirectSolver<'_>],
+    f: impl Fn(usize, &indentify_identify::Test, &mut DirectSolver<'_>) -> Result<R> + Sync + Send,
+) -> Result<Vec<R>> {
+    if let [solver] = solvers {
+        return Ok(vec![f(0, &problem.tests[0], solver)?]);
+    }
+    problem.install(|| {
+        solvers
+            .par_iter_mut()
+            .zip(&problem.tests)
+            .enumerate()
+            .map(|(k, (solver, test))| f(k, test, solver))
             .collect()
-    };
-    let base_statuses = (model.contact.friction() > 0.0).then(|| statuses(&traj));
-    let flipped = std::cell::Cell::new(false);
-    drop(traj);
+    })
+}
 
-    // finite differences of the forward solver's own cost
-    let fd_start = Instant::now();
+/// The cost, gradients and statuses at the check point.
+struct AtPoint {
+    j: f64,
+    /// The adjoint gradient, the tests' summed in test order.
+    gradient: Vec<f64>,
+    /// `J^T rho` from the forward sensitivities, over every test's steps in order.
+    jt_rho: Vec<f64>,
+    /// Each test's statuses, with friction.
+    statuses: Vec<Option<Statuses>>,
+    forward_seconds: f64,
+    adjoint_seconds: f64,
+    sensitivity_seconds: f64,
+}
+
+/// Each test's forward run, adjoint gradient and forward sensitivities at `point`.
+fn at_point(
+    problem: &Problem,
+    solvers: &mut [DirectSolver<'_>],
+    point: &[f64],
+    opts: &SolverOptions,
+    names: &[String],
+) -> Result<AtPoint> {
+    let law = problem.law;
+    let start = Instant::now();
+    let runs = each_test(problem, solvers, |k, test, solver| {
+        let model = &test.model;
+        let traj =
+            forward(solver, law, point, &test.schedule, opts, &names[k]).kind(ErrorKind::Solver)?;
+        let forward_done = start.elapsed().as_secs_f64();
+        let rho = test.dj_df(&traj);
+        let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
+        let grad = adjoint
+            .gradient(law, point, &traj, &rho)
+            .context("the adjoint sweep failed")
+            .kind(ErrorKind::Solver)?;
+        let sens = adjoint
+            .sensitivities(law, point, &traj)
+            .context("the forward sensitivities failed")
+            .kind(ErrorKind::Solver)?;
+        let held = (model.contact.friction() > 0.0).then(|| statuses(&traj));
+        Ok((traj.forces(), rho, grad, sens, held, forward_done))
+    })?;
+    let mut forces = Vec::with_capacity(problem.target.len());
+    let mut gradient: Option<Vec<f64>> = None;
+    let mut jt_rho = vec![0.0; law.params().len()];
+    let mut at = AtPoint {
+        j: 0.0,
+        gradient: Vec::new(),
+        jt_rho: Vec::new(),
+        statuses: Vec::with_capacity(runs.len()),
+        forward_seconds: 0.0,
+        adjoint_seconds: 0.0,
+        sensitivity_seconds: 0.0,
+    };
+    for (f, rho, grad, sens, held, forward_done) in runs {
+        forces.extend(f);
+        match gradient.as_mut() {
+            None => gradient = Some(grad.dj_dc),
+            Some(g) => g.iter_mut().zip(&grad.dj_dc).for_each(|(a, b)| *a += b),
+        }
+        for (row, r) in sens.df_dc.iter().zip(&rho) {
+            for (gk, d) in jt_rho.iter_mut().zip(row) {
+                *gk += r * d;
+            }
+        }
+        at.statuses.push(held);
+        at.forward_seconds = at.forward_seconds.max(forward_done);
+        at.adjoint_seconds += grad.seconds;
+        at.sensitivity_seconds += sens.seconds;
+    }
+    at.j = problem.cost_of(&forces);
+    at.gradient = gradient.unwrap_or_default();
+    at.jt_rho = jt_rho;
+    Ok(at)
+}
+
+/// Central differences of the cost (every test's forward run at `c +- h e_k`) against the
+/// adjoint and the sensitivities, per parameter; the forward solves they took.
+fn compare(
+    args: &CheckOptions,
+    problem: &Problem,
+    solvers: &mut [DirectSolver<'_>],
+    point: &[f64],
+    at: &AtPoint,
+    opts: &SolverOptions,
+    names: &[String],
+) -> Result<(Vec<ParamCheck>, usize)> {
+    let law = problem.law;
+    let fd_opts = SolverOptions {
+        record_fields: false,
+        ..opts.clone()
+    };
+    let friction = at.statuses.iter().any(Option::is_some);
+    let flipped = std::cell::Cell::new(false);
     let mut solves = 0usize;
     let mut cost = |c: &[f64]| -> Result<f64> {
-        solves += 1;
-        let t = forward(&mut solver, law, c, problem.schedule(), &fd_opts, &name)
-            .kind(ErrorKind::Solver)?;
-        if base_statuses.as_ref().is_some_and(|b| *b != statuses(&t)) {
-            flipped.set(true);
+        solves += problem.tests.len();
+        let runs = each_test(problem, solvers, |k, test, solver| {
+            let t = forward(solver, law, c, &test.schedule, &fd_opts, &names[k])
+                .kind(ErrorKind::Solver)?;
+            let kept = at.statuses[k].as_ref().is_none_or(|b| *b == statuses(&t));
+            Ok((t.forces(), kept))
+        })?;
+        let mut forces = Vec::with_capacity(problem.target.len());
+        for (f, kept) in runs {
+            forces.extend(f);
+            if !kept {
+                flipped.set(true);
+            }
         }
-        Ok(problem.cost_of(&t.forces()))
+        Ok(problem.cost_of(&forces))
     };
     let mut checks = Vec::new();
-    for (k, info) in infos.iter().enumerate() {
+    for (k, info) in law.params().iter().enumerate() {
         flipped.set(false);
-        let fd = central_difference(&mut cost, &point, k, args.rel_step)?;
-        let statuses_held = base_statuses.as_ref().map(|_| !flipped.get());
+        let fd = central_difference(&mut cost, point, k, args.rel_step)?;
+        let statuses_held = friction.then(|| !flipped.get());
         let rows = if args.scan {
-            Some(scan(&mut cost, &point, k, grad.dj_dc[k], &SCAN_STEPS)?)
+            Some(scan(&mut cost, point, k, at.gradient[k], &SCAN_STEPS)?)
         } else {
             None
         };
-        let (a, s) = (grad.dj_dc[k], jt_rho[k]);
+        let (a, s) = (at.gradient[k], at.jt_rho[k]);
         let (rd_fd, rd_s) = (relative_difference(a, fd), relative_difference(a, s));
         checks.push(ParamCheck {
             name: info.name,
@@ -367,211 +629,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             statuses_held,
         });
     }
-    let fd_seconds = fd_start.elapsed().as_secs_f64();
-    let passed = checks.iter().all(|c| c.passed);
-    let failures: Vec<String> = checks
-        .iter()
-        .filter(|c| !c.passed)
-        .map(|c| {
-            let flip = if c.statuses_held == Some(false) {
-                "; a contact or stick/slip status flips under +-h (the cost is not \
-                 differentiable across it: the difference is not meaningful; try a smaller \
-                 --rel-step)"
-            } else {
-                ""
-            };
-            format!(
-                "{}: adjoint vs central FD {:.1e} (--tol {:.0e}), adjoint vs sensitivities {:.1e} \
-                 (limit {SENSITIVITY_TOL:.0e}){flip}",
-                c.name, c.rel_diff_fd, args.tol, c.rel_diff_sensitivity
-            )
-        })
-        .collect();
-
-    Ok(CheckReport {
-        law: law.name(),
-        config: name.clone(),
-        data: if synthesized {
-            "synthesized".into()
-        } else {
-            data_name.clone()
-        },
-        truth: synthesized.then(|| Named::new(names.iter().copied().zip(truth.clone()))),
-        params: Named::new(names.iter().copied().zip(point.iter().copied())),
-        j,
-        rel_step: args.rel_step,
-        tol: args.tol,
-        sensitivity_tol: SENSITIVITY_TOL,
-        residual_tol: opts.residual_tol,
-        checks,
-        passed,
-        forward_seconds,
-        adjoint_seconds: grad.seconds,
-        sensitivity_seconds: sens.seconds,
-        fd_seconds,
-        fd_forward_solves: solves,
-        schedule_times: problem.schedule().t.len(),
-        data_name,
-        synthesized,
-        failures,
-    })
-}
-
-/// The check of a joint configuration (`tests: [...]`, no `--test`): the gradient of the
-/// joint cost `J = sum_k w_k J_k` (the tests' adjoint gradients summed in test order by
-/// the [`Evaluator`], tests solved in parallel) against central differences of the joint
-/// cost over every test's whole history and against the stacked sensitivities
-/// `sum_i w_i (F_i - F_i^exp) dF_i/dc`. Tests without a record are synthesized at the law
-/// values; when every test is synthesized the check point is perturbed as for one test,
-/// else it is the law values.
-fn run_joint(
-    args: &CheckOptions,
-    mut cfg: crate::config::Config,
-    name: &str,
-) -> Result<CheckReport> {
-    use indentify_identify::Evaluator;
-    if args.data.is_some() {
-        return Err(crate::Error::msg(
-            ErrorKind::Config,
-            format!(
-                "--data replaces the record of a one-test configuration, and `{name}` is a \
-                 joint configuration: give each test's record in tests[K].data, or check one \
-                 test with --test K"
-            ),
-        ));
-    }
-    let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
-    let names = param_names(law);
-    let infos = law.params();
-    // tight forward solves for the differences (the data are synthesized with them too)
-    cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
-    let opts = crate::identify::IdentifyOptions::new(args.config.clone());
-    let (problem, tests, _) = crate::identify::joint_problem(&opts, &cfg, name, law, &truth)?;
-    let synthesized = tests.iter().all(|(_, d, ..)| d.truth.is_some());
-    let point: Vec<f64> = if synthesized {
-        names
-            .iter()
-            .zip(&truth)
-            .map(|(n, v)| {
-                let f = if *n == "nu" {
-                    NU_PERTURBATION
-                } else {
-                    PERTURBATION
-                };
-                round_significant(v * f)
-            })
-            .collect()
-    } else {
-        truth.clone()
-    };
-    law.check_params(&point)
-        .map_err(|e| anyhow!("the check point is not admissible: {e}"))
-        .kind(ErrorKind::Config)?;
-    ensure_differentiable(law, &point, "no gradient check").kind(ErrorKind::Config)?;
-    let mut eval = Evaluator::new(&problem).kind(ErrorKind::Solver)?;
-    let start = Instant::now();
-    let forces = eval.forces(&point).kind(ErrorKind::Solver)?;
-    let forward_seconds = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let (j, grad) = eval.cost_and_gradient(&point).kind(ErrorKind::Solver)?;
-    let adjoint_seconds = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let jac = eval.jacobian(&point).kind(ErrorKind::Solver)?;
-    let sensitivity_seconds = start.elapsed().as_secs_f64();
-    let rho: Vec<f64> = forces
-        .iter()
-        .zip(&problem.target)
-        .zip(&problem.weights)
-        .map(|((f, t), w)| w * (f - t))
-        .collect();
-    let fd_start = Instant::now();
-    let mut solves = 0usize;
-    let mut cost = |c: &[f64]| -> Result<f64> {
-        solves += 1;
-        eval.cost(c).kind(ErrorKind::Solver)
-    };
-    let mut checks = Vec::new();
-    for (k, info) in infos.iter().enumerate() {
-        let fd = central_difference(&mut cost, &point, k, args.rel_step)?;
-        let rows = if args.scan {
-            Some(scan(&mut cost, &point, k, grad[k], &SCAN_STEPS)?)
-        } else {
-            None
-        };
-        let s: f64 = jac.iter().zip(&rho).map(|(row, r)| r * row[k]).sum();
-        let a = grad[k];
-        let (rd_fd, rd_s) = (relative_difference(a, fd), relative_difference(a, s));
-        checks.push(ParamCheck {
-            name: info.name,
-            unit: info.unit,
-            value: point[k],
-            adjoint: a,
-            fd,
-            sensitivity: s,
-            rel_diff_fd: rd_fd,
-            rel_diff_sensitivity: rd_s,
-            passed: rd_fd <= args.tol && rd_s <= SENSITIVITY_TOL && a.is_finite(),
-            scan: rows.map(|r| {
-                r.iter()
-                    .map(|r| ScanRow {
-                        rel_step: r.h_rel,
-                        fd: r.fd,
-                        rel_diff: r.rel_diff,
-                    })
-                    .collect()
-            }),
-            statuses_held: None,
-        });
-    }
-    let fd_seconds = fd_start.elapsed().as_secs_f64();
-    let passed = checks.iter().all(|c| c.passed);
-    let failures: Vec<String> = checks
-        .iter()
-        .filter(|c| !c.passed)
-        .map(|c| {
-            format!(
-                "{}: adjoint vs central FD {:.1e} (--tol {:.0e}), adjoint vs sensitivities {:.1e} \
-                 (limit {SENSITIVITY_TOL:.0e})",
-                c.name, c.rel_diff_fd, args.tol, c.rel_diff_sensitivity
-            )
-        })
-        .collect();
-    let describe = tests
-        .iter()
-        .map(|(label, d, ..)| format!("{label}: {}", d.describe))
-        .collect::<Vec<_>>()
-        .join("; ");
-    let data_name = format!(
-        "the joint cost sum_k w_k J_k of {} tests ({describe})",
-        tests.len()
-    );
-    Ok(CheckReport {
-        law: law.name(),
-        config: name.to_string(),
-        data: if synthesized {
-            "synthesized".into()
-        } else {
-            data_name.clone()
-        },
-        truth: synthesized.then(|| Named::new(names.iter().copied().zip(truth.clone()))),
-        params: Named::new(names.iter().copied().zip(point.iter().copied())),
-        j,
-        rel_step: args.rel_step,
-        tol: args.tol,
-        sensitivity_tol: SENSITIVITY_TOL,
-        residual_tol: cfg.solver.residual_tol,
-        checks,
-        passed,
-        forward_seconds,
-        adjoint_seconds,
-        sensitivity_seconds,
-        fd_seconds,
-        fd_forward_solves: solves,
-        schedule_times: problem.n_data(),
-        data_name,
-        synthesized,
-        failures,
-    })
+    Ok((checks, solves))
 }
 
 /// `v` rounded to 12 significant digits.

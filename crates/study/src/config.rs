@@ -6,6 +6,7 @@
 //! path) -> `--set` overrides (through a `serde_json::Value`, so any scalar can be reached
 //! by its path) -> [`Config::validate`], which asks each library to check its own inputs.
 
+mod design;
 mod identify;
 
 use std::path::{Path, PathBuf};
@@ -21,6 +22,7 @@ use crate::format::sig;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+pub use design::{Candidate, DesignSection};
 pub use identify::{
     BfgsStartName, IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName,
     fixed_item, name_value,
@@ -70,10 +72,10 @@ pub struct Config {
     /// `tests`, the top level has neither `history` nor `data`. See [`TestSpec`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tests: Option<Vec<TestSpec>>,
-    /// Candidate protocols that `indentify design` ranks (see
-    /// [`crate::design::DesignSection`]); ignored by the other commands.
+    /// Candidate protocols that `indentify design` ranks (see [`DesignSection`]);
+    /// ignored by the other commands.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub design: Option<crate::design::DesignSection>,
+    pub design: Option<DesignSection>,
     /// The folder relative to which `data.file` is found (the configuration file's own);
     /// not part of the file.
     #[serde(skip)]
@@ -1101,6 +1103,26 @@ impl Config {
             .and_then(|t| t.get(k))
             .and_then(|t| t.name.clone())
             .unwrap_or_else(|| format!("test {}", k + 1))
+    }
+
+    /// Every test as a one-test configuration, with the name its runs and messages use:
+    /// the configuration itself named `name`, or each test of a joint configuration
+    /// ([`Config::test_config`]) named `name [label]` ([`Config::test_name`]).
+    ///
+    /// # Errors
+    /// None for a valid configuration (a joint one's tests are checked when it loads).
+    pub fn one_test_configs(&self, name: &str) -> Result<Vec<(String, Config)>> {
+        match &self.tests {
+            None => Ok(vec![(name.to_string(), self.clone())]),
+            Some(tests) => (0..tests.len())
+                .map(|k| {
+                    let sub = self
+                        .test_config(k)
+                        .with_context(|| format!("in tests[{k}] of `{name}`"))?;
+                    Ok((format!("{name} [{}]", self.test_name(k)), sub))
+                })
+                .collect(),
+        }
     }
 
     /// The one-test configuration a command that runs one test works on: `self` without

@@ -18,16 +18,7 @@ use serde::Serialize;
 
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::format::sig;
-use crate::identify::{IdentifyOptions, joint_problem, resolve, setup};
-
-/// What a cost map needs of a configuration (one test or a joint `tests` list).
-struct Slice {
-    name: String,
-    law: &'static dyn indentify_laws::Law,
-    law_values: Vec<f64>,
-    id_cfg: indentify_identify::IdentifyConfig,
-    problem: indentify_identify::Problem,
-}
+use crate::identify::{IdentifyOptions, Resolved, Setup, resolve, setup};
 
 /// Where the slice passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -150,99 +141,18 @@ pub fn run(opts: &MapOptions) -> Result<CostMap> {
 
 fn run_here(opts: &MapOptions) -> Result<CostMap> {
     let cfg_err = |msg: String| Error::msg(ErrorKind::Config, msg);
-    if !(3..=MAX_GRID).contains(&opts.grid) {
-        return Err(cfg_err(format!(
-            "--grid {} is not allowed: expected a number of points per side in [3, {MAX_GRID}]",
-            opts.grid
-        )));
-    }
-    if opts.span.len() > 2 || opts.span.iter().any(|s| !(*s > 0.0 && s.is_finite())) {
-        return Err(cfg_err(format!(
-            "--span {:?} is not allowed: expected one or two finite values > 0 (half-widths in \
-             the scaled variables, e.g. 0.5 = a factor e^0.5 on a log-scaled parameter)",
-            opts.span
-        )));
-    }
+    check_grid(opts)?;
     let resolved = resolve(&opts.identify)?;
-    let law_names = resolved.names.clone();
-    let [a, b] = match opts.pair.as_slice() {
-        [a, b] => [a.trim(), b.trim()],
-        _ => {
-            return Err(cfg_err(format!(
-                "--pair needs exactly two parameter names (e.g. --pair E,eta), got {:?}",
-                opts.pair
-            )));
-        }
-    };
-    for n in [a, b] {
-        let Some(spec) = resolved.id_cfg.params.iter().find(|p| p.name == n) else {
-            return Err(cfg_err(format!(
-                "--pair: law `{}` has no parameter `{n}`; its parameters are {}",
-                resolved.law.name(),
-                law_names.join(", ")
-            )));
-        };
-        if !spec.free {
-            return Err(cfg_err(format!(
-                "--pair: `{n}` is held (fixed) in this identification: free it (--free, or \
-                 identify.params.{n}: Free(...)) or map another parameter"
-            )));
-        }
-    }
-    if a == b {
-        return Err(cfg_err(format!(
-            "--pair names `{a}` twice: expected two different free parameters"
-        )));
-    }
+    let [a, b] = check_pair(opts, &resolved)?;
     if let Some(out) = &opts.out {
         crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
     }
     let through = opts.through;
     // a joint configuration's slice is through its joint cost sum_k w_k J_k
-    let s = if resolved.cfg.tests.is_some() {
-        let (problem, ..) = joint_problem(
-            &opts.identify,
-            &resolved.cfg,
-            &resolved.name,
-            resolved.law,
-            &resolved.law_values,
-        )?;
-        Slice {
-            name: resolved.name,
-            law: resolved.law,
-            law_values: resolved.law_values,
-            id_cfg: resolved.id_cfg,
-            problem,
-        }
-    } else {
-        let s = setup(resolved, &opts.identify)?;
-        Slice {
-            name: s.name,
-            law: s.law,
-            law_values: s.law_values,
-            id_cfg: s.id_cfg,
-            problem: s.problem,
-        }
-    };
+    let s = setup(resolved, &opts.identify)?;
     let param = Parameterization::new(s.law, &s.id_cfg.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
-    let centre: Vec<f64> = match through {
-        Through::Law => s.law_values.clone(),
-        Through::Start => param.base.clone(),
-        Through::Fit => {
-            let mut cfg = s.id_cfg.clone();
-            cfg.identifiability = false;
-            let r = identify(&s.problem, &cfg, &mut |_| {})
-                .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
-            tracing::info!(
-                "  fit for the slice: J = {:.6e} N^2 after {} iterations ({})",
-                r.cost,
-                r.iterations,
-                r.stop_reason
-            );
-            r.c
-        }
-    };
+    let centre = centre(&s, &param, through)?;
     let k_of = |n: &str| param.free.iter().position(|f| f.name == n);
     let (Some(ka), Some(kb)) = (k_of(a), k_of(b)) else {
         return Err(cfg_err(format!("--pair {a},{b}: not free parameters")));
@@ -338,6 +248,83 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
         map.files = write(out, &map, [fx.scaling, fy.scaling])?;
     }
     Ok(map)
+}
+
+/// Checks `--grid` and `--span`.
+fn check_grid(opts: &MapOptions) -> Result<()> {
+    let cfg_err = |msg: String| Error::msg(ErrorKind::Config, msg);
+    if !(3..=MAX_GRID).contains(&opts.grid) {
+        return Err(cfg_err(format!(
+            "--grid {} is not allowed: expected a number of points per side in [3, {MAX_GRID}]",
+            opts.grid
+        )));
+    }
+    if opts.span.len() > 2 || opts.span.iter().any(|s| !(*s > 0.0 && s.is_finite())) {
+        return Err(cfg_err(format!(
+            "--span {:?} is not allowed: expected one or two finite values > 0 (half-widths in \
+             the scaled variables, e.g. 0.5 = a factor e^0.5 on a log-scaled parameter)",
+            opts.span
+        )));
+    }
+    Ok(())
+}
+
+/// Checks `--pair` (two different free parameters of the law) before any solve; the
+/// pair's names.
+fn check_pair<'a>(opts: &'a MapOptions, resolved: &Resolved) -> Result<[&'a str; 2]> {
+    let cfg_err = |msg: String| Error::msg(ErrorKind::Config, msg);
+    let law_names = &resolved.names;
+    let [a, b] = match opts.pair.as_slice() {
+        [a, b] => [a.trim(), b.trim()],
+        _ => {
+            return Err(cfg_err(format!(
+                "--pair needs exactly two parameter names (e.g. --pair E,eta), got {:?}",
+                opts.pair
+            )));
+        }
+    };
+    for n in [a, b] {
+        let Some(spec) = resolved.id_cfg.params.iter().find(|p| p.name == n) else {
+            return Err(cfg_err(format!(
+                "--pair: law `{}` has no parameter `{n}`; its parameters are {}",
+                resolved.law.name(),
+                law_names.join(", ")
+            )));
+        };
+        if !spec.free {
+            return Err(cfg_err(format!(
+                "--pair: `{n}` is held (fixed) in this identification: free it (--free, or \
+                 identify.params.{n}: Free(...)) or map another parameter"
+            )));
+        }
+    }
+    if a == b {
+        return Err(cfg_err(format!(
+            "--pair names `{a}` twice: expected two different free parameters"
+        )));
+    }
+    Ok([a, b])
+}
+
+/// The slice's centre: the law values, the start, or the optimum of a fit.
+fn centre(s: &Setup, param: &Parameterization, through: Through) -> Result<Vec<f64>> {
+    Ok(match through {
+        Through::Law => s.law_values.clone(),
+        Through::Start => param.base.clone(),
+        Through::Fit => {
+            let mut cfg = s.id_cfg.clone();
+            cfg.identifiability = false;
+            let r = identify(&s.problem, &cfg, &mut |_| {})
+                .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
+            tracing::info!(
+                "  fit for the slice: J = {:.6e} N^2 after {} iterations ({})",
+                r.cost,
+                r.iterations,
+                r.stop_reason
+            );
+            r.c
+        }
+    })
 }
 
 /// `x,y,J` lines (named after the parameters), x fastest.

@@ -33,79 +33,14 @@ use anyhow::anyhow;
 use indentify_identify::identifiability::{Column, Forces};
 use indentify_identify::{Evaluator, Identifiability, NoiseModel, Parameterization};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use crate::config::{Config, NoiseSetting, Overrides, TestSpec};
+pub use crate::config::{Candidate, DesignSection};
+use crate::config::{Config, Overrides};
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::format::sig;
-use crate::identify::{IdentifyOptions, joint_problem, resolve};
+use crate::identify::{IdentifyOptions, resolve, set_up_tests};
 use crate::source::ConfigSource;
-
-/// The `design: (...)` section of a configuration.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename = "design")]
-pub struct DesignSection {
-    /// The noise the standard deviations assume: `Relative(f)` (standard deviation `f`
-    /// times the force) or `Absolute(s)` (N).
-    pub noise: NoiseSetting,
-    /// The candidate protocols (at least one).
-    pub candidates: Vec<Candidate>,
-}
-
-/// One candidate protocol: a test, or tests fitted jointly.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename = "candidate")]
-pub struct Candidate {
-    /// Its label in the table.
-    pub name: String,
-    /// Its tests, as in a joint fit's `tests` list.
-    pub tests: Vec<TestSpec>,
-}
-
-impl DesignSection {
-    /// Checks the section: a stated noise level > 0, at least one candidate, each named
-    /// once and with at least one test.
-    ///
-    /// # Errors
-    /// The first problem, naming the field.
-    pub fn validate(&self) -> anyhow::Result<()> {
-        match self.noise {
-            NoiseSetting::Relative(_) | NoiseSetting::Absolute(_) => {
-                self.noise.check("design.noise")?
-            }
-            other => anyhow::bail!(
-                "design.noise = {other:?} is not allowed: a design needs a stated noise level, \
-                 Relative(f) (standard deviation f x |F|, e.g. Relative(0.01) for 1%) or \
-                 Absolute(s) (standard deviation s in N)"
-            ),
-        }
-        if self.candidates.is_empty() {
-            anyhow::bail!(
-                "design.candidates is empty: expected at least one candidate, e.g. \
-                 candidates: [(name: \"load 1 s\", tests: [(history: (segments: [...]))])]"
-            );
-        }
-        for (k, c) in self.candidates.iter().enumerate() {
-            if c.name.trim().is_empty() {
-                anyhow::bail!("design.candidates[{k}].name is empty: expected a label");
-            }
-            if let Some(j) = self.candidates[..k].iter().position(|o| o.name == c.name) {
-                anyhow::bail!(
-                    "design.candidates[{k}].name `{}` is also the name of candidates[{j}]: \
-                     expected distinct names",
-                    c.name
-                );
-            }
-            if c.tests.is_empty() {
-                anyhow::bail!(
-                    "design.candidates[{k}].tests (`{}`) is empty: expected at least one test",
-                    c.name
-                );
-            }
-        }
-        Ok(())
-    }
-}
 
 /// What to design.
 #[derive(Clone, Debug)]
@@ -322,7 +257,7 @@ fn evaluate(
     noise: NoiseModel,
 ) -> Result<CandidateResult> {
     let label = format!("{name} [{}]", cand.name);
-    let (problem, infos, _warnings) = joint_problem(id_opts, cfg, &label, law, nominal)
+    let (problem, tests, _warnings) = set_up_tests(cfg, &label, law, nominal, id_opts)
         .map_err(|e| e.context(format!("candidate `{}`", cand.name)))?;
     let solver_err = |e: indentify_identify::IdentifyError| {
         Error::new(
@@ -379,7 +314,7 @@ fn evaluate(
         );
     Ok(CandidateResult {
         name: cand.name.clone(),
-        tests: infos.iter().map(|i| i.0.clone()).collect(),
+        tests: tests.iter().map(|t| t.label.clone()).collect(),
         n_data: id.n_data,
         log_det: id.log_det_information(),
         worst,

@@ -320,9 +320,36 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     })
 }
 
-/// Everything an identification needs, set up: the [`Problem`] (model, schedule, data)
-/// and the settings. Shared by [`run`], the cost map ([`crate::costmap`]) and the test
-/// design ([`crate::design`]).
+/// One test of a set-up configuration, besides its [`indentify_identify::Test`] in the
+/// [`Problem`]: its label, data, weight, solver options, its own one-test configuration
+/// and mesher. A configuration without `tests` is a list of one such test (weight 1).
+pub struct TestSetup {
+    /// Its label: `tests[k].name` (default `test K`) of a joint configuration, the
+    /// configuration's name for a one-test configuration.
+    pub label: String,
+    /// The name of its runs in messages: `config [label]` in a joint configuration, the
+    /// configuration's name alone.
+    pub run_name: String,
+    /// Where its data come from, described.
+    pub data: String,
+    /// The law values that synthesized its data (`None`: measured or given data).
+    pub truth: Option<Vec<f64>>,
+    /// Its measured record, if any.
+    pub measured: Option<Measured>,
+    /// Whether its weight is the default `1 / (n F_max^2)` (a joint configuration's test
+    /// without `weight`).
+    pub default_weight: bool,
+    /// The direct solver's options (checkpointing decided).
+    pub solver_opts: SolverOptions,
+    /// Its one-test configuration ([`Config::test_config`], or the configuration itself).
+    pub config: Config,
+    /// Its specimen's mesher.
+    pub mesher: crate::config::Mesher,
+}
+
+/// Everything an identification needs, set up: the [`Problem`] (models, schedules, data:
+/// one test, or every test of a joint configuration) and the settings. Shared by [`run`],
+/// the gradient check, the cost map and the test design.
 pub struct Setup {
     /// The configuration's name.
     pub name: String,
@@ -338,30 +365,49 @@ pub struct Setup {
     pub id_cfg: IdentifyConfig,
     /// The identification problem.
     pub problem: Problem,
-    /// The direct solver's options (checkpointing decided).
-    pub solver_opts: SolverOptions,
-    /// The specimen's mesher.
-    pub mesher: crate::config::Mesher,
-    /// The measured record, if any.
-    pub measured: Option<Measured>,
-    /// Validity warnings.
+    /// The tests, in the problem's order (one for a configuration without `tests`).
+    pub tests: Vec<TestSetup>,
+    /// Validity warnings of every test.
     pub warnings: Vec<String>,
-    data: Data,
 }
 
 impl Setup {
-    /// Where the data come from, described.
-    pub fn data_description(&self) -> &str {
-        &self.data.describe
+    /// Whether the configuration is a joint one (a `tests` list, even of one test).
+    pub fn is_joint(&self) -> bool {
+        self.cfg.tests.is_some()
+    }
+
+    /// Where the data come from, described: the test's data, or `N tests: label: data;
+    /// ...` for a joint configuration.
+    pub fn data_description(&self) -> String {
+        if self.is_joint() {
+            format!("{} tests: {}", self.tests.len(), self.describe_tests())
+        } else {
+            self.tests[0].data.clone()
+        }
+    }
+
+    /// `label: data; label: data` over the tests.
+    fn describe_tests(&self) -> String {
+        self.tests
+            .iter()
+            .map(|t| format!("{}: {}", t.label, t.data))
+            .collect::<Vec<_>>()
+            .join("; ")
     }
 }
 
-/// Reads the data and builds the problem of a resolved configuration.
+/// Reads the data and builds the problem of a resolved configuration: its one test, or
+/// every test of a joint configuration (`tests: [...]`), each prepared, its data loaded
+/// (synthesized at the `law` values with the noise seed [`test_seed`] for test `k` when
+/// it has no record) and weighted (1 for a one-test configuration, else its `weight` or
+/// the default `1 / (n F_max^2)`); a joint configuration's tests are solved on
+/// `opts.jobs` threads when given.
 ///
 /// # Errors
 /// [`ErrorKind::Data`] for data that cannot be read or compared, [`ErrorKind::Config`] for
-/// a specimen or history that cannot be set up, [`ErrorKind::Solver`] when synthesizing
-/// the data fails.
+/// a specimen or history that cannot be set up or `--data` given for a joint
+/// configuration, [`ErrorKind::Solver`] when synthesizing the data fails.
 pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
     let Resolved {
         name,
@@ -371,22 +417,120 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
         names,
         id_cfg,
     } = resolved;
-    if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {
-        // the data path replaces the configuration's record, read with its preprocessing
-        d.file = absolute(path);
+    if let Some(path) = &opts.data {
+        if let Some(tests) = &cfg.tests {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "--data replaces the record of a one-test configuration, and `{name}` is a \
+                     joint configuration of {} tests: give each test's record in \
+                     tests[K].data",
+                    tests.len()
+                ),
+            ));
+        }
+        if let Some(d) = &mut cfg.data {
+            // the data path replaces the configuration's record, read with its preprocessing
+            d.file = absolute(path);
+        }
     }
-    if cfg.tests.is_some() {
+    let (problem, tests, warnings) = set_up_tests(&cfg, &name, law, &law_values, opts)?;
+    Ok(Setup {
+        name,
+        cfg,
+        law,
+        law_values,
+        names,
+        id_cfg,
+        problem,
+        tests,
+        warnings,
+    })
+}
+
+/// The [`Problem`] of `cfg` (see [`setup`]) at `law_values`, its tests and their
+/// warnings. `opts.data` (a curve file) is read by a one-test configuration without a
+/// record only.
+///
+/// # Errors
+/// As [`setup`].
+pub(crate) fn set_up_tests(
+    cfg: &Config,
+    name: &str,
+    law: &'static dyn Law,
+    law_values: &[f64],
+    opts: &IdentifyOptions,
+) -> Result<(Problem, Vec<TestSetup>, Vec<String>)> {
+    let n_tests = cfg.n_tests();
+    let mut tests = Vec::with_capacity(n_tests);
+    let mut infos = Vec::with_capacity(n_tests);
+    let mut warnings = Vec::new();
+    for k in 0..n_tests {
+        let (test, info, w) = set_up_test(cfg, k, name, law, law_values, opts)?;
+        tests.push(test);
+        infos.push(info);
+        warnings.extend(w);
+    }
+    let mut problem =
+        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    // a one-test problem runs on the current pool (a batch indent's worker may lend its
+    // idle neighbours to the sensitivities)
+    if let (Some(j), Some(_)) = (opts.jobs, &cfg.tests) {
+        problem
+            .set_threads(j)
+            .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    }
+    Ok((problem, infos, warnings))
+}
+
+/// Test `k` of `cfg` (the configuration itself without `tests`): prepared, its data
+/// loaded, weighted; its warnings.
+fn set_up_test(
+    cfg: &Config,
+    k: usize,
+    name: &str,
+    law: &'static dyn Law,
+    law_values: &[f64],
+    opts: &IdentifyOptions,
+) -> Result<(indentify_identify::Test, TestSetup, Vec<String>)> {
+    let (config, label, run_name, what) = match &cfg.tests {
+        Some(_) => {
+            let sub = cfg
+                .test_config(k)
+                .with_context(|| format!("in tests[{k}] of `{name}`"))
+                .kind(ErrorKind::Config)?;
+            let label = cfg.test_name(k);
+            let run_name = format!("{name} [{label}]");
+            (sub, label, run_name, format!("tests[{k}] of `{name}`"))
+        }
+        None => (
+            cfg.clone(),
+            name.to_string(),
+            name.to_string(),
+            format!("`{name}`"),
+        ),
+    };
+    if opts.noise.is_some() && config.data.is_some() {
         return Err(Error::msg(
             ErrorKind::Config,
             format!(
-                "`{name}` is a joint fit (a `tests` list): this set-up takes one test \
-                 (joint configurations go through `joint_problem`)"
+                "noise perturbs synthesized data only, and {what} fits a measured record (its \
+                 `data` section)"
             ),
         ));
     }
-    let prepared = prepare(&cfg, &name)?;
-    let mut solver_opts = cfg.solver.options(false);
-    let data = load_data(&prepared, opts, &name, law, &law_values, &solver_opts)?;
+    let prepared = prepare(&config, &run_name)?;
+    let mut solver_opts = config.solver.options(false);
+    let noise = opts.noise.map(|(a, seed)| (a, test_seed(seed, k)));
+    let data = load_data(
+        &prepared,
+        opts.data.as_deref(),
+        noise,
+        &run_name,
+        law,
+        law_values,
+        &solver_opts,
+    )?;
     solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
     let Prepared {
         schedule,
@@ -396,33 +540,56 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
         warnings,
         ..
     } = prepared;
-    let problem = Problem::new(
+    let given = match &cfg.tests {
+        Some(t) => t[k].weight,
+        None => Some(1.0),
+    };
+    let compare = || format!("cannot compare the data with {what}");
+    let weight = match given {
+        Some(w) => w,
+        None => indentify_identify::Test::default_weight(&schedule, &data.record)
+            .with_context(compare)
+            .kind(ErrorKind::Data)?,
+    };
+    let test = indentify_identify::Test::new(
         model,
-        law,
         schedule,
         &data.record,
         None,
         solver_opts.clone(),
+        weight,
     )
-    .with_context(|| format!("cannot compare the data with `{name}`"))
+    .with_context(compare)
     .kind(ErrorKind::Data)?;
-    Ok(Setup {
-        name,
-        cfg,
-        law,
-        law_values,
-        names,
-        id_cfg,
-        problem,
-        solver_opts,
-        mesher,
+    let info = TestSetup {
+        label,
+        run_name,
+        data: data.describe,
+        truth: data.truth,
         measured,
-        warnings,
-        data,
-    })
+        default_weight: given.is_none(),
+        solver_opts,
+        config,
+        mesher,
+    };
+    Ok((test, info, warnings))
 }
 
-/// Runs the identification described by `opts`, reporting progress to `observer`.
+/// The identification [`Problem`] of `opts`' configuration (one test or a joint `tests`
+/// list; data loaded or synthesized as [`run`] does) and the `law` values, without
+/// fitting: for benchmarks and studies that evaluate the cost themselves.
+///
+/// # Errors
+/// As [`run`] before any fit.
+pub fn problem(opts: &IdentifyOptions) -> Result<(Problem, Vec<f64>)> {
+    let resolved = resolve(opts)?;
+    let values = resolved.law_values.clone();
+    Ok((setup(resolved, opts)?.problem, values))
+}
+
+/// Runs the identification described by `opts`, reporting progress to `observer`: a
+/// one-test configuration, or the tests of a joint one (`tests: [...]`) fitted at once
+/// with shared parameters.
 ///
 /// A run that stops without converging (iteration limit, stall, interruption) is `Ok`:
 /// its [`IdentifyOutcome::converged`] says so, and its report is written.
@@ -448,56 +615,73 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
              continue",
         ));
     }
-    if let Some(tests) = &resolved.cfg.tests {
-        let n_tests = tests.len();
-        let Resolved {
-            cfg,
-            law,
-            law_values,
-            id_cfg,
-            ..
-        } = resolved;
-        return run_joint(
-            opts,
-            observer,
-            &cfg,
-            n_tests,
-            law,
-            &law_values,
-            id_cfg,
-            paths,
-            wall,
-        );
-    }
-    let Setup {
-        name,
-        cfg,
-        law,
-        names,
-        mut id_cfg,
-        problem,
-        solver_opts,
-        mesher,
-        measured,
-        warnings,
-        data,
-        ..
-    } = setup(resolved, opts)?;
+    let mut s = setup(resolved, opts)?;
     if opts.profiles.is_some() {
         // the profiles' threshold needs s^2 from the identifiability summary
-        id_cfg.identifiability = true;
+        s.id_cfg.identifiability = true;
     }
 
     // the history, once every input is known good
-    let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &names)?;
+    let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &s.names)?;
     observer.started(&RunInfo {
         resumed_at: resume_from.as_ref().map(|r| r.iteration),
-        data: data.describe.clone(),
-        ..run_info(&name, law, &names, &id_cfg, opts)
+        data: if s.is_joint() {
+            format!(
+                "{} tests fitted jointly ({})",
+                s.tests.len(),
+                s.describe_tests()
+            )
+        } else {
+            s.tests[0].data.clone()
+        },
+        ..run_info(&s.name, s.law, &s.names, &s.id_cfg, opts)
     });
+    let (result, multistart) = fit(
+        &s,
+        opts,
+        resume_from.as_ref(),
+        &mut history,
+        paths.as_ref(),
+        observer,
+    )?;
+    let profiles = profiles(&s, opts, &result)?;
+    let mut outcome = outcome(&s, result, resume_from.is_some())?;
+    outcome.multistart = multistart;
+    outcome.profiles = profiles;
+    if opts.refine && !opts.cancel.is_raised() {
+        let tests: Vec<disc::TestInputs<'_>> = s
+            .tests
+            .iter()
+            .map(|t| disc::TestInputs {
+                name: t.label.clone(),
+                config: &t.config,
+                mesher: &t.mesher,
+                solver: &t.solver_opts,
+            })
+            .collect();
+        add_discretization(&mut outcome, &tests, &s.problem, &s.name);
+    }
+    if let Some(p) = paths {
+        outcome.files = Some(write_report(&p, &outcome, opts, &s)?);
+    }
+    outcome.wall_seconds = wall.elapsed().as_secs_f64();
+    Ok(outcome)
+}
+
+/// The fit: the optimizer from the start (or the resumed iterate), or the multi-start's
+/// best run (each start a fit of every test) with its summary; the history written.
+fn fit(
+    s: &Setup,
+    opts: &IdentifyOptions,
+    resume_from: Option<&IterationRecord>,
+    history: &mut Option<HistoryWriter>,
+    paths: Option<&Paths>,
+    observer: &mut dyn Observer,
+) -> Result<(IdentifyResult, Option<crate::explore::MultiStartOutcome>)> {
+    let name = &s.name;
     let (result, multistart) = match &opts.starts {
         Some(starts) => {
-            let (summary, best) = crate::explore::multistart(&problem, &id_cfg, starts)
+            let (summary, best) = crate::explore::multistart(&s.problem, &s.id_cfg, starts)
                 .map_err(|e| e.context(format!("the multi-start of `{name}` failed")))?;
             // the best run's history
             for r in &best.history {
@@ -510,9 +694,9 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         }
         None => (
             optimize(
-                &problem,
-                &id_cfg,
-                resume_from.as_ref(),
+                &s.problem,
+                &s.id_cfg,
+                resume_from,
                 history.as_mut(),
                 observer,
             ),
@@ -520,7 +704,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         ),
     };
     let result = result.map_err(|e| {
-        let kept = match (&history, &paths) {
+        let kept = match (history, paths) {
             (Some(h), Some(p)) if h.lines > 0 => format!(
                 "; the history so far ({} lines) is in `{}`",
                 h.lines,
@@ -528,66 +712,134 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
             ),
             _ => String::new(),
         };
-        e.context(format!("the identification of `{name}` failed{kept}"))
+        let what = if s.is_joint() {
+            "joint identification"
+        } else {
+            "identification"
+        };
+        e.context(format!("the {what} of `{name}` failed{kept}"))
     })?;
+    Ok((result, multistart))
+}
 
-    // the curves at the start and at the result
-    let fit = fit_curves(&problem, law, &result, &solver_opts, &name)?;
-    let test = measured.as_ref().and_then(|m| m.raw.meta.test_name.clone());
-    let mut outcome = IdentifyOutcome {
-        config: name.clone(),
-        law: law.name(),
-        names: names.clone(),
-        quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
+/// The profile likelihoods after the fit, when asked and not interrupted (each profile
+/// point a constrained re-fit of every test).
+fn profiles(
+    s: &Setup,
+    opts: &IdentifyOptions,
+    result: &IdentifyResult,
+) -> Result<Option<Vec<indentify_identify::profile::Profile>>> {
+    let Some(settings) = &opts.profiles else {
+        return Ok(None);
+    };
+    if opts.cancel.is_raised() {
+        tracing::warn!("warning: interrupted: no profiles");
+        return Ok(None);
+    }
+    let wall = Instant::now();
+    let profiles = crate::explore::profiles(&s.problem, &s.id_cfg, result, settings)
+        .map_err(|e| e.context(format!("the profiles of `{}` failed", s.name)))?;
+    tracing::info!(
+        "  profiles: {} {}re-fits in {:.1} s",
+        profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),
+        if s.is_joint() { "joint " } else { "" },
+        wall.elapsed().as_secs_f64()
+    );
+    Ok(Some(profiles))
+}
+
+/// The outcome of a fit before its explorations, discretization error and files: each
+/// test's curves at the start and at the result, and every test's end to end.
+fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyOutcome> {
+    let fits = test_fits(s, &result)?;
+    let mut all = FitCurves {
+        t: Vec::new(),
+        h: Vec::new(),
+        f_data: Vec::new(),
+        f_start: Vec::new(),
+        f_final: Vec::new(),
+    };
+    for f in &fits {
+        all.t.extend(&f.fit.t);
+        all.h.extend(&f.fit.h);
+        all.f_data.extend(&f.fit.f_data);
+        all.f_start.extend(&f.fit.f_start);
+        all.f_final.extend(&f.fit.f_final);
+    }
+    let joint = s.is_joint();
+    Ok(IdentifyOutcome {
+        config: s.name.clone(),
+        law: s.law.name(),
+        names: s.names.clone(),
+        quality: indentify_report::FitQuality::compute(&all.f_data, &all.f_final).ok(),
         result,
-        truth: data.truth.clone(),
-        data: data.describe.clone(),
-        test,
-        fit,
+        truth: s.tests[0].truth.clone(),
+        data: s.data_description(),
+        test: match &s.tests[..] {
+            [one] if !joint => one
+                .measured
+                .as_ref()
+                .and_then(|m| m.raw.meta.test_name.clone()),
+            _ => None,
+        },
+        fit: all,
         files: None,
-        resumed: resume_from.is_some(),
-        warnings,
+        resumed,
+        warnings: s.warnings.clone(),
         wall_seconds: 0.0,
         discretization: None,
-        multistart,
+        multistart: None,
         profiles: None,
-        tests: Vec::new(),
-    };
-    if let Some(settings) = &opts.profiles {
-        if opts.cancel.is_raised() {
-            tracing::warn!("warning: interrupted: no profiles");
-        } else {
-            let wall = Instant::now();
-            let profiles = crate::explore::profiles(&problem, &id_cfg, &outcome.result, settings)
-                .map_err(|e| e.context(format!("the profiles of `{name}` failed")))?;
-            tracing::info!(
-                "  profiles: {} re-fits in {:.1} s",
-                profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),
-                wall.elapsed().as_secs_f64()
-            );
-            outcome.profiles = Some(profiles);
-        }
+        tests: if joint { fits } else { Vec::new() },
+    })
+}
+
+/// Each test's curves at the start and at the result (the result's forces are the
+/// optimizer's; the start is solved again, the tests one after the other) and fit quality.
+fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
+    let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
+    let mut fits = Vec::with_capacity(s.tests.len());
+    for (k, (test, info)) in s.problem.tests.iter().zip(&s.tests).enumerate() {
+        let quiet = SolverOptions {
+            record_fields: false,
+            ..info.solver_opts.clone()
+        };
+        let mut solver = DirectSolver::new(&test.model).kind(ErrorKind::Solver)?;
+        let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
+            Ok(forward(
+                &mut solver,
+                s.law,
+                c,
+                &test.schedule,
+                &quiet,
+                &info.run_name,
+            )
+            .kind(ErrorKind::Solver)?
+            .forces())
+        };
+        let f_start = curve_at(&start_params)?;
+        let f_final = match result.forces.get(s.problem.rows_of(k)) {
+            Some(f) if result.forces.len() == s.problem.target.len() => f.to_vec(),
+            _ => curve_at(&result.c)?,
+        };
+        let fit = FitCurves {
+            t: test.schedule.t.clone(),
+            h: test.schedule.depth.clone(),
+            f_data: test.target.clone(),
+            f_start,
+            f_final,
+        };
+        fits.push(TestFit {
+            name: info.label.clone(),
+            data: info.data.clone(),
+            weight: test.weight,
+            default_weight: info.default_weight,
+            cost: test.cost_of(&fit.f_final),
+            quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
+            fit,
+        });
     }
-    if opts.refine && !opts.cancel.is_raised() {
-        let tests = [disc::TestInputs {
-            name: name.clone(),
-            config: &cfg,
-            mesher: &mesher,
-            solver: &solver_opts,
-        }];
-        add_discretization(&mut outcome, &tests, &problem, &name);
-    }
-    if let Some(p) = paths {
-        outcome.files = Some(write_report(
-            &p,
-            &outcome,
-            opts,
-            measured.as_ref(),
-            &problem,
-        )?);
-    }
-    outcome.wall_seconds = wall.elapsed().as_secs_f64();
-    Ok(outcome)
+    Ok(fits)
 }
 
 /// The noise seed of test `k` (from 0) of a joint fit: `seed` for the first test (a
@@ -604,431 +856,6 @@ pub fn test_seed(seed: u64, k: usize) -> u64 {
     }
     indentify_identify::SplitMix64::new(seed ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03))
         .next_u64()
-}
-
-/// [`run`] of a joint configuration (`tests: [...]`): every test prepared, its data
-/// loaded (synthesized with the noise seed [`test_seed`] for test `k`), weighted, and the
-/// shared parameters fitted to all of them at once.
-#[allow(clippy::too_many_arguments)]
-fn run_joint(
-    opts: &IdentifyOptions,
-    observer: &mut dyn Observer,
-    cfg: &Config,
-    n_tests: usize,
-    law: &'static dyn Law,
-    law_values: &[f64],
-    id_cfg: IdentifyConfig,
-    paths: Option<Paths>,
-    wall: Instant,
-) -> Result<IdentifyOutcome> {
-    let name = opts.config.name();
-    let names = param_names(law);
-    if opts.data.is_some() {
-        return Err(Error::msg(
-            ErrorKind::Config,
-            format!(
-                "--data replaces the record of a one-test configuration, and `{name}` is a \
-                 joint configuration of {n_tests} tests: give each test's record in \
-                 tests[K].data"
-            ),
-        ));
-    }
-    let (problem, infos, warnings) = joint_problem(opts, cfg, &name, law, law_values)?;
-    let describe = infos
-        .iter()
-        .map(|(label, d, ..)| format!("{label}: {}", d.describe))
-        .collect::<Vec<_>>()
-        .join("; ");
-    let truth = infos.first().and_then(|(_, d, ..)| d.truth.clone());
-    let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &names)?;
-    observer.started(&RunInfo {
-        resumed_at: resume_from.as_ref().map(|r| r.iteration),
-        data: format!("{n_tests} tests fitted jointly ({describe})"),
-        ..run_info(&name, law, &names, &id_cfg, opts)
-    });
-    let mut id_cfg = id_cfg;
-    if opts.profiles.is_some() {
-        // the profiles' threshold needs s^2 from the identifiability summary
-        id_cfg.identifiability = true;
-    }
-    // each start of a multi-start is a joint fit (its tests solved in parallel inside it)
-    let (result, multistart) = match &opts.starts {
-        Some(starts) => {
-            let (summary, best) = crate::explore::multistart(&problem, &id_cfg, starts)
-                .map_err(|e| e.context(format!("the multi-start of `{name}` failed")))?;
-            for r in &best.history {
-                if let Some(h) = history.as_mut() {
-                    h.record(r).kind(ErrorKind::Io)?;
-                }
-                observer.iteration(r);
-            }
-            (best, Some(summary))
-        }
-        None => (
-            optimize(
-                &problem,
-                &id_cfg,
-                resume_from.as_ref(),
-                history.as_mut(),
-                observer,
-            )
-            .map_err(|e| e.context(format!("the joint identification of `{name}` failed")))?,
-            None,
-        ),
-    };
-    // each profile point is a constrained joint re-fit
-    let profiles = match &opts.profiles {
-        Some(_) if opts.cancel.is_raised() => {
-            tracing::warn!("warning: interrupted: no profiles");
-            None
-        }
-        Some(settings) => {
-            let wall = Instant::now();
-            let profiles = crate::explore::profiles(&problem, &id_cfg, &result, settings)
-                .map_err(|e| e.context(format!("the profiles of `{name}` failed")))?;
-            tracing::info!(
-                "  profiles: {} joint re-fits in {:.1} s",
-                profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),
-                wall.elapsed().as_secs_f64()
-            );
-            Some(profiles)
-        }
-        None => None,
-    };
-    // each test's curves at the start and at the result (the result's forces are known)
-    let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
-    let mut fits = Vec::with_capacity(n_tests);
-    for (k, (test, (label, data, _, default_weight, solver_opts, ..))) in
-        problem.tests.iter().zip(&infos).enumerate()
-    {
-        let rows = problem.rows_of(k);
-        let quiet = SolverOptions {
-            record_fields: false,
-            ..solver_opts.clone()
-        };
-        let mut solver = DirectSolver::new(&test.model).kind(ErrorKind::Solver)?;
-        let f_start = forward(
-            &mut solver,
-            law,
-            &start_params,
-            &test.schedule,
-            &quiet,
-            &format!("{name} [{label}]"),
-        )
-        .kind(ErrorKind::Solver)?
-        .forces();
-        let f_final = result
-            .forces
-            .get(rows.clone())
-            .map(<[f64]>::to_vec)
-            .unwrap_or_default();
-        let fit = FitCurves {
-            t: test.schedule.t.clone(),
-            h: test.schedule.depth.clone(),
-            f_data: test.target.clone(),
-            f_start,
-            f_final,
-        };
-        fits.push(TestFit {
-            name: label.clone(),
-            data: data.describe.clone(),
-            weight: test.weight,
-            default_weight: *default_weight,
-            cost: test.cost_of(&fit.f_final),
-            quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
-            fit,
-        });
-    }
-    let mut all = FitCurves {
-        t: Vec::new(),
-        h: Vec::new(),
-        f_data: Vec::new(),
-        f_start: Vec::new(),
-        f_final: Vec::new(),
-    };
-    for f in &fits {
-        all.t.extend(&f.fit.t);
-        all.h.extend(&f.fit.h);
-        all.f_data.extend(&f.fit.f_data);
-        all.f_start.extend(&f.fit.f_start);
-        all.f_final.extend(&f.fit.f_final);
-    }
-    let mut outcome = IdentifyOutcome {
-        config: name.clone(),
-        law: law.name(),
-        names,
-        quality: indentify_report::FitQuality::compute(&all.f_data, &all.f_final).ok(),
-        result,
-        truth,
-        data: format!("{n_tests} tests: {describe}"),
-        multistart,
-        profiles,
-        test: None,
-        fit: all,
-        files: None,
-        resumed: resume_from.is_some(),
-        warnings,
-        wall_seconds: 0.0,
-        discretization: None,
-        tests: fits,
-    };
-    if opts.refine && !opts.cancel.is_raised() {
-        let tests: Vec<disc::TestInputs<'_>> = infos
-            .iter()
-            .map(
-                |(label, _, _, _, solver, config, mesher)| disc::TestInputs {
-                    name: label.clone(),
-                    config,
-                    mesher,
-                    solver,
-                },
-            )
-            .collect();
-        add_discretization(&mut outcome, &tests, &problem, &name);
-    }
-    if let Some(p) = paths {
-        outcome.files = Some(write_joint_report(&p, &outcome, opts, &infos)?);
-    }
-    outcome.wall_seconds = wall.elapsed().as_secs_f64();
-    Ok(outcome)
-}
-
-/// The identification [`Problem`] of `opts`' configuration (one test or a joint `tests`
-/// list; data loaded or synthesized as [`run`] does) and the `law` values, without
-/// fitting: for benchmarks and studies that evaluate the cost themselves.
-///
-/// # Errors
-/// As [`run`] before any fit.
-pub fn problem(opts: &IdentifyOptions) -> Result<(Problem, Vec<f64>)> {
-    let resolved = resolve(opts)?;
-    if resolved.cfg.tests.is_some() {
-        let name = resolved.name.clone();
-        let (problem, ..) = joint_problem(
-            opts,
-            &resolved.cfg,
-            &name,
-            resolved.law,
-            &resolved.law_values,
-        )?;
-        Ok((problem, resolved.law_values))
-    } else {
-        let values = resolved.law_values.clone();
-        let s = setup(resolved, opts)?;
-        Ok((s.problem, values))
-    }
-}
-
-/// What [`joint_problem`] keeps of each test besides its [`indentify_identify::Test`]:
-/// label, data, measured record, whether its weight is the default, solver options.
-pub(crate) type JointInfo = (
-    String,
-    Data,
-    Option<Measured>,
-    bool,
-    SolverOptions,
-    Config,
-    crate::config::Mesher,
-);
-
-/// The [`Problem`] of a joint configuration (`cfg.tests`): every test prepared, its data
-/// loaded (synthesized at `law_values` with the noise seed [`test_seed`] for test `k`
-/// when it has no record) and weighted; solved on `opts.jobs` threads when given.
-///
-/// # Errors
-/// As [`run`] before any fit.
-pub(crate) fn joint_problem(
-    opts: &IdentifyOptions,
-    cfg: &Config,
-    name: &str,
-    law: &'static dyn Law,
-    law_values: &[f64],
-) -> Result<(Problem, Vec<JointInfo>, Vec<String>)> {
-    let n_tests = cfg.n_tests();
-    let mut tests = Vec::with_capacity(n_tests);
-    let mut infos = Vec::with_capacity(n_tests);
-    let mut warnings = Vec::new();
-    for k in 0..n_tests {
-        let sub = cfg
-            .test_config(k)
-            .with_context(|| format!("in tests[{k}] of `{name}`"))
-            .kind(ErrorKind::Config)?;
-        let label = cfg.test_name(k);
-        let sub_name = format!("{name} [{label}]");
-        if opts.noise.is_some() && sub.data.is_some() {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "noise perturbs synthesized data only, and tests[{k}] of `{name}` fits a \
-                     measured record (its `data` section)"
-                ),
-            ));
-        }
-        let prepared = prepare(&sub, &sub_name)?;
-        let mut solver_opts = sub.solver.options(false);
-        let sub_opts = IdentifyOptions {
-            noise: opts.noise.map(|(a, seed)| (a, test_seed(seed, k))),
-            ..opts.clone()
-        };
-        let data = load_data(
-            &prepared,
-            &sub_opts,
-            &sub_name,
-            law,
-            law_values,
-            &solver_opts,
-        )?;
-        solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
-        let Prepared {
-            schedule,
-            model,
-            mesher,
-            measured,
-            warnings: w,
-            ..
-        } = prepared;
-        warnings.extend(w);
-        let given = cfg.tests.as_ref().and_then(|t| t[k].weight);
-        let weight = match given {
-            Some(w) => w,
-            None => indentify_identify::Test::default_weight(&schedule, &data.record)
-                .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
-                .kind(ErrorKind::Data)?,
-        };
-        let test = indentify_identify::Test::new(
-            model,
-            schedule,
-            &data.record,
-            None,
-            solver_opts.clone(),
-            weight,
-        )
-        .with_context(|| format!("cannot compare the data with tests[{k}] of `{name}`"))
-        .kind(ErrorKind::Data)?;
-        tests.push(test);
-        infos.push((
-            label,
-            data,
-            measured,
-            given.is_none(),
-            solver_opts,
-            sub,
-            mesher,
-        ));
-    }
-    let mut problem =
-        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
-    if let Some(j) = opts.jobs {
-        problem
-            .set_threads(j)
-            .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
-    }
-    Ok((problem, infos, warnings))
-}
-
-/// The report of a joint fit: result.json (with a `tests` list), fit.csv (a `test` column,
-/// every test's rows), and with figures one report folder per test, `test-K/` (report.md,
-/// report.json and the figures of that test's curves at the shared parameters).
-fn write_joint_report(
-    paths: &Paths,
-    outcome: &IdentifyOutcome,
-    opts: &IdentifyOptions,
-    infos: &[JointInfo],
-) -> Result<ReportFiles> {
-    let mut text = String::from("test,t,h,F_data,F_start,F_final\n");
-    for (k, t) in outcome.tests.iter().enumerate() {
-        for line in fit_csv(&t.fit).lines().skip(1) {
-            text.push_str(&format!("{},{line}\n", k + 1));
-        }
-    }
-    crate::atomic::write(&paths.fit, text).kind(ErrorKind::Io)?;
-    let json = serde_json::to_string_pretty(&result_json(outcome, opts, paths))
-        .context("cannot represent the result")
-        .kind(ErrorKind::Io)?;
-    crate::atomic::write(&paths.result, json + "\n").kind(ErrorKind::Io)?;
-    let mut files = ReportFiles {
-        result: paths.result.clone(),
-        history: paths.history.clone(),
-        fit: paths.fit.clone(),
-        report: None,
-        report_error: None,
-    };
-    if !opts.figures {
-        return Ok(files);
-    }
-    let history_records = crate::history::read_all(&paths.history, outcome.names.len());
-    let mut all_figures = Vec::new();
-    let mut first = None;
-    for (k, (t, (_, _, measured, ..))) in outcome.tests.iter().zip(infos).enumerate() {
-        let dir = paths.dir.join(format!("test-{}", k + 1));
-        let (file, test) = match measured {
-            Some(m) => (
-                m.path.display().to_string(),
-                m.raw.meta.test_name.clone().unwrap_or_default(),
-            ),
-            None => (t.data.clone(), String::new()),
-        };
-        let written = crate::atomic::ensure_writable_dir(&dir).and_then(|()| {
-            figures::write(
-                &dir,
-                &outcome.result,
-                &figures::Inputs {
-                    title: format!(
-                        "Joint identification of {} parameters: {}, {} of {}",
-                        outcome.law,
-                        outcome.config,
-                        t.name,
-                        outcome.tests.len()
-                    ),
-                    extra_markdown: String::new(),
-                    file,
-                    test,
-                    measured: measured.as_ref(),
-                    t: &t.fit.t,
-                    h: &t.fit.h,
-                    f_data: &t.fit.f_data,
-                    f_start: &t.fit.f_start,
-                    f_final: &t.fit.f_final,
-                    history: &history_records,
-                    warnings: &outcome.warnings,
-                    // the joint shift, with this test's refined discretization and force
-                    // change
-                    discretization: outcome.discretization.as_ref().and_then(|d| {
-                        let td = d.tests.get(k)?;
-                        Some(indentify_report::DiscretizationSummary {
-                            refined: format!(
-                                "{} with {} (every test refined; the shift is the joint fit's)",
-                                td.mesh, td.steps
-                            ),
-                            rms_rel: td.rms_rel,
-                            max_abs: td.max_abs,
-                            shift: d.shift.clone(),
-                            seconds: d.seconds,
-                        })
-                    }),
-                },
-            )
-        });
-        match written {
-            Ok(w) => {
-                all_figures.extend(w.figures);
-                if first.is_none() {
-                    first = Some((w.markdown, w.json));
-                }
-            }
-            Err(e) => {
-                tracing::warn!(
-                    "warning: no report or figures for {}: {e:#} (result.json, history.csv and \
-                     fit.csv are written)",
-                    t.name
-                );
-                files.report_error = Some(format!("{e:#}"));
-            }
-        }
-    }
-    if let Some((md, json)) = first {
-        files.report = Some((md, json, all_figures));
-    }
-    Ok(files)
 }
 
 /// The discretization error of `outcome`'s fit ([`disc::compute`]: every test refined, the
@@ -1232,17 +1059,19 @@ pub fn prepare(cfg: &Config, name: &str) -> Result<Prepared> {
     })
 }
 
-/// The data: the measured record, a curve file, or the configuration's own curve.
+/// The data: the measured record, a curve file, or the configuration's own curve (with
+/// `noise`: amplitude, seed).
 fn load_data(
     prepared: &Prepared,
-    opts: &IdentifyOptions,
+    curve: Option<&Path>,
+    noise: Option<(f64, u64)>,
     name: &str,
     law: &'static dyn Law,
     law_values: &[f64],
     solver_opts: &SolverOptions,
 ) -> Result<Data> {
     let schedule = &prepared.schedule;
-    match (&prepared.measured, &opts.data) {
+    match (&prepared.measured, curve) {
         (Some(m), _) => Ok(Data {
             record: ForceRecord::new(m.record.t.clone(), m.record.f.clone())
                 .with_context(|| format!("cannot use `{}` as data", m.path.display()))
@@ -1271,7 +1100,7 @@ fn load_data(
                 "synthesized: the curve of `{name}` at {}",
                 assignments(&names, law_values)
             );
-            if let Some((a, seed)) = opts.noise {
+            if let Some((a, seed)) = noise {
                 forces = multiplicative_noise(&forces, a, seed);
                 describe.push_str(&format!(
                     ", noise F (1 + {a} xi), xi uniform in [-1, 1], seed {seed}"
@@ -1346,47 +1175,41 @@ fn optimize(
     outcome.map_err(|e| Error::new(ErrorKind::Solver, anyhow!(e)))
 }
 
-/// The curves at the start and at the result.
-fn fit_curves(
-    problem: &Problem,
-    law: &'static dyn Law,
-    result: &IdentifyResult,
-    opts: &SolverOptions,
-    name: &str,
-) -> Result<FitCurves> {
-    let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
-    let mut solver = DirectSolver::new(problem.model()).kind(ErrorKind::Solver)?;
-    let quiet = SolverOptions {
-        record_fields: false,
-        ..opts.clone()
-    };
-    let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
-        Ok(
-            forward(&mut solver, law, c, problem.schedule(), &quiet, name)
-                .kind(ErrorKind::Solver)?
-                .forces(),
-        )
-    };
-    let f_start = curve_at(&start_params)?;
-    let f_final = curve_at(&result.c)?;
-    Ok(FitCurves {
-        t: problem.schedule().t.clone(),
-        h: problem.schedule().depth.clone(),
-        f_data: problem.target.clone(),
-        f_start,
-        f_final,
-    })
+/// One page of a report: report.md, report.json and the figures of one test's curves.
+struct Page<'a> {
+    dir: PathBuf,
+    title: String,
+    test: &'a TestSetup,
+    fit: &'a FitCurves,
+    discretization: Option<indentify_report::DiscretizationSummary>,
+    extra_markdown: String,
 }
 
-/// Writes result.json, fit.csv and (with `opts.figures`) the report and its figures.
+/// Writes result.json, fit.csv and (with `opts.figures`) the report and its figures: for a
+/// one-test configuration one page in the report directory (with the multi-start and
+/// profiles); for a joint one a page per test in `test-K/` (that test's curves at the
+/// shared parameters) and an index report.md in the report directory (the parameters,
+/// the tests with links to their pages, the multi-start and profiles). fit.csv of a joint
+/// fit has a `test` column and every test's rows.
 fn write_report(
     paths: &Paths,
     outcome: &IdentifyOutcome,
     opts: &IdentifyOptions,
-    measured: Option<&Measured>,
-    problem: &Problem,
+    s: &Setup,
 ) -> Result<ReportFiles> {
-    crate::atomic::write(&paths.fit, fit_csv(&outcome.fit)).kind(ErrorKind::Io)?;
+    let joint = s.is_joint();
+    let fit = if joint {
+        let mut text = String::from("test,t,h,F_data,F_start,F_final\n");
+        for (k, t) in outcome.tests.iter().enumerate() {
+            for line in fit_csv(&t.fit).lines().skip(1) {
+                text.push_str(&format!("{},{line}\n", k + 1));
+            }
+        }
+        text
+    } else {
+        fit_csv(&outcome.fit)
+    };
+    crate::atomic::write(&paths.fit, fit).kind(ErrorKind::Io)?;
     // result.json first: a report or figure that cannot be made must not lose the result
     let json = serde_json::to_string_pretty(&result_json(outcome, opts, paths))
         .context("cannot represent the result")
@@ -1403,50 +1226,48 @@ fn write_report(
         return Ok(files);
     }
     let history_records = crate::history::read_all(&paths.history, outcome.names.len());
-    let mut extra_markdown = String::new();
-    let mut extra_figures = Vec::new();
-    if let Some(m) = &outcome.multistart {
-        extra_markdown.push_str(&m.markdown());
-    }
-    if let Some(p) = &outcome.profiles {
-        let (links, written) = match crate::explore::write_profile_figures(&paths.dir, p) {
-            Ok(w) => w,
-            Err(e) => {
-                tracing::warn!("warning: no profile figures: {e:#}");
-                (Vec::new(), Vec::new())
-            }
-        };
-        extra_figures = written;
-        if !extra_markdown.is_empty() {
-            extra_markdown.push('\n');
-        }
-        extra_markdown.push_str(&crate::explore::profiles_markdown(p, &links));
-    }
-    let (file, test) = match measured {
-        Some(m) => (
-            m.path.display().to_string(),
-            m.raw.meta.test_name.clone().unwrap_or_default(),
-        ),
-        None => (outcome.data.clone(), String::new()),
-    };
-    let written: anyhow::Result<Written> = figures::write(
-        &paths.dir,
-        &outcome.result,
-        &figures::Inputs {
+    let (extra_markdown, extra_figures) = explorations(paths, outcome);
+    let pages: Vec<Page<'_>> = if joint {
+        let n = outcome.tests.len();
+        outcome
+            .tests
+            .iter()
+            .zip(&s.tests)
+            .enumerate()
+            .map(|(k, (t, test))| Page {
+                dir: paths.dir.join(format!("test-{}", k + 1)),
+                title: format!(
+                    "Joint identification of {} parameters: {}, {} of {n}",
+                    outcome.law, outcome.config, t.name
+                ),
+                test,
+                fit: &t.fit,
+                // the joint shift, with this test's refined discretization and force change
+                discretization: outcome.discretization.as_ref().and_then(|d| {
+                    let td = d.tests.get(k)?;
+                    Some(indentify_report::DiscretizationSummary {
+                        refined: format!(
+                            "{} with {} (every test refined; the shift is the joint fit's)",
+                            td.mesh, td.steps
+                        ),
+                        rms_rel: td.rms_rel,
+                        max_abs: td.max_abs,
+                        shift: d.shift.clone(),
+                        seconds: d.seconds,
+                    })
+                }),
+                extra_markdown: String::new(),
+            })
+            .collect()
+    } else {
+        vec![Page {
+            dir: paths.dir.clone(),
             title: format!(
                 "Identification of {} parameters: {}",
                 outcome.law, outcome.config
             ),
-            file,
-            test,
-            measured,
-            t: &problem.schedule().t,
-            h: &problem.schedule().depth,
-            f_data: &problem.target,
-            f_start: &outcome.fit.f_start,
-            f_final: &outcome.fit.f_final,
-            history: &history_records,
-            warnings: &outcome.warnings,
+            test: &s.tests[0],
+            fit: &outcome.fit,
             discretization: outcome.discretization.as_ref().map(|d| {
                 indentify_report::DiscretizationSummary {
                     refined: format!("{} with {}", d.mesh, d.steps),
@@ -1456,23 +1277,169 @@ fn write_report(
                     seconds: d.seconds,
                 }
             }),
-            extra_markdown,
-        },
-    );
-    match written {
-        Ok(mut w) => {
-            w.figures.extend(extra_figures);
-            files.report = Some((w.markdown, w.json, w.figures));
-        }
-        Err(e) => {
-            tracing::warn!(
-                "warning: no report.md, report.json or figures: {e:#} (result.json, \
-                 history.csv and fit.csv are written)"
-            );
-            files.report_error = Some(format!("{e:#}"));
+            extra_markdown: extra_markdown.clone(),
+        }]
+    };
+    let mut figures = Vec::new();
+    let mut first = None;
+    for page in &pages {
+        match write_page(page, outcome, &history_records) {
+            Ok(w) => {
+                figures.extend(w.figures);
+                first.get_or_insert((w.markdown, w.json));
+            }
+            Err(e) => {
+                let which = if joint {
+                    format!("no report or figures for {}", page.test.label)
+                } else {
+                    "no report.md, report.json or figures".to_string()
+                };
+                tracing::warn!(
+                    "warning: {which}: {e:#} (result.json, history.csv and fit.csv are written)"
+                );
+                files.report_error = Some(format!("{e:#}"));
+            }
         }
     }
+    figures.extend(extra_figures);
+    if joint {
+        // the index of the pages: what the console points to
+        let index = paths.dir.join("report.md");
+        match crate::atomic::write(&index, joint_index(outcome, &extra_markdown)) {
+            Ok(()) => {
+                if let Some((md, _)) = &mut first {
+                    *md = index;
+                }
+            }
+            Err(e) => {
+                tracing::warn!("warning: no report.md: {e:#}");
+                files.report_error = Some(format!("{e:#}"));
+            }
+        }
+    }
+    if let Some((md, json)) = first {
+        files.report = Some((md, json, figures));
+    }
     Ok(files)
+}
+
+/// The multi-start and profiles sections of the report (Markdown) and the profile
+/// figures, written into the report directory.
+fn explorations(paths: &Paths, outcome: &IdentifyOutcome) -> (String, Vec<PathBuf>) {
+    let mut markdown = String::new();
+    let mut figures = Vec::new();
+    if let Some(m) = &outcome.multistart {
+        markdown.push_str(&m.markdown());
+    }
+    if let Some(p) = &outcome.profiles {
+        let (links, written) = match crate::explore::write_profile_figures(&paths.dir, p) {
+            Ok(w) => w,
+            Err(e) => {
+                tracing::warn!("warning: no profile figures: {e:#}");
+                (Vec::new(), Vec::new())
+            }
+        };
+        figures = written;
+        if !markdown.is_empty() {
+            markdown.push('\n');
+        }
+        markdown.push_str(&crate::explore::profiles_markdown(p, &links));
+    }
+    (markdown, figures)
+}
+
+/// Writes one page ([`figures::write`]) into its folder.
+fn write_page(
+    page: &Page<'_>,
+    outcome: &IdentifyOutcome,
+    history: &[IterationRecord],
+) -> anyhow::Result<Written> {
+    crate::atomic::ensure_writable_dir(&page.dir)?;
+    let measured = page.test.measured.as_ref();
+    let (file, test) = match measured {
+        Some(m) => (
+            m.path.display().to_string(),
+            m.raw.meta.test_name.clone().unwrap_or_default(),
+        ),
+        None => (page.test.data.clone(), String::new()),
+    };
+    figures::write(
+        &page.dir,
+        &outcome.result,
+        &figures::Inputs {
+            title: page.title.clone(),
+            file,
+            test,
+            measured,
+            t: &page.fit.t,
+            h: &page.fit.h,
+            f_data: &page.fit.f_data,
+            f_start: &page.fit.f_start,
+            f_final: &page.fit.f_final,
+            history,
+            warnings: &outcome.warnings,
+            discretization: page.discretization.clone(),
+            extra_markdown: page.extra_markdown.clone(),
+        },
+    )
+}
+
+/// The report.md of a joint fit: the shared parameters, the tests with their weights,
+/// shares of `J` and fit qualities, links to their pages, then `extra` (multi-start,
+/// profiles).
+fn joint_index(o: &IdentifyOutcome, extra: &str) -> String {
+    use crate::format::sig;
+    let r = &o.result;
+    let mut md = format!(
+        "# Joint identification of {} parameters: {}\n\n{} tests share the parameters; \
+         J = sum_k w_k J_k = {:.4e} ({}, {} iterations). Each test's page shows its curves at \
+         the shared parameters, the parameters' identifiability and the convergence.\n\n",
+        o.law,
+        o.config,
+        o.tests.len(),
+        r.cost,
+        r.stop_reason,
+        r.iterations
+    );
+    md.push_str("| parameter | unit | start | final | std. dev. |\n|---|---|---:|---:|---:|\n");
+    for p in &r.params {
+        let value = if p.free {
+            sig(p.value, 9)
+        } else {
+            format!("{} (held)", p.value)
+        };
+        let sd = o.std_dev(p.name).map_or(String::new(), |s| sig(s, 3));
+        md.push_str(&format!(
+            "| {} | {} | {} | {value} | {sd} |\n",
+            p.name, p.unit, p.start
+        ));
+    }
+    md.push_str(
+        "\n| test | data | weight | w J | R² | RMS (% of F_max) | page |\n\
+         |---|---|---:|---:|---:|---:|---|\n",
+    );
+    for (k, t) in o.tests.iter().enumerate() {
+        let (r2, rms) = t
+            .quality
+            .as_ref()
+            .map_or((String::new(), String::new()), |q| {
+                (format!("{:.6}", q.r2), format!("{:.3}", 100.0 * q.rms_rel))
+            });
+        md.push_str(&format!(
+            "| {} | {} | {:.4e} | {:.4e} | {r2} | {rms} | [test-{}/report.md](test-{}/report.md) |\n",
+            t.name,
+            t.data.replace('|', "\\|"),
+            t.weight,
+            t.cost,
+            k + 1,
+            k + 1
+        ));
+    }
+    if !extra.is_empty() {
+        md.push('\n');
+        md.push_str(extra);
+    }
+    md
 }
 
 /// `t,h,F_data,F_start,F_final` at the schedule times.

@@ -42,4 +42,14 @@ pub mod synthetic;
 pub mod templates;
 
 pub use error::{Classify, Error, ErrorKind, Result};
+// what the front ends (cli, python, xtask) need of the crates below, so that they depend on
+// `study` alone for it
+pub use indentify_contact::Punch;
+pub use indentify_contact::punch::Rim;
+pub use indentify_identify::profile::ProfileSettings;
+pub use indentify_identify::{
+    Cancel, Identifiability, IterationRecord, NoiseModel, StopReason, multiplicative_noise,
+};
+pub use indentify_records as records;
+pub use indentify_report::FitQuality;
 pub use source::{ConfigSource, DEFAULT_CONFIG, DEFAULT_NAME};

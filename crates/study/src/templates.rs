@@ -2,6 +2,8 @@
 //! (the files in `examples/` are exactly this output), and the template for a measured
 //! record. `indentify init` prints them.
 
+use std::path::{Path, PathBuf};
+
 use serde_json::Value;
 
 use indentify_contact::punch::AutoOptions;
@@ -200,70 +202,7 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
          \x20   //     height = size_factor x a, a uniform core of elements_in_contact squares per side\n\
          \x20   //     over a, graded beyond (instrument scale: nm to mm indents alike).\n",
     );
-    match cfg.specimen {
-        Specimen::Cylinder {
-            radius,
-            height,
-            nr,
-            nz,
-            grading_r,
-            grading_z,
-        } => {
-            out.push_str("    specimen: Cylinder(\n");
-            block(
-                &mut out,
-                "        ",
-                &[
-                    (format!("radius: {},", num(radius)), "mm, > 0".into()),
-                    (format!("height: {},", num(height)), "mm, > 0".into()),
-                    (
-                        format!("nr: {nr},"),
-                        "elements along r, an integer in [1, 2000]".into(),
-                    ),
-                    (
-                        format!("nz: {nz},"),
-                        "elements along z, an integer in [1, 2000]".into(),
-                    ),
-                    (
-                        format!("grading_r: {},", num(grading_r)),
-                        "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)"
-                            .into(),
-                    ),
-                    (
-                        format!("grading_z: {},", num(grading_z)),
-                        "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)"
-                            .into(),
-                    ),
-                ],
-            );
-        }
-        Specimen::Auto {
-            elements_in_contact,
-            size_factor,
-            grading,
-        } => {
-            out.push_str("    specimen: Auto(\n");
-            block(
-                &mut out,
-                "        ",
-                &[
-                    (
-                        format!("elements_in_contact: {elements_in_contact},"),
-                        "element edges across the contact-radius bound, in [2, 64]".into(),
-                    ),
-                    (
-                        format!("size_factor: {},", num(size_factor)),
-                        "specimen radius and height in contact-radius bounds, in [5, 10000]".into(),
-                    ),
-                    (
-                        format!("grading: {},", num(grading)),
-                        "largest size ratio of neighbouring elements beyond the core, in [1.05, 3]"
-                            .into(),
-                    ),
-                ],
-            );
-        }
-    }
+    specimen_block(&mut out, cfg.specimen);
     out.push_str("    ),\n");
 
     out.push_str(
@@ -310,49 +249,147 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
     out.push_str("    ),\n");
 
     if let Some(history) = &cfg.history {
-        out.push_str(
-            "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
-             \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
-             \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
-             \x20   history: (\n        segments: [\n",
-        );
-        let mut previous = 0.0;
-        let lines: Vec<(String, String)> = history
-            .segments
-            .iter()
-            .map(|seg| {
-                let what = if seg.depth > previous {
-                    "load"
-                } else if seg.depth < previous {
-                    "unload"
-                } else {
-                    "hold"
-                };
-                previous = seg.depth;
-                (
-                    format!(
-                        "(duration: {}, depth: {}, steps: {}),",
-                        num(seg.duration),
-                        num(seg.depth),
-                        seg.steps
-                    ),
-                    what.into(),
-                )
-            })
-            .collect();
-        block(&mut out, "            ", &lines);
-        out.push_str("        ],\n    ),\n");
+        history_block(&mut out, history);
     }
     if let Some(d) = &cfg.data {
         out.push_str(&data_block(d));
     }
 
-    let o = &cfg.solver;
+    solver_block(&mut out, &cfg.solver);
+    if let Some(tests) = &cfg.tests {
+        out.push_str(&ron_section(
+            "tests",
+            "A joint fit (docs/joint-fits.md): the tests share the law's parameters; each gives\n\
+             \x20   // its `history` or `data`, and may give its own `name`, `specimen`, `punch`, `contact`\n\
+             \x20   // and `weight` (default 1/(n F_max^2)).",
+            tests,
+        ));
+    }
+    if let Some(id) = &cfg.identify {
+        identify_block(&mut out, cfg, id);
+    }
+    if let Some(design) = &cfg.design {
+        out.push_str(&ron_section(
+            "design",
+            "Candidate protocols that `indentify design` ranks (docs/design.md).",
+            design,
+        ));
+    }
+    out.push_str(")\n");
+    out
+}
+
+/// The annotated `specimen: ...(` section, without its closing line.
+fn specimen_block(out: &mut String, specimen: Specimen) {
+    match specimen {
+        Specimen::Cylinder {
+            radius,
+            height,
+            nr,
+            nz,
+            grading_r,
+            grading_z,
+        } => {
+            out.push_str("    specimen: Cylinder(\n");
+            block(
+                out,
+                "        ",
+                &[
+                    (format!("radius: {},", num(radius)), "mm, > 0".into()),
+                    (format!("height: {},", num(height)), "mm, > 0".into()),
+                    (
+                        format!("nr: {nr},"),
+                        "elements along r, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("nz: {nz},"),
+                        "elements along z, an integer in [1, 2000]".into(),
+                    ),
+                    (
+                        format!("grading_r: {},", num(grading_r)),
+                        "size ratio of neighbouring elements along r, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                    (
+                        format!("grading_z: {},", num(grading_z)),
+                        "size ratio of neighbouring elements along z, in [1, 3] (1 = uniform)"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+        Specimen::Auto {
+            elements_in_contact,
+            size_factor,
+            grading,
+        } => {
+            out.push_str("    specimen: Auto(\n");
+            block(
+                out,
+                "        ",
+                &[
+                    (
+                        format!("elements_in_contact: {elements_in_contact},"),
+                        "element edges across the contact-radius bound, in [2, 64]".into(),
+                    ),
+                    (
+                        format!("size_factor: {},", num(size_factor)),
+                        "specimen radius and height in contact-radius bounds, in [5, 10000]".into(),
+                    ),
+                    (
+                        format!("grading: {},", num(grading)),
+                        "largest size ratio of neighbouring elements beyond the core, in [1.05, 3]"
+                            .into(),
+                    ),
+                ],
+            );
+        }
+    }
+}
+
+/// The annotated `history: (...)` section.
+fn history_block(out: &mut String, history: &crate::config::History) {
+    out.push_str(
+        "    // Punch depth history from t = 0, h = 0: each segment moves the punch linearly to\n\
+         \x20   // `depth` (mm, positive into the body) over `duration` (s, > 0) in `steps` equal time\n\
+         \x20   // steps (>= 1). A punch withdrawn past contact loss gives F = 0.\n\
+         \x20   history: (\n        segments: [\n",
+    );
+    let mut previous = 0.0;
+    let lines: Vec<(String, String)> = history
+        .segments
+        .iter()
+        .map(|seg| {
+            let what = if seg.depth > previous {
+                "load"
+            } else if seg.depth < previous {
+                "unload"
+            } else {
+                "hold"
+            };
+            previous = seg.depth;
+            (
+                format!(
+                    "(duration: {}, depth: {}, steps: {}),",
+                    num(seg.duration),
+                    num(seg.depth),
+                    seg.steps
+                ),
+                what.into(),
+            )
+        })
+        .collect();
+    block(out, "            ", &lines);
+    out.push_str("        ],\n    ),\n");
+}
+
+/// The annotated `solver: (...)` section.
+fn solver_block(out: &mut String, o: &crate::config::SolverConfig) {
     out.push_str(
         "    // Optional: numerical options of the direct solver (the defaults are shown).\n    solver: (\n",
     );
     block(
-        &mut out,
+        out,
         "        ",
         &[
             (
@@ -382,11 +419,26 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
         ],
     );
     out.push_str("    ),\n");
-    if let Some(id) = &cfg.identify {
-        identify_block(&mut out, cfg, id);
-    }
-    out.push_str(")\n");
-    out
+}
+
+/// A section written as indented RON after a comment (`tests`, `design`: lists whose
+/// entries are the other sections' fields).
+fn ron_section<T: serde::Serialize>(name: &str, comment: &str, value: &T) -> String {
+    let pretty = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .extensions(ron::extensions::Extensions::IMPLICIT_SOME)
+        .indentor("    ".to_string());
+    let text = ron::ser::to_string_pretty(value, pretty).unwrap_or_else(|_| "[]".to_string());
+    // `name: "..."`, not `name: Some("...")`: the loader takes implicit `Some` (its own
+    // `#![enable(...)]` line is not needed inside the file)
+    let text = match text.strip_prefix("#![enable(implicit_some)]") {
+        Some(rest) => rest.trim_start(),
+        None => &text,
+    };
+    format!(
+        "    // {comment}\n    {name}: {},\n",
+        text.replace('\n', "\n    ")
+    )
 }
 
 /// The annotated `identify: (...)` section.
@@ -620,11 +672,103 @@ fn ron_inline(v: &Value) -> String {
     }
 }
 
+/// How a configuration saved as `config` names the data file `file` (both as given, from
+/// the working directory): relative to the configuration's folder, where `data.file` is
+/// looked up ([`crate::config::DataSection::path`]), or absolute when the two share no
+/// root.
+///
+/// # Errors
+/// A file or folder that does not exist.
+pub fn data_path_for(file: &Path, config: &Path) -> std::io::Result<String> {
+    let file = std::fs::canonicalize(file)?;
+    let dir = config
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let dir = std::fs::canonicalize(dir)?;
+    let f: Vec<_> = file.components().collect();
+    let d: Vec<_> = dir.components().collect();
+    let common = f.iter().zip(&d).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return Ok(file.display().to_string());
+    }
+    let mut relative = PathBuf::new();
+    for _ in common..d.len() {
+        relative.push("..");
+    }
+    for c in &f[common..] {
+        relative.push(c);
+    }
+    Ok(relative.display().to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::parse;
     use indentify_contact::Punch;
+
+    /// `init --data FILE --out CONFIG` names the record relative to the configuration's
+    /// folder, where `data.file` is looked up: found again from there.
+    #[test]
+    fn data_paths_are_relative_to_the_configuration() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path();
+        std::fs::create_dir_all(root.join("a/data")).unwrap();
+        std::fs::create_dir_all(root.join("b/c")).unwrap();
+        let file = root.join("a/data/x.txt");
+        std::fs::write(&file, "t,F\n").unwrap();
+        let config = root.join("b/c/cfg.ron");
+        let written = data_path_for(&file, &config).unwrap();
+        assert_eq!(
+            written,
+            format!("..{0}..{0}a{0}data{0}x.txt", std::path::MAIN_SEPARATOR)
+        );
+        let found = std::fs::canonicalize(root.join("b/c").join(&written)).unwrap();
+        assert_eq!(found, std::fs::canonicalize(&file).unwrap());
+        assert_eq!(
+            data_path_for(&file, &root.join("a/data/cfg.ron")).unwrap(),
+            "x.txt"
+        );
+        assert!(data_path_for(&root.join("missing.txt"), &config).is_err());
+    }
+
+    /// `check` prints a joint configuration resolved: its `tests` (and a `design`
+    /// section) are written out and parse back to the same configuration.
+    #[test]
+    fn annotated_keeps_tests_and_design() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+        for file in ["r2-multi-rate.ron", "r2-design.ron"] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap();
+            let cfg = parse(&text, file).unwrap();
+            let written = annotated(&cfg, &["a header".to_string()]);
+            let back = parse(&written, file).unwrap();
+            assert!(back.tests.is_some() || back.design.is_some(), "{file}");
+            assert!(
+                !written.contains("Some(") && !written.contains("#!["),
+                "{written}"
+            );
+            assert_eq!(
+                (back.tests, back.design),
+                (cfg.tests, cfg.design),
+                "{written}"
+            );
+        }
+        let mut cfg = Reference::R1Maxwell.config();
+        let test = crate::config::TestSpec {
+            name: Some("a \"quoted\" name".into()),
+            specimen: None,
+            punch: Some(Punch::Sphere { radius: 0.5 }),
+            contact: Some(indentify_contact::ContactKind::Normal),
+            history: cfg.history.clone(),
+            data: None,
+            weight: Some(2.0),
+        };
+        cfg.tests = Some(vec![test]);
+        cfg.history = None;
+        let written = annotated(&cfg, &[]);
+        assert_eq!(parse(&written, "t").unwrap(), cfg, "{written}");
+    }
 
     #[test]
     fn every_template_parses_back_exactly() {

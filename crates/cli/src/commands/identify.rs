@@ -8,13 +8,12 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use indentify_identify::profile::ProfileSettings;
-use indentify_identify::{Identifiability, IterationRecord};
-use indentify_study::ConfigSource;
 use indentify_study::config::{MethodName, Overrides, fixed_item, name_value};
+use indentify_study::discretization::Discretization;
 use indentify_study::explore::StartsOptions;
 use indentify_study::format::{sig, table};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome, Observer, RunInfo};
+use indentify_study::{ConfigSource, Identifiability, IterationRecord, ProfileSettings};
 
 use crate::print;
 
@@ -290,7 +289,7 @@ pub fn run(args: &Args) -> Result<()> {
                 f.history.display().to_string(),
             )
         });
-        if let indentify_identify::StopReason::Undetermined { met, params } = &r.stop_reason {
+        if let indentify_study::StopReason::Undetermined { met, params } = &r.stop_reason {
             // the exit status of an undetermined stop (3), distinct from the iteration
             // limit's and a stall's (1)
             eprintln!(
@@ -299,11 +298,11 @@ pub fn run(args: &Args) -> Result<()> {
                  history in `{history}`.",
                 o.config,
                 params.join("; "),
-                indentify_identify::StopReason::UNDETERMINED_ADVICE
+                indentify_study::StopReason::UNDETERMINED_ADVICE
             );
             std::process::exit(EXIT_UNDETERMINED);
         }
-        if r.stop_reason == indentify_identify::StopReason::Interrupted {
+        if r.stop_reason == indentify_study::StopReason::Interrupted {
             tracing::warn!(
                 "interrupted after iteration {}: the result so far is in `{result}` and the \
                  history in `{history}` (continue with --resume)",
@@ -326,6 +325,37 @@ pub fn run(args: &Args) -> Result<()> {
 
 /// The table of the result and the lines under it.
 pub fn summary(o: &IdentifyOutcome) -> String {
+    let mut text = parameter_table(o);
+    text.push_str(&fit_lines(o));
+    if let Some(i) = &o.result.identifiability {
+        text.push_str(&identifiability_lines(i));
+    }
+    if let Some(d) = &o.discretization {
+        text.push_str(&discretization_lines(o, d));
+    }
+    if let Some(f) = &o.files {
+        let reports = f.report.as_ref().map_or(String::new(), |(md, json, figs)| {
+            format!(
+                "{} and {}, {} figures as SVG and PNG; ",
+                md.display(),
+                json.display(),
+                figs.len() / 2
+            )
+        });
+        text.push_str(&format!(
+            "  report: {reports}result {}, history {}, fit {}; total wall time {:.1} s\n",
+            f.result.display(),
+            f.history.display(),
+            f.fit.display(),
+            o.wall_seconds
+        ));
+    }
+    text
+}
+
+/// The first line and the parameter table: start, final value, truth, deviation and
+/// discretization shift per parameter.
+fn parameter_table(o: &IdentifyOutcome) -> String {
     let result = &o.result;
     let mut rows = vec![
         ["parameter", "unit", "start", "final"]
@@ -391,7 +421,7 @@ pub fn summary(o: &IdentifyOutcome) -> String {
         }
         rows.push(row);
     }
-    let mut text = format!(
+    format!(
         "identified {} parameters ({}, {}: {})\n{}",
         o.law,
         result.method.name(),
@@ -402,7 +432,13 @@ pub fn summary(o: &IdentifyOutcome) -> String {
         },
         result.stop_reason,
         table(&rows, "  ")
-    );
+    )
+}
+
+/// The cost, the counts and the fit quality (each test's too in a joint fit).
+fn fit_lines(o: &IdentifyOutcome) -> String {
+    let result = &o.result;
+    let mut text = String::new();
     text.push_str(&format!(
         "  J = {:.4e} N^2 (start {:.4e}), {} iterations, {} forward and {} adjoint solves, {:.1} s\n",
         result.cost,
@@ -452,88 +488,81 @@ pub fn summary(o: &IdentifyOutcome) -> String {
             t.cost
         ));
     }
-    if let Some(i) = &result.identifiability {
-        text.push_str(&format!("  {}\n", identifiability_line(i)));
-        if let Some(w) = i.weakest_direction() {
-            text.push_str(&format!("  weakest direction: {w}\n"));
-        }
-        if !i.undetermined.is_empty() {
-            let list: Vec<String> = i
-                .undetermined
-                .iter()
-                .zip(&i.reasons)
-                .map(|(n, why)| format!("{n}: {why}"))
-                .collect();
-            text.push_str(&format!(
-                "  UNDETERMINED by these data: {}\n  what to do: {}\n",
-                list.join("; "),
-                indentify_identify::StopReason::UNDETERMINED_ADVICE
-            ));
-        }
+    text
+}
+
+/// The identifiability summary and the undetermined parameters.
+fn identifiability_lines(i: &Identifiability) -> String {
+    let mut text = String::new();
+    text.push_str(&format!("  {}\n", identifiability_line(i)));
+    if let Some(w) = i.weakest_direction() {
+        text.push_str(&format!("  weakest direction: {w}\n"));
     }
-    if let Some(d) = disc {
-        let rel: Vec<String> = result
-            .params
+    if !i.undetermined.is_empty() {
+        let list: Vec<String> = i
+            .undetermined
             .iter()
-            .zip(&d.relative_shift)
-            .filter(|(p, _)| p.free)
-            .map(|(p, r)| match r {
-                Some(r) => format!("{} {:+.2e}", p.name, r),
-                None => format!("{} undetermined", p.name),
-            })
+            .zip(&i.reasons)
+            .map(|(n, why)| format!("{n}: {why}"))
             .collect();
-        if d.tests.len() > 1 {
-            // a joint fit: every test refined, one line each, then the joint shift
+        text.push_str(&format!(
+            "  UNDETERMINED by these data: {}\n  what to do: {}\n",
+            list.join("; "),
+            indentify_study::StopReason::UNDETERMINED_ADVICE
+        ));
+    }
+    text
+}
+
+/// The discretization error: the refined run's force change (each test's in a joint fit)
+/// and the parameter shift.
+fn discretization_lines(o: &IdentifyOutcome, d: &Discretization) -> String {
+    let result = &o.result;
+    let mut text = String::new();
+    let rel: Vec<String> = result
+        .params
+        .iter()
+        .zip(&d.relative_shift)
+        .filter(|(p, _)| p.free)
+        .map(|(p, r)| match r {
+            Some(r) => format!("{} {:+.2e}", p.name, r),
+            None => format!("{} undetermined", p.name),
+        })
+        .collect();
+    if d.tests.len() > 1 {
+        // a joint fit: every test refined, one line each, then the joint shift
+        text.push_str(&format!(
+            "  discretization: each test's mesh refined 2x and steps halved; relative \
+             parameter shift of the joint fit {}; {:.1} s (--no-refine skips it)\n",
+            rel.join(", "),
+            d.seconds
+        ));
+        for t in &d.tests {
             text.push_str(&format!(
-                "  discretization: each test's mesh refined 2x and steps halved; relative \
-                 parameter shift of the joint fit {}; {:.1} s (--no-refine skips it)\n",
-                rel.join(", "),
-                d.seconds
-            ));
-            for t in &d.tests {
-                text.push_str(&format!(
-                    "    {}: {} -> {} elements, {} -> {} steps: force change RMS {:.3}% of \
-                     F_max (largest {:.3e} N)\n",
-                    t.name,
-                    t.elements.0,
-                    t.elements.1,
-                    t.n_steps.0,
-                    t.n_steps.1,
-                    100.0 * t.rms_rel,
-                    t.max_abs
-                ));
-            }
-        } else {
-            text.push_str(&format!(
-                "  discretization: mesh refined 2x ({} -> {} elements), steps halved ({} -> \
-                 {}): force change RMS {:.3}% of F_max (largest {:.3e} N); relative parameter \
-                 shift {}; {:.1} s (--no-refine skips it)\n",
-                d.elements.0,
-                d.elements.1,
-                d.n_steps.0,
-                d.n_steps.1,
-                100.0 * d.rms_rel,
-                d.max_abs,
-                rel.join(", "),
-                d.seconds
+                "    {}: {} -> {} elements, {} -> {} steps: force change RMS {:.3}% of \
+                 F_max (largest {:.3e} N)\n",
+                t.name,
+                t.elements.0,
+                t.elements.1,
+                t.n_steps.0,
+                t.n_steps.1,
+                100.0 * t.rms_rel,
+                t.max_abs
             ));
         }
-    }
-    if let Some(f) = &o.files {
-        let reports = f.report.as_ref().map_or(String::new(), |(md, json, figs)| {
-            format!(
-                "{} and {}, {} figures as SVG and PNG; ",
-                md.display(),
-                json.display(),
-                figs.len() / 2
-            )
-        });
+    } else {
         text.push_str(&format!(
-            "  report: {reports}result {}, history {}, fit {}; total wall time {:.1} s\n",
-            f.result.display(),
-            f.history.display(),
-            f.fit.display(),
-            o.wall_seconds
+            "  discretization: mesh refined 2x ({} -> {} elements), steps halved ({} -> \
+             {}): force change RMS {:.3}% of F_max (largest {:.3e} N); relative parameter \
+             shift {}; {:.1} s (--no-refine skips it)\n",
+            d.elements.0,
+            d.elements.1,
+            d.n_steps.0,
+            d.n_steps.1,
+            100.0 * d.rms_rel,
+            d.max_abs,
+            rel.join(", "),
+            d.seconds
         ));
     }
     text
@@ -579,7 +608,7 @@ fn identifiability_line(i: &Identifiability) -> String {
         sv.join(", "),
         i.condition_text()
     ));
-    if i.noise != indentify_identify::NoiseModel::Residual {
+    if i.noise != indentify_study::NoiseModel::Residual {
         s.push_str(&format!(
             "; deviations assume {}",
             i.noise.describe(i.noise_level)

@@ -2,12 +2,13 @@
 //! reference problems R0-R2, or a template for a measured record (`--data FILE`).
 
 use std::io::Write as _;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
 use indentify_study::templates::{
-    DataTemplate, data_template, parse_tip, template, tip_from_metadata,
+    DataTemplate, data_path_for, data_template, parse_tip, template, tip_from_metadata,
 };
 
 /// Arguments of `indentify init`.
@@ -20,8 +21,9 @@ pub struct Args {
     /// A template for a measured record instead: the file is read (its tests listed, its
     /// tip taken from its metadata when it states one); its depth drives the simulation
     /// (no `history`), the automatic specimen, 60 resampled points, every parameter but nu
-    /// free within ranges that work on real records. The path is written as given: make it
-    /// relative to the folder where the configuration will live, or absolute.
+    /// free within ranges that work on real records. With --out the path is written
+    /// relative to the configuration's folder (where it is looked up); without, as given
+    /// (save the configuration in the current folder, or give --out).
     #[arg(long, value_name = "FILE")]
     pub data: Option<String>,
 
@@ -33,6 +35,10 @@ pub struct Args {
     /// file's, else Berkovich).
     #[arg(long, value_name = "TIP", requires = "data")]
     pub tip: Option<String>,
+
+    /// Write the configuration to this file (atomically) instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
 }
 
 /// The laws `init` has a template for.
@@ -57,27 +63,45 @@ impl LawKind {
     }
 }
 
-/// Prints the template to stdout.
+/// Prints the template to stdout, or writes it to `--out`.
 ///
 /// # Errors
-/// A closed standard output.
+/// An unreadable record, an unwritable `--out`, a closed standard output.
 pub fn run(args: &Args) -> Result<()> {
     let reference = args.law.reference();
     let text = match &args.data {
-        Some(file) => data_template(reference, &inspect(file, args)?),
+        Some(file) => {
+            let mut d = inspect(file, args)?;
+            if let Some(out) = &args.out {
+                d.file = data_path_for(Path::new(file), out).with_context(|| {
+                    format!(
+                        "cannot name `{file}` from the folder of `{}` (does the folder exist?)",
+                        out.display()
+                    )
+                })?;
+            }
+            data_template(reference, &d)
+        }
         None => template(reference),
     };
-    std::io::stdout()
-        .lock()
-        .write_all(text.as_bytes())
-        .context("cannot write the template to standard output")
+    match &args.out {
+        Some(out) => {
+            indentify_study::atomic::write(out, text)?;
+            tracing::info!("wrote {}", out.display());
+            Ok(())
+        }
+        None => std::io::stdout()
+            .lock()
+            .write_all(text.as_bytes())
+            .context("cannot write the template to standard output"),
+    }
 }
 
 /// Reads the record `file` for its tests and tip.
 fn inspect(file: &str, args: &Args) -> Result<DataTemplate> {
     let bytes =
         std::fs::read(file).with_context(|| format!("cannot read the data file `{file}`"))?;
-    let records = indentify_records::read(&bytes, file, &Default::default())
+    let records = indentify_study::records::read(&bytes, file, &Default::default())
         .with_context(|| format!("cannot read `{file}` as an instrument record"))?;
     let tests: Vec<String> = records
         .iter()
@@ -110,7 +134,7 @@ fn inspect(file: &str, args: &Args) -> Result<DataTemplate> {
             (p, format!("{d}, as the file states"))
         }
         (None, None) => (
-            indentify_contact::Punch::Berkovich { tip_radius: None },
+            indentify_study::Punch::Berkovich { tip_radius: None },
             "Berkovich, assumed: the file does not state its tip (give --tip, or edit `punch`)"
                 .to_string(),
         ),
