@@ -1,4 +1,4 @@
-//! CalculiX referee for normal contact, friction (issue 12) and finite strain (issue 13):
+//! CalculiX referee for normal contact, friction and finite strain:
 //! input decks of the reference problems R0, R1 and R2 on our own mesh (CAX8, node for
 //! node), a rigid cone in node-to-surface penalty contact (surface-to-surface optional),
 //! the reaction-force parser of the `.dat` file, and the comparison with our `Normal`

@@ -3,7 +3,7 @@
 //! (default 2) against each of its tests alone, measured back to back (rounds alternate
 //! the joint problem and the single tests, each evaluation at a new parameter point so that
 //! nothing comes from the cache); prints the median wall times and the ratio of the joint
-//! evaluation to the slowest single test (issue 14's target: at most 1.2), with the cost and
+//! evaluation to the slowest single test (the target once set: at most 1.2), with the cost and
 //! gradient asked together and as a line search asks them (cost, then gradient, the
 //! adjoints prefetched), and the lower bound of any schedule. Each single test is timed on
 //! one thread and, with `--threads` above 1, also on that many (its Gauss-point passes in

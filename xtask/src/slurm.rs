@@ -137,25 +137,9 @@ pub fn run(args: &[String]) -> Result<()> {
     print_indented("batch merge", &text);
 
     // the comparison
-    let a = fs::read(local.join("results.csv")).context("reading the local results.csv")?;
-    let b = fs::read(shared.join("results.csv")).context("reading the merged results.csv")?;
-    let (ta, tb) = (table(&a)?, table(&b)?);
-    println!(
-        "slurm-check: local results.csv: {} bytes, {} rows x {} columns; merged: {} bytes, {} \
-         rows x {} columns",
-        a.len(),
-        ta.rows.len(),
-        ta.header.len(),
-        b.len(),
-        tb.rows.len(),
-        tb.header.len()
-    );
+    let (ta, tb) = read_results(&local, &shared)?;
     let problems = problems(&ta, &tb, map.indents.len(), &tasks, o.array);
-    let states = ta.column("status");
-    let mut counts = std::collections::BTreeMap::<&str, usize>::new();
-    for s in &states {
-        *counts.entry(s.as_str()).or_default() += 1;
-    }
+    let counts = status_counts(&ta);
 
     drop(daemons);
     println!("slurm-check summary:");
@@ -1071,6 +1055,33 @@ fn compare(a: &Table, b: &Table) -> Vec<String> {
         }
     }
     problems
+}
+
+/// The local and the merged results.csv, read and their sizes printed.
+fn read_results(local: &Path, shared: &Path) -> Result<(Table, Table)> {
+    let a = fs::read(local.join("results.csv")).context("reading the local results.csv")?;
+    let b = fs::read(shared.join("results.csv")).context("reading the merged results.csv")?;
+    let (ta, tb) = (table(&a)?, table(&b)?);
+    println!(
+        "slurm-check: local results.csv: {} bytes, {} rows x {} columns; merged: {} bytes, {} \
+         rows x {} columns",
+        a.len(),
+        ta.rows.len(),
+        ta.header.len(),
+        b.len(),
+        tb.rows.len(),
+        tb.header.len()
+    );
+    Ok((ta, tb))
+}
+
+/// How many indents ended in each status.
+fn status_counts(t: &Table) -> std::collections::BTreeMap<String, usize> {
+    let mut counts = std::collections::BTreeMap::new();
+    for s in t.column("status") {
+        *counts.entry(s).or_default() += 1;
+    }
+    counts
 }
 
 #[cfg(test)]

@@ -353,7 +353,7 @@ pub fn outside_reference(line: &str) -> Option<String> {
         ));
     }
     let lower = line.to_ascii_lowercase();
-    for word in ["issue ", "issues ", "issue #", "task "] {
+    for word in ["issue ", "issues ", "issue #"] {
         let mut from = 0;
         while let Some(k) = lower[from..].find(word) {
             let at = from + k;

@@ -1,5 +1,5 @@
 //! Benchmarks of the adjoint sweep against the forward solve on R1 (Maxwell) and R2
-//! (Norton-Hoff) of DESIGN.md §5, and the forward sensitivities of every parameter.
+//! (Norton-Hoff) of docs/theory.md §11, and the forward sensitivities of every parameter.
 //! `cargo bench -p indentify-adjoint`; the ratio adjoint / forward is printed.
 
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -1,7 +1,7 @@
 //! Exact discrete adjoint and forward sensitivities of the indentation direct problem.
 //!
 //! From a [`Trajectory`] recorded by [`indentify_contact::DirectSolver`], [`Adjoint::gradient`]
-//! sweeps the steps in reversed time (DESIGN.md §3, paper §3) and returns `dJ/dc` for any
+//! sweeps the steps in reversed time (docs/theory.md §3, paper §3) and returns `dJ/dc` for any
 //! `dJ/dF_i`; [`Adjoint::sensitivities`] differentiates the scheme forward and returns
 //! the Jacobian `dF_i/dc`. Both are exact for the discrete scheme (active sets held at their
 //! converged values) and use the same constrained tangents as the forward run.

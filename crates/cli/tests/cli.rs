@@ -23,7 +23,7 @@ fn r0_variant(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
 #[test]
 fn r0_matches_sneddon_within_two_percent_and_writes_91_rows() {
     // Reference: Sneddon (1965), rigid cone on an elastic half-space,
-    // F = (2/pi) tan(alpha) E/(1-nu^2) h^2; DESIGN.md §5 puts the 10 x 10 mm cylinder
+    // F = (2/pi) tan(alpha) E/(1-nu^2) h^2; docs/theory.md §11 puts the 10 x 10 mm cylinder
     // about 1% above the half-space.
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("curve.csv");

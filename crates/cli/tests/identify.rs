@@ -1,5 +1,5 @@
 //! End-to-end tests of `indentify identify` and of the seeded noise of `simulate`: the
-//! embedded default (R1 of DESIGN.md §5 from the paper's first start), the report files,
+//! embedded default (R1 of docs/theory.md §11 from the paper's first start), the report files,
 //! the history written line by line and resumed, the command-line settings, and bad input.
 //!
 //! Reference: the truth that generated the synthetic data, E = 20000 MPa, eta = 30000 MPa s
@@ -565,7 +565,7 @@ fn honest_stop(config: &str, method: &str, start: &str, truth: &[(&str, f64)]) -
     undetermined
 }
 
-/// Issue 14's first false convergence: R2 with BFGS from (E, K, m, sY) = (30000, 20000,
+/// A false convergence once seen: R2 with BFGS from (E, K, m, sY) = (30000, 20000,
 /// 15, 2000), where the material stays elastic: K, m and sY have no effect there. It used
 /// to print "converged" with R^2 0.73 and `unidentifiable: []`; now K, m and sY are
 /// undetermined and the exit status is 3 (measured: E 28162, 6 iterations, ~7 s).
@@ -582,7 +582,7 @@ fn r2_from_an_elastic_start_does_not_claim_convergence() {
     }
 }
 
-/// Issue 14's second false convergence: R1 with L-BFGS from (E, eta) = (20000, 1000)
+/// A second false convergence once seen: R1 with L-BFGS from (E, eta) = (20000, 1000)
 /// jumps eta to its upper bound 1e7, where dJ/deta vanishes; it used to exit 0 with E 29%
 /// off. Now eta is undetermined at that bound and the exit status is 3.
 #[test]

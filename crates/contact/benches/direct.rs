@@ -1,12 +1,12 @@
 //! Benchmarks of the direct problem on the reference problems R0 (elastic), R1 (Maxwell)
-//! and R2 (Norton-Hoff) of DESIGN.md §5: 20 x 20 Q8, cone 68 deg, trapezoid 30 steps per
+//! and R2 (Norton-Hoff) of docs/theory.md §11: 20 x 20 Q8, cone 68 deg, trapezoid 30 steps per
 //! segment, with the paper's vertical contact; R1 and R2 also with normal contact
 //! (`*_normal`, [`ContactKind::Normal`]), run right after their vertical twins so that the
 //! ratio is measured back to back; and with Coulomb friction mu = 0.1 (`*_friction`,
 //! [`ContactKind::NormalFriction`]) right after the frictionless normal twin. Finite strain
 //! (`*_finite`, [`Kinematics::Finite`], normal contact) runs right after its small-strain
 //! normal twin, for R0, R1 and R2 with sY = 500 and sY = 0 (`r2_sy0_*`): the ratio of
-//! issue 13 (docs/validation-finite-strain.md §4). Finite strain's Gauss-point passes run
+//! finite-strain cost study (docs/validation-finite-strain.md §4). Finite strain's Gauss-point passes run
 //! on rayon's threads, small strain's do not: `RAYON_NUM_THREADS=1 cargo bench -p
 //! indentify-contact` gives the serial ratio.
 //! `cargo bench -p indentify-contact`.

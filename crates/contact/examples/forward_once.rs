@@ -1,4 +1,4 @@
-//! Profiling driver: one forward solve of R0, R1 or R2 (DESIGN.md §5) with its time split
+//! Profiling driver: one forward solve of R0, R1 or R2 (docs/theory.md §11) with its time split
 //! and the global iterations per segment, e.g. under `valgrind --tool=callgrind`:
 //! `cargo run --release -p indentify-contact --example forward_once -- r2 [REPEAT]`
 //! (with REPEAT > 1 it reports the fastest of REPEAT runs; `--steps` lists every step's

@@ -3,7 +3,7 @@
 //! Newton driver of one step (`newton.rs`), and the recorded trajectory that the adjoint
 //! replays.
 //!
-//! At step i (DESIGN.md §1): local backward-Euler updates at every Gauss point give
+//! At step i (docs/theory.md §1): local backward-Euler updates at every Gauss point give
 //! `sigma_i(u_i)` and the tangent `C_i`; equilibrium `sum_g w_g B^T sigma_i = G^T lambda_i`
 //! holds on the free dofs; on the active set `A_i` the contact dofs are prescribed by the
 //! model's contact constraint (`constraint/`: vertical, `u_z,k = phi(r_k) - U_i`; normal,

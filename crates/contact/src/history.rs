@@ -236,7 +236,7 @@ impl Schedule {
     }
 }
 
-/// The trapezoid of DESIGN.md §5: ramp to `h_max` in `t_load`, hold `t_hold`, unload to 0
+/// The trapezoid of docs/theory.md §11: ramp to `h_max` in `t_load`, hold `t_hold`, unload to 0
 /// in `t_unload`, `steps` per segment.
 pub fn trapezoid(
     h_max: f64,

@@ -24,7 +24,7 @@ use crate::punch::Punch;
 /// configuration has a friction.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum ContactKind {
-    /// The paper's small-strain contact (DESIGN.md §1): the gap of a top node is taken at
+    /// The paper's small-strain contact (docs/theory.md §1): the gap of a top node is taken at
     /// its reference radius, `g_k = phi(r_k) - U - u_z,k`, and its reaction is vertical.
     #[default]
     Vertical,

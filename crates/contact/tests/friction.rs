@@ -224,7 +224,7 @@ fn bad_friction_is_refused() {
     assert!(e.to_string().contains("Normal(friction: mu)"), "{e}");
 }
 
-/// Study (ignored; prints, asserts nothing timed): the cost of R2 (DESIGN.md §5, reference
+/// Study (ignored; prints, asserts nothing timed): the cost of R2 (docs/theory.md §11, reference
 /// mesh, cone 68 deg, 30 steps per segment) with friction mu = 0.2 against frictionless
 /// normal contact, run back to back, alternating, three times each.
 /// `cargo test -p indentify-contact --release --test friction -- --ignored --nocapture`.

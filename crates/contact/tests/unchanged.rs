@@ -1,5 +1,5 @@
 //! Friction leaves the frictionless paths alone: the forces and displacements of R0, R1
-//! and R2 (DESIGN.md §5) with vertical and with frictionless normal contact hash to the
+//! and R2 (docs/theory.md §11) with vertical and with frictionless normal contact hash to the
 //! values recorded before friction was added (commit f148430), bit for bit; and the
 //! finite-strain paths (normal contact, with and without friction) hash to the values
 //! recorded at e461c8d, on 1 and 2 threads.
@@ -56,7 +56,7 @@ fn cone() -> Punch {
     }
 }
 
-/// R0, R1 and R2 (DESIGN.md §5) on each of the `models`, hashed on a pool of one thread
+/// R0, R1 and R2 (docs/theory.md §11) on each of the `models`, hashed on a pool of one thread
 /// and on one of two, which must agree.
 fn hashes_on_1_and_2_threads(models: impl Fn() -> Vec<Model> + Sync) -> Vec<u64> {
     let r0 = vec![20000.0, 0.3];

@@ -755,7 +755,7 @@ impl SolverConfig {
     }
 }
 
-/// The reference problems of DESIGN.md §5 (and the `init` templates).
+/// The reference problems of docs/theory.md §11 (and the `init` templates).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reference {
     /// R0: elastic, E = 20000 MPa, nu = 0.3 (Sneddon's cone).
@@ -774,15 +774,17 @@ impl Reference {
         Reference::R2NortonHoff,
     ];
 
-    /// Id and one-line title, e.g. `R0 of DESIGN.md §5: elastic cone indentation`.
+    /// Id and one-line title, e.g. `R0 of docs/theory.md §11: elastic cone indentation`.
     pub fn title(&self) -> &'static str {
         match self {
             Reference::R0Elastic => {
-                "R0 of DESIGN.md §5: elastic cone indentation (Sneddon's solution)"
+                "R0 of docs/theory.md §11: elastic cone indentation (Sneddon's solution)"
             }
-            Reference::R1Maxwell => "R1 of DESIGN.md §5: Maxwell viscoelastic cone indentation",
+            Reference::R1Maxwell => {
+                "R1 of docs/theory.md §11: Maxwell viscoelastic cone indentation"
+            }
             Reference::R2NortonHoff => {
-                "R2 of DESIGN.md §5: Norton-Hoff viscoplastic cone indentation"
+                "R2 of docs/theory.md §11: Norton-Hoff viscoplastic cone indentation"
             }
         }
     }
