@@ -74,6 +74,7 @@
 //! # Ok::<(), indentify_report::ReportError>(())
 //! ```
 
+pub mod adequacy;
 mod error;
 mod explore;
 mod fit;
@@ -83,6 +84,7 @@ mod model;
 mod plot;
 mod units;
 
+pub use adequacy::{Adequacy, NoiseEstimate, Verdict};
 pub use error::ReportError;
 pub use explore::{CostMapFigure, ProfileFigure, contour_segments};
 pub use fit::FitQuality;
