@@ -49,6 +49,7 @@
 //!         forward_solves: 2,
 //!         adjoint_solves: 2,
 //!         wall_time_s: 0.5,
+//!         converged: Some(true),
 //!     },
 //!     fit,
 //!     preprocessing: vec![PreprocessingStep::new("zero point", "none needed")],
@@ -62,6 +63,7 @@
 //!     warnings: Vec::new(),
 //!     discretization: None,
 //!     identifiability: None,
+//!     adequacy: None,
 //! };
 //!
 //! let md = report.to_markdown();

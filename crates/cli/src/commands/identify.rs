@@ -395,11 +395,7 @@ pub fn summary(o: &IdentifyOutcome) -> String {
         "identified {} parameters ({}, {}: {})\n{}",
         o.law,
         result.method.name(),
-        if o.converged() {
-            "converged"
-        } else {
-            "NOT converged"
-        },
+        o.headline_status(),
         result.stop_reason,
         table(&rows, "  ")
     );
@@ -452,6 +448,8 @@ pub fn summary(o: &IdentifyOutcome) -> String {
             t.cost
         ));
     }
+    // model adequacy and the caveats of the headline (indentify_study::adequacy)
+    text.push_str(&o.adequacy_lines());
     if let Some(i) = &result.identifiability {
         text.push_str(&format!("  {}\n", identifiability_line(i)));
         if let Some(w) = i.weakest_direction() {
