@@ -22,7 +22,10 @@
 //!    is an upper bound (a noise-free or coarsely sampled record). It is computed twice:
 //!    from the measured force (the force channel's noise) and from the residuals (the same
 //!    plus the measured depth's noise carried through the law's slope, which a smooth law
-//!    cannot fit either); `σ_rec` is the larger resolved one.
+//!    cannot fit either). `σ_rec` is the residuals' estimate when resolved (or the force's
+//!    if larger and resolved); when only the force's is resolved, the residuals' as an
+//!    upper bound (a load-controlled force is smooth: its noise is in the depth); when
+//!    neither is, the smaller bound.
 //! 2. **Residuals against `σ_rec`**: `ratio = sqrt(chi2 / dof)` with
 //!    `chi2 = sum r_i^2 / σ_rec^2`, `dof = n - p`; `z_ratio = ln(ratio^2) / (1.7 / sqrt(n))`
 //!    (the spread of `ln(chi2/dof)` when both the residuals and `σ_rec` come from the same
@@ -32,11 +35,11 @@
 //!    when the residuals come in long runs), their lag-1 autocorrelation with the
 //!    Durbin-Watson statistic, and the Ljung-Box `Q` over `L = min(10, n / 5)` lags
 //!    (`z_ljung_box` by the Wilson-Hilferty transform of `chi2(L)`).
-//! 4. **Verdict**: [`Verdict::Systematic`] when the noise is resolved and `z_ratio > 3`,
-//!    `runs_z < -3` or `z_ljung_box > 3`, or when the residuals exceed even an unresolved
-//!    upper bound of the noise (`ratio > 2`); [`Verdict::CannotTell`] with fewer than
-//!    [`MIN_POINTS`] points or an unresolved noise that the residuals do not exceed;
-//!    [`Verdict::Adequate`] otherwise.
+//! 4. **Verdict**: [`Verdict::Systematic`] when `σ_rec` is resolved and `z_ratio > 3`, or
+//!    it is an upper bound and `ratio > 2`, or the record is noisy (either estimate
+//!    resolved) and `runs_z < -3` or `z_ljung_box > 3`; [`Verdict::CannotTell`] with fewer
+//!    than [`MIN_POINTS`] points, a noise-free fit ([`NOISE_FREE_FLOOR`]) or an unresolved
+//!    `σ_rec` and none of the above; [`Verdict::Adequate`] otherwise.
 
 use serde::{Deserialize, Serialize};
 
@@ -199,6 +202,10 @@ pub struct Adequacy {
     pub sigma_record: f64,
     /// Whether `σ_rec` is resolved (noise separated from the curve).
     pub noise_resolved: bool,
+    /// Whether either estimate is resolved: the record is noisy, so its residuals must
+    /// look white whatever `σ_rec` is (the structure tests apply).
+    #[serde(default)]
+    pub noisy_record: bool,
     /// The measured force's own noise (third differences of the data), N.
     pub sigma_data: Option<NoiseEstimate>,
     /// The residuals' high-frequency noise (third differences of the residuals), N.
@@ -245,22 +252,26 @@ impl Adequacy {
         }
         let sigma_data = NoiseEstimate::of_series(t, f_data);
         let sigma_residual = NoiseEstimate::of_series(t, &r);
-        let both = [sigma_data, sigma_residual];
-        let resolved = both
-            .iter()
-            .flatten()
-            .filter(|e| e.resolved)
-            .map(|e| e.sigma)
-            .fold(f64::NAN, f64::max);
-        let (sigma_record, noise_resolved) = if resolved.is_finite() {
-            (resolved, true)
-        } else {
-            let bound = both
-                .iter()
-                .flatten()
-                .map(|e| e.sigma)
-                .fold(f64::NAN, f64::min);
-            (bound, false)
+        // the residuals' own estimate when resolved (it includes the depth's noise carried
+        // through the law); else, when the force's is resolved, the residuals' as an upper
+        // bound (a load-controlled force is smooth, its noise is in the depth); else the
+        // smaller bound
+        let resolved = |e: &Option<NoiseEstimate>| e.filter(|e| e.resolved).map(|e| e.sigma);
+        let noisy_record = resolved(&sigma_data).is_some() || resolved(&sigma_residual).is_some();
+        let (sigma_record, noise_resolved) = match (resolved(&sigma_residual), sigma_residual) {
+            (Some(r), _) => (r.max(resolved(&sigma_data).unwrap_or(0.0)), true),
+            (None, Some(r)) if noisy_record => {
+                (r.sigma.max(sigma_data.map_or(0.0, |d| d.sigma)), false)
+            }
+            (None, None) if noisy_record => (resolved(&sigma_data).unwrap_or(f64::NAN), true),
+            _ => (
+                [sigma_data, sigma_residual]
+                    .iter()
+                    .flatten()
+                    .map(|e| e.sigma)
+                    .fold(f64::NAN, f64::min),
+                false,
+            ),
         };
         let ss: f64 = r.iter().map(|v| v * v).sum();
         let rms = (ss / n as f64).sqrt();
@@ -296,6 +307,7 @@ impl Adequacy {
             free,
             sigma_record,
             noise_resolved,
+            noisy_record,
             sigma_data,
             sigma_residual,
             rms,
@@ -352,44 +364,42 @@ impl Adequacy {
         let advice = "the standard deviations assume a law that fits and are conditional \
                       on it; try another law, freeing held parameters, a joint fit of \
                       several tests, or a shorter stretch of the record";
-        if !self.noise_resolved {
-            if self.ratio > RATIO_LIMIT_UNRESOLVED {
-                self.verdict = Verdict::Systematic;
-                self.message = format!(
-                    "systematic residuals: the residuals exceed even an upper bound of the \
-                     record's noise ({nums}); {advice}"
-                );
-            } else {
-                self.verdict = Verdict::CannotTell;
-                self.message = format!(
-                    "cannot tell: the record's noise cannot be separated from the curve at \
-                     this sampling (noise-free or coarsely sampled data; {nums}); the \
-                     residual test needs a noisy record"
-                );
-            }
-            return;
-        }
         let mut why = Vec::new();
-        if self.z_ratio > Z_LIMIT {
+        if self.noise_resolved && self.z_ratio > Z_LIMIT {
             why.push(format!(
                 "larger than the record's noise (z = {})",
                 fmt2(self.z_ratio)
             ));
         }
-        if self.runs_z < -Z_LIMIT {
+        if !self.noise_resolved && self.ratio > RATIO_LIMIT_UNRESOLVED {
+            why.push(format!(
+                "{} times even an upper bound of the record's noise",
+                fmt2(self.ratio)
+            ));
+        }
+        if self.noisy_record && self.runs_z < -Z_LIMIT {
             why.push(format!(
                 "in long runs of one sign ({} runs, {} expected)",
                 self.runs,
                 fmt2(self.runs_expected)
             ));
         }
-        if self.z_ljung_box > Z_LIMIT {
+        if self.noisy_record && self.z_ljung_box > Z_LIMIT {
             why.push(format!(
                 "autocorrelated (Ljung-Box Q = {} over {} lags, z = {})",
                 fmt2(self.ljung_box),
                 self.ljung_box_lags,
                 fmt2(self.z_ljung_box)
             ));
+        }
+        if why.is_empty() && !self.noise_resolved {
+            self.verdict = Verdict::CannotTell;
+            self.message = format!(
+                "cannot tell: the noise of the residuals cannot be separated from the curve at \
+                 this sampling (noise-free or coarsely sampled data; {nums}); the residual \
+                 test needs a noisy record"
+            );
+            return;
         }
         if why.is_empty() {
             self.verdict = Verdict::Adequate;
@@ -699,6 +709,31 @@ mod tests {
         let a = assess_case(300, 1, 0.0, 1.5, 0.0);
         assert_eq!(a.verdict, Verdict::Systematic, "{}", a.message);
         assert!(!a.noise_resolved);
+    }
+
+    /// A load-controlled record: the force is smooth (its own noise 1e-7), the noise is in
+    /// the depth and reaches the residuals through the law's slope. White depth noise alone
+    /// is adequate (the residuals' own estimate is resolved); with a smooth misfit too the
+    /// residuals are systematic against the residuals' noise bound, not against the force's
+    /// far smaller noise (which gave ratios of 3e4 on the sphere record).
+    #[test]
+    fn load_controlled_records_compare_with_the_residuals_noise() {
+        let t = grid(60);
+        let mut g = Normal(11);
+        let smooth: Vec<f64> = t.iter().map(|&s| basis(s, 2.0)[0]).collect();
+        let data: Vec<f64> = smooth.iter().map(|f| f + 1e-7 * g.next()).collect();
+        let model: Vec<f64> = smooth.iter().map(|f| f + 1e-3 * g.next()).collect();
+        let a = Adequacy::assess(&t, &data, &model, 3).unwrap();
+        assert_eq!(a.verdict, Verdict::Adequate, "{}", a.message);
+        assert!((a.sigma_record / 1e-3 - 1.0).abs() < 0.4, "{a:?}");
+        let bent: Vec<f64> = model
+            .iter()
+            .zip(&t)
+            .map(|(m, s)| m + 2e-2 * (2.0 * s).sin())
+            .collect();
+        let a = Adequacy::assess(&t, &data, &bent, 3).unwrap();
+        assert_eq!(a.verdict, Verdict::Systematic, "{}", a.message);
+        assert!(a.noisy_record && a.ratio < 100.0, "{a:?}");
     }
 
     /// The numbers of docs/adequacy.md: `cargo test -p indentify-report --lib -- --ignored

@@ -466,7 +466,12 @@ fn adequacy_section(out: &mut String, a: &Adequacy) {
     };
     line!(out, "## Model adequacy");
     line!(out);
-    line!(out, "**{}**: {}", a.verdict.as_str(), escape(&a.message));
+    let verdict = a.verdict.as_str();
+    let why = a
+        .message
+        .strip_prefix(&format!("{verdict}: "))
+        .unwrap_or(&a.message);
+    line!(out, "**{verdict}**: {}", escape(why));
     line!(out);
     line!(out, "| statistic | value | limit |");
     line!(out, "|---|--:|--:|");
