@@ -18,7 +18,7 @@
 //!    kink are dropped, divided by `0.99893` (the variance of a normal truncated at 4σ).
 //!    For white noise the `z_i` have lag-1 autocorrelation `-3/4`; windows dominated by
 //!    the curve's own curvature have a positive one. The estimate is *resolved* (noise
-//!    separated from the curve) when that autocorrelation is below `-1/2`; otherwise it
+//!    separated from the curve) when that autocorrelation is below `-0.4`; otherwise it
 //!    is an upper bound (a noise-free or coarsely sampled record). It is computed twice:
 //!    from the measured force (the force channel's noise) and from the residuals (the same
 //!    plus the measured depth's noise carried through the law's slope, which a smooth law
@@ -30,7 +30,7 @@
 //!    `chi2 = sum r_i^2 / σ_rec^2`, `dof = n - p`; `z_ratio = ln(ratio^2) / (1.7 / sqrt(n))`
 //!    (the spread of `ln(chi2/dof)` when both the residuals and `σ_rec` come from the same
 //!    white noise: `1.62 / sqrt(n)` from the variances and covariance of the two mean
-//!    squares, 1.66-1.75 measured by Monte Carlo for n = 60-2000).
+//!    squares, 1.66-1.78 measured by Monte Carlo for n = 60-2000).
 //! 3. **Structure**: the Wald-Wolfowitz runs test of the residuals' signs (`runs_z`, negative
 //!    when the residuals come in long runs), their lag-1 autocorrelation with the
 //!    Durbin-Watson statistic, and the Ljung-Box `Q` over `L = min(10, n / 5)` lags
@@ -52,8 +52,11 @@ pub const Z_LIMIT: f64 = 3.0;
 /// systematic however small the true noise is.
 pub const RATIO_LIMIT_UNRESOLVED: f64 = 2.0;
 /// The noise estimate is resolved when the lag-1 autocorrelation of its third differences
-/// is below this (white noise: -0.75, a smooth curve: near +1).
-pub const RESOLVED_LAG1: f64 = -0.5;
+/// is below this (white noise: -0.75, a smooth curve: near +1). Splitting the differences'
+/// variance into noise (lag-1 -0.75) and curve (lag-1 about +1), a lag-1 `rho` leaves the
+/// noise a share `(1 - rho) / 1.75`: at -0.4 at least 80%, so a resolved `σ_rec` is high
+/// by at most 12% (conservative: it can only hide a misfit, never invent one).
+pub const RESOLVED_LAG1: f64 = -0.4;
 /// `sd(ln(chi2 / dof)) = RATIO_SPREAD / sqrt(n)` under white noise, see the module docs.
 pub const RATIO_SPREAD: f64 = 1.7;
 /// A fit whose RMS residual is below this fraction of F_max reproduces a noise-free
@@ -108,7 +111,7 @@ pub struct NoiseEstimate {
     pub sigma: f64,
     /// Lag-1 autocorrelation of the normalized third differences (white noise: -0.75).
     pub lag1: f64,
-    /// Whether the differences are noise, not the curve's curvature (`lag1 < -0.5`).
+    /// Whether the differences are noise, not the curve's curvature (`lag1 < -0.4`).
     pub resolved: bool,
     /// Windows used (after the 4-deviation trim).
     pub windows: usize,
