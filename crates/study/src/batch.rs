@@ -795,7 +795,8 @@ fn results_csv(statuses: &[IndentStatus], names: &[String]) -> Vec<u8> {
     w.into_inner().expect("writing to memory")
 }
 
-/// Heat maps and histograms of every free parameter and of R², when positions are given.
+/// Heat maps and histograms of every free parameter, of its standard deviation
+/// (`<p>_std_map`) and of R², when positions are given (in mm).
 fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result<Vec<PathBuf>> {
     let placed: Vec<&IndentStatus> = statuses
         .iter()
@@ -832,6 +833,25 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
             .map_or(String::new(), |u| format!(" ({u})"));
         quantities.push((n.clone(), format!("{n}{unit}"), values));
     }
+    // each free parameter's standard deviation (NaN: held, undetermined, failed)
+    let sigma_maps: Vec<(String, String, Vec<f64>)> = quantities
+        .iter()
+        .map(|(n, title, _)| {
+            let values = placed
+                .iter()
+                .map(|s| {
+                    s.names
+                        .iter()
+                        .position(|m| m == n)
+                        .and_then(|j| s.std_dev.get(j).copied().flatten())
+                        .filter(|_| s.state != State::Failed)
+                        .unwrap_or(f64::NAN)
+                })
+                .collect();
+            (format!("{n}_std"), format!("σ of {title}"), values)
+        })
+        .collect();
+    quantities.extend(sigma_maps);
     quantities.push((
         "R2".into(),
         "R²".into(),
@@ -847,6 +867,8 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
             x: x.clone(),
             y: y.clone(),
             values,
+            // manifest positions are in mm, the internal length unit
+            position_unit: "mm".into(),
         };
         for (fig, suffix) in [(MapFigure::HeatMap, "map"), (MapFigure::Histogram, "hist")] {
             let svg = data
