@@ -346,16 +346,22 @@ impl Report {
             ));
         }
         if let Some(d) = &self.discretization {
-            let moved: Vec<String> = self
-                .parameters
-                .iter()
-                .zip(&d.shift)
-                .filter_map(|(p, s)| {
-                    let (s, sd) = ((*s)?, p.std_dev?);
-                    (!p.fixed && sd > 0.0 && s.abs() > sd && !self.is_undetermined(&p.name))
-                        .then(|| format!("{} by {:.1} σ", p.name, s.abs() / sd))
-                })
-                .collect();
+            let moved: Vec<String> =
+                self.parameters
+                    .iter()
+                    .zip(&d.shift)
+                    .filter_map(|(p, s)| {
+                        let (s, sd) = ((*s)?, p.std_dev?);
+                        (!p.fixed && sd > 0.0 && s.abs() > sd && !self.is_undetermined(&p.name))
+                            .then(|| {
+                                format!(
+                                    "{} by {} σ",
+                                    p.name,
+                                    crate::units::fmt_sig_n(s.abs() / sd, 2)
+                                )
+                            })
+                    })
+                    .collect();
             if !moved.is_empty() {
                 out.push(format!(
                     "discretization error beyond σ: a refined mesh moves {}",

@@ -286,7 +286,9 @@ fn draw_force<DB: DrawingBackend>(
     // A header with the caption and, in small type, what was identified and how well.
     let (w, h) = root.dim_in_pixel();
     let note_px = fonts.tick * 0.9;
-    let notes = header_notes(report);
+    // about 0.55 em a character in DejaVu Sans
+    let max_chars = (f64::from(root.dim_in_pixel().0) / (note_px * 0.55)) as usize;
+    let notes = header_notes(report, max_chars.max(40));
     let head =
         (fonts.label * 0.8 + fonts.caption * 1.3 + note_px * 1.3 * notes.len() as f64) as u32;
     let (header, body) = root.split_vertically(head.min(h / 3));
@@ -412,14 +414,37 @@ const CAVEAT: RGBColor = RGBColor(170, 20, 20);
 /// ± σ, the fit's numbers and the source, then the report's caveats ([`Report::caveats`]:
 /// not converged, systematic residuals, discretization beyond σ, undetermined, at a bound),
 /// so that a figure pasted alone carries the console's verdict.
-fn header_notes(report: &Report) -> Vec<(String, bool)> {
-    let mut notes = vec![(identified_label(report), false), (fit_note(report), false)];
+fn header_notes(report: &Report, max_chars: usize) -> Vec<(String, bool)> {
+    let mut notes: Vec<(String, bool)> = wrap(&identified_label(report), max_chars)
+        .into_iter()
+        .map(|l| (l, false))
+        .collect();
+    notes.push((fit_note(report), false));
     let caveats = report.caveats();
-    // two caveats a line: a figure's width holds about 110 characters of the note font
-    for pair in caveats.chunks(2) {
-        notes.push((format!("CAVEAT: {}", pair.join("; ")), true));
+    if !caveats.is_empty() {
+        let text = format!("CAVEAT: {}", caveats.join("; "));
+        notes.extend(wrap(&text, max_chars).into_iter().map(|l| (l, true)));
     }
     notes
+}
+
+/// `text` cut at spaces into lines of at most `max` characters (a longer word stays whole).
+fn wrap(text: &str, max: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > max {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
 }
 
 /// `identified: E = 1683 ± 12 MPa, eta = 1.033e5 ± 2.1e3 MPa s` (the free parameters, in

@@ -218,7 +218,14 @@ fn figure_headers_carry_the_verdict() {
     a.verdict = Verdict::Systematic;
     r.adequacy = Some(a);
     for fig in [Figure::ForceDepth, Figure::ForceTime] {
-        let svg = r.figure_svg(fig, FigureSize::default()).unwrap();
+        // the header's text, its wrapped lines joined again
+        let svg: String = r
+            .figure_svg(fig, FigureSize::default())
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('<'))
+            .collect::<Vec<_>>()
+            .join(" ");
         for text in [
             "last iterate (NOT converged): E = 201.3 ± 2.1 GPa",
             "eta = 5000 GPa s undetermined",

@@ -118,10 +118,10 @@ impl IdentifyOutcome {
                     let (s, sd) = (d.shift[k]?, self.std_dev(p.name)?);
                     (s.abs() > sd).then(|| {
                         format!(
-                            "{} {:+.1}% ({:.1} σ)",
+                            "{} {:+.1}% ({} σ)",
                             p.name,
                             100.0 * s / p.value.abs().max(f64::MIN_POSITIVE),
-                            s.abs() / sd
+                            crate::format::sig(s.abs() / sd, 2)
                         )
                     })
                 })
