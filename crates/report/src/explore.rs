@@ -57,7 +57,13 @@ pub struct CostMapFigure {
     /// Contour levels (values of `log10 J`); empty: 12 levels evenly spread over the finite
     /// range.
     pub levels: Vec<f64>,
+    /// The unit of `J` shown on the colour bar (`N^2`; empty: none).
+    pub cost_unit: String,
 }
+
+/// Where a cost map's mark label starts, in pixels from the mark (right of and above the
+/// cross's 8-pixel arms).
+const MARK_LABEL_OFFSET: (i32, i32) = (11, -24);
 
 fn draw_err(figure: &'static str, e: impl std::fmt::Display) -> ReportError {
     ReportError::Draw {
@@ -346,26 +352,32 @@ impl CostMapFigure {
         png_of(size, |root| self.draw(root), "cost map")
     }
 
-    /// `log10 J` per grid point (NaN where `J` is not finite or not positive), and the
-    /// contour levels.
+    /// `log10 J` per grid point (NaN where `J` is not finite: a failed solve; `J = 0`, the
+    /// exact minimum of noise-free data, and round-off below it clamped to the lowest
+    /// positive value, so they take the bottom colour and not the failed solves' grey),
+    /// the colour range and the contour levels.
     fn log_cost(&self) -> (Vec<f64>, f64, f64, Vec<f64>) {
+        let (lo, hi) = self
+            .cost
+            .iter()
+            .filter(|v| v.is_finite() && **v > 0.0)
+            .map(|v| v.log10())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
         let lg: Vec<f64> = self
             .cost
             .iter()
             .map(|&v| {
-                if v.is_finite() && v > 0.0 {
+                if !v.is_finite() {
+                    f64::NAN
+                } else if v > 0.0 {
                     v.log10()
                 } else {
-                    f64::NAN
+                    lo
                 }
             })
             .collect();
-        let (lo, hi) = lg
-            .iter()
-            .filter(|v| v.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
-            });
         let hi = if hi > lo { hi } else { lo + 1.0 };
         let levels = if self.levels.is_empty() {
             (1..=12).map(|k| lo + (hi - lo) * k as f64 / 13.0).collect()
@@ -475,14 +487,21 @@ impl CostMapFigure {
                     .map_err(|e| e.to_string())?;
                 }
                 for (x, y, label) in &self.marks {
-                    c.draw_series([Cross::new((*x, *y), 8, RED.stroke_width(3))])
+                    // the label beside the cross, on a white box, never over its centre
+                    let font = ("sans-serif", 15).into_font().color(&RED);
+                    let (tw, th) = plot
+                        .estimate_text_size(label, &font)
                         .map_err(|e| e.to_string())?;
-                    c.draw_series([Text::new(
-                        label.clone(),
-                        (*x, *y),
-                        ("sans-serif", 15).into_font().color(&RED),
-                    )])
-                    .map_err(|e| e.to_string())?;
+                    let (tw, th) = (tw as i32, th as i32);
+                    let (ox, oy) = MARK_LABEL_OFFSET;
+                    c.draw_series([EmptyElement::at((*x, *y))
+                        + Cross::new((0, 0), 8, RED.stroke_width(3))
+                        + Rectangle::new(
+                            [(ox - 2, oy - 1), (ox + tw + 2, oy + th + 1)],
+                            WHITE.mix(0.8).filled(),
+                        )
+                        + Text::new(label.clone(), (ox, oy), font)])
+                        .map_err(|e| e.to_string())?;
                 }
             }};
         }
@@ -508,9 +527,14 @@ impl CostMapFigure {
                     .map_err(|e| e.to_string())?
             ),
         }
-        // color bar of log10 J
+        // color bar of log10 J, with J's unit
+        let bar_caption = if self.cost_unit.is_empty() {
+            "log10 J".to_string()
+        } else {
+            format!("log10 J [{}]", self.cost_unit)
+        };
         let mut bar_chart = ChartBuilder::on(&bar)
-            .caption("log10 J", ("sans-serif", 15))
+            .caption(bar_caption, ("sans-serif", 15))
             .margin_top(20)
             .margin_bottom(52)
             .margin_right(10)
@@ -588,9 +612,10 @@ mod tests {
             log_y: false,
             marks: vec![(2000.0, 2.0, "optimum".into())],
             levels: vec![],
+            cost_unit: "N^2".into(),
         };
         let svg = map.svg(FigureSize::default()).unwrap();
-        assert!(svg.contains("E (MPa)") && svg.contains("log10 J"));
+        assert!(svg.contains("E (MPa)") && svg.contains("log10 J [N^2]"));
         let png = map.png(FigureSize::default()).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         let mut bad = map.clone();
@@ -621,5 +646,59 @@ mod tests {
             empty.svg(FigureSize::default()),
             Err(ReportError::Empty { .. })
         ));
+    }
+
+    /// Noise-free data give J = 0 at the law's point: that cell takes the colour map's
+    /// bottom colour, never the grey of a failed solve; a failed solve stays grey; the
+    /// mark's label sits beside its cross, not over it; the colour bar names J's unit.
+    #[test]
+    fn zero_cost_is_the_bottom_colour_and_labels_clear_the_mark() {
+        let x: Vec<f64> = (0..3).map(|k| 1.0 + k as f64).collect();
+        let y = x.clone();
+        let mut cost: Vec<f64> = (0..9).map(|p| 10.0 * (p as f64 - 4.0).powi(2)).collect();
+        assert_eq!(cost[4], 0.0);
+        let grey = "#C8C8C8";
+        let mut map = CostMapFigure {
+            title: "J".into(),
+            x_label: "a".into(),
+            y_label: "b".into(),
+            x,
+            y,
+            cost: cost.clone(),
+            log_x: false,
+            log_y: false,
+            marks: vec![(2.0, 2.0, "law".into())],
+            levels: vec![],
+            cost_unit: "N^2".into(),
+        };
+        let svg = map.svg(FigureSize::default()).unwrap();
+        assert!(!svg.contains(grey), "the J = 0 cell is grey");
+        assert!(svg.contains("#440154"), "no bottom colour");
+        assert!(svg.contains("log10 J [N^2]"));
+        cost[0] = f64::NAN;
+        map.cost = cost;
+        assert!(map.svg(FigureSize::default()).unwrap().contains(grey));
+        let (lg, ..) = map.log_cost();
+        assert_eq!(lg[4], lg[1].min(lg[3]));
+        // the label starts beyond the cross's arms (8 px from its centre)
+        let attr = |tag: &str, name: &str| -> f64 {
+            let k = tag.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            tag[k..].split('"').next().unwrap().parse().unwrap()
+        };
+        let arm = svg
+            .lines()
+            .find(|l| l.starts_with("<line") && l.contains("#FF0000"))
+            .expect("the cross");
+        let centre = (
+            0.5 * (attr(arm, "x1") + attr(arm, "x2")),
+            0.5 * (attr(arm, "y1") + attr(arm, "y2")),
+        );
+        let k = svg.find("\nlaw\n").expect("the label");
+        let text = svg[..k].rsplit("<text").next().unwrap();
+        let (tx, ty) = (attr(text, "x"), attr(text, "y"));
+        assert!(
+            tx > centre.0 + 8.0 || ty + 12.0 < centre.1 - 8.0,
+            "label at ({tx}, {ty}) over the mark at {centre:?}"
+        );
     }
 }

@@ -49,6 +49,7 @@
 //!         forward_solves: 2,
 //!         adjoint_solves: 2,
 //!         wall_time_s: 0.5,
+//!         converged: Some(true),
 //!     },
 //!     fit,
 //!     preprocessing: vec![PreprocessingStep::new("zero point", "none needed")],
@@ -62,6 +63,7 @@
 //!     warnings: Vec::new(),
 //!     discretization: None,
 //!     identifiability: None,
+//!     adequacy: None,
 //! };
 //!
 //! let md = report.to_markdown();
@@ -74,6 +76,7 @@
 //! # Ok::<(), indentify_report::ReportError>(())
 //! ```
 
+pub mod adequacy;
 mod error;
 mod explore;
 mod fit;
@@ -83,6 +86,7 @@ mod model;
 mod plot;
 mod units;
 
+pub use adequacy::{Adequacy, NoiseEstimate, Verdict};
 pub use error::ReportError;
 pub use explore::{CostMapFigure, ProfileFigure, contour_segments};
 pub use fit::FitQuality;

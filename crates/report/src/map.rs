@@ -20,6 +20,8 @@ pub struct MapData {
     pub y: Vec<f64>,
     /// The quantity at each indent; NaN where the indent failed or has no value.
     pub values: Vec<f64>,
+    /// The positions' unit, shown on the axes (`x [mm]`); empty: none.
+    pub position_unit: String,
 }
 
 /// The two map figures.
@@ -145,22 +147,45 @@ impl MapData {
         };
         let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let xr = (min(&self.x) - d.0 / 2.0)..(max(&self.x) + d.0 / 2.0);
-        let yr = (min(&self.y) - d.1 / 2.0)..(max(&self.y) + d.1 / 2.0);
+        let mut xr = (min(&self.x) - d.0 / 2.0)..(max(&self.x) + d.0 / 2.0);
+        let mut yr = (min(&self.y) - d.1 / 2.0)..(max(&self.y) + d.1 / 2.0);
         let (w, _) = root.dim_in_pixel();
         let (plot, bar) = root.split_horizontally(w.saturating_sub(130));
+        let plot = plot
+            .titled(&self.title, ("sans-serif", 22))
+            .map_err(|e| e.to_string())?;
+        // equal aspect: one length per pixel on both axes, the shorter span widened about
+        // its centre (the plotting area is the area less the margins and label areas)
+        let (pw, ph) = plot.dim_in_pixel();
+        let (margin, x_area, y_area) = (12u32, 40u32, 60u32);
+        let px = f64::from(pw.saturating_sub(2 * margin + y_area).max(1));
+        let py = f64::from(ph.saturating_sub(2 * margin + x_area).max(1));
+        let (sx, sy) = (xr.end - xr.start, yr.end - yr.start);
+        let per_pixel = (sx / px).max(sy / py);
+        let widen = |r: &mut std::ops::Range<f64>, pixels: f64| {
+            let (c, half) = (0.5 * (r.start + r.end), 0.5 * per_pixel * pixels);
+            *r = (c - half)..(c + half);
+        };
+        widen(&mut xr, px);
+        widen(&mut yr, py);
         let mut chart = ChartBuilder::on(&plot)
-            .caption(&self.title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+            .margin(margin)
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area)
             .build_cartesian_2d(xr, yr)
             .map_err(|e| e.to_string())?;
+        let axis = |name: &str| {
+            if self.position_unit.is_empty() {
+                name.to_string()
+            } else {
+                format!("{name} [{}]", self.position_unit)
+            }
+        };
         chart
             .configure_mesh()
             .disable_mesh()
-            .x_desc("x")
-            .y_desc("y")
+            .x_desc(axis("x"))
+            .y_desc(axis("y"))
             .label_style(("sans-serif", 15))
             .x_label_formatter(&|v| fmt_tick(*v))
             .y_label_formatter(&|v| fmt_tick(*v))
@@ -300,6 +325,7 @@ mod tests {
             x: vec![],
             y: vec![],
             values: vec![],
+            position_unit: "mm".into(),
         };
         for i in 0..4 {
             for j in 0..3 {
@@ -324,6 +350,37 @@ mod tests {
         // the two phases get the two ends of the color map
         let svg = m.svg(MapFigure::HeatMap, FigureSize::default()).unwrap();
         assert!(svg.contains("#440154") && svg.contains("#FDE725"), "{svg}");
+    }
+
+    /// The heat map's axes carry the positions' unit and one length per pixel on both
+    /// axes: the cells of a square grid are squares.
+    #[test]
+    fn heat_maps_have_units_and_equal_aspect() {
+        // a 2 x 8 strip: without the equal aspect its cells would be 4 times as tall as wide
+        let mut m = grid();
+        (m.x, m.y, m.values) = (vec![], vec![], vec![]);
+        for i in 0..2 {
+            for j in 0..8 {
+                m.x.push(i as f64 * 0.01);
+                m.y.push(j as f64 * 0.01);
+                m.values.push(if j < 4 { 1.0 } else { 2.0 });
+            }
+        }
+        let svg = m.svg(MapFigure::HeatMap, FigureSize::default()).unwrap();
+        assert!(svg.contains("x [mm]") && svg.contains("y [mm]"), "{svg}");
+        let attr = |tag: &str, name: &str| -> f64 {
+            let k = tag.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            tag[k..].split('"').next().unwrap().parse().unwrap()
+        };
+        let cells: Vec<&str> = svg
+            .lines()
+            .filter(|l| l.starts_with("<rect") && l.contains("#440154"))
+            .collect();
+        assert!(!cells.is_empty());
+        for c in cells {
+            let (w, h) = (attr(c, "width"), attr(c, "height"));
+            assert!((w - h).abs() <= 1.5, "cell {w} x {h}: {c}");
+        }
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 use std::fmt::Write;
 
+use crate::adequacy::{Adequacy, Verdict};
 use crate::model::{BoundHit, DiscretizationSummary, IdentifiabilitySummary, Parameter, Report};
 use crate::units::{DisplayUnit, fmt_sig};
 
@@ -29,6 +30,10 @@ impl Report {
         let mut out = String::new();
         line!(out, "# {}", escape(&self.title));
         line!(out);
+        if let Some(a) = self.adequacy.as_ref().filter(|a| systematic(a)) {
+            line!(out, "> **Warning:** {}", escape(&a.message));
+            line!(out);
+        }
         for w in &self.warnings {
             line!(out, "> **Warning:** {}", escape(w));
             line!(out);
@@ -42,6 +47,9 @@ impl Report {
             out.push_str(&self.discretization_section(d));
         }
         self.fit_section(&mut out);
+        if let Some(a) = &self.adequacy {
+            adequacy_section(&mut out, a);
+        }
         self.convergence_section(&mut out);
         self.preprocessing_section(&mut out);
         self.figure_section(&mut out);
@@ -149,9 +157,11 @@ impl Report {
     fn parameter_section(&self, out: &mut String) {
         line!(out, "## Identified parameters");
         line!(out);
+        let conditional = self.adequacy.as_ref().is_some_and(systematic);
         line!(
             out,
-            "| parameter | value | ± σ | unit | start | lower bound | upper bound | status |"
+            "| parameter | value | ± σ{} | unit | start | lower bound | upper bound | status |",
+            if conditional { " \\*" } else { "" }
         );
         line!(out, "|---|--:|--:|---|--:|--:|--:|---|");
         for p in &self.parameters {
@@ -180,6 +190,14 @@ impl Report {
             );
         }
         line!(out);
+        if conditional {
+            line!(
+                out,
+                "\\* conditional on a law that fits: the residuals are systematic (see Model \
+                 adequacy), so the true uncertainty is larger by an unknown amount."
+            );
+            line!(out);
+        }
         if let Some(c) = &self.correlation {
             // undetermined parameters have no correlation to show
             let keep: Vec<usize> = (0..c.names.len())
@@ -424,4 +442,91 @@ fn status(p: &Parameter) -> &'static str {
 /// Keeps user text from breaking table cells or lines.
 fn escape(s: &str) -> String {
     s.replace('|', "\\|").replace(['\n', '\r'], " ")
+}
+
+fn systematic(a: &Adequacy) -> bool {
+    a.verdict == Verdict::Systematic
+}
+
+/// The section `## Model adequacy`: the residuals against the record's own noise and their
+/// structure, with the verdict (statistics and thresholds in `docs/adequacy.md`).
+fn adequacy_section(out: &mut String, a: &Adequacy) {
+    let est = |e: &Option<crate::adequacy::NoiseEstimate>| match e {
+        Some(e) => format!(
+            "{} N ({}, lag-1 of its differences {:.2})",
+            fmt_sig(e.sigma),
+            if e.resolved {
+                "resolved"
+            } else {
+                "upper bound"
+            },
+            e.lag1
+        ),
+        None => "not estimated".to_string(),
+    };
+    line!(out, "## Model adequacy");
+    line!(out);
+    let verdict = a.verdict.as_str();
+    let why = a
+        .message
+        .strip_prefix(&format!("{verdict}: "))
+        .unwrap_or(&a.message);
+    line!(out, "**{verdict}**: {}", escape(why));
+    line!(out);
+    line!(out, "| statistic | value | limit |");
+    line!(out, "|---|--:|--:|");
+    line!(
+        out,
+        "| record noise σ_rec (third differences) | {} N{} | |",
+        fmt_sig(a.sigma_record),
+        if a.noise_resolved {
+            ""
+        } else {
+            " (upper bound)"
+        }
+    );
+    line!(
+        out,
+        "| noise of the measured force | {} | |",
+        est(&a.sigma_data)
+    );
+    line!(
+        out,
+        "| high-frequency noise of the residuals | {} | |",
+        est(&a.sigma_residual)
+    );
+    line!(
+        out,
+        "| RMS residual / σ_rec | {:.3} | z ≤ {} ({} unresolved) |",
+        a.ratio,
+        crate::adequacy::Z_LIMIT,
+        crate::adequacy::RATIO_LIMIT_UNRESOLVED
+    );
+    line!(
+        out,
+        "| χ² / dof | {} / {} (z = {:.2}) | |",
+        fmt_sig(a.chi2),
+        a.dof,
+        a.z_ratio
+    );
+    line!(
+        out,
+        "| runs of one sign | {} ({:.1} expected, z = {:.2}) | z ≥ -{} |",
+        a.runs,
+        a.runs_expected,
+        a.runs_z,
+        crate::adequacy::Z_LIMIT
+    );
+    line!(out, "| lag-1 autocorrelation | {:.3} | |", a.lag1);
+    line!(out, "| Durbin-Watson | {:.3} | |", a.durbin_watson);
+    line!(
+        out,
+        "| Ljung-Box Q ({} lags) | {} (z = {:.2}) | z ≤ {} |",
+        a.ljung_box_lags,
+        fmt_sig(a.ljung_box),
+        a.z_ljung_box,
+        crate::adequacy::Z_LIMIT
+    );
+    line!(out, "| points, free parameters | {}, {} | |", a.n, a.free);
+    line!(out);
 }

@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::adequacy::{Adequacy, Verdict};
 use crate::error::ReportError;
 use crate::fit::FitQuality;
 use crate::units::DisplayUnit;
@@ -45,6 +46,10 @@ pub struct Report {
     /// matrix, the parameters left undetermined (shown in `## Identifiability`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identifiability: Option<IdentifiabilitySummary>,
+    /// Whether the residuals look like the record's own noise ([`Adequacy::assess`]; shown
+    /// in `## Model adequacy`, and as a warning at the top when systematic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adequacy: Option<Adequacy>,
 }
 
 /// The singular value decomposition of the scaled sensitivity matrix `S` (weighted
@@ -191,6 +196,9 @@ pub struct Convergence {
     pub adjoint_solves: usize,
     /// Wall-clock time of the identification, seconds.
     pub wall_time_s: f64,
+    /// Whether the optimizer met a convergence criterion (`None`: not stated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
 }
 
 /// One preprocessing step applied to the measured curve.
@@ -317,6 +325,83 @@ impl FigureLink {
 }
 
 impl Report {
+    /// What makes the result less than it looks, one clause each (empty when nothing):
+    /// the stop when not converged, systematic residuals, parameters the discretization
+    /// moves by more than their standard deviation, undetermined parameters, values at a
+    /// bound. The Markdown's top and every force figure show them.
+    pub fn caveats(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(converged) = self.convergence.converged
+            && !converged
+        {
+            out.push(format!("NOT converged ({})", self.convergence.stop_reason));
+        }
+        if let Some(a) = &self.adequacy
+            && a.verdict == Verdict::Systematic
+        {
+            out.push(format!(
+                "systematic residuals (RMS {:.2} σ_rec, runs z = {:.2}): the σ assume a law \
+                 that fits",
+                a.ratio, a.runs_z
+            ));
+        }
+        if let Some(d) = &self.discretization {
+            let moved: Vec<String> =
+                self.parameters
+                    .iter()
+                    .zip(&d.shift)
+                    .filter_map(|(p, s)| {
+                        let (s, sd) = ((*s)?, p.std_dev?);
+                        (!p.fixed && sd > 0.0 && s.abs() > sd && !self.is_undetermined(&p.name))
+                            .then(|| {
+                                format!(
+                                    "{} by {} σ",
+                                    p.name,
+                                    crate::units::fmt_sig_n(s.abs() / sd, 2)
+                                )
+                            })
+                    })
+                    .collect();
+            if !moved.is_empty() {
+                out.push(format!(
+                    "discretization error beyond σ: a refined mesh moves {}",
+                    moved.join(", ")
+                ));
+            }
+        }
+        let undetermined: Vec<&str> = self
+            .parameters
+            .iter()
+            .filter(|p| !p.fixed && self.is_undetermined(&p.name))
+            .map(|p| p.name.as_str())
+            .collect();
+        if !undetermined.is_empty() {
+            out.push(format!("undetermined: {}", undetermined.join(", ")));
+        }
+        let bound: Vec<String> = self
+            .parameters
+            .iter()
+            .filter(|p| !p.fixed)
+            .filter_map(|p| {
+                p.at_bound.map(|b| {
+                    format!(
+                        "{} at its {} bound",
+                        p.name,
+                        if b == BoundHit::Lower {
+                            "lower"
+                        } else {
+                            "upper"
+                        }
+                    )
+                })
+            })
+            .collect();
+        if !bound.is_empty() {
+            out.push(bound.join(", "));
+        }
+        out
+    }
+
     /// The report as one pretty-printed JSON object.
     ///
     /// Non-finite numbers become `null` (JSON has no NaN); such a report does not read

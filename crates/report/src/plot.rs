@@ -286,7 +286,11 @@ fn draw_force<DB: DrawingBackend>(
     // A header with the caption and, in small type, what was identified and how well.
     let (w, h) = root.dim_in_pixel();
     let note_px = fonts.tick * 0.9;
-    let head = (fonts.label * 0.8 + fonts.caption * 1.3 + note_px * 2.6) as u32;
+    // about 0.55 em a character in DejaVu Sans
+    let max_chars = (f64::from(root.dim_in_pixel().0) / (note_px * 0.55)) as usize;
+    let notes = header_notes(report, max_chars.max(40));
+    let head =
+        (fonts.label * 0.8 + fonts.caption * 1.3 + note_px * 1.3 * notes.len() as f64) as u32;
     let (header, body) = root.split_vertically(head.min(h / 3));
     let centre = i32::try_from(w / 2).unwrap_or(0);
     let top = (fonts.label * 0.8) as i32;
@@ -301,7 +305,7 @@ fn draw_force<DB: DrawingBackend>(
         ))
         .map_err(err)?;
     let grey = RGBColor(80, 80, 80);
-    for (i, line) in header_notes(report).into_iter().enumerate() {
+    for (i, (line, caveat)) in notes.into_iter().enumerate() {
         let y = top + (fonts.caption * 1.3 + note_px * 1.3 * i as f64) as i32;
         header
             .draw(&Text::new(
@@ -309,7 +313,7 @@ fn draw_force<DB: DrawingBackend>(
                 (centre, y),
                 ("sans-serif", note_px)
                     .into_font()
-                    .color(&grey)
+                    .color(if caveat { &CAVEAT } else { &grey })
                     .pos(Pos::new(HPos::Center, VPos::Top)),
             ))
             .map_err(err)?;
@@ -403,13 +407,49 @@ fn draw_force<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The header's two lines: the identified values, then the fit's numbers and the source.
-fn header_notes(report: &Report) -> Vec<String> {
-    vec![identified_label(report), fit_note(report)]
+/// The colour of the header's caveat lines (dark red).
+const CAVEAT: RGBColor = RGBColor(170, 20, 20);
+
+/// The header's lines, each with whether it is a caveat: the identified values with their
+/// ± σ, the fit's numbers and the source, then the report's caveats ([`Report::caveats`]:
+/// not converged, systematic residuals, discretization beyond σ, undetermined, at a bound),
+/// so that a figure pasted alone carries the console's verdict.
+fn header_notes(report: &Report, max_chars: usize) -> Vec<(String, bool)> {
+    let mut notes: Vec<(String, bool)> = wrap(&identified_label(report), max_chars)
+        .into_iter()
+        .map(|l| (l, false))
+        .collect();
+    notes.push((fit_note(report), false));
+    let caveats = report.caveats();
+    if !caveats.is_empty() {
+        let text = format!("CAVEAT: {}", caveats.join("; "));
+        notes.extend(wrap(&text, max_chars).into_iter().map(|l| (l, true)));
+    }
+    notes
 }
 
-/// `identified: E = 1683 MPa, eta = 1.033e5 MPa s` (the free parameters, in the report's
-/// display units).
+/// `text` cut at spaces into lines of at most `max` characters (a longer word stays whole).
+fn wrap(text: &str, max: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        if !line.is_empty() && line.chars().count() + 1 + word.chars().count() > max {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// `identified: E = 1683 ± 12 MPa, eta = 1.033e5 ± 2.1e3 MPa s` (the free parameters, in
+/// the report's display units; `sY = 8.776 MPa undetermined`, `m = 30.00 at upper bound`;
+/// `last iterate (NOT converged):` instead of `identified:` when the run did not converge).
 fn identified_label(report: &Report) -> String {
     let free: Vec<String> = report
         .parameters
@@ -422,14 +462,45 @@ fn identified_label(report: &Report) -> String {
             } else {
                 format!(" {}", p.unit.label)
             };
-            format!("{} = {}{unit}", p.name, short_value(v))
+            let sd = p.std_dev.map(|s| s * p.unit.factor.abs());
+            let status = if report.is_undetermined(&p.name) {
+                " undetermined".to_string()
+            } else {
+                match p.at_bound {
+                    Some(crate::model::BoundHit::Lower) => " at lower bound".to_string(),
+                    Some(crate::model::BoundHit::Upper) => " at upper bound".to_string(),
+                    None => String::new(),
+                }
+            };
+            let pm = match sd {
+                Some(s) if s.is_finite() && !report.is_undetermined(&p.name) => {
+                    format!(" ± {}", short_sd(s))
+                }
+                _ => String::new(),
+            };
+            format!("{} = {}{pm}{unit}{status}", p.name, short_value(v))
         })
         .collect();
     if free.is_empty() {
         "no free parameter".to_string()
+    } else if report.convergence.converged == Some(false) {
+        format!("last iterate (NOT converged): {}", free.join(", "))
     } else {
         format!("identified: {}", free.join(", "))
     }
+}
+
+/// Two significant digits of a standard deviation.
+fn short_sd(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-2..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let decimals = (1 - a.log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// Four significant digits, in exponent notation outside [0.01, 1e5).

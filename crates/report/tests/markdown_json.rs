@@ -106,3 +106,33 @@ fn undetermined_parameters_are_marked_not_shown_as_numbers() {
     let old = Report::from_json(&v.to_string()).unwrap();
     assert!(old.identifiability.is_none() && !old.is_undetermined("eta"));
 }
+
+/// A report whose residuals are systematic says so at the top, marks its deviations as
+/// conditional, and has a `## Model adequacy` section with the statistics; the adequacy
+/// reads back from JSON.
+#[test]
+fn systematic_residuals_are_said_at_the_top() {
+    use indentify_report::{Adequacy, Report, Verdict};
+    let mut r = common::nano_report();
+    let md = r.to_markdown();
+    assert!(!md.contains("Model adequacy") && !md.contains("conditional on a law"));
+    let c = &r.curves;
+    // the law's curve plus a smooth misfit of 10% F_max: systematic however small the noise
+    let bent: Vec<f64> = c
+        .f_final
+        .iter()
+        .zip(&c.t)
+        .map(|(f, t)| f + 1e-3 * (t / 3.0).sin())
+        .collect();
+    let a = Adequacy::assess(&c.t, &bent, &c.f_final, 2).unwrap();
+    assert_eq!(a.verdict, Verdict::Systematic, "{}", a.message);
+    r.adequacy = Some(a);
+    let md = r.to_markdown();
+    let top: String = md.lines().take(4).collect::<Vec<_>>().join("\n");
+    assert!(top.contains("> **Warning:** systematic residuals"), "{top}");
+    assert!(md.contains("| parameter | value | ± σ \\* |"), "{md}");
+    assert!(md.contains("conditional on a law that fits"));
+    assert!(md.contains("## Model adequacy") && md.contains("runs of one sign"));
+    let back = Report::from_json(&r.to_json().unwrap()).unwrap();
+    assert_eq!(back.adequacy, r.adequacy);
+}

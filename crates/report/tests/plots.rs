@@ -174,3 +174,69 @@ fn force_figures_state_the_result_and_the_residuals() {
         "force-depth has no residual panel"
     );
 }
+
+/// A figure pasted alone carries the console's verdict: ± σ beside each identified value,
+/// `undetermined` instead of a deviation, `last iterate (NOT converged)`, and a CAVEAT line
+/// for systematic residuals and for a discretization shift beyond σ.
+#[test]
+fn figure_headers_carry_the_verdict() {
+    use indentify_report::{
+        Adequacy, DiscretizationSummary, IdentifiabilitySummary, Undetermined, Verdict,
+    };
+    let r = common::nano_report();
+    let svg = r
+        .figure_svg(Figure::ForceDepth, FigureSize::default())
+        .unwrap();
+    // a converged fit: its values with their deviations (E 201.3 GPa, σ 2.1 GPa)
+    assert!(svg.contains("identified: E = 201.3 ± 2.1 GPa"), "{svg}");
+    assert!(svg.contains("eta at its upper bound"), "{svg}");
+
+    let mut r = common::nano_report();
+    r.convergence.converged = Some(false);
+    r.identifiability = Some(IdentifiabilitySummary {
+        names: vec!["E".into(), "eta".into()],
+        singular_values: vec![1.0, 1e-9],
+        directions: vec![vec![1.0, 0.0], vec![0.0, 1.0]],
+        condition: "1e18".into(),
+        weakest: None,
+        undetermined: vec![Undetermined {
+            name: "eta".into(),
+            reason: "flat".into(),
+        }],
+        advice: String::new(),
+    });
+    // a refined mesh moves E by 5 GPa = 2.4 σ
+    r.discretization = Some(DiscretizationSummary {
+        refined: "2x".into(),
+        rms_rel: 1e-3,
+        max_abs: 1e-5,
+        shift: vec![Some(5e3), None, None],
+        seconds: 1.0,
+    });
+    let c = &r.curves;
+    let mut a = Adequacy::assess(&c.t, &c.f_data, &c.f_final, 2).unwrap();
+    a.verdict = Verdict::Systematic;
+    r.adequacy = Some(a);
+    for fig in [Figure::ForceDepth, Figure::ForceTime] {
+        // the header's text, its wrapped lines joined again
+        let svg: String = r
+            .figure_svg(fig, FigureSize::default())
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('<'))
+            .collect::<Vec<_>>()
+            .join(" ");
+        for text in [
+            "last iterate (NOT converged): E = 201.3 ± 2.1 GPa",
+            "eta = 5000 GPa s undetermined",
+            "CAVEAT: NOT converged",
+            "systematic residuals",
+            "discretization error beyond σ: a refined mesh moves E by 2.4 σ",
+            "undetermined: eta",
+        ] {
+            assert!(svg.contains(text), "{fig:?}: no `{text}` in {svg}");
+        }
+        // no deviation shown for the undetermined parameter
+        assert!(!svg.contains("5000 ±"), "{svg}");
+    }
+}

@@ -390,6 +390,14 @@ pub struct IndentStatus {
     pub iterations: usize,
     /// Wall time (s).
     pub seconds: f64,
+    /// The residual tests' verdict (`adequate`, `systematic residuals`, `cannot tell`;
+    /// crate::adequacy), `None` for a failed indent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adequacy: Option<String>,
+    /// What makes the result less than it looks (systematic residuals, discretization
+    /// beyond σ, undetermined, at a bound).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub caveats: Vec<String>,
 }
 
 /// Progress of a batch.
@@ -618,6 +626,8 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         rms_rel: None,
         iterations: 0,
         seconds: 0.0,
+        adequacy: None,
+        caveats: Vec::new(),
     };
     match identify::run(&id_opts, &mut ()) {
         Ok(o) => {
@@ -637,6 +647,8 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
             status.r2 = o.quality.as_ref().map(|q| q.r2);
             status.rms_rel = o.quality.as_ref().map(|q| q.rms_rel);
             status.iterations = o.result.iterations;
+            status.adequacy = o.adequacy().map(|a| a.verdict.as_str().to_string());
+            status.caveats = o.caveats();
         }
         Err(e) => {
             status.message = e.messages().join(": ");
@@ -739,7 +751,7 @@ fn num(v: Option<f64>) -> String {
     }
 }
 
-/// `id,x,y,<p>,<p>_std,...,R2,rms_rel,status,iterations,seconds,error`.
+/// `id,x,y,<p>,<p>_std,...,R2,rms_rel,status,iterations,seconds,error,adequacy`.
 fn results_csv(statuses: &[IndentStatus], names: &[String]) -> Vec<u8> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header = vec!["id".to_string(), "x".into(), "y".into()];
@@ -747,7 +759,18 @@ fn results_csv(statuses: &[IndentStatus], names: &[String]) -> Vec<u8> {
         header.push(n.clone());
         header.push(format!("{n}_std"));
     }
-    header.extend(["R2", "rms_rel", "status", "iterations", "seconds", "error"].map(String::from));
+    header.extend(
+        [
+            "R2",
+            "rms_rel",
+            "status",
+            "iterations",
+            "seconds",
+            "error",
+            "adequacy",
+        ]
+        .map(String::from),
+    );
     w.write_record(&header).expect("writing to memory");
     for s in statuses {
         let mut row = vec![s.id.clone(), num(s.x), num(s.y)];
@@ -766,12 +789,14 @@ fn results_csv(statuses: &[IndentStatus], names: &[String]) -> Vec<u8> {
         } else {
             String::new()
         });
+        row.push(s.adequacy.clone().unwrap_or_default());
         w.write_record(&row).expect("writing to memory");
     }
     w.into_inner().expect("writing to memory")
 }
 
-/// Heat maps and histograms of every free parameter and of R², when positions are given.
+/// Heat maps and histograms of every free parameter, of its standard deviation
+/// (`<p>_std_map`) and of R², when positions are given (in mm).
 fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result<Vec<PathBuf>> {
     let placed: Vec<&IndentStatus> = statuses
         .iter()
@@ -808,6 +833,25 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
             .map_or(String::new(), |u| format!(" ({u})"));
         quantities.push((n.clone(), format!("{n}{unit}"), values));
     }
+    // each free parameter's standard deviation (NaN: held, undetermined, failed)
+    let sigma_maps: Vec<(String, String, Vec<f64>)> = quantities
+        .iter()
+        .map(|(n, title, _)| {
+            let values = placed
+                .iter()
+                .map(|s| {
+                    s.names
+                        .iter()
+                        .position(|m| m == n)
+                        .and_then(|j| s.std_dev.get(j).copied().flatten())
+                        .filter(|_| s.state != State::Failed)
+                        .unwrap_or(f64::NAN)
+                })
+                .collect();
+            (format!("{n}_std"), format!("σ of {title}"), values)
+        })
+        .collect();
+    quantities.extend(sigma_maps);
     quantities.push((
         "R2".into(),
         "R²".into(),
@@ -823,6 +867,8 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
             x: x.clone(),
             y: y.clone(),
             values,
+            // manifest positions are in mm, the internal length unit
+            position_unit: "mm".into(),
         };
         for (fig, suffix) in [(MapFigure::HeatMap, "map"), (MapFigure::Histogram, "hist")] {
             let svg = data
@@ -1020,6 +1066,8 @@ mod tests {
             rms_rel: Some(0.01),
             iterations: 7,
             seconds: 1.23456,
+            adequacy: (state != State::Failed).then(|| "systematic residuals".into()),
+            caveats: Vec::new(),
         };
         let csv = results_csv(
             &[st("a", State::Converged, 2e4), st("b", State::Failed, 0.0)],
@@ -1029,14 +1077,14 @@ mod tests {
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(
             lines[0],
-            "id,x,y,E,E_std,nu,nu_std,R2,rms_rel,status,iterations,seconds,error"
+            "id,x,y,E,E_std,nu,nu_std,R2,rms_rel,status,iterations,seconds,error,adequacy"
         );
         assert_eq!(
             lines[1],
-            "a,0,,20000,12.5,0.3,,0.99,0.01,converged,7,1.235,"
+            "a,0,,20000,12.5,0.3,,0.99,0.01,converged,7,1.235,,systematic residuals"
         );
         assert!(
-            lines[2].ends_with("failed,7,1.235,cannot read `x.csv`"),
+            lines[2].ends_with("failed,7,1.235,cannot read `x.csv`,"),
             "{}",
             lines[2]
         );

@@ -376,6 +376,7 @@ fn write(
         cost: map.cost.clone(),
         log_x: scaling[0] == indentify_identify::Scaling::Log,
         log_y: scaling[1] == indentify_identify::Scaling::Log,
+        cost_unit: "N^2".into(),
         marks: vec![(
             ca,
             cb,

@@ -213,6 +213,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
             forward_solves: result.forward_solves,
             adjoint_solves: result.adjoint_solves,
             wall_time_s: result.seconds,
+            converged: Some(result.stop_reason.is_converged()),
         },
         fit,
         preprocessing,
@@ -228,6 +229,13 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         warnings: inputs.warnings.to_vec(),
         discretization: inputs.discretization.clone(),
         identifiability,
+        // the residuals of this curve against its record's own noise
+        adequacy: indentify_report::Adequacy::assess(
+            inputs.t,
+            inputs.f_data,
+            inputs.f_final,
+            result.params.iter().filter(|p| p.free).count(),
+        ),
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();

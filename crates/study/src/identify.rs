@@ -1569,6 +1569,9 @@ struct ResultJson {
     warnings: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     fit_quality: Option<FitJson>,
+    // model adequacy and the headline's caveats (crate::adequacy)
+    adequacy: Option<crate::adequacy::FitAdequacy>,
+    caveats: Vec<String>,
     identifiability: Option<IdentifiabilityJson>,
     #[serde(skip_serializing_if = "Option::is_none")]
     discretization: Option<DiscretizationJson>,
@@ -1766,6 +1769,8 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         resumed: o.resumed,
         warnings: o.warnings.clone(),
         fit_quality: o.quality.as_ref().map(fit_json),
+        adequacy: o.adequacy(),
+        caveats: o.caveats(),
         identifiability: r.identifiability.as_ref().map(IdentifiabilityJson::from),
         discretization: o
             .discretization

@@ -18,6 +18,7 @@
 //! # Ok::<(), indentify_study::Error>(())
 //! ```
 
+pub mod adequacy;
 pub mod atomic;
 pub mod batch;
 pub mod check;

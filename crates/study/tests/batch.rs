@@ -54,9 +54,21 @@ fn a_map_is_identified_sharded_merged_and_rerun() {
         assert!(rel(st.values[2], eta) < 0.06, "{id} eta = {}", st.values[2]);
         assert!(st.std_dev[0].is_some_and(|s| s > 0.0));
     }
-    for f in ["E_map.svg", "E_map.png", "eta_hist.svg", "R2_map.png"] {
+    for f in [
+        "E_map.svg",
+        "E_map.png",
+        "eta_hist.svg",
+        "R2_map.png",
+        "E_std_map.svg",
+        "eta_std_map.png",
+    ] {
         assert!(whole.join("maps").join(f).is_file(), "{f}");
     }
+    // positions in mm on both axes; each indent's adequacy in results.csv
+    let svg = std::fs::read_to_string(whole.join("maps/E_std_map.svg")).unwrap();
+    assert!(svg.contains("σ of E (MPa)") && svg.contains("x [mm]"));
+    let csv = std::fs::read_to_string(whole.join("results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().ends_with(",adequacy"), "{csv}");
     let svg = std::fs::read_to_string(whole.join("maps/eta_map.svg")).unwrap();
     assert!(
         svg.contains("eta (MPa s)"),

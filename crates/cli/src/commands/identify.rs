@@ -425,11 +425,7 @@ fn parameter_table(o: &IdentifyOutcome) -> String {
         "identified {} parameters ({}, {}: {})\n{}",
         o.law,
         result.method.name(),
-        if o.converged() {
-            "converged"
-        } else {
-            "NOT converged"
-        },
+        o.headline_status(),
         result.stop_reason,
         table(&rows, "  ")
     )
@@ -488,6 +484,8 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
             t.cost
         ));
     }
+    // model adequacy and the caveats of the headline (indentify_study::adequacy)
+    text.push_str(&o.adequacy_lines());
     text
 }
 

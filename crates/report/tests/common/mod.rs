@@ -112,6 +112,7 @@ pub fn nano_report() -> Report {
             forward_solves: 5,
             adjoint_solves: 4,
             wall_time_s: 12.5,
+            converged: Some(true),
         },
         fit,
         preprocessing: vec![
@@ -127,6 +128,7 @@ pub fn nano_report() -> Report {
         warnings: Vec::new(),
         discretization: None,
         identifiability: None,
+        adequacy: None,
     }
 }
 

@@ -1,0 +1,774 @@
+//! Model adequacy: do a fit's residuals look like the record's own noise, or does the law
+//! fail to describe the curve?
+//!
+//! A least-squares fit always returns parameters and, from the sensitivities, standard
+//! deviations; both assume that the law can describe the record and that what is left is
+//! noise. This module tests that assumption from the record alone (pure numerics, no
+//! model evaluation). The statistics, thresholds and their Monte-Carlo calibration are in
+//! `docs/adequacy.md`:
+//!
+//! 1. **The record's noise `σ_rec`**, estimated without any law from the *third divided
+//!    differences* of a series `y(t)`: for every four consecutive samples the weights
+//!    `w_j = 1 / prod_{k != j} (t_j - t_k)` annihilate any quadratic in `t` (exactly, for
+//!    any spacing), and `z_i = sum_j w_j y_{i+j} / ||w||` has variance `σ^2` when `y` is a
+//!    smooth curve plus white noise of standard deviation `σ` (uniform spacing:
+//!    `z = (y_{i+3} - 3 y_{i+2} + 3 y_{i+1} - y_i) / sqrt(20)`, the von Neumann / Rice idea
+//!    one order higher). `σ^2` is the mean of `z_i^2` over the windows whose `|z_i|` stays
+//!    within 4 robust deviations (`1.4826 MAD`), so the few windows across a segment's
+//!    kink are dropped, divided by `0.99893` (the variance of a normal truncated at 4σ).
+//!    For white noise the `z_i` have lag-1 autocorrelation `-3/4`; windows dominated by
+//!    the curve's own curvature have a positive one. The estimate is *resolved* (noise
+//!    separated from the curve) when that autocorrelation is below `-0.4`; otherwise it
+//!    is an upper bound (a noise-free or coarsely sampled record). It is computed twice:
+//!    from the measured force (the force channel's noise) and from the residuals (the same
+//!    plus the measured depth's noise carried through the law's slope, which a smooth law
+//!    cannot fit either). `σ_rec` is the residuals' estimate when resolved (or the force's
+//!    if larger and resolved); when only the force's is resolved, the residuals' as an
+//!    upper bound (a load-controlled force is smooth: its noise is in the depth); when
+//!    neither is, the smaller bound.
+//! 2. **Residuals against `σ_rec`**: `ratio = sqrt(chi2 / dof)` with
+//!    `chi2 = sum r_i^2 / σ_rec^2`, `dof = n - p`; `z_ratio = ln(ratio^2) / (1.7 / sqrt(n))`
+//!    (the spread of `ln(chi2/dof)` when both the residuals and `σ_rec` come from the same
+//!    white noise: `1.62 / sqrt(n)` from the variances and covariance of the two mean
+//!    squares, 1.66-1.78 measured by Monte Carlo for n = 60-2000).
+//! 3. **Structure**: the Wald-Wolfowitz runs test of the residuals' signs (`runs_z`, negative
+//!    when the residuals come in long runs), their lag-1 autocorrelation with the
+//!    Durbin-Watson statistic, and the Ljung-Box `Q` over `L = min(10, n / 5)` lags
+//!    (`z_ljung_box` by the Wilson-Hilferty transform of `chi2(L)`).
+//! 4. **Verdict**: [`Verdict::Systematic`] when `σ_rec` is resolved and `z_ratio > 3`, or
+//!    it is an upper bound and `ratio > 2`, or the record is noisy (either estimate
+//!    resolved) and `runs_z < -3` or `z_ljung_box > 3`; [`Verdict::CannotTell`] with fewer
+//!    than [`MIN_POINTS`] points, a noise-free fit ([`NOISE_FREE_FLOOR`]) or an unresolved
+//!    `σ_rec` and none of the above; [`Verdict::Adequate`] otherwise.
+
+use serde::{Deserialize, Serialize};
+
+/// Fewer points than this: [`Verdict::CannotTell`].
+pub const MIN_POINTS: usize = 20;
+/// The one-sided limit of `z_ratio`, `-runs_z` and `z_ljung_box` (a 0.13% tail each for
+/// a normal statistic).
+pub const Z_LIMIT: f64 = 3.0;
+/// An unresolved noise estimate is an upper bound: residuals above this many times it are
+/// systematic however small the true noise is.
+pub const RATIO_LIMIT_UNRESOLVED: f64 = 2.0;
+/// The noise estimate is resolved when the lag-1 autocorrelation of its third differences
+/// is below this (white noise: -0.75, a smooth curve: near +1). Splitting the differences'
+/// variance into noise (lag-1 -0.75) and curve (lag-1 about +1), a lag-1 `rho` leaves the
+/// noise a share `(1 - rho) / 1.75`: at -0.4 at least 80%, so a resolved `σ_rec` is high
+/// by at most 12% (conservative: it can only hide a misfit, never invent one).
+pub const RESOLVED_LAG1: f64 = -0.4;
+/// `sd(ln(chi2 / dof)) = RATIO_SPREAD / sqrt(n)` under white noise, see the module docs.
+pub const RATIO_SPREAD: f64 = 1.7;
+/// A fit whose RMS residual is below this fraction of F_max reproduces a noise-free
+/// record to the forward solver's precision (equilibrium tolerance 1e-10 relative, steps
+/// converged to ~1e-8): nothing to test.
+pub const NOISE_FREE_FLOOR: f64 = 1e-7;
+/// Ljung-Box lags (fewer for short series: `n / 5`).
+pub const LJUNG_BOX_LAGS: usize = 10;
+
+/// What the residual tests say about the law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// The residuals look like the record's own noise.
+    Adequate,
+    /// The residuals are larger than the noise or structured: the law does not describe
+    /// the record, and the standard deviations (which assume it does) are conditional.
+    Systematic,
+    /// The test cannot decide (noise not separable from the curve, or too few points).
+    CannotTell,
+}
+
+impl Verdict {
+    /// `adequate`, `systematic residuals`, `cannot tell`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Adequate => "adequate",
+            Verdict::Systematic => "systematic residuals",
+            Verdict::CannotTell => "cannot tell",
+        }
+    }
+
+    /// The worse of two verdicts (systematic > cannot tell > adequate).
+    pub fn worst(self, other: Verdict) -> Verdict {
+        let rank = |v: Verdict| match v {
+            Verdict::Adequate => 0,
+            Verdict::CannotTell => 1,
+            Verdict::Systematic => 2,
+        };
+        if rank(other) > rank(self) {
+            other
+        } else {
+            self
+        }
+    }
+}
+
+/// A noise level estimated from a series by third divided differences.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NoiseEstimate {
+    /// The standard deviation (the series' unit); an upper bound when not `resolved`.
+    pub sigma: f64,
+    /// Lag-1 autocorrelation of the normalized third differences (white noise: -0.75).
+    pub lag1: f64,
+    /// Whether the differences are noise, not the curve's curvature (`lag1 < -0.4`).
+    pub resolved: bool,
+    /// Windows used (after the 4-deviation trim).
+    pub windows: usize,
+}
+
+impl NoiseEstimate {
+    /// The noise of `y(t)` (see the module docs). Windows whose times do not increase
+    /// strictly, or whose values are not finite, are skipped. `None` with fewer than 8
+    /// usable windows.
+    pub fn of_series(t: &[f64], y: &[f64]) -> Option<NoiseEstimate> {
+        let n = t.len().min(y.len());
+        if n < 4 {
+            return None;
+        }
+        // z_i, None where the window is unusable
+        let mut z: Vec<Option<f64>> = Vec::with_capacity(n - 3);
+        for i in 0..n - 3 {
+            let ts = &t[i..i + 4];
+            let ys = &y[i..i + 4];
+            let ok =
+                ts.windows(2).all(|p| p[1] > p[0]) && ts.iter().chain(ys).all(|v| v.is_finite());
+            if !ok {
+                z.push(None);
+                continue;
+            }
+            let mut w = [0.0; 4];
+            for j in 0..4 {
+                let mut d = 1.0;
+                for k in 0..4 {
+                    if k != j {
+                        d *= ts[j] - ts[k];
+                    }
+                }
+                w[j] = 1.0 / d;
+            }
+            let norm = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let v: f64 = w.iter().zip(ys).map(|(a, b)| a * b).sum::<f64>() / norm;
+            z.push(v.is_finite().then_some(v));
+        }
+        let vals: Vec<f64> = z.iter().flatten().copied().collect();
+        if vals.len() < 8 {
+            return None;
+        }
+        let med = median(&vals);
+        let mad = median(&vals.iter().map(|v| (v - med).abs()).collect::<Vec<_>>());
+        let limit = 4.0 * 1.4826 * mad;
+        let keep = |v: f64| (v - med).abs() <= limit;
+        let kept: Vec<f64> = vals.iter().copied().filter(|&v| keep(v)).collect();
+        if kept.is_empty() {
+            return None;
+        }
+        let sigma = (kept.iter().map(|v| v * v).sum::<f64>() / kept.len() as f64 / 0.99893).sqrt();
+        // lag-1 autocorrelation over adjacent kept windows (about zero: the differences
+        // of noise have mean zero, those of a smooth curve do not and count as signal)
+        let (mut num, mut den) = (0.0, 0.0);
+        for p in z.windows(2) {
+            if let (Some(a), Some(b)) = (p[0], p[1])
+                && keep(a)
+                && keep(b)
+            {
+                num += a * b;
+                den += 0.5 * (a * a + b * b);
+            }
+        }
+        let lag1 = if den > 0.0 { num / den } else { 1.0 };
+        Some(NoiseEstimate {
+            sigma,
+            lag1,
+            resolved: lag1 < RESOLVED_LAG1 && sigma > 0.0,
+            windows: kept.len(),
+        })
+    }
+}
+
+/// The adequacy of one fit (one test of a joint fit): its residuals against the record's
+/// own noise and their structure. Forces in N.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Adequacy {
+    /// What the tests say.
+    pub verdict: Verdict,
+    /// The verdict in words, with the numbers and what to try.
+    pub message: String,
+    /// Points compared.
+    pub n: usize,
+    /// Largest measured force magnitude (N), the scale of the noise-free floor.
+    pub f_max: f64,
+    /// Free parameters of the fit (`dof = n - p`).
+    pub free: usize,
+    /// The record's noise `σ_rec` (N) the residuals are compared with; an upper bound
+    /// when not `noise_resolved`.
+    pub sigma_record: f64,
+    /// Whether `σ_rec` is resolved (noise separated from the curve).
+    pub noise_resolved: bool,
+    /// Whether either estimate is resolved: the record is noisy, so its residuals must
+    /// look white whatever `σ_rec` is (the structure tests apply).
+    #[serde(default)]
+    pub noisy_record: bool,
+    /// The measured force's own noise (third differences of the data), N.
+    pub sigma_data: Option<NoiseEstimate>,
+    /// The residuals' high-frequency noise (third differences of the residuals), N.
+    pub sigma_residual: Option<NoiseEstimate>,
+    /// RMS of the residuals (N).
+    pub rms: f64,
+    /// `sqrt(chi2 / dof)`, the residuals' size in units of `σ_rec` (1 for a law that fits).
+    pub ratio: f64,
+    /// `chi2 = sum r_i^2 / σ_rec^2`.
+    pub chi2: f64,
+    /// `n - p`.
+    pub dof: usize,
+    /// `ln(ratio^2) / (1.7 / sqrt(n))`.
+    pub z_ratio: f64,
+    /// Runs of equal residual signs.
+    pub runs: usize,
+    /// Their expectation for independent signs.
+    pub runs_expected: f64,
+    /// Wald-Wolfowitz `z` (negative: long runs, a systematic misfit).
+    pub runs_z: f64,
+    /// Lag-1 autocorrelation of the residuals.
+    pub lag1: f64,
+    /// Durbin-Watson `sum (r_i - r_{i-1})^2 / sum r_i^2` (2 for independent residuals).
+    pub durbin_watson: f64,
+    /// Ljung-Box `Q = n (n + 2) sum_k rho_k^2 / (n - k)`.
+    pub ljung_box: f64,
+    /// Its lags `L` (degrees of freedom).
+    pub ljung_box_lags: usize,
+    /// Wilson-Hilferty `z` of `Q` against `chi2(L)`.
+    pub z_ljung_box: f64,
+}
+
+impl Adequacy {
+    /// The adequacy of the fit `f_model` to `f_data` at times `t` with `free` fitted
+    /// parameters. `None` when the series are empty or differ in length.
+    pub fn assess(t: &[f64], f_data: &[f64], f_model: &[f64], free: usize) -> Option<Adequacy> {
+        let n = t.len();
+        if n == 0 || f_data.len() != n || f_model.len() != n {
+            return None;
+        }
+        let r: Vec<f64> = f_data.iter().zip(f_model).map(|(d, m)| d - m).collect();
+        if r.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let sigma_data = NoiseEstimate::of_series(t, f_data);
+        let sigma_residual = NoiseEstimate::of_series(t, &r);
+        // the residuals' own estimate when resolved (it includes the depth's noise carried
+        // through the law); else, when the force's is resolved, the residuals' as an upper
+        // bound (a load-controlled force is smooth, its noise is in the depth); else the
+        // smaller bound
+        let resolved = |e: &Option<NoiseEstimate>| e.filter(|e| e.resolved).map(|e| e.sigma);
+        let noisy_record = resolved(&sigma_data).is_some() || resolved(&sigma_residual).is_some();
+        let (sigma_record, noise_resolved) = match (resolved(&sigma_residual), sigma_residual) {
+            (Some(r), _) => (r.max(resolved(&sigma_data).unwrap_or(0.0)), true),
+            (None, Some(r)) if noisy_record => {
+                (r.sigma.max(sigma_data.map_or(0.0, |d| d.sigma)), false)
+            }
+            (None, None) if noisy_record => (resolved(&sigma_data).unwrap_or(f64::NAN), true),
+            _ => (
+                [sigma_data, sigma_residual]
+                    .iter()
+                    .flatten()
+                    .map(|e| e.sigma)
+                    .fold(f64::NAN, f64::min),
+                false,
+            ),
+        };
+        let ss: f64 = r.iter().map(|v| v * v).sum();
+        let rms = (ss / n as f64).sqrt();
+        let f_max = f_data.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let dof = n.saturating_sub(free).max(1);
+        let chi2 = ss / (sigma_record * sigma_record);
+        let ratio = (chi2 / dof as f64).sqrt();
+        let z_ratio = (ratio * ratio).ln() / (RATIO_SPREAD / (n as f64).sqrt());
+        let (runs, runs_expected, runs_z) = runs_test(&r);
+        let rho = autocorrelations(&r, LJUNG_BOX_LAGS.min(n / 5).max(1));
+        let lag1 = rho.first().copied().unwrap_or(f64::NAN);
+        let durbin_watson = if ss > 0.0 {
+            r.windows(2).map(|p| (p[1] - p[0]).powi(2)).sum::<f64>() / ss
+        } else {
+            f64::NAN
+        };
+        let lags = rho.len();
+        let nf = n as f64;
+        let ljung_box = nf
+            * (nf + 2.0)
+            * rho
+                .iter()
+                .enumerate()
+                .map(|(k, p)| p * p / (nf - (k + 1) as f64))
+                .sum::<f64>();
+        let z_ljung_box = wilson_hilferty(ljung_box, lags as f64);
+
+        let mut a = Adequacy {
+            verdict: Verdict::CannotTell,
+            f_max,
+            message: String::new(),
+            n,
+            free,
+            sigma_record,
+            noise_resolved,
+            noisy_record,
+            sigma_data,
+            sigma_residual,
+            rms,
+            ratio,
+            chi2,
+            dof,
+            z_ratio,
+            runs,
+            runs_expected,
+            runs_z,
+            lag1,
+            durbin_watson,
+            ljung_box,
+            ljung_box_lags: lags,
+            z_ljung_box,
+        };
+        a.decide();
+        Some(a)
+    }
+
+    /// Sets the verdict and its message from the statistics.
+    fn decide(&mut self) {
+        let nums = format!(
+            "RMS residual {} x the record's noise{} (σ_rec = {} N), runs z = {}, lag-1 \
+             autocorrelation {}",
+            fmt2(self.ratio),
+            if self.noise_resolved { "" } else { " bound" },
+            crate::units::fmt_sig(self.sigma_record),
+            fmt2(self.runs_z),
+            fmt2(self.lag1)
+        );
+        if self.n < MIN_POINTS {
+            self.verdict = Verdict::CannotTell;
+            self.message = format!(
+                "cannot tell: {} points, the residual tests need at least {MIN_POINTS}",
+                self.n
+            );
+            return;
+        }
+        if self.rms <= NOISE_FREE_FLOOR * self.f_max {
+            self.verdict = Verdict::CannotTell;
+            self.message = format!(
+                "cannot tell: the fit reproduces the record to {} of F_max (noise-free data \
+                 at the solver's precision); the residual test needs a noisy record",
+                crate::units::fmt_sig(self.rms / self.f_max)
+            );
+            return;
+        }
+        if !self.sigma_record.is_finite() {
+            self.verdict = Verdict::CannotTell;
+            self.message = "cannot tell: the record's noise could not be estimated".into();
+            return;
+        }
+        let advice = "the standard deviations assume a law that fits and are conditional \
+                      on it; try another law, freeing held parameters, a joint fit of \
+                      several tests, or a shorter stretch of the record";
+        let mut why = Vec::new();
+        if self.noise_resolved && self.z_ratio > Z_LIMIT {
+            why.push(format!(
+                "larger than the record's noise (z = {})",
+                fmt2(self.z_ratio)
+            ));
+        }
+        if !self.noise_resolved && self.ratio > RATIO_LIMIT_UNRESOLVED {
+            why.push(format!(
+                "{} times even an upper bound of the record's noise",
+                fmt2(self.ratio)
+            ));
+        }
+        if self.noisy_record && self.runs_z < -Z_LIMIT {
+            why.push(format!(
+                "in long runs of one sign ({} runs, {} expected)",
+                self.runs,
+                fmt2(self.runs_expected)
+            ));
+        }
+        if self.noisy_record && self.z_ljung_box > Z_LIMIT {
+            why.push(format!(
+                "autocorrelated (Ljung-Box Q = {} over {} lags, z = {})",
+                fmt2(self.ljung_box),
+                self.ljung_box_lags,
+                fmt2(self.z_ljung_box)
+            ));
+        }
+        if why.is_empty() && !self.noise_resolved {
+            self.verdict = Verdict::CannotTell;
+            self.message = format!(
+                "cannot tell: the noise of the residuals cannot be separated from the curve at \
+                 this sampling (noise-free or coarsely sampled data; {nums}); the residual \
+                 test needs a noisy record"
+            );
+            return;
+        }
+        if why.is_empty() {
+            self.verdict = Verdict::Adequate;
+            self.message = format!("adequate: the residuals look like the record's noise ({nums})");
+        } else {
+            self.verdict = Verdict::Systematic;
+            self.message = format!(
+                "systematic residuals: {} ({nums}); {advice}",
+                why.join(", ")
+            );
+        }
+    }
+
+    /// One line for a console or a figure: `adequacy: systematic residuals (RMS 3.1 σ_rec,
+    /// runs z = -6.2)`.
+    pub fn short(&self) -> String {
+        format!(
+            "adequacy: {} (RMS {} σ_rec{}, runs z = {})",
+            self.verdict.as_str(),
+            fmt2(self.ratio),
+            if self.noise_resolved { "" } else { " bound" },
+            fmt2(self.runs_z)
+        )
+    }
+}
+
+/// The worst verdict of several tests' assessments (`None` when there are none).
+pub fn worst_verdict<'a>(all: impl IntoIterator<Item = &'a Adequacy>) -> Option<Verdict> {
+    all.into_iter().map(|a| a.verdict).reduce(Verdict::worst)
+}
+
+/// Two significant decimals, or the number as it is when not finite.
+fn fmt2(v: f64) -> String {
+    if v.is_finite() {
+        if v.abs() >= 100.0 {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.2}")
+        }
+    } else {
+        format!("{v}")
+    }
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    }
+}
+
+/// Wald-Wolfowitz: the runs of equal signs of `r` (zeros dropped), their expectation and
+/// `z = (runs - mu) / sd` with `mu = 2 n1 n2 / N + 1`,
+/// `sd^2 = 2 n1 n2 (2 n1 n2 - N) / (N^2 (N - 1))`. `z` is 0 with one sign only.
+pub fn runs_test(r: &[f64]) -> (usize, f64, f64) {
+    let signs: Vec<bool> = r.iter().filter(|v| **v != 0.0).map(|v| *v > 0.0).collect();
+    let n = signs.len();
+    if n == 0 {
+        return (0, 0.0, 0.0);
+    }
+    let runs = 1 + signs.windows(2).filter(|p| p[0] != p[1]).count();
+    let n1 = signs.iter().filter(|s| **s).count() as f64;
+    let n2 = n as f64 - n1;
+    let nn = n as f64;
+    let mu = 2.0 * n1 * n2 / nn + 1.0;
+    let var = 2.0 * n1 * n2 * (2.0 * n1 * n2 - nn) / (nn * nn * (nn - 1.0));
+    let z = if var > 0.0 {
+        (runs as f64 - mu) / var.sqrt()
+    } else {
+        0.0
+    };
+    (runs, mu, z)
+}
+
+/// Sample autocorrelations `rho_1..rho_lags` of `r` about its mean.
+pub fn autocorrelations(r: &[f64], lags: usize) -> Vec<f64> {
+    let n = r.len();
+    let mean = r.iter().sum::<f64>() / n.max(1) as f64;
+    let d: Vec<f64> = r.iter().map(|v| v - mean).collect();
+    let c0: f64 = d.iter().map(|v| v * v).sum();
+    (1..=lags.min(n.saturating_sub(1)))
+        .map(|k| {
+            if c0 > 0.0 {
+                d.iter().zip(&d[k..]).map(|(a, b)| a * b).sum::<f64>() / c0
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The standard normal deviate of `q` under `chi2(k)` (Wilson-Hilferty:
+/// `((q/k)^(1/3) - (1 - 2/(9k))) / sqrt(2/(9k))`).
+pub fn wilson_hilferty(q: f64, k: f64) -> f64 {
+    if !(k > 0.0) || !q.is_finite() {
+        return f64::NAN;
+    }
+    let v = 2.0 / (9.0 * k);
+    ((q / k).cbrt() - (1.0 - v)) / v.sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64 and Box-Muller: seeded standard normal draws.
+    struct Normal(u64);
+    impl Normal {
+        fn u(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+        fn next(&mut self) -> f64 {
+            let (a, b) = (self.u(), self.u());
+            (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+        }
+    }
+
+    /// Depth of a load (0..1 s), hold (1..2 s), unload (2..3 s) history, peak 1.
+    fn depth(t: f64) -> f64 {
+        if t < 1.0 {
+            t
+        } else if t < 2.0 {
+            1.0
+        } else {
+            (3.0 - t).max(0.0)
+        }
+    }
+
+    /// The basis of a linear "law" with three parameters: F = a h^2 + b h + c creep(t),
+    /// creep a relaxation during the hold carried into the unload.
+    fn basis(t: f64, power: f64) -> [f64; 3] {
+        let h = depth(t);
+        let creep = if t < 1.0 {
+            0.0
+        } else {
+            1.0 - (-(t.min(2.0) - 1.0) / 0.3).exp()
+        } * if t > 2.0 { 3.0 - t } else { 1.0 };
+        [h.powf(power), h, creep]
+    }
+
+    /// Least-squares fit of `y` on `basis(t, 2)`; the fitted values.
+    fn fit(t: &[f64], y: &[f64]) -> Vec<f64> {
+        let rows: Vec<[f64; 3]> = t.iter().map(|&s| basis(s, 2.0)).collect();
+        let mut a = [[0.0; 3]; 3];
+        let mut b = [0.0; 3];
+        for (r, v) in rows.iter().zip(y) {
+            for i in 0..3 {
+                b[i] += r[i] * v;
+                for j in 0..3 {
+                    a[i][j] += r[i] * r[j];
+                }
+            }
+        }
+        // Gauss elimination (3x3, symmetric positive definite)
+        for k in 0..3 {
+            for i in k + 1..3 {
+                let f = a[i][k] / a[k][k];
+                for j in k..3 {
+                    a[i][j] -= f * a[k][j];
+                }
+                b[i] -= f * b[k];
+            }
+        }
+        let mut c = [0.0; 3];
+        for k in (0..3).rev() {
+            let s: f64 = (k + 1..3).map(|j| a[k][j] * c[j]).sum();
+            c[k] = (b[k] - s) / a[k][k];
+        }
+        rows.iter()
+            .map(|r| r.iter().zip(&c).map(|(x, y)| x * y).sum())
+            .collect()
+    }
+
+    fn grid(n: usize) -> Vec<f64> {
+        (0..n).map(|i| 3.0 * i as f64 / (n - 1) as f64).collect()
+    }
+
+    /// Data of the law `power` (2: the fitted law's own) with a bump of `bump` noise
+    /// deviations at t = 1.5 and white noise `sigma`, fitted with the power-2 law.
+    fn assess_case(n: usize, seed: u64, sigma: f64, power: f64, bump: f64) -> Adequacy {
+        let t = grid(n);
+        let mut g = Normal(seed);
+        let y: Vec<f64> = t
+            .iter()
+            .map(|&s| {
+                let b = basis(s, power);
+                b[0] + 0.2 * b[1] - 0.1 * b[2]
+                    + bump * sigma * (-((s - 1.5) / 0.15).powi(2)).exp()
+                    + sigma * g.next()
+            })
+            .collect();
+        let m = fit(&t, &y);
+        Adequacy::assess(&t, &y, &m, 3).unwrap()
+    }
+
+    /// Fraction of `seeds` seeds flagged systematic.
+    fn alarm_rate(n: usize, sigma: f64, power: f64, bump: f64, seeds: u64) -> f64 {
+        let flagged = (0..seeds)
+            .filter(|&s| {
+                assess_case(n, 1000 + s, sigma, power, bump).verdict == Verdict::Systematic
+            })
+            .count();
+        flagged as f64 / seeds as f64
+    }
+
+    #[test]
+    fn noise_estimate_recovers_known_noise_on_a_smooth_curve() {
+        for (n, uniform) in [(200, true), (2000, true), (500, false)] {
+            let t: Vec<f64> = (0..n)
+                .map(|i| {
+                    let x = i as f64 / n as f64;
+                    if uniform {
+                        10.0 * x
+                    } else {
+                        10.0 * x * x + 0.01 * x
+                    }
+                })
+                .collect();
+            let mut g = Normal(7);
+            let sigma = 0.02;
+            let y: Vec<f64> = t.iter().map(|s| s.sin() + sigma * g.next()).collect();
+            let e = NoiseEstimate::of_series(&t, &y).unwrap();
+            let tol = 4.0 * 1.5 / (n as f64).sqrt();
+            assert!(
+                (e.sigma / sigma - 1.0).abs() < tol,
+                "n {n}: {} vs {sigma}",
+                e.sigma
+            );
+            assert!(e.resolved && (e.lag1 + 0.75).abs() < 0.15, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn noise_estimate_of_noise_free_data_is_near_zero_and_unresolved() {
+        let t = grid(300);
+        let y: Vec<f64> = t.iter().map(|&s| basis(s, 2.0)[0]).collect();
+        let e = NoiseEstimate::of_series(&t, &y).unwrap();
+        // a piecewise quadratic: its third differences vanish but at the two kinks
+        assert!(e.sigma < 1e-12, "{e:?}");
+        let y: Vec<f64> = t.iter().map(|&s| (2.0 * s).sin()).collect();
+        let e = NoiseEstimate::of_series(&t, &y).unwrap();
+        // a smooth curve: a tiny upper bound, not mistaken for noise
+        assert!(e.sigma < 1e-4 && !e.resolved, "{e:?}");
+    }
+
+    #[test]
+    fn runs_and_autocorrelation_by_hand() {
+        // + + - - + : 3 runs, n1 = 3, n2 = 2, mu = 2*3*2/5 + 1 = 3.4
+        let (runs, mu, _) = runs_test(&[1.0, 2.0, -1.0, -3.0, 0.5]);
+        assert_eq!(runs, 3);
+        assert!((mu - 3.4).abs() < 1e-12);
+        let rho = autocorrelations(&[1.0, -1.0, 1.0, -1.0], 1);
+        // mean 0, c0 = 4, c1 = -3
+        assert!((rho[0] + 0.75).abs() < 1e-12);
+        // Wilson-Hilferty: the median of chi2(k) is near k (1 - 2/(9k))^3
+        let k = 10.0_f64;
+        assert!(wilson_hilferty(k * (1.0 - 2.0 / (9.0 * k)).powi(3), k).abs() < 1e-12);
+    }
+
+    /// The false-alarm rate: the law's own data plus white noise pass in at least 95% of
+    /// 400 seeds, for short and long records and two noise levels.
+    #[test]
+    fn correctly_specified_fits_pass() {
+        for n in [60, 90, 300, 2000] {
+            for sigma in [1e-2, 1e-3] {
+                let rate = alarm_rate(n, sigma, 2.0, 0.0, 400);
+                assert!(rate <= 0.05, "n {n}, sigma {sigma}: false alarms {rate}");
+            }
+        }
+        let a = assess_case(300, 3, 1e-2, 2.0, 0.0);
+        assert_eq!(a.verdict, Verdict::Adequate, "{}", a.message);
+        assert!(a.noise_resolved && (a.ratio - 1.0).abs() < 0.2, "{a:?}");
+    }
+
+    /// Power: a wrong law (F ~ h^1.5 data fitted with h^2) and a smooth bump of one noise
+    /// deviation's height are flagged.
+    #[test]
+    fn misspecified_fits_are_flagged() {
+        for n in [90, 300, 2000] {
+            let rate = alarm_rate(n, 1e-3, 1.5, 0.0, 200);
+            assert!(rate >= 0.95, "n {n}: wrong law flagged in {rate}");
+        }
+        let rate = alarm_rate(2000, 1e-3, 2.0, 2.0, 200);
+        assert!(rate >= 0.9, "bump of 2 sigma, n 2000: flagged in {rate}");
+        let a = assess_case(300, 5, 1e-3, 1.5, 0.0);
+        assert_eq!(a.verdict, Verdict::Systematic);
+        assert!(
+            a.message
+                .contains("the standard deviations assume a law that fits")
+        );
+    }
+
+    /// Noise-free data: the law's own curve cannot be tested, a wrong law still shows.
+    #[test]
+    fn noise_free_records() {
+        let a = assess_case(300, 1, 0.0, 2.0, 0.0);
+        assert_eq!(a.verdict, Verdict::CannotTell, "{}", a.message);
+        let a = assess_case(300, 1, 0.0, 1.5, 0.0);
+        assert_eq!(a.verdict, Verdict::Systematic, "{}", a.message);
+        assert!(!a.noise_resolved);
+    }
+
+    /// A load-controlled record: the force is smooth (its own noise 1e-7), the noise is in
+    /// the depth and reaches the residuals through the law's slope. White depth noise alone
+    /// is adequate (the residuals' own estimate is resolved); with a smooth misfit too the
+    /// residuals are systematic against the residuals' noise bound, not against the force's
+    /// far smaller noise (which gave ratios of 3e4 on the sphere record).
+    #[test]
+    fn load_controlled_records_compare_with_the_residuals_noise() {
+        let t = grid(60);
+        let mut g = Normal(11);
+        let smooth: Vec<f64> = t.iter().map(|&s| basis(s, 2.0)[0]).collect();
+        let data: Vec<f64> = smooth.iter().map(|f| f + 1e-7 * g.next()).collect();
+        let model: Vec<f64> = smooth.iter().map(|f| f + 1e-3 * g.next()).collect();
+        let a = Adequacy::assess(&t, &data, &model, 3).unwrap();
+        assert_eq!(a.verdict, Verdict::Adequate, "{}", a.message);
+        assert!((a.sigma_record / 1e-3 - 1.0).abs() < 0.4, "{a:?}");
+        let bent: Vec<f64> = model
+            .iter()
+            .zip(&t)
+            .map(|(m, s)| m + 2e-2 * (2.0 * s).sin())
+            .collect();
+        let a = Adequacy::assess(&t, &data, &bent, 3).unwrap();
+        assert_eq!(a.verdict, Verdict::Systematic, "{}", a.message);
+        assert!(a.noisy_record && a.ratio < 100.0, "{a:?}");
+    }
+
+    /// The numbers of docs/adequacy.md: `cargo test -p indentify-report --lib -- --ignored
+    /// --nocapture adequacy_table`.
+    #[test]
+    #[ignore]
+    fn adequacy_table() {
+        for (label, power, bump) in [
+            ("own law", 2.0, 0.0),
+            ("wrong law h^1.5", 1.5, 0.0),
+            ("bump 1 sigma", 2.0, 1.0),
+            ("bump 2 sigma", 2.0, 2.0),
+            ("bump 4 sigma", 2.0, 4.0),
+        ] {
+            for n in [60, 90, 300, 2000] {
+                for sigma in [1e-2, 1e-3] {
+                    let rate = alarm_rate(n, sigma, power, bump, 1000);
+                    println!("| {label} | {n} | {sigma:e} | {:.1}% |", 100.0 * rate);
+                }
+            }
+        }
+        // the spread of ln(chi2/dof) under the null, against RATIO_SPREAD / sqrt(n)
+        for n in [60, 300, 2000] {
+            let v: Vec<f64> = (0..1000)
+                .map(|s| (assess_case(n, s, 1e-3, 2.0, 0.0).ratio.powi(2)).ln())
+                .collect();
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+            println!(
+                "n {n}: mean {m:.4}, sd*sqrt(n) {:.3}",
+                sd * (n as f64).sqrt()
+            );
+        }
+    }
+}
