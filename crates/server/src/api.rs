@@ -134,7 +134,7 @@ pub const CSRF_HEADER: &str = "x-indentify";
 /// The token's cookie, set when the page is opened with `?token=`.
 const TOKEN_COOKIE: &str = "indentify_token";
 
-fn header_str<'a>(h: &'a HeaderMap, name: impl header::AsHeaderName) -> Option<&'a str> {
+fn header_str(h: &HeaderMap, name: impl header::AsHeaderName) -> Option<&str> {
     h.get(name).and_then(|v| v.to_str().ok())
 }
 
@@ -176,7 +176,10 @@ async fn guard(State(st): Shared, req: Request, next: Next) -> Response {
                 .map(String::from)
         });
         let given = [&query_token, &bearer, &cookie];
-        if !given.iter().any(|g| g.as_deref().is_some_and(|g| eq_const(g, token))) {
+        if !given
+            .iter()
+            .any(|g| g.as_deref().is_some_and(|g| eq_const(g, token)))
+        {
             return ApiError::new(
                 StatusCode::UNAUTHORIZED,
                 "unauthorized",
@@ -211,16 +214,19 @@ async fn guard(State(st): Shared, req: Request, next: Next) -> Response {
     }
     let mut resp = next.run(req).await;
     let hs = resp.headers_mut();
-    hs.insert("x-content-type-options", HeaderValue::from_static("nosniff"));
+    hs.insert(
+        "x-content-type-options",
+        HeaderValue::from_static("nosniff"),
+    );
     hs.insert("x-frame-options", HeaderValue::from_static("DENY"));
     if !hs.contains_key("content-security-policy") {
         hs.insert(
-        "content-security-policy",
-        HeaderValue::from_static(
-            "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; \
+            "content-security-policy",
+            HeaderValue::from_static(
+                "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; \
              frame-ancestors 'none'",
-        ),
-    );
+            ),
+        );
     }
     if let Some(c) = set_cookie.and_then(|c| HeaderValue::from_str(&c).ok()) {
         hs.insert(header::SET_COOKIE, c);
@@ -231,8 +237,7 @@ async fn guard(State(st): Shared, req: Request, next: Next) -> Response {
 /// Compares without stopping at the first difference.
 fn eq_const(a: &str, b: &str) -> bool {
     a.len() == b.len()
-        && a
-            .bytes()
+        && a.bytes()
             .zip(b.bytes())
             .fold(0u8, |acc, (x, y)| acc | (x ^ y))
             == 0
@@ -320,19 +325,19 @@ pub fn record_template(
             let d = p.describe();
             (p, format!("{d} (tip {t})"))
         }
-        (None, Some(s)) => match indentify_study::templates::tip_from_metadata(
-            &indentify_records::Meta {
+        (None, Some(s)) => {
+            match indentify_study::templates::tip_from_metadata(&indentify_records::Meta {
                 tip: Some(s.to_string()),
                 tip_radius: radius,
                 ..Default::default()
-            },
-        ) {
-            Some(p) => {
-                let d = p.describe();
-                (p, format!("{d}, as the file states"))
+            }) {
+                Some(p) => {
+                    let d = p.describe();
+                    (p, format!("{d}, as the file states"))
+                }
+                None => berkovich(),
             }
-            None => berkovich(),
-        },
+        }
         (None, None) => berkovich(),
     };
     let d = indentify_study::templates::DataTemplate {
@@ -376,7 +381,9 @@ async fn template(
                 if k == 0 || k > n {
                     return Err(ApiError::bad_request(
                         "data",
-                        vec![format!("test {k} is not a test of record `{id}` (1 to {n})")],
+                        vec![format!(
+                            "test {k} is not a test of record `{id}` (1 to {n})"
+                        )],
                     ));
                 }
             }
@@ -430,7 +437,10 @@ async fn upload(
     Ok((StatusCode::CREATED, axum::Json(info)))
 }
 
-async fn get_record(State(st): Shared, Path(id): Path<String>) -> Result<axum::Json<Value>, ApiError> {
+async fn get_record(
+    State(st): Shared,
+    Path(id): Path<String>,
+) -> Result<axum::Json<Value>, ApiError> {
     let runs = Arc::clone(&st.runs);
     Ok(axum::Json(
         blocking(move || records::load(runs.workspace(), &id)).await?,
@@ -446,7 +456,10 @@ async fn submit(
     body: Result<axum::Json<RunRequest>, axum::extract::rejection::JsonRejection>,
 ) -> Result<(StatusCode, axum::Json<Value>), ApiError> {
     let axum::Json(req) = body.map_err(|e| {
-        ApiError::bad_request("config", vec![format!("malformed request: {}", e.body_text())])
+        ApiError::bad_request(
+            "config",
+            vec![format!("malformed request: {}", e.body_text())],
+        )
     })?;
     let runs = Arc::clone(&st.runs);
     let id = blocking(move || runs.submit(req)).await?;
@@ -489,14 +502,12 @@ async fn events(State(st): Shared, Path(id): Path<String>) -> Result<Response, A
         }
         let text = match first {
             Some(t) => t,
-            None => loop {
-                match rx.recv().await {
-                    Ok(t) => break t.as_str().to_string(),
-                    Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => {
-                        break serde_json::to_string(&run.meta()).unwrap_or_default();
-                    }
-                    Err(tokio::sync::broadcast::error::RecvError::Closed) => return None,
+            None => match rx.recv().await {
+                Ok(t) => t.as_str().to_string(),
+                Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => {
+                    serde_json::to_string(&run.meta()).unwrap_or_default()
                 }
+                Err(tokio::sync::broadcast::error::RecvError::Closed) => return None,
             },
         };
         let is_final = serde_json::from_str::<Value>(&text)
@@ -504,14 +515,20 @@ async fn events(State(st): Shared, Path(id): Path<String>) -> Result<Response, A
             .and_then(|v| v["status"].as_str().map(String::from))
             .is_some_and(|s| matches!(s.as_str(), "done" | "failed" | "cancelled"));
         let ev = Event::default().event("status").data(text);
-        Some((Ok::<_, std::convert::Infallible>(ev), (None, rx, is_final, run)))
+        Some((
+            Ok::<_, std::convert::Infallible>(ev),
+            (None, rx, is_final, run),
+        ))
     });
     Ok(Sse::new(stream)
         .keep_alive(KeepAlive::default())
         .into_response())
 }
 
-async fn list_files(State(st): Shared, Path(id): Path<String>) -> Result<axum::Json<Value>, ApiError> {
+async fn list_files(
+    State(st): Shared,
+    Path(id): Path<String>,
+) -> Result<axum::Json<Value>, ApiError> {
     let run = st.runs.get(&id)?;
     Ok(axum::Json(
         json!({ "files": crate::runs::files(run.dir()) }),
@@ -546,7 +563,9 @@ async fn get_file(
             .map_err(|_| ApiError::not_found(format!("no file `{path}` in run `{id}`")))?;
         let dir = run.dir().canonicalize().map_err(ApiError::io)?;
         if !real.starts_with(&dir) || !real.is_file() {
-            return Err(ApiError::not_found(format!("no file `{path}` in run `{id}`")));
+            return Err(ApiError::not_found(format!(
+                "no file `{path}` in run `{id}`"
+            )));
         }
         std::fs::read(&real).map_err(ApiError::io)
     })

@@ -150,7 +150,10 @@ impl Server {
     ///
     /// # Errors
     /// The listener failing.
-    pub fn run_until(self, stop: impl std::future::Future<Output = ()> + Send + 'static) -> Result<()> {
+    pub fn run_until(
+        self,
+        stop: impl std::future::Future<Output = ()> + Send + 'static,
+    ) -> Result<()> {
         let Server {
             listener,
             app,

@@ -159,11 +159,13 @@ fn describe(bytes: &[u8], name: &str) -> Result<Vec<TestInfo>, ApiError> {
 pub fn store(ws: &Workspace, name: &str, bytes: &[u8]) -> Result<Value, ApiError> {
     let name = sanitize_name(name);
     let id = content_id(bytes);
-    let dir = ws.record_dir(&id).ok_or_else(|| ApiError::internal("bad record id"))?;
+    let dir = ws
+        .record_dir(&id)
+        .ok_or_else(|| ApiError::internal("bad record id"))?;
     let meta = dir.join("record.json");
     if meta.is_file() {
         let existing = std::fs::read(&meta).map_err(ApiError::io)?;
-        let v: Value = serde_json::from_slice(&existing).map_err(|e| ApiError::internal(e))?;
+        let v: Value = serde_json::from_slice(&existing).map_err(ApiError::internal)?;
         let file = v["file"].as_str().unwrap_or_default();
         let same = std::fs::read(dir.join(file)).is_ok_and(|b| b == bytes);
         if same {

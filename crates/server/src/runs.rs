@@ -423,9 +423,7 @@ impl Runs {
             text: text.clone(),
             name: name.to_string(),
         };
-        let cfg = source
-            .load(&user_sets)
-            .map_err(|e| ApiError::study(&e))?;
+        let cfg = source.load(&user_sets).map_err(|e| ApiError::study(&e))?;
         let mut sets = Vec::new();
         if let Some((rid, rel, _)) = &record {
             if cfg.data.is_none() {
@@ -573,7 +571,8 @@ impl Runs {
             Status::Running if meta.command == "identify" => {
                 run.cancel.raise();
                 run.update(true, |m| {
-                    m.message = Some("cancel asked: stopping after the iteration in progress".into());
+                    m.message =
+                        Some("cancel asked: stopping after the iteration in progress".into());
                 });
                 Ok(run.meta())
             }
@@ -659,11 +658,11 @@ fn execute(run: &Arc<Run>) {
         m.progress.stage = "starting".into();
     });
     let command = run.meta().command;
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command.as_str()
-    {
-        "identify" => run_identify(run),
-        _ => run_simulate(run),
-    }));
+    let outcome =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command.as_str() {
+            "identify" => run_identify(run),
+            _ => run_simulate(run),
+        }));
     let (status, summary, error, message) = match outcome {
         Ok(Ok(end)) => end,
         Ok(Err(e)) => (Status::Failed, None, Some(e), None),

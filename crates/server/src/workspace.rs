@@ -126,8 +126,7 @@ pub fn safe_relative(path: &str) -> Option<PathBuf> {
         let ok = !p.is_empty()
             && p.len() <= 200
             && !p.starts_with('.')
-            && p
-                .bytes()
+            && p.bytes()
                 .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'.' | b'_' | b'-'));
         if !ok {
             return None;
@@ -180,9 +179,19 @@ mod tests {
         assert_eq!(sanitize_name(""), "record");
         assert!(sanitize_name(&format!("{}.txt", "a".repeat(300))).ends_with(".txt"));
         assert!(sanitize_name(&"a".repeat(300)).len() <= 100);
-        assert_eq!(safe_relative("test-1/fit.svg"), Some(PathBuf::from("test-1/fit.svg")));
+        assert_eq!(
+            safe_relative("test-1/fit.svg"),
+            Some(PathBuf::from("test-1/fit.svg"))
+        );
         for bad in [
-            "../x", "a/../../x", "/etc/passwd", ".x", "a//b", "", "a\\..\\b", "%2e%2e/x",
+            "../x",
+            "a/../../x",
+            "/etc/passwd",
+            ".x",
+            "a//b",
+            "",
+            "a\\..\\b",
+            "%2e%2e/x",
             "a/b/c/d/e",
         ] {
             assert_eq!(safe_relative(bad), None, "{bad}");

@@ -25,7 +25,11 @@ fn health_page_laws_and_templates() {
     let page = get(s.addr, "/");
     assert_eq!(page.status, 200);
     assert!(page.text().contains("<script src=\"/app.js\""));
-    assert!(page.header("content-security-policy").unwrap().contains("script-src 'self'"));
+    assert!(
+        page.header("content-security-policy")
+            .unwrap()
+            .contains("script-src 'self'")
+    );
     assert!(get(s.addr, "/app.js").text().contains("EventSource"));
     let laws = get(s.addr, "/api/laws").json();
     let maxwell = &laws["laws"][1];
@@ -35,13 +39,16 @@ fn health_page_laws_and_templates() {
     let t = get(s.addr, "/api/templates/norton-hoff").text();
     assert_eq!(
         t,
-        indentify_study::templates::template(
-            indentify_study::config::Reference::R2NortonHoff
-        )
+        indentify_study::templates::template(indentify_study::config::Reference::R2NortonHoff)
     );
     let bad = get(s.addr, "/api/templates/hooke");
     assert_eq!(bad.status, 400);
-    assert!(bad.json()["error"].as_str().unwrap().contains("elastic, maxwell or norton-hoff"));
+    assert!(
+        bad.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("elastic, maxwell or norton-hoff")
+    );
     assert_eq!(get(s.addr, "/api/nothing").status, 404);
 }
 
@@ -54,7 +61,13 @@ fn a_record_is_read_by_every_reader_and_stored_once() {
     assert_eq!(t["points"], 1000);
     assert!((t["h_max"].as_f64().unwrap() - 2.1098e-3).abs() < 1e-6);
     assert_eq!(t["segments"].as_array().unwrap().len(), 5);
-    assert!(t["preprocessing"].as_array().unwrap().iter().any(|p| p["step"] == "resample"));
+    assert!(
+        t["preprocessing"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["step"] == "resample")
+    );
     let id = info["id"].as_str().unwrap();
     // same bytes, same id, nothing rewritten
     assert_eq!(upload(s.addr)["id"], id);
@@ -62,16 +75,22 @@ fn a_record_is_read_by_every_reader_and_stored_once() {
     assert_eq!(listed["records"].as_array().unwrap().len(), 1);
     assert_eq!(get(s.addr, &format!("/api/records/{id}")).json()["id"], id);
     // a multi-test file and the native Hysitron format
-    let multi = std::fs::read(repo().join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT"))
-        .unwrap();
+    let multi =
+        std::fs::read(repo().join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT")).unwrap();
     let m = post(s.addr, "/api/records?name=HT_V_100mN.TXT", &multi).json();
     assert_eq!(m["format"], "AntonPaarMulti");
     assert!(m["tests"].as_array().unwrap().len() > 1);
     let hld = std::fs::read(repo().join("examples/data/hysitron/Exp-50mN_0000.hld")).unwrap();
-    assert_eq!(post(s.addr, "/api/records?name=Exp-50mN_0000.hld", &hld).json()["format"], "Hld");
+    assert_eq!(
+        post(s.addr, "/api/records?name=Exp-50mN_0000.hld", &hld).json()["format"],
+        "Hld"
+    );
     // the template of a record names it relative to a run folder
     let t = get(s.addr, &format!("/api/templates/maxwell?record={id}")).text();
-    assert!(t.contains(&format!("file: \"../../records/{id}/anonNI.TXT\"")), "{t}");
+    assert!(
+        t.contains(&format!("file: \"../../records/{id}/anonNI.TXT\"")),
+        "{t}"
+    );
 }
 
 #[test]
@@ -86,12 +105,20 @@ fn bad_uploads_are_refused_and_nothing_is_lost() {
     assert_eq!(r.status, 400);
     let msgs = r.json()["messages"].clone();
     assert_eq!(msgs[0], "cannot read `garbage.bin` as an instrument record");
-    assert!(msgs[1].as_str().unwrap().starts_with("garbage.bin"), "{msgs}");
+    assert!(
+        msgs[1].as_str().unwrap().starts_with("garbage.bin"),
+        "{msgs}"
+    );
     // oversized
     let big = vec![b'1'; 65 * 1024];
     let r = post(s.addr, "/api/records?name=big.csv", &big);
     assert_eq!(r.status, 413, "{}", r.text());
-    assert!(r.json()["error"].as_str().unwrap().contains("limit of 65536 bytes"));
+    assert!(
+        r.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("limit of 65536 bytes")
+    );
     // empty
     assert_eq!(post(s.addr, "/api/records?name=e.csv", b"").status, 400);
     // a name that climbs: stored under records/<id>/ with its last component only
@@ -128,13 +155,19 @@ fn malformed_requests_get_the_clis_messages() {
     assert_eq!(r.status, 400);
     assert_eq!(r.json()["kind"], "config");
     assert_eq!(r.json()["messages"], json!(cli(text, &[])));
-    let r = submit(s.addr, json!({"command": "identify", "sets": {"law.E": "oops"}}));
+    let r = submit(
+        s.addr,
+        json!({"command": "identify", "sets": {"law.E": "oops"}}),
+    );
     assert_eq!(r.status, 400);
     assert_eq!(
         r.json()["messages"],
         json!(cli(indentify_study::DEFAULT_CONFIG, &["law.E=oops"]))
     );
-    let r = submit(s.addr, json!({"command": "simulate", "sets": {"law.nu": 0.7}}));
+    let r = submit(
+        s.addr,
+        json!({"command": "simulate", "sets": {"law.nu": 0.7}}),
+    );
     assert_eq!(r.status, 400);
     assert_eq!(
         r.json()["messages"],
@@ -142,25 +175,46 @@ fn malformed_requests_get_the_clis_messages() {
     );
     let r = submit(s.addr, json!({"command": "analyze"}));
     assert_eq!(r.status, 400);
-    assert!(r.json()["error"].as_str().unwrap().contains("identify, simulate"));
+    assert!(
+        r.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("identify, simulate")
+    );
     let r = submit(s.addr, json!({"command": "simulate", "bogus": 1}));
     assert_eq!(r.status, 400);
     assert!(r.json()["error"].as_str().unwrap().contains("bogus"));
     let r = post(s.addr, "/api/runs", b"{not json");
     assert_eq!(r.status, 400);
     // a record that does not exist, a test out of range, a record with a history config
-    let r = submit(s.addr, json!({"command": "simulate", "record": "0123456789abcdef"}));
+    let r = submit(
+        s.addr,
+        json!({"command": "simulate", "record": "0123456789abcdef"}),
+    );
     assert_eq!(r.status, 404);
     let id = upload(s.addr)["id"].as_str().unwrap().to_string();
-    let r = submit(s.addr, json!({"command": "simulate", "record": id, "test": 3}));
+    let r = submit(
+        s.addr,
+        json!({"command": "simulate", "record": id, "test": 3}),
+    );
     assert_eq!(r.status, 400);
-    assert!(r.json()["error"].as_str().unwrap().contains("test 3 is not a test"));
+    assert!(
+        r.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("test 3 is not a test")
+    );
     let r = submit(
         s.addr,
         json!({"command": "simulate", "record": id, "config": indentify_study::DEFAULT_CONFIG}),
     );
     assert_eq!(r.status, 400);
-    assert!(r.json()["error"].as_str().unwrap().contains("no `data` section"));
+    assert!(
+        r.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("no `data` section")
+    );
     // nothing of these reached the workspace
     assert!(tree(&s.dir.path().join("ws/runs")).is_empty());
 }
@@ -168,7 +222,11 @@ fn malformed_requests_get_the_clis_messages() {
 #[test]
 fn no_request_reaches_a_file_outside_the_workspace() {
     let s = serve(|_| {});
-    std::fs::write(s.dir.path().join("secret.txt"), "t,h,F\n0,0,0\n1,1e-3,1e-2\n").unwrap();
+    std::fs::write(
+        s.dir.path().join("secret.txt"),
+        "t,h,F\n0,0,0\n1,1e-3,1e-2\n",
+    )
+    .unwrap();
     let secret = s.dir.path().join("secret.txt").display().to_string();
     let id = upload(s.addr)["id"].as_str().unwrap().to_string();
     for file in [
@@ -183,7 +241,12 @@ fn no_request_reaches_a_file_outside_the_workspace() {
             json!({"command": "simulate", "record": id, "sets": [format!("data.file={file}")]}),
         );
         assert_eq!(r.status, 400, "{file}: {}", r.text());
-        assert!(r.json()["error"].as_str().unwrap().contains("is not a record of this workspace"));
+        assert!(
+            r.json()["error"]
+                .as_str()
+                .unwrap()
+                .contains("is not a record of this workspace")
+        );
     }
     // a joint configuration naming a file outside
     let joint = std::fs::read_to_string(repo().join("examples/real/ht-nh-joint.ron")).unwrap();
@@ -193,7 +256,10 @@ fn no_request_reaches_a_file_outside_the_workspace() {
     let r = submit(s.addr, json!({"command": "simulate"}));
     let run = r.json()["id"].as_str().unwrap().to_string();
     wait(s.addr, &run);
-    assert_eq!(get(s.addr, &format!("/api/runs/{run}/files/config.ron")).status, 200);
+    assert_eq!(
+        get(s.addr, &format!("/api/runs/{run}/files/config.ron")).status,
+        200
+    );
     for path in [
         "../../../secret.txt",
         "..%2F..%2F..%2Fsecret.txt",
@@ -204,28 +270,53 @@ fn no_request_reaches_a_file_outside_the_workspace() {
         "%2Fetc%2Fpasswd",
     ] {
         let r = get(s.addr, &format!("/api/runs/{run}/files/{path}"));
-        assert!(r.status == 404 || r.status == 400, "{path}: {} {}", r.status, r.text());
+        assert!(
+            r.status == 404 || r.status == 400,
+            "{path}: {} {}",
+            r.status,
+            r.text()
+        );
         assert!(!r.text().contains("1e-3"), "{path} leaked the file");
     }
     for bad in ["..", "..%2F..", "R1", "a.b"] {
-        assert_eq!(get(s.addr, &format!("/api/runs/{bad}")).status, 404, "{bad}");
+        assert_eq!(
+            get(s.addr, &format!("/api/runs/{bad}")).status,
+            404,
+            "{bad}"
+        );
     }
 }
 
 #[test]
 fn cross_site_and_foreign_host_requests_are_refused() {
     let s = serve(|_| {});
-    let r = request(s.addr, "POST", "/api/runs", &[], b"{\"command\":\"simulate\"}");
+    let r = request(
+        s.addr,
+        "POST",
+        "/api/runs",
+        &[],
+        b"{\"command\":\"simulate\"}",
+    );
     assert_eq!(r.status, 403);
     let r = request(
         s.addr,
         "POST",
         "/api/runs",
-        &[("X-Indentify", "1"), ("Origin", "http://evil.example"), ("Content-Type", "application/json")],
+        &[
+            ("X-Indentify", "1"),
+            ("Origin", "http://evil.example"),
+            ("Content-Type", "application/json"),
+        ],
         b"{\"command\":\"simulate\"}",
     );
     assert_eq!(r.status, 403);
-    let r = request(s.addr, "GET", "/api/health", &[("Host", "evil.example:80")], b"");
+    let r = request(
+        s.addr,
+        "GET",
+        "/api/health",
+        &[("Host", "evil.example:80")],
+        b"",
+    );
     assert_eq!(r.status, 403);
     let r = request(s.addr, "DELETE", "/api/runs/x", &[], b"");
     assert_eq!(r.status, 403);
@@ -237,9 +328,21 @@ fn cross_site_and_foreign_host_requests_are_refused() {
     let r = get(t.addr, "/?token=0123456789abcdef0123");
     assert_eq!(r.status, 200);
     assert!(r.header("set-cookie").unwrap().contains("HttpOnly"));
-    let r = request(t.addr, "GET", "/api/health", &[("Authorization", "Bearer 0123456789abcdef0123")], b"");
+    let r = request(
+        t.addr,
+        "GET",
+        "/api/health",
+        &[("Authorization", "Bearer 0123456789abcdef0123")],
+        b"",
+    );
     assert_eq!(r.status, 200);
-    let r = request(t.addr, "GET", "/api/runs", &[("Cookie", "indentify_token=0123456789abcdef0123")], b"");
+    let r = request(
+        t.addr,
+        "GET",
+        "/api/runs",
+        &[("Cookie", "indentify_token=0123456789abcdef0123")],
+        b"",
+    );
     assert_eq!(r.status, 200);
     // beyond loopback a token is drawn when none is given
     let mut o = indentify_server::ServeOptions::new(s.dir.path().join("ws2"));
@@ -252,7 +355,10 @@ fn cross_site_and_foreign_host_requests_are_refused() {
 #[test]
 fn a_simulation_writes_the_clis_files_and_survives_a_restart() {
     let s = serve(|_| {});
-    let r = submit(s.addr, json!({"command": "simulate", "sets": {"law.E": 25000}}));
+    let r = submit(
+        s.addr,
+        json!({"command": "simulate", "sets": {"law.E": 25000}}),
+    );
     assert_eq!(r.status, 202, "{}", r.text());
     let id = r.json()["id"].as_str().unwrap().to_string();
     let v = wait(s.addr, &id);
@@ -276,12 +382,25 @@ fn a_simulation_writes_the_clis_files_and_survives_a_restart() {
     assert_eq!(status["status"], "done");
     // cancelling a finished run: a clear answer, nothing removed
     let before = tree(&dir);
-    let r = request(s.addr, "DELETE", &format!("/api/runs/{id}"), &[("X-Indentify", "1")], b"");
+    let r = request(
+        s.addr,
+        "DELETE",
+        &format!("/api/runs/{id}"),
+        &[("X-Indentify", "1")],
+        b"",
+    );
     assert_eq!(r.status, 409);
     assert!(r.json()["error"].as_str().unwrap().contains("done already"));
     assert_eq!(tree(&dir), before);
     assert_eq!(
-        request(s.addr, "DELETE", "/api/runs/r1-0", &[("X-Indentify", "1")], b"").status,
+        request(
+            s.addr,
+            "DELETE",
+            "/api/runs/r1-0",
+            &[("X-Indentify", "1")],
+            b""
+        )
+        .status,
         404
     );
     // a new server on the same workspace lists the run
@@ -290,23 +409,38 @@ fn a_simulation_writes_the_clis_files_and_survives_a_restart() {
     let (addr2, _) = indentify_server::bind(&o).unwrap().spawn();
     let listed = get(addr2, "/api/runs").json();
     assert_eq!(listed["runs"][0]["id"], id.as_str());
-    assert_eq!(get(addr2, &format!("/api/runs/{id}")).json()["result"]["max_force"], v["result"]["max_force"]);
+    assert_eq!(
+        get(addr2, &format!("/api/runs/{id}")).json()["result"]["max_force"],
+        v["result"]["max_force"]
+    );
 }
 
 #[test]
 fn an_identification_streams_its_progress_and_can_be_cancelled() {
     let s = serve(|_| {});
     // R1 (the embedded default) for 3 iterations, no discretization check
-    let r = submit(s.addr, json!({"command": "identify", "max_iter": 3, "no_refine": true}));
+    let r = submit(
+        s.addr,
+        json!({"command": "identify", "max_iter": 3, "no_refine": true}),
+    );
     assert_eq!(r.status, 202, "{}", r.text());
     let id = r.json()["id"].as_str().unwrap().to_string();
     // a second one waits in the queue (one worker) and is cancelled there
-    let queued = submit(s.addr, json!({"command": "identify", "max_iter": 3, "no_refine": true}))
-        .json()["id"]
+    let queued = submit(
+        s.addr,
+        json!({"command": "identify", "max_iter": 3, "no_refine": true}),
+    )
+    .json()["id"]
         .as_str()
         .unwrap()
         .to_string();
-    let c = request(s.addr, "DELETE", &format!("/api/runs/{queued}"), &[("X-Indentify", "1")], b"");
+    let c = request(
+        s.addr,
+        "DELETE",
+        &format!("/api/runs/{queued}"),
+        &[("X-Indentify", "1")],
+        b"",
+    );
     assert_eq!(c.status, 200, "{}", c.text());
     assert_eq!(c.json()["status"], "cancelled");
     let evs = events(s.addr, &id);
@@ -319,7 +453,10 @@ fn an_identification_streams_its_progress_and_can_be_cancelled() {
         .map(|e| e["progress"]["iteration"].as_u64().unwrap())
         .collect();
     for k in 0..=3 {
-        assert!(iterations.contains(&k), "iteration {k} missing from {iterations:?}");
+        assert!(
+            iterations.contains(&k),
+            "iteration {k} missing from {iterations:?}"
+        );
     }
     assert_eq!(last["progress"]["costs"].as_array().unwrap().len(), 4);
     let v = get(s.addr, &format!("/api/runs/{id}")).json();
@@ -327,8 +464,20 @@ fn an_identification_streams_its_progress_and_can_be_cancelled() {
     assert_eq!(res["iterations"], 3);
     assert_eq!(res["parameters"][0]["name"], "E");
     assert!(res["identifiability"]["singular_values"].is_array());
-    let files: Vec<&str> = v["files"].as_array().unwrap().iter().map(|f| f["name"].as_str().unwrap()).collect();
-    for f in ["report.md", "result.json", "history.csv", "fit.csv", "config.ron", "force_depth.svg"] {
+    let files: Vec<&str> = v["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].as_str().unwrap())
+        .collect();
+    for f in [
+        "report.md",
+        "result.json",
+        "history.csv",
+        "fit.csv",
+        "config.ron",
+        "force_depth.svg",
+    ] {
         assert!(files.contains(&f), "{f} not in {files:?}");
     }
     assert!(v["message"].as_str().unwrap().contains("did not converge"));
@@ -348,11 +497,24 @@ fn an_identification_streams_its_progress_and_can_be_cancelled() {
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    let c = request(s.addr, "DELETE", &format!("/api/runs/{long}"), &[("X-Indentify", "1")], b"");
+    let c = request(
+        s.addr,
+        "DELETE",
+        &format!("/api/runs/{long}"),
+        &[("X-Indentify", "1")],
+        b"",
+    );
     assert_eq!(c.status, 200, "{}", c.text());
     let v = wait(s.addr, &long);
     assert_eq!(v["status"], "cancelled", "{v}");
-    assert!(v["result"]["stop_reason"].as_str().unwrap().contains("nterrupt"), "{}", v["result"]["stop_reason"]);
+    assert!(
+        v["result"]["stop_reason"]
+            .as_str()
+            .unwrap()
+            .contains("nterrupt"),
+        "{}",
+        v["result"]["stop_reason"]
+    );
 }
 
 /// A bounded load test on loopback: 20 queued simulations and 5 clients following their
@@ -364,7 +526,10 @@ fn load_20_queued_runs_and_5_event_clients() {
     let t0 = std::time::Instant::now();
     let ids: Vec<String> = (0..20)
         .map(|k| {
-            let r = submit(s.addr, json!({"command": "simulate", "sets": {"law.E": 20000 + 100 * k}}));
+            let r = submit(
+                s.addr,
+                json!({"command": "simulate", "sets": {"law.E": 20000 + 100 * k}}),
+            );
             assert_eq!(r.status, 202);
             r.json()["id"].as_str().unwrap().to_string()
         })
@@ -393,7 +558,10 @@ fn load_20_queued_runs_and_5_event_clients() {
     let total = t0.elapsed().as_secs_f64();
     let n_events: usize = watchers.into_iter().map(|w| w.join().unwrap()).sum();
     for id in &ids {
-        assert_eq!(get(s.addr, &format!("/api/runs/{id}")).json()["status"], "done");
+        assert_eq!(
+            get(s.addr, &format!("/api/runs/{id}")).json()["status"],
+            "done"
+        );
     }
     println!(
         "load: 20 runs submitted in {submitted:.3} s, all done in {total:.2} s; 5 event clients \

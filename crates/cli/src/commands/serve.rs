@@ -57,10 +57,11 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(h) = args.host {
         opts.host = h;
     }
-    opts.token = args
-        .token
-        .clone()
-        .or_else(|| std::env::var("INDENTIFY_TOKEN").ok().filter(|t| !t.is_empty()));
+    opts.token = args.token.clone().or_else(|| {
+        std::env::var("INDENTIFY_TOKEN")
+            .ok()
+            .filter(|t| !t.is_empty())
+    });
     opts.workers = args.jobs as usize;
     opts.max_queue = args.max_queue as usize;
     opts.max_upload = args.max_upload_mb as usize * 1024 * 1024;
@@ -81,7 +82,10 @@ pub fn run(args: &Args) -> Result<()> {
             "xdg-open"
         };
         if let Err(e) = std::process::Command::new(opener).arg(&server.url).spawn() {
-            tracing::warn!("cannot open a browser ({opener}: {e}): open {} yourself", server.url);
+            tracing::warn!(
+                "cannot open a browser ({opener}: {e}): open {} yourself",
+                server.url
+            );
         }
     }
     server.run_until(indentify_server::ctrl_c())

@@ -29,7 +29,7 @@ function el(tag, attrs = {}, ...children) {
 }
 
 const sig = (v, n = 4) => (v === null || v === undefined || !isFinite(v)) ? '–' : Number(v).toPrecision(n).replace(/\.?0+e/, 'e').replace(/(\.\d*?)0+$/, '$1').replace(/\.$/, '');
-const esc = (s) => String(s);
+const bound = (v) => (v === null || v === undefined) ? '∞' : (isFinite(v) ? sig(v, 3) : (v > 0 ? '∞' : '−∞'));
 
 // ---- SVG plots -----------------------------------------------------------------------------
 const SVGNS = 'http://www.w3.org/2000/svg';
@@ -73,7 +73,7 @@ function plot(container, series, opts = {}) {
   for (const t of ticks(y0, y1)) {
     root.append(svg('line', { x1: L, x2: W - R, y1: py(t), y2: py(t), class: 'gridline' }));
     const s = svg('text', { x: L - 5, y: py(t) + 4, 'text-anchor': 'end' });
-    s.textContent = opts.logy ? `1e${sig(t, 3)}` : sig(t * (opts.yscale || 1), 3); root.append(s);
+    s.textContent = opts.logy ? sig(Math.pow(10, t), 2) : sig(t * (opts.yscale || 1), 3); root.append(s);
   }
   root.append(svg('rect', { x: L, y: T, width: W - L - R, height: H - T - B, class: 'axis' }));
   const xl = svg('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle' }); xl.textContent = opts.xlabel || ''; root.append(xl);
@@ -338,7 +338,7 @@ function renderIdentify(run, res) {
     else if (und.has(p.name)) { sd = 'undetermined'; }
     else if (id) { sd = sig(id.std_dev[p.name], 3); rel = sig(id.rel_std_dev[p.name], 2); }
     const final = sig(p.value, 7) + (p.bound_hit ? ` (at ${p.bound_hit} bound)` : '');
-    const cells = [p.name, p.unit, sig(p.start, 6), final, sd, rel, p.free ? `[${sig(p.lower, 3)}, ${sig(p.upper, 3)}]` : ''];
+    const cells = [p.name, p.unit, sig(p.start, 6), final, sd, rel, p.free ? `[${bound(p.lower)}, ${bound(p.upper)}]` : ''];
     if (hasTruth) cells.push(p.truth !== undefined ? sig(p.truth, 6) : '');
     const tr = el('tr', { 'data-param': p.name }, ...cells.map((c, i) => el('td', { class: (i >= 2 ? 'num' : '') + (c === 'undetermined' ? ' undetermined' : ''), text: c })));
     body.append(tr);
@@ -432,7 +432,7 @@ async function compare() {
 async function start() {
   try {
     const h = await api('/api/health');
-    $('#health').textContent = `v${h.version}, workspace ${h.workspace}, uploads up to ${Math.round(h.max_upload / 1e6)} MB`;
+    $('#health').textContent = `v${h.version}, workspace ${h.workspace}, uploads up to ${Math.round(h.max_upload / 1048576)} MB`;
   } catch (e) { $('#health').textContent = e.message; $('#health').className = 'error'; }
   const drop = $('#drop');
   drop.addEventListener('dragover', (ev) => { ev.preventDefault(); drop.classList.add('over'); });

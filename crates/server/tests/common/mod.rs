@@ -131,6 +131,13 @@ pub fn request(
             r.read_exact(&mut chunk).unwrap();
             body.extend_from_slice(&chunk[..n]);
         }
+    } else if let Some(n) = headers
+        .iter()
+        .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
+        .and_then(|(_, v)| v.parse::<usize>().ok())
+    {
+        body = vec![0; n];
+        r.read_exact(&mut body).unwrap();
     } else {
         let _ = r.read_to_end(&mut body);
     }
@@ -167,7 +174,14 @@ pub fn submit(addr: SocketAddr, req: serde_json::Value) -> Resp {
 pub fn events(addr: SocketAddr, id: &str) -> Vec<serde_json::Value> {
     let mut s = TcpStream::connect(addr).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(300))).unwrap();
-    write_request(&mut s, addr, "GET", &format!("/api/runs/{id}/events"), &[], b"");
+    write_request(
+        &mut s,
+        addr,
+        "GET",
+        &format!("/api/runs/{id}/events"),
+        &[],
+        b"",
+    );
     let mut r = BufReader::new(s);
     let (status, _) = read_head(&mut r);
     assert_eq!(status, 200);
