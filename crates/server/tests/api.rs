@@ -569,3 +569,40 @@ fn load_20_queued_runs_and_5_event_clients() {
         worst * 1e3
     );
 }
+
+/// The server's cost on a run: the same identification (R1, no discretization check) called
+/// directly as the CLI calls it and through the API, alternating, in one process. Run with
+/// `cargo test -p indentify-server --test api overhead -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn overhead_of_a_run_through_the_server() {
+    let s = serve(|_| {});
+    let mut ratios = Vec::new();
+    for k in 0..4 {
+        let out = s.dir.path().join(format!("direct{k}"));
+        let t = std::time::Instant::now();
+        let mut opts = indentify_study::identify::IdentifyOptions::new(ConfigSource::Default);
+        opts.out = Some(out);
+        opts.refine = false;
+        indentify_study::identify::run(&opts, &mut ()).unwrap();
+        let direct = t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let id = submit(s.addr, json!({"command": "identify", "no_refine": true})).json()["id"]
+            .as_str()
+            .unwrap()
+            .to_string();
+        let v = wait(s.addr, &id);
+        let served = t.elapsed().as_secs_f64();
+        assert_eq!(v["status"], "done");
+        ratios.push(served / direct);
+        println!(
+            "overhead: pair {k}: direct {direct:.3} s, through the server {served:.3} s, ratio {:.3}",
+            served / direct
+        );
+    }
+    ratios.sort_by(f64::total_cmp);
+    println!(
+        "overhead: median ratio {:.3}",
+        (ratios[1] + ratios[2]) / 2.0
+    );
+}
