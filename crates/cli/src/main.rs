@@ -178,6 +178,8 @@ enum Command {
                             indentify design examples/r2-design.ron --free K,m,sY --out out/design"
     )]
     Design(commands::design::Args),
+    /// Serve the toolkit in a browser: records, runs with live progress, results (docs/web.md).
+    Serve(commands::serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -193,6 +195,7 @@ fn main() -> ExitCode {
         Command::Batch(args) => commands::batch::run(args),
         Command::Map(args) => commands::map::run(args),
         Command::Design(args) => commands::design::run(args),
+        Command::Serve(args) => commands::serve::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

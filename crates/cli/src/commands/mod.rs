@@ -8,4 +8,5 @@ pub mod gradient_check;
 pub mod identify;
 pub mod init;
 pub mod map;
+pub mod serve;
 pub mod simulate;

@@ -1,0 +1,459 @@
+// indentify serve: the page's script (compiled into the binary; no third-party code).
+// It uses only the documented HTTP API (docs/web.md) and draws its curves as SVG.
+'use strict';
+
+const $ = (sel) => document.querySelector(sel);
+const state = { records: [], record: null, test: 1, laws: {}, run: null, source: null, selected: new Set() };
+
+// ---- API ---------------------------------------------------------------------------------
+async function api(path, opts = {}) {
+  const headers = Object.assign({ 'X-Indentify': '1' }, opts.headers || {});
+  const r = await fetch(path, Object.assign({}, opts, { headers, credentials: 'same-origin' }));
+  const ct = r.headers.get('content-type') || '';
+  const body = ct.includes('json') ? await r.json() : await r.text();
+  if (!r.ok) {
+    const e = new Error(typeof body === 'object' ? (body.messages || [body.error]).join('\n  ') : String(body));
+    e.status = r.status;
+    throw e;
+  }
+  return body;
+}
+
+function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === 'class') e.className = v; else if (k === 'text') e.textContent = v; else e.setAttribute(k, v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+}
+
+const sig = (v, n = 4) => (v === null || v === undefined || !isFinite(v)) ? '–' : Number(v).toPrecision(n).replace(/\.?0+e/, 'e').replace(/(\.\d*?)0+$/, '$1').replace(/\.$/, '');
+const bound = (v) => (v === null || v === undefined) ? '∞' : (isFinite(v) ? sig(v, 3) : (v > 0 ? '∞' : '−∞'));
+
+// ---- SVG plots -----------------------------------------------------------------------------
+const SVGNS = 'http://www.w3.org/2000/svg';
+function svg(tag, attrs = {}) {
+  const e = document.createElementNS(SVGNS, tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+  return e;
+}
+
+function ticks(lo, hi, n = 5) {
+  if (!(hi > lo)) { hi = lo + 1; }
+  const step0 = (hi - lo) / n;
+  const mag = Math.pow(10, Math.floor(Math.log10(step0)));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= step0) || step0;
+  const out = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+  return out;
+}
+
+// series: [{x: [], y: [], label, color, dash, dots}]
+function plot(container, series, opts = {}) {
+  const W = 560, H = 300, L = 62, R = 12, T = 22, B = 40;
+  const xs = series.flatMap((s) => s.x).filter(isFinite);
+  let ys = series.flatMap((s) => s.y).filter(isFinite);
+  if (opts.logy) ys = ys.filter((v) => v > 0).map(Math.log10);
+  container.replaceChildren();
+  const root = svg('svg', { viewBox: `0 0 ${W} ${H}`, role: 'img' });
+  container.append(root);
+  if (!xs.length || !ys.length) { const t = svg('text', { x: W / 2, y: H / 2, 'text-anchor': 'middle' }); t.textContent = 'no data'; root.append(t); return; }
+  let [x0, x1] = [Math.min(...xs), Math.max(...xs)];
+  let [y0, y1] = [Math.min(...ys), Math.max(...ys)];
+  if (x1 === x0) x1 = x0 + 1;
+  if (y1 === y0) { y0 -= 1; y1 += 1; }
+  const pad = (y1 - y0) * 0.05; y0 -= pad; y1 += pad;
+  const px = (x) => L + (x - x0) / (x1 - x0) * (W - L - R);
+  const py = (y) => H - B - (y - y0) / (y1 - y0) * (H - T - B);
+  for (const t of ticks(x0, x1)) {
+    root.append(svg('line', { x1: px(t), x2: px(t), y1: T, y2: H - B, class: 'gridline' }));
+    const s = svg('text', { x: px(t), y: H - B + 14, 'text-anchor': 'middle' }); s.textContent = sig(t * (opts.xscale || 1), 3); root.append(s);
+  }
+  for (const t of ticks(y0, y1)) {
+    root.append(svg('line', { x1: L, x2: W - R, y1: py(t), y2: py(t), class: 'gridline' }));
+    const s = svg('text', { x: L - 5, y: py(t) + 4, 'text-anchor': 'end' });
+    s.textContent = opts.logy ? sig(Math.pow(10, t), 2) : sig(t * (opts.yscale || 1), 3); root.append(s);
+  }
+  root.append(svg('rect', { x: L, y: T, width: W - L - R, height: H - T - B, class: 'axis' }));
+  const xl = svg('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle' }); xl.textContent = opts.xlabel || ''; root.append(xl);
+  const yl = svg('text', { x: 12, y: (T + H - B) / 2, 'text-anchor': 'middle', transform: `rotate(-90 12 ${(T + H - B) / 2})` }); yl.textContent = opts.ylabel || ''; root.append(yl);
+  if (opts.zero && y0 < 0 && y1 > 0) root.append(svg('line', { x1: L, x2: W - R, y1: py(0), y2: py(0), stroke: '#999', 'stroke-dasharray': '3 3' }));
+  let lx = L + 8;
+  for (const s of series) {
+    const pts = [];
+    for (let i = 0; i < s.x.length; i++) {
+      let y = s.y[i];
+      if (opts.logy) y = y > 0 ? Math.log10(y) : NaN;
+      if (isFinite(s.x[i]) && isFinite(y)) pts.push([px(s.x[i]), py(y)]);
+    }
+    if (s.dots) {
+      for (const [a, b] of pts) root.append(svg('circle', { cx: a, cy: b, r: 2.2, fill: s.color }));
+    } else if (pts.length) {
+      root.append(svg('polyline', { points: pts.map((p) => p.join(',')).join(' '), fill: 'none', stroke: s.color, 'stroke-width': 1.6, 'stroke-dasharray': s.dash || '' }));
+    }
+    if (s.label) {
+      root.append(svg('rect', { x: lx, y: 7, width: 12, height: 4, fill: s.color }));
+      const t = svg('text', { x: lx + 16, y: 13 }); t.textContent = s.label; root.append(t);
+      lx += 24 + s.label.length * 6.2;
+    }
+  }
+}
+
+function parseCsv(text) {
+  const lines = text.trim().split(/\r?\n/).filter((l) => l && !l.startsWith('#'));
+  const head = lines.shift().split(',').map((s) => s.trim());
+  const cols = Object.fromEntries(head.map((h) => [h, []]));
+  for (const l of lines) l.split(',').forEach((v, i) => cols[head[i]] && cols[head[i]].push(parseFloat(v)));
+  return cols;
+}
+
+// ---- records -------------------------------------------------------------------------------
+async function loadRecords(select) {
+  const { records } = await api('/api/records');
+  state.records = records;
+  const sel = $('#record-select');
+  const keep = select || sel.value;
+  sel.replaceChildren(el('option', { value: '', text: 'none: a reference problem (depth history)' }));
+  for (const r of records) sel.append(el('option', { value: r.id, text: `${r.name} (${r.tests.length} test${r.tests.length === 1 ? '' : 's'}, ${r.id})` }));
+  sel.value = keep || '';
+}
+
+async function upload(files) {
+  const status = $('#upload-status');
+  for (const f of files) {
+    status.textContent = `uploading ${f.name} (${(f.size / 1e6).toFixed(2)} MB)…`;
+    status.className = 'muted';
+    try {
+      const info = await api(`/api/records?name=${encodeURIComponent(f.name)}`, { method: 'POST', body: f });
+      status.textContent = `${info.name}: ${info.format}, ${info.tests.length} test(s), id ${info.id}`;
+      await loadRecords(info.id);
+      await showRecord(info.id);
+    } catch (e) {
+      status.textContent = e.message;
+      status.className = 'error';
+    }
+  }
+}
+
+async function showRecord(id) {
+  state.record = null;
+  $('#tests tbody').replaceChildren();
+  $('#record-plot').replaceChildren();
+  $('#prep').replaceChildren();
+  $('#record-info').textContent = '';
+  if (!id) { await loadTemplate(); return; }
+  const r = await api(`/api/records/${id}`);
+  state.record = r;
+  state.test = 1;
+  $('#record-info').textContent = `${r.name}: ${r.format}, ${r.bytes} bytes`;
+  renderTests();
+  await loadTemplate();
+}
+
+function renderTests() {
+  const r = state.record;
+  const body = $('#tests tbody');
+  body.replaceChildren();
+  for (const t of r.tests) {
+    const radio = el('input', { type: 'radio', name: 'test', value: t.index });
+    radio.checked = t.index === state.test;
+    const tr = el('tr', { class: 'clickable' + (t.index === state.test ? ' selected' : '') },
+      el('td', {}, radio), el('td', { text: t.index }), el('td', { text: t.name }), el('td', { class: 'num', text: t.points }),
+      el('td', { class: 'num', text: sig(t.h_max * 1e6) }), el('td', { class: 'num', text: sig(t.f_max * 1e3) }), el('td', { text: t.tip || '–' }));
+    tr.addEventListener('click', () => { state.test = t.index; renderTests(); loadTemplate(); });
+    body.append(tr);
+  }
+  const t = r.tests[state.test - 1];
+  plot($('#record-plot'), [{ x: t.curve.h, y: t.curve.f, label: t.name, color: '#1f6feb' }],
+    { xlabel: 'depth h (nm)', ylabel: 'force F (mN)', xscale: 1e6, yscale: 1e3 });
+  const prep = $('#prep');
+  prep.replaceChildren();
+  if (t.segments.length) {
+    prep.append(el('p', { text: 'Segments (file ids): ' + t.segments.map((s) => `${s.id}: ${sig(s.t0, 3)}–${sig(s.t1, 3)} s (${s.samples})`).join('; ') }));
+  }
+  const ul = el('ul');
+  for (const s of t.preprocessing) ul.append(el('li', { text: `${s.step}: ${s.description}` }));
+  if (t.preprocessing_error) ul.append(el('li', { class: 'error', text: t.preprocessing_error }));
+  prep.append(el('p', { text: 'Default preprocessing (zero point, segments, 60 resampled points):' }), ul);
+}
+
+// ---- configuration -------------------------------------------------------------------------
+async function loadLaws() {
+  const { laws } = await api('/api/laws');
+  for (const l of laws) state.laws[l.name] = l;
+  renderLaw();
+}
+
+function renderLaw() {
+  const l = state.laws[$('#law').value];
+  const body = $('#law-params tbody');
+  body.replaceChildren();
+  if (!l) return;
+  for (const p of l.params) body.append(el('tr', {}, el('td', { text: p.name }), el('td', { text: p.unit }), el('td', { text: p.range }), el('td', { text: p.description })));
+}
+
+async function loadTemplate() {
+  const law = $('#law').value;
+  const q = new URLSearchParams();
+  if (state.record) {
+    q.set('record', state.record.id);
+    if (state.record.tests.length > 1) q.set('test', state.test);
+    if ($('#tip').value) q.set('tip', $('#tip').value);
+  }
+  try {
+    $('#config').value = await api(`/api/templates/${law}?${q}`);
+    $('#submit-error').textContent = '';
+  } catch (e) { $('#submit-error').textContent = e.message; }
+}
+
+async function submit() {
+  const err = $('#submit-error');
+  err.textContent = '';
+  const body = { command: $('#command').value, sets: $('#sets').value.split('\n').map((s) => s.trim()).filter(Boolean) };
+  const cfg = $('#config').value;
+  if (cfg.trim()) body.config = cfg;
+  const maxIter = parseInt($('#max-iter').value, 10);
+  if (maxIter > 0 && body.command === 'identify') body.max_iter = maxIter;
+  if ($('#no-refine').checked && body.command === 'identify') body.no_refine = true;
+  try {
+    const { id } = await api('/api/runs', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+    openRun(id);
+    loadRuns();
+  } catch (e) { err.textContent = e.message; }
+}
+
+// ---- a run ---------------------------------------------------------------------------------
+function openRun(id) {
+  if (state.source) state.source.close();
+  state.run = id;
+  location.hash = `run=${id}`;
+  $('#run-id').textContent = id;
+  $('#run-error').textContent = '';
+  $('#run-message').textContent = '';
+  clearResult();
+  const es = new EventSource(`/api/runs/${id}/events`);
+  state.source = es;
+  es.addEventListener('status', (ev) => {
+    const m = JSON.parse(ev.data);
+    renderProgress(m);
+    if (['done', 'failed', 'cancelled'].includes(m.status)) {
+      es.close();
+      if (state.source === es) state.source = null;
+      loadResult(id);
+      loadRuns();
+    }
+  });
+}
+
+function fmtTime(s) {
+  if (s === null || s === undefined || !isFinite(s)) return '–';
+  if (s < 60) return `${s.toFixed(1)} s`;
+  return `${Math.floor(s / 60)} min ${Math.round(s % 60)} s`;
+}
+
+function renderProgress(m) {
+  const badge = $('#run-status');
+  badge.textContent = m.status;
+  badge.className = `badge ${m.status}`;
+  const p = m.progress || {};
+  $('#cancel').disabled = !(m.status === 'queued' || (m.status === 'running' && m.command === 'identify'));
+  let frac = 0;
+  let text = `${m.command}: ${p.stage || m.status}`;
+  if (p.max_iterations) {
+    frac = Math.min(1, p.iteration / p.max_iterations);
+    text += ` — iteration ${p.iteration} of at most ${p.max_iterations}`;
+    if (p.cost !== null && p.cost !== undefined) text += `, J = ${sig(p.cost, 5)} N²`;
+    text += `, ${p.forward_solves} forward / ${p.adjoint_solves} adjoint solves, ${fmtTime(p.elapsed)}`;
+    if (m.status === 'running' && p.eta !== null && p.eta !== undefined) text += `, at most ${fmtTime(p.eta)} left`;
+  }
+  if (m.status !== 'running' && m.status !== 'queued') frac = 1;
+  $('#progress-bar').style.width = `${(100 * frac).toFixed(1)}%`;
+  $('#progress-text').textContent = text;
+  const body = $('#progress-params tbody');
+  body.replaceChildren();
+  (p.names || []).forEach((n, k) => {
+    if (p.free && p.free[k] && p.params && p.params.length) body.append(el('tr', {}, el('td', { text: n }), el('td', { class: 'num', text: sig(p.params[k], 6) })));
+  });
+  if (p.costs && p.costs.length > 1) {
+    plot($('#cost-plot'), [{ x: p.costs.map((_, i) => i), y: p.costs, color: '#1f6feb', label: 'J (N²)' }], { logy: true, xlabel: 'iteration', ylabel: 'J' });
+  }
+  if (m.message) $('#run-message').textContent = m.message;
+  if (m.error) $('#run-error').textContent = `${m.error.kind} error: ${m.error.messages.join('\n  ')}`;
+}
+
+function clearResult() {
+  for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads']) $(s).replaceChildren();
+  $('#result-summary').textContent = '';
+}
+
+async function loadResult(id) {
+  const run = await api(`/api/runs/${id}`);
+  renderProgress(run);
+  clearResult();
+  const res = run.result;
+  const files = run.files || [];
+  const has = (n) => files.some((f) => f.name === n);
+  if (run.command === 'identify' && res) renderIdentify(run, res);
+  if (run.command === 'simulate' && res) renderSimulate(res);
+  if (has('fit.csv')) {
+    const fit = parseCsv(await api(`/api/runs/${id}/files/fit.csv`));
+    plot($('#fit-plot'), [
+      { x: fit.h, y: fit.F_data, label: 'data', color: '#222', dots: true },
+      { x: fit.h, y: fit.F_start, label: 'start', color: '#999', dash: '4 3' },
+      { x: fit.h, y: fit.F_final, label: 'fit', color: '#d62728' },
+    ], { xlabel: 'depth h (µm)', ylabel: 'force F (mN)', xscale: 1e3, yscale: 1e3 });
+    plot($('#residual-plot'), [{ x: fit.t, y: fit.F_final.map((v, i) => v - fit.F_data[i]), label: 'F_fit − F_data', color: '#d62728', dots: true }],
+      { xlabel: 'time t (s)', ylabel: 'residual (mN)', yscale: 1e3, zero: true });
+  } else if (has('curve.csv')) {
+    const c = parseCsv(await api(`/api/runs/${id}/files/curve.csv`));
+    plot($('#fit-plot'), [{ x: c.h, y: c.F, label: 'simulated', color: '#d62728' }], { xlabel: 'depth h (µm)', ylabel: 'force F (mN)', xscale: 1e3, yscale: 1e3 });
+  }
+  const figs = $('#figures');
+  for (const f of files.filter((f) => f.name.endsWith('.svg'))) {
+    figs.append(el('figure', {}, el('img', { src: `/api/runs/${id}/files/${f.name}`, alt: f.name, loading: 'lazy' }), el('figcaption', { text: f.name })));
+  }
+  const dl = $('#downloads');
+  for (const f of files) {
+    dl.append(el('li', {}, el('a', { href: `/api/runs/${id}/files/${f.name}`, download: f.name.replace('/', '_'), text: f.name }), ` (${(f.bytes / 1024).toFixed(1)} kB)`));
+  }
+}
+
+function renderIdentify(run, res) {
+  const q = res.fit_quality;
+  $('#result-summary').textContent = `${res.law}, ${res.method}: ${res.converged ? 'converged' : 'NOT converged'} (${res.stop_reason}); ` +
+    `J = ${sig(res.J, 5)} N² (start ${sig(res.J_start, 4)}), ${res.iterations} iterations, ${sig(res.seconds, 3)} s` +
+    (q ? `; R² = ${sig(q.r2, 6)}, RMS residual ${sig(100 * q.rms_rel, 3)}% of F_max` : '');
+  const id = res.identifiability;
+  const und = new Set(id ? id.undetermined : []);
+  const head = $('#param-table thead');
+  const cols = ['parameter', 'unit', 'start', 'final', 'σ (std. dev.)', 'σ / value', 'bounds'];
+  const hasTruth = res.parameters.some((p) => p.truth !== undefined);
+  if (hasTruth) cols.push('truth');
+  head.append(el('tr', {}, ...cols.map((c) => el('th', { text: c }))));
+  const body = $('#param-table tbody');
+  for (const p of res.parameters) {
+    let sd = '', rel = '';
+    if (!p.free) { sd = 'held'; }
+    else if (und.has(p.name)) { sd = 'undetermined'; }
+    else if (id) { sd = sig(id.std_dev[p.name], 3); rel = sig(id.rel_std_dev[p.name], 2); }
+    const final = sig(p.value, 7) + (p.bound_hit ? ` (at ${p.bound_hit} bound)` : '');
+    const cells = [p.name, p.unit, sig(p.start, 6), final, sd, rel, p.free ? `[${bound(p.lower)}, ${bound(p.upper)}]` : ''];
+    if (hasTruth) cells.push(p.truth !== undefined ? sig(p.truth, 6) : '');
+    const tr = el('tr', { 'data-param': p.name }, ...cells.map((c, i) => el('td', { class: (i >= 2 ? 'num' : '') + (c === 'undetermined' ? ' undetermined' : ''), text: c })));
+    body.append(tr);
+  }
+  const box = $('#identifiability');
+  if (id) {
+    box.append(el('p', { text: `Singular values of the scaled sensitivity matrix: ${id.singular_values.map((v) => sig(v, 3)).join(', ')}; condition number ${id.condition}.` }));
+    if (id.weakest_direction) box.append(el('p', { text: `Weakest direction: ${id.weakest_direction}` }));
+    if (id.undetermined.length) box.append(el('p', { class: 'undetermined', text: `Undetermined by these data: ${id.undetermined.map((n) => `${n} (${id.undetermined_reasons[n] || ''})`).join('; ')}` }));
+    if (id.names.length > 1) {
+      const t = el('table', { class: 'grid' });
+      t.append(el('tr', {}, el('th', { text: 'correlation' }), ...id.names.map((n) => el('th', { text: n }))));
+      id.names.forEach((a, i) => t.append(el('tr', {}, el('th', { text: a }), ...id.names.map((_, j) => el('td', { class: 'num', text: sig(id.correlation[i][j], 3) })))));
+      box.append(t);
+    }
+  }
+  for (const w of res.warnings || []) box.append(el('p', { class: 'error', text: `warning: ${w}` }));
+}
+
+function renderSimulate(res) {
+  $('#result-summary').textContent = `${res.law} (${(res.params || []).join(', ')}), ${res.punch}; ${res.mesh}; ${res.steps} steps, ` +
+    `${res.newton_iterations} Newton iterations; max force ${sig(res.max_force * 1e3, 5)} mN at h = ${sig(res.at_depth * 1e3, 4)} µm; ${sig(res.seconds, 3)} s` +
+    (res.failure ? `; stopped: ${res.failure}` : '');
+}
+
+async function cancelRun() {
+  if (!state.run) return;
+  try {
+    const m = await api(`/api/runs/${state.run}`, { method: 'DELETE' });
+    renderProgress(m);
+  } catch (e) { $('#run-message').textContent = e.message; }
+}
+
+// ---- runs list and comparison --------------------------------------------------------------
+async function loadRuns() {
+  const { runs } = await api('/api/runs');
+  const body = $('#runs-table tbody');
+  body.replaceChildren();
+  for (const r of runs) {
+    const s = r.summary || {};
+    const box = el('input', { type: 'checkbox' });
+    box.checked = state.selected.has(r.id);
+    box.addEventListener('click', (ev) => { ev.stopPropagation(); if (box.checked) state.selected.add(r.id); else state.selected.delete(r.id); });
+    const tr = el('tr', { class: 'clickable' + (r.id === state.run ? ' selected' : ''), 'data-run': r.id },
+      el('td', {}, box), el('td', { text: r.id }), el('td', { text: r.command }), el('td', {}, el('span', { class: `badge ${r.status}`, text: r.status })),
+      el('td', { text: s.law || '' }), el('td', { class: 'num', text: s.J !== undefined ? sig(s.J, 4) : '' }), el('td', { class: 'num', text: s.r2 ? sig(s.r2, 6) : '' }), el('td', { text: r.record || '' }));
+    tr.addEventListener('click', () => { if (['done', 'failed', 'cancelled'].includes(r.status)) { openRunDone(r.id); } else { openRun(r.id); } });
+    body.append(tr);
+  }
+}
+
+function openRunDone(id) {
+  if (state.source) { state.source.close(); state.source = null; }
+  state.run = id;
+  location.hash = `run=${id}`;
+  $('#run-id').textContent = id;
+  $('#run-error').textContent = '';
+  $('#run-message').textContent = '';
+  loadResult(id);
+}
+
+async function compare() {
+  const ids = [...state.selected];
+  const view = $('#compare-view');
+  view.replaceChildren();
+  if (!ids.length) { view.textContent = 'Select runs with the check boxes first.'; return; }
+  const runs = await Promise.all(ids.map((id) => api(`/api/runs/${id}`)));
+  const names = [...new Set(runs.flatMap((r) => (r.result && r.result.parameters ? r.result.parameters.map((p) => p.name) : [])))];
+  const t = el('table', { class: 'grid', id: 'compare-table' });
+  t.append(el('tr', {}, el('th', { text: '' }), ...runs.map((r) => el('th', { text: `${r.id} (${r.command})` }))));
+  const row = (label, f) => t.append(el('tr', {}, el('th', { text: label }), ...runs.map((r) => el('td', { class: 'num', text: r.result ? f(r.result) : '' }))));
+  row('law', (x) => x.law || '');
+  row('converged', (x) => (x.converged === undefined ? '' : String(x.converged)));
+  row('J (N²)', (x) => sig(x.J, 5));
+  row('R²', (x) => (x.fit_quality ? sig(x.fit_quality.r2, 6) : ''));
+  for (const n of names) {
+    row(n, (x) => {
+      const p = (x.parameters || []).find((q) => q.name === n);
+      if (!p) return '';
+      const id = x.identifiability;
+      if (!p.free) return `${sig(p.value, 6)} (held)`;
+      if (id && id.undetermined.includes(n)) return `${sig(p.value, 6)} (undetermined)`;
+      const sd = id ? id.std_dev[n] : null;
+      return sd !== null && sd !== undefined ? `${sig(p.value, 6)} ± ${sig(sd, 2)}` : sig(p.value, 6);
+    });
+  }
+  view.append(t);
+}
+
+// ---- start ---------------------------------------------------------------------------------
+async function start() {
+  try {
+    const h = await api('/api/health');
+    $('#health').textContent = `v${h.version}, workspace ${h.workspace}, uploads up to ${Math.round(h.max_upload / 1048576)} MB`;
+  } catch (e) { $('#health').textContent = e.message; $('#health').className = 'error'; }
+  const drop = $('#drop');
+  drop.addEventListener('dragover', (ev) => { ev.preventDefault(); drop.classList.add('over'); });
+  drop.addEventListener('dragleave', () => drop.classList.remove('over'));
+  drop.addEventListener('drop', (ev) => { ev.preventDefault(); drop.classList.remove('over'); upload(ev.dataTransfer.files); });
+  $('#file-input').addEventListener('change', (ev) => upload(ev.target.files));
+  $('#record-select').addEventListener('change', (ev) => showRecord(ev.target.value));
+  $('#law').addEventListener('change', () => { renderLaw(); loadTemplate(); });
+  $('#tip').addEventListener('change', loadTemplate);
+  $('#load-template').addEventListener('click', loadTemplate);
+  $('#run').addEventListener('click', submit);
+  $('#cancel').addEventListener('click', cancelRun);
+  $('#compare').addEventListener('click', compare);
+  await Promise.all([loadLaws(), loadRecords(), loadRuns()]);
+  await loadTemplate();
+  const m = location.hash.match(/run=([a-z0-9-]+)/);
+  if (m) {
+    const run = await api(`/api/runs/${m[1]}`).catch(() => null);
+    if (run && ['done', 'failed', 'cancelled'].includes(run.status)) openRunDone(m[1]); else if (run) openRun(m[1]);
+  }
+  document.body.dataset.ready = '1';
+}
+
+start();

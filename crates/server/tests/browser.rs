@@ -1,0 +1,384 @@
+//! End to end in a real browser: headless Chromium driven over the WebDriver protocol
+//! (Debian's `chromium` and `chromium-driver`; spoken here with the tests' own small HTTP
+//! client, no client crate). The page loads, a shipped record is uploaded through the file
+//! input, a short identification runs with live progress, and the parameter table, the
+//! fit plot and the figures appear. Screenshots go to `$CARGO_TARGET_TMPDIR/browser/`.
+//!
+//! Without Chromium or chromedriver the test is skipped with a message, except under CI
+//! (`CI=true`), where it fails: scripts/test.sh installs both.
+
+mod common;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::*;
+use serde_json::{Value, json};
+
+const ELEMENT: &str = "element-6066-11e4-a52e-4f735466cecf";
+
+fn find(names: &[&str], env: &str) -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os(env) {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH")?;
+    for dir in std::env::split_paths(&path) {
+        for n in names {
+            let p = dir.join(n);
+            if p.is_file() {
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+/// chromedriver, ended when dropped.
+struct Driver {
+    child: Child,
+    addr: SocketAddr,
+    session: String,
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = request(
+            self.addr,
+            "DELETE",
+            &format!("/session/{}", self.session),
+            &[],
+            b"",
+        );
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Driver {
+    fn call(&self, method: &str, path: &str, body: Value) -> Value {
+        let path = format!("/session/{}{path}", self.session);
+        let body = if method == "GET" {
+            Vec::new()
+        } else {
+            body.to_string().into_bytes()
+        };
+        let r = request(
+            self.addr,
+            method,
+            &path,
+            &[("Content-Type", "application/json")],
+            &body,
+        );
+        let v = r.json();
+        assert_eq!(r.status, 200, "{method} {path}: {v}");
+        v["value"].clone()
+    }
+
+    fn js(&self, script: &str) -> Value {
+        self.call(
+            "POST",
+            "/execute/sync",
+            json!({"script": script, "args": []}),
+        )
+    }
+
+    fn element(&self, css: &str) -> String {
+        let v = self.call(
+            "POST",
+            "/element",
+            json!({"using": "css selector", "value": css}),
+        );
+        v[ELEMENT].as_str().unwrap().to_string()
+    }
+
+    fn send_keys(&self, css: &str, text: &str) {
+        let e = self.element(css);
+        self.call(
+            "POST",
+            &format!("/element/{e}/value"),
+            json!({"text": text}),
+        );
+    }
+
+    fn click(&self, css: &str) {
+        let e = self.element(css);
+        self.call("POST", &format!("/element/{e}/click"), json!({}));
+    }
+
+    /// Polls `script` (an expression) until it is truthy; returns its value.
+    fn until(&self, what: &str, script: &str, timeout: f64) -> Value {
+        let t0 = Instant::now();
+        loop {
+            let v = self.js(&format!("return ({script});"));
+            let truthy = !(v.is_null() || v == json!(false) || v == json!("") || v == json!(0));
+            if truthy {
+                return v;
+            }
+            if t0.elapsed().as_secs_f64() > timeout {
+                let text = self.js("return document.body.innerText;");
+                panic!(
+                    "timed out waiting for {what}; the page reads:\n{}",
+                    text.as_str().unwrap_or("")
+                );
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn screenshot(&self, path: &std::path::Path) {
+        let b64 = self.call("GET", "/screenshot", json!({}));
+        std::fs::write(path, base64(b64.as_str().unwrap())).unwrap();
+    }
+}
+
+/// Standard base64 (the screenshots).
+fn base64(s: &str) -> Vec<u8> {
+    let val = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    };
+    let bytes: Vec<u8> = s
+        .bytes()
+        .filter(|&c| c != b'=' && !c.is_ascii_whitespace())
+        .collect();
+    let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
+    for chunk in bytes.chunks(4) {
+        let mut n = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            n |= u32::from(val(c)) << (18 - 6 * i);
+        }
+        out.push((n >> 16) as u8);
+        if chunk.len() > 2 {
+            out.push((n >> 8) as u8);
+        }
+        if chunk.len() > 3 {
+            out.push(n as u8);
+        }
+    }
+    out
+}
+
+fn start_driver(
+    driver: &std::path::Path,
+    chromium: &std::path::Path,
+    profile: &std::path::Path,
+) -> Driver {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let child = Command::new(driver)
+        .arg(format!("--port={port}"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("cannot start chromedriver");
+    let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let t0 = Instant::now();
+    while std::net::TcpStream::connect(addr).is_err() {
+        assert!(t0.elapsed().as_secs() < 30, "chromedriver did not start");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let args = [
+        "--headless".to_string(),
+        "--no-sandbox".into(),
+        "--disable-gpu".into(),
+        "--disable-quic".into(),
+        "--no-first-run".into(),
+        "--disable-background-networking".into(),
+        "--disable-component-update".into(),
+        "--disable-sync".into(),
+        "--disable-dev-shm-usage".into(),
+        "--window-size=1400,2200".into(),
+        format!("--user-data-dir={}", profile.display()),
+    ];
+    let caps = json!({"capabilities": {"alwaysMatch": {
+        "browserName": "chrome",
+        "goog:chromeOptions": {"binary": chromium, "args": args}
+    }}});
+    let r = request(
+        addr,
+        "POST",
+        "/session",
+        &[("Content-Type", "application/json")],
+        caps.to_string().as_bytes(),
+    );
+    let v = r.json();
+    assert_eq!(r.status, 200, "new session: {v}");
+    Driver {
+        child,
+        addr,
+        session: v["value"]["sessionId"].as_str().unwrap().to_string(),
+    }
+}
+
+#[test]
+fn a_short_fit_in_headless_chromium() {
+    let driver = find(&["chromedriver"], "CHROMEDRIVER");
+    let chromium = find(
+        &["chromium", "chromium-browser", "google-chrome"],
+        "CHROMIUM",
+    );
+    let (Some(driver), Some(chromium)) = (driver, chromium) else {
+        let msg = "headless browser test: chromium and chromedriver not found (apt-get install \
+                   chromium chromium-driver; scripts/test.sh does it)";
+        if std::env::var("CI").is_ok_and(|v| v == "true") {
+            panic!("{msg}: required under CI");
+        }
+        eprintln!("SKIPPED {msg}");
+        return;
+    };
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("browser");
+    std::fs::create_dir_all(&out).unwrap();
+    let s = serve(|_| {});
+    let profile = tempfile::tempdir().unwrap();
+    let d = start_driver(&driver, &chromium, profile.path());
+
+    let t0 = Instant::now();
+    d.call(
+        "POST",
+        "/url",
+        json!({"url": format!("http://127.0.0.1:{}/", s.addr.port())}),
+    );
+    d.until(
+        "the page to be ready",
+        "document.body.dataset.ready === '1'",
+        30.0,
+    );
+    let interactive = t0.elapsed().as_secs_f64();
+    assert!(
+        d.js("return document.querySelector('#health').textContent;")
+            .as_str()
+            .unwrap()
+            .contains("workspace")
+    );
+    assert_eq!(
+        d.js("return document.querySelectorAll('#law-params tbody tr').length;"),
+        json!(3)
+    );
+
+    // a shipped record through the file input
+    let record = repo()
+        .join("examples/data/anton-paar-unht-berkovich/anonNI.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &record.display().to_string());
+    d.until(
+        "the record's tests",
+        "document.querySelectorAll('#tests tbody tr').length === 1",
+        60.0,
+    );
+    d.until(
+        "the record template",
+        "document.querySelector('#config').value.includes('../../records/')",
+        30.0,
+    );
+    d.until(
+        "the record's plot",
+        "document.querySelector('#record-plot polyline')",
+        10.0,
+    );
+    assert!(
+        d.js("return document.querySelector('#upload-status').textContent;")
+            .as_str()
+            .unwrap()
+            .contains("AntonPaar")
+    );
+
+    // a short fit: 20 resampled points, one sub-step, 2 iterations, no refinement
+    d.send_keys("#sets", "data.preprocessing.resample.n=20\ndata.substeps=1");
+    d.send_keys("#max-iter", "2");
+    d.click("#no-refine");
+    let t_run = Instant::now();
+    d.click("#run");
+    d.until("the progress of an iteration", "/iteration [0-9]+ of at most 2, J = /.test(document.querySelector('#progress-text').textContent)", 120.0);
+    let progress_seen = t_run.elapsed().as_secs_f64();
+    d.screenshot(&out.join("progress.png"));
+    d.until(
+        "the end of the run",
+        "['done','failed','cancelled'].includes(document.querySelector('#run-status').textContent)",
+        300.0,
+    );
+    let status = d.js("return document.querySelector('#run-status').textContent;");
+    assert_eq!(
+        status,
+        json!("done"),
+        "{}",
+        d.js("return document.querySelector('#run-error').textContent;")
+    );
+
+    // the parameter table, the fit and residual plots, the figures, the downloads
+    d.until(
+        "the parameter table",
+        "document.querySelector('#param-table tr[data-param=\"E\"]')",
+        30.0,
+    );
+    let row = d.js("return [...document.querySelectorAll('#param-table tr[data-param=\"E\"] td')].map(t => t.textContent);");
+    let cells: Vec<&str> = row
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert_eq!(cells[0], "E");
+    assert_eq!(cells[1], "MPa");
+    let value: f64 = cells[3].split_whitespace().next().unwrap().parse().unwrap();
+    assert!(value > 0.0, "{cells:?}");
+    assert!(
+        cells[4] == "undetermined" || cells[4].parse::<f64>().is_ok(),
+        "σ of E: {cells:?}"
+    );
+    let nu = d.js("return document.querySelector('#param-table tr[data-param=\"nu\"] td:nth-child(5)').textContent;");
+    assert_eq!(nu, json!("held"));
+    d.until(
+        "the fit plot",
+        "document.querySelectorAll('#fit-plot polyline').length >= 2",
+        10.0,
+    );
+    d.until(
+        "the residual plot",
+        "document.querySelectorAll('#residual-plot circle').length >= 10",
+        10.0,
+    );
+    d.until("the figures loaded", "[...document.querySelectorAll('#figures img')].some(i => i.complete && i.naturalWidth > 0)", 30.0);
+    let links =
+        d.js("return [...document.querySelectorAll('#downloads a')].map(a => a.textContent);");
+    for f in ["report.md", "result.json", "config.ron", "fit.csv"] {
+        assert!(
+            links.as_array().unwrap().contains(&json!(f)),
+            "{f} not in {links}"
+        );
+    }
+    assert!(
+        d.js("return document.querySelector('#identifiability').textContent;")
+            .as_str()
+            .unwrap()
+            .contains("Singular values")
+    );
+    // the runs list shows it, and the comparison view works
+    d.until(
+        "the runs list",
+        "document.querySelectorAll('#runs-table tbody tr').length === 1",
+        10.0,
+    );
+    d.click("#runs-table tbody input[type=checkbox]");
+    d.click("#compare");
+    d.until(
+        "the comparison",
+        "document.querySelector('#compare-table')",
+        10.0,
+    );
+    d.js("window.scrollTo(0, 0); return 0;");
+    d.screenshot(&out.join("result.png"));
+    eprintln!(
+        "browser: page interactive after {interactive:.2} s; first iteration shown {progress_seen:.1} s \
+         after Run; screenshots in {}",
+        out.display()
+    );
+}
