@@ -343,7 +343,7 @@ pub enum Specimen {
     },
     /// Radius = height = `size_factor` contact-radius bounds at the maximum depth, a
     /// uniform core of `elements_in_contact` squares per side under the punch, graded
-    /// beyond (the contact crate's [`indentify_contact::auto_specimen`]); every field
+    /// beyond (the contact crate's [`indentify_contact::punch::auto_specimen`]); every field
     /// optional.
     Auto {
         /// Element edges across the contact-radius bound, in [2, 64] (default 12).

@@ -1,7 +1,7 @@
 //! Exploring the cost around a fit: parallel multi-start (`indentify identify --starts N`)
 //! and profile-likelihood intervals (`--profiles`), their console tables, Markdown
 //! sections, JSON fields and profile figures. The numerics are `indentify_identify`'s
-//! ([`indentify_identify::multistart`], [`indentify_identify::profile`]); this module runs
+//! ([`indentify_identify::multistart`](mod@indentify_identify::multistart), [`indentify_identify::profile`](mod@indentify_identify::profile)); this module runs
 //! them in parallel on rayon's current pool and formats the results.
 //!
 //! Determinism: every run and every profile chain is computed by its own evaluator from

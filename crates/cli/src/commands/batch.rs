@@ -41,7 +41,7 @@ pub struct RunArgs {
     #[arg(required = true)]
     pub manifest: Option<PathBuf>,
 
-    /// Output folder: indents/<id>/, results.csv, maps/.
+    /// Output folder: indents/{id}/, results.csv, maps/.
     #[arg(long, value_name = "DIR", required = true)]
     pub out: Option<PathBuf>,
 

@@ -106,7 +106,7 @@ pub struct Args {
     /// dev. per step, at most 8 per side), the others re-fitted from the neighbouring point;
     /// the interval is where 2 (J - J*) / s^2 <= 3.841 with s^2 = 2 J* / (n - p). Chains of
     /// different parameters and sides run in parallel. Console, report.md, result.json
-    /// `profiles`, figures profile_<name>.svg/png.
+    /// `profiles`, figures profile_{name}.svg/png.
     #[arg(long)]
     pub profiles: bool,
 
