@@ -844,6 +844,18 @@ mod tests {
         );
     }
 
+    /// Header lines are cut at spaces to the figure's width; joined again they are the
+    /// text (a long stop reason overflowed the sphere record's caveat line).
+    #[test]
+    fn header_lines_wrap_at_spaces() {
+        let text = "CAVEAT: NOT converged (relative decrease below tolerance, but the data do \
+                    not determine K); systematic residuals";
+        let lines = wrap(text, 30);
+        assert!(lines.len() > 2 && lines.iter().all(|l| l.chars().count() <= 30));
+        assert_eq!(lines.join(" "), text);
+        assert_eq!(wrap("a_very_long_word b", 5), ["a_very_long_word", "b"]);
+    }
+
     #[test]
     fn iteration_ticks_are_integers() {
         assert_eq!(iteration_tick(2.0, 10.0), "2");

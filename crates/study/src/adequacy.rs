@@ -61,6 +61,15 @@ impl FitAdequacy {
     }
 }
 
+/// A multiple of σ: `2.4`, `9.4e8` (a noise-free fit's deviations are tiny).
+fn sigmas(x: f64) -> String {
+    if x >= 1e3 {
+        format!("{x:.1e}")
+    } else {
+        format!("{x:.1}")
+    }
+}
+
 /// The adequacy of `curves` fitted with `free` parameters.
 pub fn assess(curves: &FitCurves, free: usize) -> Option<Adequacy> {
     Adequacy::assess(&curves.t, &curves.f_data, &curves.f_final, free)
@@ -121,7 +130,7 @@ impl IdentifyOutcome {
                             "{} {:+.1}% ({} σ)",
                             p.name,
                             100.0 * s / p.value.abs().max(f64::MIN_POSITIVE),
-                            crate::format::sig(s.abs() / sd, 2)
+                            sigmas(s.abs() / sd)
                         )
                     })
                 })
