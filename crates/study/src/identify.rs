@@ -1,4 +1,6 @@
-//! The identification pipeline: a configuration and its data -> the least-squares misfit
+//! The identification pipeline, one for a one-test configuration and a joint one (a
+//! configuration is set up as its list of tests, [`TestSetup`]): a configuration and its
+//! data -> the least-squares misfit
 //! minimized with its adjoint gradient (`indentify_identify`) -> the result, the fitted
 //! curves and, with an output folder, the report directory (`result.json`, `history.csv`
 //! written as iterations complete, `fit.csv`, `report.md`/`report.json` and figures).
@@ -167,7 +169,8 @@ pub struct ReportFiles {
     pub history: PathBuf,
     /// fit.csv.
     pub fit: PathBuf,
-    /// report.md, report.json and the figures, when drawn.
+    /// report.md, report.json and the figures, when drawn (a joint fit: the index
+    /// report.md, the first test's `test-1/report.json`, every test's figures).
     pub report: Option<(PathBuf, PathBuf, Vec<PathBuf>)>,
     /// Why the report or figures are missing, when they are.
     pub report_error: Option<String>,
