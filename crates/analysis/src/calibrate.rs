@@ -14,7 +14,9 @@
 //!    the tip's. The coefficients are the least squares of the relative misfit
 //!    `(A(h_c,i) - A_i) / A_i` under `C_k >= 0` (an area must grow with the depth): the
 //!    unconstrained fit when its coefficients are all non-negative, else the best fit with
-//!    the offending ones held at zero (said in the warnings).
+//!    the offending ones held at zero (said in the warnings). Points whose relative misfit
+//!    exceeds 5 robust standard deviations (and 5 %) are dropped once and the fit repeated
+//!    (an indent that sank in at first contact has its depths offset; they are listed).
 //! 3. The equivalent tip radius: the sphere `A = pi (2 R h_c - h_c^2)` through the
 //!    calibrated area at the shallowest quarter of the calibration depths (median of the
 //!    per-point radii): the bluntness of a worn Berkovich, or a sphere's radius.
@@ -141,6 +143,8 @@ pub struct AreaFit {
     pub points: Vec<(f64, f64)>,
     /// Equivalent tip radius, mm.
     pub radius: Option<f64>,
+    /// Points dropped as outliers: test, unloading, relative misfit of the first fit.
+    pub rejected: Vec<(String, usize, f64)>,
     /// What the fit had to do.
     pub warnings: Vec<String>,
 }
@@ -206,6 +210,39 @@ fn lsq_subset(hc: &[f64], a: &[f64], terms: usize, cols: &[usize]) -> Option<(Ve
     coef.iter().all(|v| v.is_finite()).then_some((coef, ss))
 }
 
+/// The best non-negative fit (C0 > 0): the subsets of free coefficients tried in turn.
+fn best_fit(hc: &[f64], a: &[f64], terms: usize) -> Option<(Vec<f64>, f64, Vec<usize>)> {
+    let mut best: Option<(Vec<f64>, f64, Vec<usize>)> = None;
+    for mask in 1u32..(1 << terms) {
+        if mask & 1 == 0 {
+            continue; // C0 always free
+        }
+        let cols: Vec<usize> = (0..terms).filter(|k| mask & (1 << k) != 0).collect();
+        let Some((coef, ss)) = lsq_subset(&hc, a, terms, &cols) else {
+            continue;
+        };
+        if coef.iter().any(|&c| c < 0.0) || !(coef[0] > 0.0) {
+            continue;
+        }
+        let held: Vec<usize> = (0..terms).filter(|k| mask & (1 << k) == 0).collect();
+        if best.as_ref().is_none_or(|b| ss < b.1 * (1.0 - 1e-12)) {
+            best = Some((coef, ss, held));
+        }
+    }
+    best
+}
+
+fn no_fit(hc: &[f64]) -> AnalysisError {
+    AnalysisError::Calibration {
+        reason: format!(
+            "no area function with C0 > 0 and the other coefficients >= 0 fits the {} points (h_c {:.1} to {:.1} nm)",
+            hc.len(),
+            hc.iter().copied().fold(f64::INFINITY, f64::min) * 1e6,
+            hc.iter().copied().fold(0.0, f64::max) * 1e6
+        ),
+    }
+}
+
 /// Fits the ISO area function with `terms` coefficients (1 to 6) to the points, with the
 /// reference's reduced modulus `er` (MPa), `beta` and `epsilon`.
 ///
@@ -251,31 +288,36 @@ pub fn area_function(
             2 * terms
         )));
     }
-    let mut best: Option<(Vec<f64>, f64, Vec<usize>)> = None;
-    for mask in 1u32..(1 << terms) {
-        if mask & 1 == 0 {
-            continue; // C0 always free
-        }
-        let cols: Vec<usize> = (0..terms).filter(|k| mask & (1 << k) != 0).collect();
-        let Some((coef, ss)) = lsq_subset(&hc, &a, terms, &cols) else {
-            continue;
-        };
-        if coef.iter().any(|&c| c < 0.0) || !(coef[0] > 0.0) {
-            continue;
-        }
-        let held: Vec<usize> = (0..terms).filter(|k| mask & (1 << k) == 0).collect();
-        if best.as_ref().is_none_or(|b| ss < b.1 * (1.0 - 1e-12)) {
-            best = Some((coef, ss, held));
-        }
-    }
-    let Some((coef, ss, held)) = best else {
+    let first = best_fit(&hc, &a, terms).ok_or_else(|| no_fit(&hc))?;
+    // outliers: relative misfits beyond 5 robust standard deviations (1.4826 MAD) and
+    // beyond 5 %, dropped once and the fit repeated
+    let rel: Vec<f64> = (0..hc.len())
+        .map(|i| {
+            let model: f64 = (0..terms)
+                .map(|k| first.0[k] * hc[i].powf(iso_exponent(k)))
+                .sum();
+            model / a[i] - 1.0
+        })
+        .collect();
+    let mut abs: Vec<f64> = rel.iter().map(|r| r.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let mad = abs[abs.len() / 2];
+    let cut = (5.0 * 1.4826 * mad).max(0.05);
+    let keep: Vec<usize> = (0..hc.len()).filter(|&i| rel[i].abs() <= cut).collect();
+    let rejected: Vec<(String, usize, f64)> = (0..hc.len())
+        .filter(|&i| rel[i].abs() > cut)
+        .map(|i| (points[i].test.clone(), points[i].unloading, rel[i]))
+        .collect();
+    let (hc, a): (Vec<f64>, Vec<f64>) = keep.iter().map(|&i| (hc[i], a[i])).unzip();
+    if hc.len() < 2 * terms {
         return Err(err(format!(
-            "no area function with C0 > 0 and the other coefficients >= 0 fits the {} points (h_c {:.1} to {:.1} nm)",
+            "{} unloadings left after dropping {} outliers; expected at least {}",
             hc.len(),
-            hc.iter().copied().fold(f64::INFINITY, f64::min) * 1e6,
-            hc.iter().copied().fold(0.0, f64::max) * 1e6
+            rejected.len(),
+            2 * terms
         )));
-    };
+    }
+    let (coef, ss, held) = best_fit(&hc, &a, terms).ok_or_else(|| no_fit(&hc))?;
     let mut warnings = Vec::new();
     if !held.is_empty() {
         let free: Vec<usize> = (0..terms).collect();
@@ -321,6 +363,7 @@ pub fn area_function(
         hc_range: (lo, hi),
         points: hc.into_iter().zip(a).collect(),
         radius,
+        rejected,
         warnings,
     })
 }

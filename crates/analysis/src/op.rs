@@ -97,8 +97,9 @@ pub struct Options {
     /// A drop of the force by this fraction of a peak makes the peak an unloading's start
     /// (default 0.1).
     pub drop: f64,
-    /// Forces within this fraction of a peak count as the peak (hold, start of unloading;
-    /// default 0.01).
+    /// Forces within this fraction of a peak count as the peak (the end of the hold, i.e. the
+    /// start of the unloading, is the deepest such sample; the hold starts at the first
+    /// sample within a fifth of it; default 0.01).
     pub hold_tolerance: f64,
     /// The shortest hold analysed for creep, s (default 0.5).
     pub min_hold: f64,
@@ -274,7 +275,7 @@ struct Found {
     end: usize,
 }
 
-fn find_unloadings(f: &[f64], drop: f64, tol: f64) -> Vec<Found> {
+fn find_unloadings(h: &[f64], f: &[f64], drop: f64, tol: f64) -> Vec<Found> {
     let n = f.len();
     let f_top = f.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let floor = (1e-3 * f_top).max(f64::MIN_POSITIVE);
@@ -307,8 +308,17 @@ fn find_unloadings(f: &[f64], drop: f64, tol: f64) -> Vec<Found> {
             j += 1;
         }
         let level = (1.0 - tol) * f[k];
-        let start = (k..i).rev().find(|&q| f[q] >= level).unwrap_or(k);
-        let level_start = (from..=k).find(|&q| f[q] >= level).unwrap_or(k);
+        // the end of the hold at the peak: of the samples at the peak's level, the deepest
+        // (creep deepens a load-controlled hold; the unloading's first samples, which may
+        // still be within the tolerance, are shallower)
+        let start = (k..i)
+            .filter(|&q| f[q] >= level)
+            .max_by(|&a, &b| h[a].total_cmp(&h[b]))
+            .unwrap_or(k);
+        // the hold starts where the force first comes within a fifth of the tolerance of
+        // the peak (0.2 % by default): the loading's last samples are not counted as creep
+        let hold_level = (1.0 - 0.2 * tol) * f[k];
+        let level_start = (from..=k).find(|&q| f[q] >= hold_level).unwrap_or(k);
         out.push(Found {
             level_start,
             peak: k,
@@ -478,7 +488,7 @@ pub fn analyze(r: &Record, o: &Options) -> Result<TestAnalysis, AnalysisError> {
         out.error = Some(format!("sample {i} is not finite"));
         return Ok(out);
     }
-    let found = find_unloadings(&r.f[..n], o.drop, o.hold_tolerance);
+    let found = find_unloadings(&r.h[..n], &r.f[..n], o.drop, o.hold_tolerance);
     if found.is_empty() {
         out.error = Some(format!(
             "no unloading: the force never falls by {} % of a peak (largest force {:.4} mN at sample {} of {n})",
