@@ -16,7 +16,9 @@
 //!    unconstrained fit when its coefficients are all non-negative, else the best fit with
 //!    the offending ones held at zero (said in the warnings). Points whose relative misfit
 //!    exceeds 5 robust standard deviations (and 5 %) are dropped once and the fit repeated
-//!    (an indent that sank in at first contact has its depths offset; they are listed).
+//!    (an indent that sank in at first contact has its depths offset; they are listed);
+//!    before that, points whose area is below half the nominal tip's at their depth are
+//!    dropped (a worn tip only gains area: such a point's depth is offset).
 //! 3. The equivalent tip radius: the sphere `A = pi (2 R h_c - h_c^2)` through the
 //!    calibrated area at the shallowest quarter of the calibration depths (median of the
 //!    per-point radii): the bluntness of a worn Berkovich, or a sphere's radius.
@@ -251,6 +253,7 @@ fn no_fit(hc: &[f64]) -> AnalysisError {
 /// contact depth or stiffness, no fit with a positive `C0`.
 pub fn area_function(
     points: &[Point],
+    nominal: &crate::tip::AreaFunction,
     er: f64,
     beta: f64,
     epsilon: f64,
@@ -288,6 +291,32 @@ pub fn area_function(
             2 * terms
         )));
     }
+    // points whose area is below half the nominal tip's at their contact depth: a worn tip
+    // only gains area, so their depth is offset (an indent that sank in at first contact)
+    let mut rejected: Vec<(String, usize, f64)> = Vec::new();
+    let mut idx: Vec<usize> = Vec::new();
+    for i in 0..hc.len() {
+        let nom = nominal.area(hc[i]);
+        if nom.is_finite() && a[i] < 0.5 * nom {
+            rejected.push((
+                points[i].test.clone(),
+                points[i].unloading,
+                a[i] / nom - 1.0,
+            ));
+        } else {
+            idx.push(i);
+        }
+    }
+    let pts: Vec<&Point> = idx.iter().map(|&i| &points[i]).collect();
+    let (hc, a): (Vec<f64>, Vec<f64>) = idx.iter().map(|&i| (hc[i], a[i])).unzip();
+    if hc.len() < 2 * terms {
+        return Err(err(format!(
+            "{} unloadings left after dropping {} whose area is below half the nominal tip's; expected at least {}",
+            hc.len(),
+            rejected.len(),
+            2 * terms
+        )));
+    }
     let first = best_fit(&hc, &a, terms).ok_or_else(|| no_fit(&hc))?;
     // outliers: relative misfits beyond 5 robust standard deviations (1.4826 MAD) and
     // beyond 5 %, dropped once and the fit repeated
@@ -304,10 +333,11 @@ pub fn area_function(
     let mad = abs[abs.len() / 2];
     let cut = (5.0 * 1.4826 * mad).max(0.05);
     let keep: Vec<usize> = (0..hc.len()).filter(|&i| rel[i].abs() <= cut).collect();
-    let rejected: Vec<(String, usize, f64)> = (0..hc.len())
-        .filter(|&i| rel[i].abs() > cut)
-        .map(|i| (points[i].test.clone(), points[i].unloading, rel[i]))
-        .collect();
+    rejected.extend(
+        (0..hc.len())
+            .filter(|&i| rel[i].abs() > cut)
+            .map(|i| (pts[i].test.clone(), pts[i].unloading, rel[i])),
+    );
     let (hc, a): (Vec<f64>, Vec<f64>) = keep.iter().map(|&i| (hc[i], a[i])).unzip();
     if hc.len() < 2 * terms {
         return Err(err(format!(
@@ -430,7 +460,7 @@ mod tests {
                 ..p.clone()
             })
             .collect();
-        let fit = area_function(&corr, er, 1.0, 0.75, 3).unwrap();
+        let fit = area_function(&corr, &AreaFunction::Berkovich, er, 1.0, 0.75, 3).unwrap();
         let AreaFunction::Iso { coefficients } = &truth else {
             unreachable!()
         };

@@ -18,6 +18,7 @@
 //! # Ok::<(), indentify_study::Error>(())
 //! ```
 
+pub mod analyze;
 pub mod atomic;
 pub mod batch;
 pub mod check;
