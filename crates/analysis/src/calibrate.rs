@@ -71,7 +71,7 @@ pub fn reduced_modulus(e: f64, nu: f64, tip: &Tip) -> f64 {
 /// negative compliance or slope (the stiffness does not follow the constant-hardness law).
 pub fn frame_compliance(points: &[Point], min_fraction: f64) -> Result<Compliance, AnalysisError> {
     let err = |reason: String| AnalysisError::Calibration { reason };
-    if !(min_fraction >= 0.0 && min_fraction < 1.0) {
+    if !(0.0..1.0).contains(&min_fraction) {
         return Err(AnalysisError::Option {
             field: "compliance_range".into(),
             value: min_fraction.to_string(),
@@ -220,7 +220,7 @@ fn best_fit(hc: &[f64], a: &[f64], terms: usize) -> Option<(Vec<f64>, f64, Vec<u
             continue; // C0 always free
         }
         let cols: Vec<usize> = (0..terms).filter(|k| mask & (1 << k) != 0).collect();
-        let Some((coef, ss)) = lsq_subset(&hc, a, terms, &cols) else {
+        let Some((coef, ss)) = lsq_subset(hc, a, terms, &cols) else {
             continue;
         };
         if coef.iter().any(|&c| c < 0.0) || !(coef[0] > 0.0) {

@@ -87,11 +87,10 @@ fn sheet_row(range: &Range<Data>, i: usize) -> usize {
     range.start().map_or(i, |(r, _)| r as usize + i) + 1
 }
 
-fn read_test(
-    file: &str,
-    sheet: &str,
-    range: &Range<Data>,
-) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<Quantity>), ReadError> {
+/// Time, depth, force (s, mm, N) and the markers of a test sheet.
+type Samples = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Quantity>);
+
+fn read_test(file: &str, sheet: &str, range: &Range<Data>) -> Result<Samples, ReadError> {
     let at = |_: usize| format!("{file} [{sheet}]");
     let rows: Vec<&[Data]> = range.rows().collect();
     if rows.len() < 4 {
