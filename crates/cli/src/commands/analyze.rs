@@ -40,7 +40,7 @@ pub struct Args {
 
     /// Force range of the unloading fit, as fractions of F_max: LOWER,UPPER (default: the
     /// vendor's for the format: 0.4,0.98 Anton Paar and others, 0.5,0.95 KLA).
-    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 1)]
     pub fit_range: Option<Vec<f64>>,
 
     /// epsilon of h_c = h_max - epsilon F_max/S: `tip` (0.75 Berkovich and sphere, 0.727
@@ -116,10 +116,18 @@ fn epsilon(s: &str) -> Result<Epsilon> {
     }
 }
 
+/// The fit range of `--fit-range LO,HI`; a count other than 2 gives NaN ends, which the
+/// analysis refuses naming `fit_range`.
 fn fit_range(v: &Option<Vec<f64>>) -> Option<FitRange> {
-    v.as_ref().map(|v| FitRange {
-        lower: v.first().copied().unwrap_or(f64::NAN),
-        upper: v.get(1).copied().unwrap_or(f64::NAN),
+    v.as_ref().map(|v| match v.as_slice() {
+        [lower, upper] => FitRange {
+            lower: *lower,
+            upper: *upper,
+        },
+        _ => FitRange {
+            lower: f64::NAN,
+            upper: f64::NAN,
+        },
     })
 }
 
@@ -209,7 +217,7 @@ pub struct CalibrateArgs {
 
     /// Force range of the unloading fit, LOWER,UPPER fractions of F_max (default: the
     /// vendor's).
-    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_name = "LO,HI", value_delimiter = ',', num_args = 1)]
     pub fit_range: Option<Vec<f64>>,
 
     /// beta of E_r = sqrt(pi) S / (2 beta sqrt(A)).
