@@ -103,7 +103,7 @@ fn head(b: &[u8], n: usize) -> Vec<u8> {
         .collect()
 }
 
-/// The seeds with their weights: the four real files (the 1.3 MB multi-test file mostly
+/// The seeds with their weights: the real files (the KLA workbook and a small hand-made one too) (the 1.3 MB multi-test file mostly
 /// as its first 600 lines), and a file as `indentify simulate` writes it.
 fn seeds(root: &Path) -> Result<Vec<(String, Vec<u8>, u32)>> {
     let data = root.join("examples/data");
@@ -117,6 +117,8 @@ fn seeds(root: &Path) -> Result<Vec<(String, Vec<u8>, u32)>> {
         ("HT_V_100mN_data.TXT".into(), load("anton-paar-sphere-creep/HT_V_100mN_data.TXT")?, 5),
         ("RobinSteel0000LC.txt".into(), load("hysitron/RobinSteel0000LC.txt")?, 15),
         ("Exp-50mN_0000.hld".into(), load("hysitron/Exp-50mN_0000.hld")?, 20),
+        ("two-tests.xlsx".into(), std::fs::read(root.join("crates/records/tests/data/two-tests.xlsx")).context("reading crates/records/tests/data/two-tests.xlsx")?, 10),
+        ("FusedSilica.xlsx".into(), load("kla-fused-silica/FusedSilica.xlsx")?, 1),
         (
             "simulate.csv".into(),
             b"t,h,F,a\n0,0,0,0\n0.5,0.001,0.02,0.01\n1,0.002,0.05,0.02\n1.5,0.0015,0.01,0.02\n2,0.001,0,0.01\n".to_vec(),

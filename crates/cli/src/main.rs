@@ -180,6 +180,22 @@ enum Command {
     Design(commands::design::Args),
     /// Serve the toolkit in a browser: records, runs with live progress, results (docs/web.md).
     Serve(commands::serve::Args),
+    /// Oliver-Pharr (ISO 14577) analysis of every test and unloading: H, E, S, creep, work.
+    #[command(
+        after_help = "Reads the file (every test, or --test K), applies the zero point, the file's \
+                            drift correction and the tip's (or the file's) frame compliance, fits \
+                            F = alpha (h - h_f)^m over the fit range of each unloading and reports \
+                            S, h_c, A_p, H_IT, E_r and E_IT per test (from its unloading at the \
+                            largest force), the hold's creep and the work ratio. Method, defaults \
+                            and sources: docs/analysis.md.\n\n\
+                            Examples:\n  \
+                            indentify analyze examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT --tip sphere:10 --epsilon m\n  \
+                            indentify calibrate examples/data/kla-fused-silica/FusedSilica.xlsx --modulus 72 --nu 0.17 --out tip.ron\n  \
+                            indentify analyze examples/data/kla-fused-silica/FusedSilica.xlsx --tip-file tip.ron --nu 0.17 --out out/fs"
+    )]
+    Analyze(commands::analyze::Args),
+    /// Calibrate the frame compliance and the tip's area function on a reference (fused silica); write a tip file.
+    Calibrate(commands::analyze::CalibrateArgs),
 }
 
 fn main() -> ExitCode {
@@ -196,6 +212,8 @@ fn main() -> ExitCode {
         Command::Map(args) => commands::map::run(args),
         Command::Design(args) => commands::design::run(args),
         Command::Serve(args) => commands::serve::run(args),
+        Command::Analyze(args) => commands::analyze::run(args),
+        Command::Calibrate(args) => commands::analyze::run_calibrate(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -42,13 +42,14 @@ pub const TOKENS: &[&[u8]] = &[
 ];
 
 /// Every format, `Auto` first.
-pub const FORMATS: [Format; 6] = [
+pub const FORMATS: [Format; 7] = [
     Format::Auto,
     Format::Csv,
     Format::AntonPaar,
     Format::AntonPaarMulti,
     Format::HysitronTxt,
     Format::Hld,
+    Format::Kla,
 ];
 
 /// One edit of a file; positions are reduced modulo the sizes they index.

@@ -12,6 +12,7 @@
 //! | `AntonPaar` | single-test TXT: method header (rates, max depth, pause, O&P results), `Measured values`, `Time (s) Pd (nm) Fn (mN) ... SegmentID` | a `Measured values` line |
 //! | `AntonPaarMulti` | tests side by side: `X_<test>_Time_[s] Y_<test>_Fn_[mN] X_<test>_Time_[s] Y_<test>_Pd_[nm]`; a shorter test's trailing repeats of its last row are dropped | first header `X_..._Time_` |
 //! | `HysitronTxt` | date, `Number of Points = N`, `Depth (nm) Load (µN) Time (s) ...`; blank lines between rows give segment ids | `Number of Points =` |
+//! | `Kla` | KLA/Agilent/Keysight workbooks (`.xlsx`, `.xls`, read with `calamine`): a sheet per test `Test <N>` (names row, units row, samples), the `Results`, `Pre-Test Inputs`, `Post-Test Inputs` and `Cycles-GroupedByTest` sheets into the metadata | zip or OLE2 magic bytes |
 //! | `Hld` | `Key: value unit` header (machine compliance, drift rate, tip area coefficients, load-function segments), then `<section> Data Points: N` blocks; the record is `Test Data` (`Time_s Disp_nm Force_µN`), each sample tagged with its load-function segment | `File Version: Hysitron` or `Test Data Points:` |
 //!
 //! The results table beside a multi-test file (`HT_V_100mN_data.TXT`: `Group Measurement
@@ -87,6 +88,7 @@ mod error;
 mod example_reader;
 pub mod fuzzing;
 mod hysitron;
+mod kla;
 pub mod prep;
 mod record;
 mod table;
@@ -111,6 +113,9 @@ use error::ReadErrorKind as K;
 /// - [`Format::AntonPaar`]: a `Measured values` line exists;
 /// - [`Format::Csv`] otherwise.
 pub fn detect(bytes: &[u8]) -> Format {
+    if kla::is_workbook(bytes) {
+        return Format::Kla;
+    }
     detect_text(&text::decode(bytes))
 }
 
@@ -150,6 +155,9 @@ fn detect_text(text: &str) -> Format {
 /// a declared point count that disagrees with the rows, a test index out of range, fewer
 /// than two rows.
 pub fn read(bytes: &[u8], name: &str, opts: &ReadOptions) -> Result<Vec<Record>, ReadError> {
+    if opts.format == Format::Kla || (opts.format == Format::Auto && kla::is_workbook(bytes)) {
+        return kla::read(name, bytes, opts.test);
+    }
     let text = text::decode(bytes);
     if text.trim().is_empty() {
         return Err(ReadError::new(
@@ -176,6 +184,7 @@ pub fn read(bytes: &[u8], name: &str, opts: &ReadOptions) -> Result<Vec<Record>,
         Format::AntonPaarMulti => anton_paar::read_multi(name, &text, opts.test),
         Format::HysitronTxt => single(hysitron::read_txt(name, &text)?),
         Format::Hld => single(hysitron::read_hld(name, &text)?),
+        Format::Kla => kla::read(name, bytes, opts.test),
     }
 }
 

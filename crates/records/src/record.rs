@@ -157,6 +157,8 @@ pub enum Format {
     HysitronTxt,
     /// Hysitron native `.hld` (key-value header, load function, data sections).
     Hld,
+    /// KLA/Agilent/Keysight workbook (`.xlsx`, `.xls`): a sheet per test.
+    Kla,
 }
 
 impl Format {
@@ -169,6 +171,7 @@ impl Format {
             Format::AntonPaarMulti => "anton-paar-multi",
             Format::HysitronTxt => "hysitron-txt",
             Format::Hld => "hld",
+            Format::Kla => "kla",
         }
     }
 
@@ -182,6 +185,7 @@ impl Format {
             Format::AntonPaarMulti,
             Format::HysitronTxt,
             Format::Hld,
+            Format::Kla,
         ]
         .into_iter()
         .find(|f| f.name() == n || f.name().replace('-', "") == n)

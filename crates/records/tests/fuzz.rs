@@ -179,3 +179,43 @@ fn unmutated_seeds_read() {
         }
     }
 }
+
+/// The hand-made workbooks of tests/data (the 1.6 MB `FusedSilica.xlsx` is fuzzed by
+/// `cargo xtask fuzz-readers`).
+fn workbooks() -> Vec<Vec<u8>> {
+    vec![
+        include_bytes!("data/two-tests.xlsx").to_vec(),
+        include_bytes!("data/unknown-layout.xlsx").to_vec(),
+        include_bytes!("data/no-depth.xlsx").to_vec(),
+        include_bytes!("data/depth-volts.xlsx").to_vec(),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_workbooks_never_panic(
+        which in 0..4usize,
+        ms in proptest::collection::vec(mutation(), 1..4),
+        f in 0..FORMATS.len(),
+        test in proptest::option::of(0..4usize),
+        p in options(),
+    ) {
+        let mut b = workbooks().swap_remove(which);
+        for m in &ms {
+            b = mutate(b, m);
+        }
+        exercise(&b, FORMATS[f], test, &p);
+    }
+
+    #[test]
+    fn random_bytes_behind_a_zip_signature_never_panic(
+        bytes in proptest::collection::vec(any::<u8>(), 0..600),
+        p in options(),
+    ) {
+        let mut b = b"PK\x03\x04".to_vec();
+        b.extend(bytes);
+        exercise(&b, Format::Auto, None, &p);
+    }
+}

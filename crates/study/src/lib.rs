@@ -19,6 +19,7 @@
 //! ```
 
 pub mod adequacy;
+pub mod analyze;
 pub mod atomic;
 pub mod batch;
 pub mod check;
@@ -45,6 +46,7 @@ pub mod templates;
 pub use error::{Classify, Error, ErrorKind, Result};
 // what the front ends (cli, python, xtask) need of the crates below, so that they depend on
 // `study` alone for it
+pub use indentify_analysis::{AreaFunction, Epsilon, FitRange, Tip};
 pub use indentify_contact::Punch;
 pub use indentify_contact::punch::Rim;
 pub use indentify_identify::profile::ProfileSettings;

@@ -1,5 +1,6 @@
 //! The subcommands of `indentify`, one module each.
 
+pub mod analyze;
 pub mod batch;
 pub mod check;
 pub mod design;
