@@ -266,7 +266,7 @@ async fn health(State(st): Shared) -> axum::Json<Value> {
 async fn laws() -> axum::Json<Value> {
     let laws: Vec<Value> = ["elastic", "maxwell", "norton-hoff"]
         .iter()
-        .filter_map(|n| indentify_laws::law_by_name(n).map(|l| (n, l)))
+        .filter_map(|n| indentify_study::law_by_name(n).map(|l| (n, l)))
         .map(|(n, l)| {
             let params: Vec<Value> = l
                 .params()
@@ -326,7 +326,7 @@ pub fn record_template(
             (p, format!("{d} (tip {t})"))
         }
         (None, Some(s)) => {
-            match indentify_study::templates::tip_from_metadata(&indentify_records::Meta {
+            match indentify_study::templates::tip_from_metadata(&indentify_study::records::Meta {
                 tip: Some(s.to_string()),
                 tip_radius: radius,
                 ..Default::default()
@@ -350,9 +350,9 @@ pub fn record_template(
     Ok(indentify_study::templates::data_template(r, &d))
 }
 
-fn berkovich() -> (indentify_contact::Punch, String) {
+fn berkovich() -> (indentify_study::Punch, String) {
     (
-        indentify_contact::Punch::Berkovich { tip_radius: None },
+        indentify_study::Punch::Berkovich { tip_radius: None },
         "Berkovich, assumed: the file does not state its tip (choose a tip, or edit `punch`)"
             .to_string(),
     )

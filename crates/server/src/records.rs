@@ -68,7 +68,7 @@ fn thin(v: &[f64]) -> Vec<f64> {
     out
 }
 
-fn segments(r: &indentify_records::Record) -> Vec<SegmentInfo> {
+fn segments(r: &indentify_study::records::Record) -> Vec<SegmentInfo> {
     let Some(ids) = &r.segment else {
         return Vec::new();
     };
@@ -95,27 +95,28 @@ fn segments(r: &indentify_records::Record) -> Vec<SegmentInfo> {
 /// # Errors
 /// The reader's message (file, line, what was expected), as a 400.
 fn describe(bytes: &[u8], name: &str) -> Result<Vec<TestInfo>, ApiError> {
-    let records = indentify_records::read(bytes, name, &Default::default()).map_err(|e| {
-        ApiError::bad_request(
-            "data",
-            vec![
-                format!("cannot read `{name}` as an instrument record"),
-                e.to_string(),
-            ],
-        )
-    })?;
-    let prep = indentify_records::Preprocessing {
-        resample: Some(indentify_records::Resample {
+    let records =
+        indentify_study::records::read(bytes, name, &Default::default()).map_err(|e| {
+            ApiError::bad_request(
+                "data",
+                vec![
+                    format!("cannot read `{name}` as an instrument record"),
+                    e.to_string(),
+                ],
+            )
+        })?;
+    let prep = indentify_study::records::Preprocessing {
+        resample: Some(indentify_study::records::Resample {
             n: 60,
-            ..indentify_records::Resample::default()
+            ..indentify_study::records::Resample::default()
         }),
-        ..indentify_records::Preprocessing::default()
+        ..indentify_study::records::Preprocessing::default()
     };
     Ok(records
         .iter()
         .enumerate()
         .map(|(k, r)| {
-            let (steps, error) = match indentify_records::apply(r, &prep) {
+            let (steps, error) = match indentify_study::records::apply(r, &prep) {
                 Ok((_, applied)) => (
                     applied
                         .into_iter()
@@ -181,7 +182,7 @@ pub fn store(ws: &Workspace, name: &str, bytes: &[u8]) -> Result<Value, ApiError
         ));
     }
     let tests = describe(bytes, &name)?;
-    let format = format!("{:?}", indentify_records::detect(bytes));
+    let format = format!("{:?}", indentify_study::records::detect(bytes));
     let info = serde_json::json!({
         "id": id,
         "name": name,

@@ -10,10 +10,10 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Instant;
 
 use axum::http::StatusCode;
-use indentify_identify::{Cancel, IterationRecord, StopReason};
 use indentify_study::config::{Config, Reference};
 use indentify_study::identify::{self, IdentifyOptions, Observer, RunInfo};
 use indentify_study::simulate::{self, SimulateOptions};
+use indentify_study::{Cancel, IterationRecord, StopReason};
 use indentify_study::{ConfigSource, DEFAULT_CONFIG};
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
@@ -384,33 +384,7 @@ impl Runs {
             .run_dir(&id)
             .ok_or_else(|| ApiError::internal("bad run id"))?;
         let name = "config.ron";
-        let record = match &req.record {
-            Some(rid) => {
-                let info = records::load(&self.ws, rid)?;
-                let n = info["tests"].as_array().map_or(0, Vec::len);
-                if let Some(k) = req.test {
-                    if k == 0 || k > n {
-                        return Err(ApiError::bad_request(
-                            "data",
-                            vec![format!(
-                                "test {k} is not a test of record `{rid}`: it holds {n} test{} \
-                                 (1 to {n})",
-                                if n == 1 { "" } else { "s" }
-                            )],
-                        ));
-                    }
-                }
-                let (rel, _) = records::file_of(&self.ws, rid)?;
-                Some((rid.clone(), rel, info))
-            }
-            None if req.test.is_some() => {
-                return Err(ApiError::bad_request(
-                    "config",
-                    vec!["`test` chooses a test of a record: give `record` too".into()],
-                ));
-            }
-            None => None,
-        };
+        let record = self.resolve_record(&req)?;
         let text = match (&req.config, &record) {
             (Some(t), _) => t.clone(),
             (None, Some((_, rel, info))) => {
@@ -465,21 +439,7 @@ impl Runs {
         } else {
             (text, sets)
         };
-        let mut cli = format!("indentify {} config.ron --out .", req.command);
-        if req.command == "simulate" {
-            cli = "indentify simulate config.ron --out curve.csv".into();
-        }
-        for s in &run_sets {
-            cli.push_str(&format!(" --set '{s}'"));
-        }
-        if req.command == "identify" {
-            if let Some(n) = req.max_iter {
-                cli.push_str(&format!(" --max-iter {n}"));
-            }
-            if req.no_refine {
-                cli.push_str(" --no-refine");
-            }
-        }
+        let cli = cli_line(&req, &run_sets);
         let meta = RunMeta {
             id: id.clone(),
             command: req.command.clone(),
@@ -519,6 +479,41 @@ impl Runs {
         lock(&self.queue).push_back(run);
         self.ready.notify_one();
         Ok(id)
+    }
+
+    /// The record a request names (its id, its path relative to a run folder, its
+    /// record.json), checked against the request's test number.
+    fn resolve_record(
+        &self,
+        req: &RunRequest,
+    ) -> Result<Option<(String, String, serde_json::Value)>, ApiError> {
+        Ok(match &req.record {
+            Some(rid) => {
+                let info = records::load(&self.ws, rid)?;
+                let n = info["tests"].as_array().map_or(0, Vec::len);
+                if let Some(k) = req.test {
+                    if k == 0 || k > n {
+                        return Err(ApiError::bad_request(
+                            "data",
+                            vec![format!(
+                                "test {k} is not a test of record `{rid}`: it holds {n} test{} \
+                             (1 to {n})",
+                                if n == 1 { "" } else { "s" }
+                            )],
+                        ));
+                    }
+                }
+                let (rel, _) = records::file_of(&self.ws, rid)?;
+                Some((rid.clone(), rel, info))
+            }
+            None if req.test.is_some() => {
+                return Err(ApiError::bad_request(
+                    "config",
+                    vec!["`test` chooses a test of a record: give `record` too".into()],
+                ));
+            }
+            None => None,
+        })
     }
 
     /// Refuses a configuration whose data files are not records of this workspace.
@@ -880,4 +875,24 @@ pub fn files(dir: &Path) -> Vec<Value> {
     }
     out.sort_by(|a, b| a["name"].as_str().cmp(&b["name"].as_str()));
     out
+}
+
+/// The command line that repeats a run from its folder.
+fn cli_line(req: &RunRequest, run_sets: &[String]) -> String {
+    let mut cli = format!("indentify {} config.ron --out .", req.command);
+    if req.command == "simulate" {
+        cli = "indentify simulate config.ron --out curve.csv".into();
+    }
+    for s in run_sets {
+        cli.push_str(&format!(" --set '{s}'"));
+    }
+    if req.command == "identify" {
+        if let Some(n) = req.max_iter {
+            cli.push_str(&format!(" --max-iter {n}"));
+        }
+        if req.no_refine {
+            cli.push_str(" --no-refine");
+        }
+    }
+    cli
 }

@@ -109,15 +109,10 @@ fn metadata(m: &Measured) -> Vec<NameValue> {
     out
 }
 
-/// Builds the report, renders it and its figures into `dir`.
-///
-/// # Errors
-/// A report that cannot be rendered (no finite point in a series), an unwritable file.
-pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result<Written> {
-    let fit = FitQuality::compute(inputs.f_data, inputs.f_final)
-        .context("cannot measure the quality of the fit")?;
+/// The report's parameter rows: values, bounds hit, and the standard deviations that are finite.
+fn parameters(result: &IdentifyResult) -> Vec<Parameter> {
     let id = result.identifiability.as_ref();
-    let parameters = result
+    result
         .params
         .iter()
         .map(|p| {
@@ -146,7 +141,18 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
                 std_dev,
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Builds the report, renders it and its figures into `dir`.
+///
+/// # Errors
+/// A report that cannot be rendered (no finite point in a series), an unwritable file.
+pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result<Written> {
+    let fit = FitQuality::compute(inputs.f_data, inputs.f_final)
+        .context("cannot measure the quality of the fit")?;
+    let id = result.identifiability.as_ref();
+    let parameters = parameters(result);
     // the determined parameters only: an undetermined one has no correlation to show
     let correlation = id.map(|i| {
         let keep: Vec<usize> = (0..i.names.len())

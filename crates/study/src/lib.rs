@@ -53,6 +53,7 @@ pub use indentify_identify::profile::ProfileSettings;
 pub use indentify_identify::{
     Cancel, Identifiability, IterationRecord, NoiseModel, StopReason, multiplicative_noise,
 };
+pub use indentify_laws::law_by_name;
 pub use indentify_records as records;
 pub use indentify_report::FitQuality;
 pub use source::{ConfigSource, DEFAULT_CONFIG, DEFAULT_NAME};
