@@ -513,7 +513,7 @@ impl CalibrateOptions {
     }
 }
 
-/// The outcome of [`calibrate`].
+/// The outcome of [`calibrate()`].
 #[derive(Debug, Clone, Serialize)]
 pub struct CalibrateOutcome {
     /// The calibrated tip (what the tip file holds).

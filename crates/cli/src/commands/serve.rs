@@ -14,7 +14,7 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_PORT)]
     pub port: u16,
 
-    /// The workspace folder: uploaded records (records/) and every run's files (runs/<id>/,
+    /// The workspace folder: uploaded records (records/) and every run's files (runs/{id}/,
     /// as the CLI writes them, with status.json); created if needed.
     #[arg(long, value_name = "DIR", default_value = "indentify-workspace")]
     pub workspace: PathBuf,

@@ -206,7 +206,7 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
 
 /// The contact constraint of a model as the adjoint and the sensitivities see a
 /// converged recorded step: the frames its system is transposed with (the same piece
-/// as the direct solver's, [`Constraint`]).
+/// as the direct solver's, `Constraint`).
 #[derive(Debug)]
 pub struct RecordedContact<'m>(Box<dyn Constraint + 'm>);
 
