@@ -11,7 +11,7 @@
 
 mod common;
 
-use indentify_adjoint::{Adjoint, Replay};
+use indentify_adjoint::Adjoint;
 use indentify_contact::{
     ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
 };
@@ -49,20 +49,8 @@ fn hashes(model: &Model, law: &dyn Law, c: &[f64]) -> [u64; 4] {
         checkpoint_every: 4,
         ..opts
     };
-    let ck = solver.run(law, c, &schedule, &ck_opts).unwrap();
-    let g_ck = adj
-        .gradient_replayed(
-            law,
-            c,
-            &ck,
-            &rho,
-            Replay {
-                solver: &mut solver,
-                schedule: &schedule,
-                opts: &ck_opts,
-            },
-        )
-        .unwrap();
+    let g_ck =
+        common::checkpointed_gradient(&mut adj, &mut solver, law, c, &schedule, &ck_opts, &rho);
     let s = adj.sensitivities(law, c, &traj).unwrap();
     [
         fnv(traj.steps.iter().map(|s| s.force)),

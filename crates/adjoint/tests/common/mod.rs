@@ -5,13 +5,40 @@
 //! contact set and stick/slip statuses of the +-h runs equal the base run's.
 
 use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_adjoint::{Adjoint, Replay};
+use indentify_adjoint::{Adjoint, Gradient, Replay};
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
     trapezoid,
 };
 use indentify_laws::Law;
 use indentify_mesh::CylinderMesher;
+
+/// The gradient of the run of `solver` with `ck_opts` (checkpointed), replayed segment by
+/// segment from its checkpoints.
+#[allow(dead_code)]
+pub fn checkpointed_gradient(
+    adj: &mut Adjoint,
+    solver: &mut DirectSolver,
+    law: &dyn Law,
+    c: &[f64],
+    sched: &Schedule,
+    ck_opts: &SolverOptions,
+    rho: &[f64],
+) -> Gradient {
+    let ck = solver.run(law, c, sched, ck_opts).unwrap();
+    adj.gradient_replayed(
+        law,
+        c,
+        &ck,
+        rho,
+        Replay {
+            solver,
+            schedule: sched,
+            opts: ck_opts,
+        },
+    )
+    .unwrap()
+}
 
 /// The finite-strain test model: a 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45 towards the
 /// axis and the top, frictionless normal contact with `punch`, `Kinematics::Finite`.
@@ -126,20 +153,7 @@ pub fn whole_history_check_on(
         checkpoint_every: 5,
         ..opts.clone()
     };
-    let ck = solver.run(law, c, &sched, &ck_opts).unwrap();
-    let g_ck = adj
-        .gradient_replayed(
-            law,
-            c,
-            &ck,
-            &rho,
-            Replay {
-                solver: &mut solver,
-                schedule: &sched,
-                opts: &ck_opts,
-            },
-        )
-        .unwrap();
+    let g_ck = checkpointed_gradient(&mut adj, &mut solver, law, c, &sched, &ck_opts, &rho);
     let (mut worst_fd, mut worst_sens) = (0.0f64, 0.0f64);
     for k in 0..checked {
         let name = law.params()[k].name;
@@ -335,20 +349,7 @@ pub fn friction_history_check(
         checkpoint_every: 5,
         ..opts.clone()
     };
-    let ck = solver.run(law, c, &sched, &ck_opts).unwrap();
-    let g_ck = adj
-        .gradient_replayed(
-            law,
-            c,
-            &ck,
-            &rho,
-            Replay {
-                solver: &mut solver,
-                schedule: &sched,
-                opts: &ck_opts,
-            },
-        )
-        .unwrap();
+    let g_ck = checkpointed_gradient(&mut adj, &mut solver, law, c, &sched, &ck_opts, &rho);
     let mut out = Outcome {
         stick,
         slip,
