@@ -15,31 +15,28 @@
 //! `K_i V_i = sum_g w B^T (C_i S - I) mu_{i+1}` with `V_i = dJ/dF_i` on `A_i`;
 //! `mu_i = C_i (S mu_{i+1} - B V_i)`; `dJ/dc = -sum_i sum_g w mu_i . R_i`.
 //!
-//! Normal contact ([`indentify_contact::ContactKind::Normal`]): each step's system is the
-//! forward's rotated one (`Q^T K Q + D` with the curvature stiffness `D` on the tangential
-//! dofs, [`Model::frames`] from the recorded displacement and reactions); the active
-//! dofs are the normal ones, `m . du = 0` in the sensitivities, and the adjoint's data
-//! become `m . V = rho m_z` on them plus the source `rho d t_z` on the tangential dofs
-//! (`D` couples the tangential motion to the vertical force), so that the same transposed
-//! recursion holds (docs/validation-contact.md).
+//! The contact enters each step through the model's constraint, the direct solver's own
+//! piece, as [`RecordedContact`] shows it: the step's constrained system (frames of the
+//! active nodes under normal contact), the constraint's part of the adjoint's
+//! right-hand side and its values on the constrained dofs (vertical: `V = rho` on the
+//! active dofs; normal: `m . V = rho m_z` and the curvature source; Coulomb friction: the
+//! `rho e_A` shift and the sticking ties between steps), the transposed solve, and the
+//! prescribed values of the sensitivities. One sweep and one sensitivity loop serve every
+//! contact kind: a new constraint brings its adjoint in its own file in
+//! `crates/contact/src/constraint/` (docs/solver.md).
 //!
 //! Finite strain ([`indentify_contact::Kinematics::Finite`]): the same recursion with the
 //! Gauss-point law in log-strain space and `B` replaced by the step's
 //! `G_i = P(C(u_i)) B_L(u_i)`, the stiffness by the forward's consistent tangent
 //! (material and geometric parts), and `dF_i` by the variation of the internal force
 //! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
-//!
-//! Coulomb friction ([`indentify_contact::ContactKind::NormalFriction`]): the module
-//! `friction` (stick/slip partition held; sticking nodes tie this step to the previous
-//! one, slipping rows make the step's matrix unsymmetric; docs/validation-contact.md §7).
 
 pub mod check;
 mod finite;
-mod friction;
 
 use indentify_contact::{
-    ConstrainedSystem, DirectSolver, Model, NodeFrame, RecordedContact, Schedule, SolverOptions,
-    StepFields, StepRecord, Trajectory,
+    DirectSolver, ForceCotangent, Model, RecordedContact, Schedule, SolverOptions, StepFields,
+    StepRecord, StepTangent, Trajectory,
 };
 use indentify_fe::dofs::NO_EQ;
 use indentify_laws::{Law, LawError, Mat4, Vec4};
@@ -138,24 +135,18 @@ pub struct Replay<'a, 'm> {
 #[derive(Debug)]
 pub struct Adjoint<'m> {
     model: &'m Model,
-    /// The model's contact constraint (the frames of each recorded step).
+    /// The model's contact constraint with the system of each recorded step.
     contact: RecordedContact<'m>,
-    system: ConstrainedSystem,
     tangents: Vec<Mat4>,
     field_a: Vec<Vec4>,
     field_b: Vec<Vec4>,
     strain: Vec<[f64; 4]>,
     full: Vec<f64>,
     eq: Vec<f64>,
-    xbar: Vec<f64>,
-    /// Scratch of all dofs (finite strain with friction: `-rho e_A`).
-    xbar_full: Vec<f64>,
-    /// Frames of the current step's active nodes (normal contact; empty otherwise).
-    frames: Vec<NodeFrame>,
+    /// Scratch of all dofs (finite strain, [`ForceCotangent::Shifted`]: `-rho e_A`).
+    e_a: Vec<f64>,
     /// The step's finite-strain operators (`Kinematics::Finite` only).
     finite: Option<finite::FiniteStep>,
-    /// Scratch of all dofs: a copy of the displacement variation (finite strain).
-    du: Vec<f64>,
 }
 
 impl<'m> Adjoint<'m> {
@@ -169,25 +160,20 @@ impl<'m> Adjoint<'m> {
         let nq = model.disc.n_qp();
         Ok(Adjoint {
             model,
-            contact: RecordedContact::new(model),
-            system: ConstrainedSystem::new(model)?,
+            contact: RecordedContact::new(model)?,
             tangents: vec![Mat4::ZERO; nq],
             field_a: vec![Vec4::ZERO; nq],
             field_b: vec![Vec4::ZERO; nq],
             strain: vec![[0.0; 4]; nq],
             full: vec![0.0; model.disc.n_dofs()],
             eq: vec![0.0; model.dofs.n_eq],
-            xbar: vec![0.0; model.dofs.n_eq],
-            xbar_full: Vec::new(),
-            frames: Vec::new(),
+            e_a: Vec::new(),
             finite,
-            du: Vec::new(),
         })
     }
 
-    /// Forms `C_i` at every Gauss point, sets the tangent, the active set of step `i` (and
-    /// its frames under normal contact, from the step's displacement `u1`), and
-    /// factorizes.
+    /// Forms `C_i` at every Gauss point and sets the system of step `i` (tangent, active
+    /// set, the constraint's frames from the step's displacement `u1`), factorized.
     fn prepare_step(
         &mut self,
         law: &dyn Law,
@@ -203,49 +189,42 @@ impl<'m> Adjoint<'m> {
             t: rec.t,
             reason,
         };
-        if let Some(fs) = self.finite.as_mut() {
-            // finite strain: the law's tangents in log space, the element tangents at u1
-            for (t, s) in self.tangents.iter_mut().zip(sigma1) {
-                *t = law
-                    .tangent(c, s, rec.dt)
-                    .map_err(|f| fail(f.reason.clone()))?;
-            }
-            fs.prepare(model, u1, sigma1, &self.tangents)
-                .map_err(fail)?;
-            self.system.set_tangent_elements(model, &fs.ke);
-        } else if law.is_linear() {
-            // the tangent does not depend on the state: one evaluation serves every point
+        // the law's tangent (one for every point when it does not depend on the state)
+        let uniform = self.finite.is_none() && law.is_linear();
+        if uniform {
             let ct = law
                 .tangent(c, &Vec4::ZERO, rec.dt)
                 .map_err(|f| fail(f.reason))?;
             self.tangents.fill(ct);
-            self.system.set_tangent_uniform(model, &ct, (c, rec.dt));
         } else {
             for (t, s) in self.tangents.iter_mut().zip(sigma1) {
                 *t = law
                     .tangent(c, s, rec.dt)
                     .map_err(|f| fail(f.reason.clone()))?;
             }
-            self.system.set_tangent(model, &self.tangents, None);
         }
-        let mut active = vec![false; model.candidates.len()];
-        for &k in &rec.active {
-            active[k as usize] = true;
+        if let Some(fs) = self.finite.as_mut() {
+            // finite strain: the element tangents at u1 from the law's in log space
+            fs.prepare(model, u1, sigma1, &self.tangents)
+                .map_err(fail)?;
         }
-        self.system.set_active(model, &active);
-        // the step's frames from the contact constraint (the forward's piece); with
-        // friction the reactions come from the internal force of the converged stresses
+        // with friction the frames' reactions come from the converged stresses
         let f_int = if self.contact.needs_internal_force() {
             force_into(model, self.finite.as_ref(), sigma1, &mut self.full);
             Some(self.full.as_slice())
         } else {
             None
         };
-        self.frames = self.contact.frames(rec, u1, f_int);
-        self.system.set_frames(&self.frames);
-        self.system
-            .factorize(model)
-            .map_err(|e| fail(e.to_string()))
+        let tangent = match &self.finite {
+            Some(fs) => StepTangent::Elements(&fs.ke),
+            None if uniform => StepTangent::Uniform {
+                tangent: &self.tangents[0],
+                params: c,
+                dt: rec.dt,
+            },
+            None => StepTangent::Points(&self.tangents),
+        };
+        self.contact.prepare(rec, u1, f_int, tangent).map_err(fail)
     }
 
     /// Scatters `self.eq` into the full dof vector `self.full` ([`expand_into`]).
@@ -264,21 +243,6 @@ impl<'m> Adjoint<'m> {
     fn strains_of_full(&mut self) {
         let model = self.model;
         strains_into(model, self.finite.as_ref(), &self.full, &mut self.strain);
-    }
-
-    /// The variation of the internal force into `self.full` ([`delta_force_into`]), with
-    /// `self.field_b` holding `dsigma`.
-    fn delta_force(&mut self, q_field: &[Vec4]) {
-        let model = self.model;
-        delta_force_into(
-            model,
-            self.finite.as_ref(),
-            &self.tangents,
-            q_field,
-            &mut self.field_b,
-            &mut self.full,
-            &mut self.du,
-        );
     }
 
     /// Restricts `self.full` to equations into `self.eq`.
@@ -301,11 +265,11 @@ impl<'m> Adjoint<'m> {
         dj_df: &[f64],
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
-        let f0 = self.system.factorizations();
+        let f0 = self.contact.factorizations();
         check_inputs(law, c, traj, dj_df.len())?;
         // every sweep from a new system's state (no factorization, no assembly sum kept):
         // the gradient depends on its inputs alone, not on what ran before on this workspace
-        self.system.forget_factorizations();
+        self.contact.begin();
         let mut sweep = Sweep::new(law, c);
         self.field_a.fill(Vec4::ZERO);
         for i in (0..traj.steps.len()).rev() {
@@ -322,7 +286,7 @@ impl<'m> Adjoint<'m> {
         Ok(Gradient {
             dj_dc: sweep.finish(law, c),
             seconds: start.elapsed().as_secs_f64(),
-            factorizations: self.system.factorizations() - f0,
+            factorizations: self.contact.factorizations() - f0,
         })
     }
 
@@ -359,8 +323,8 @@ impl<'m> Adjoint<'m> {
             ));
         }
         let start = std::time::Instant::now();
-        let f0 = self.system.factorizations();
-        self.system.forget_factorizations();
+        let f0 = self.contact.factorizations();
+        self.contact.begin();
         let n = traj.steps.len();
         if dj_df.len() != n {
             return Err(AdjointError::Length {
@@ -411,12 +375,12 @@ impl<'m> Adjoint<'m> {
         Ok(Gradient {
             dj_dc: sweep.finish(law, c),
             seconds: start.elapsed().as_secs_f64(),
-            factorizations: self.system.factorizations() - f0,
+            factorizations: self.contact.factorizations() - f0,
         })
     }
 
     /// One step of the reversed-time sweep: `self.field_a` holds `mu_{i+1}` on entry and
-    /// `mu_i` on exit.
+    /// `mu_i` on exit (the contact keeps what the step passes to the one before it).
     fn sweep_step(
         &mut self,
         law: &dyn Law,
@@ -424,10 +388,6 @@ impl<'m> Adjoint<'m> {
         sweep: &mut Sweep,
         step: &Recorded<'_>,
     ) -> Result<(), AdjointError> {
-        let model = self.model;
-        if model.contact.friction() > 0.0 {
-            return self.sweep_step_friction(law, c, sweep, step);
-        }
         let Recorded {
             i,
             rec,
@@ -436,45 +396,68 @@ impl<'m> Adjoint<'m> {
             rho,
         } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
-        // with mu_{i+1} = 0, no data and no contact, mu_i = 0: nothing to do
-        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() {
+        // with mu_{i+1} = 0, no data, no contact and nothing carried, mu_i = 0
+        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending()
+        {
             return Ok(());
         }
         sweep.mu_zero = false;
         self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
-        let s = sweep.s;
-        // b = sum_g w B^T (C S - I) mu_{i+1}
-        for q in 0..self.field_b.len() {
-            let sm = s.mul_vec(&self.field_a[q]);
-            self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
-        }
-        self.force_of_field_b();
+        let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
+        self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
         self.restrict();
-        // V = dJ/dF_i on the active contact dofs (normal contact: m . V = rho m_z, and the
-        // source rho d t_z along t on the tangential dofs)
-        if self.frames.is_empty() {
-            for &k in &rec.active {
-                if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
-                    self.xbar[e] = rho;
-                }
-            }
-        } else {
-            for f in &self.frames {
-                self.xbar[f.ez] = rho * f.m[1];
-                if let Some(er) = f.er {
-                    let src = rho * f.d * f.t[1];
-                    self.eq[er] += src * f.t[0];
-                    self.eq[f.ez] += src * f.t[1];
-                }
+        // the constraint's part and the transposed solve: V in self.eq
+        let mut eq = std::mem::take(&mut self.eq);
+        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        self.eq = eq;
+        self.expand();
+        if shifted {
+            // V' = V + rho e_A
+            for d in force_dofs(self.model, rec) {
+                self.full[d] += rho;
             }
         }
-        let mut eq = std::mem::take(&mut self.eq);
-        self.system.solve_dirichlet(model, &mut eq, &self.xbar);
-        self.eq = eq;
-        self.xbar.fill(0.0);
-        self.expand();
         self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
         Ok(())
+    }
+
+    /// The body's part of a sweep step's right-hand side into `self.full` (all dofs), from
+    /// `mu_{i+1}` in `self.field_a`: `g = sum_g w B^T (C S - I) mu_{i+1}`, and with a
+    /// shifted force cotangent `shift = Some(rho)` ([`ForceCotangent::Shifted`]) less
+    /// `rho K e_A` (small strain folded into the Gauss-point field,
+    /// `B^T [C (S mu - rho B e_A) - mu]`; finite strain `G^T (C S - I) mu - rho K e_A` with
+    /// the consistent tangent).
+    fn adjoint_source(&mut self, s: Mat4, rec: &StepRecord, shift: Option<f64>) {
+        let model = self.model;
+        match (shift, self.finite.is_some()) {
+            (Some(rho), false) => {
+                self.full.fill(0.0);
+                for d in force_dofs(model, rec) {
+                    self.full[d] = 1.0;
+                }
+                model.disc.strains(&self.full, &mut self.strain);
+                for q in 0..self.field_b.len() {
+                    let sm = s.mul_vec(&self.field_a[q]) - Vec4(self.strain[q]) * rho;
+                    self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+                }
+                model.disc.internal_force(&self.field_b, &mut self.full);
+            }
+            (shift, _) => {
+                for q in 0..self.field_b.len() {
+                    let sm = s.mul_vec(&self.field_a[q]);
+                    self.field_b[q] = self.tangents[q].mul_vec(&sm) - self.field_a[q];
+                }
+                self.force_of_field_b();
+                if let (Some(rho), Some(fs)) = (shift, &self.finite) {
+                    self.e_a.clear();
+                    self.e_a.resize(self.full.len(), 0.0);
+                    for d in force_dofs(model, rec) {
+                        self.e_a[d] = -rho;
+                    }
+                    fs.add_k_times(model, &self.e_a, &mut self.full);
+                }
+            }
+        }
     }
 
     /// The Gauss-point half of a sweep step, from the adjoint displacement `V` in
@@ -526,13 +509,10 @@ impl<'m> Adjoint<'m> {
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
         let model = self.model;
-        if model.contact.friction() > 0.0 {
-            return self.sensitivities_friction(law, c, traj);
-        }
         let start = std::time::Instant::now();
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
-        self.system.forget_factorizations();
+        self.contact.begin();
         let s = law.compliance(c);
         let np = c.len();
         let nq = model.disc.n_qp();
@@ -542,25 +522,28 @@ impl<'m> Adjoint<'m> {
         // given a step's factorized system, the parameters' solves are independent: each
         // has its own work space (the same arithmetic on any thread, so the same bits)
         let mut work: Vec<ParamWork> = (0..np)
-            .map(|_| ParamWork::new(model, &self.system))
+            .map(|_| ParamWork::new(model, &self.contact))
             .collect();
-        let zero = vec![0.0; model.dofs.n_eq];
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            // the prescribed values tied to the previous step (friction's sticking nodes)
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             let step = ParamStep {
                 model,
                 tangents: &self.tangents,
-                system: &self.system,
+                contact: &self.contact,
                 finite: self.finite.as_ref(),
                 s: &s,
                 r_field: &r_field,
                 np,
-                zero: &zero,
-                active: &rec.active,
+                rec,
             };
             let one =
                 |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
@@ -570,26 +553,21 @@ impl<'m> Adjoint<'m> {
             // `ThreadPool::install`); from any other thread the parameters' solves are too
             // short to gain from being handed to the pool (measured: no gain on 2 threads)
             let on_pool = rayon::current_thread_index().is_some();
-            let done = if np > 1 && on_pool && rayon::current_num_threads() > 1 {
+            if np > 1 && on_pool && rayon::current_num_threads() > 1 {
                 use rayon::prelude::*;
                 y.par_iter_mut()
                     .zip(df[i].par_iter_mut())
                     .zip(work.par_iter_mut())
                     .enumerate()
                     .with_max_len(1)
-                    .try_for_each(one)
+                    .for_each(one);
             } else {
                 y.iter_mut()
                     .zip(df[i].iter_mut())
                     .zip(work.iter_mut())
                     .enumerate()
-                    .try_for_each(one)
-            };
-            done.map_err(|e| AdjointError::Step {
-                step: i,
-                t: rec.t,
-                reason: e.to_string(),
-            })?;
+                    .for_each(one);
+            }
         }
         Ok(Sensitivities {
             df_dc: df,
@@ -607,20 +585,32 @@ struct ParamWork {
     strain: Vec<[f64; 4]>,
     /// Finite strain: the displacement variation (all dofs).
     du: Vec<f64>,
+    /// The previous step's displacement variation (all dofs), kept when the contact ties
+    /// a step to the previous one ([`RecordedContact::ties_steps`]; empty otherwise).
+    du_prev: Vec<f64>,
+    /// The prescribed values of the solve (equations; zero between solves).
+    xbar: Vec<f64>,
     solve: indentify_fe::SolveScratch,
 }
 
 impl ParamWork {
-    fn new(model: &Model, system: &ConstrainedSystem) -> ParamWork {
+    fn new(model: &Model, contact: &RecordedContact<'_>) -> ParamWork {
         let nq = model.disc.n_qp();
+        let nd = model.disc.n_dofs();
         ParamWork {
             q: vec![Vec4::ZERO; nq],
             field_b: vec![Vec4::ZERO; nq],
-            full: vec![0.0; model.disc.n_dofs()],
+            full: vec![0.0; nd],
             eq: vec![0.0; model.dofs.n_eq],
             strain: vec![[0.0; 4]; nq],
             du: Vec::new(),
-            solve: system.solve_scratch(),
+            du_prev: if contact.ties_steps() {
+                vec![0.0; nd]
+            } else {
+                Vec::new()
+            },
+            xbar: vec![0.0; model.dofs.n_eq],
+            solve: contact.solve_scratch(),
         }
     }
 }
@@ -629,29 +619,22 @@ impl ParamWork {
 struct ParamStep<'a> {
     model: &'a Model,
     tangents: &'a [Mat4],
-    system: &'a ConstrainedSystem,
+    /// The step's contact and its factorized system.
+    contact: &'a RecordedContact<'a>,
     finite: Option<&'a finite::FiniteStep>,
     s: &'a Mat4,
     /// `R_i e_k` at every point, point-major ([`residual_param_field`]).
     r_field: &'a [Vec4],
     /// Number of parameters.
     np: usize,
-    /// Zero prescribed values (equations).
-    zero: &'a [f64],
-    active: &'a [u32],
+    rec: &'a StepRecord,
 }
 
 impl ParamStep<'_> {
     /// Parameter `k`'s step: from `y_{i-1}` in `yk`, `K du = -sum w B^T C q` with
-    /// `q = y_{i-1} - R_i e_k` (`du = 0` on the active contact dofs), `y_i` into `yk`
-    /// and `dF_i/dc_k` into `dfk`.
-    fn solve(
-        &self,
-        k: usize,
-        yk: &mut [Vec4],
-        dfk: &mut f64,
-        w: &mut ParamWork,
-    ) -> Result<(), indentify_fe::FeError> {
+    /// `q = y_{i-1} - R_i e_k` (`du` on the constrained dofs as the contact prescribes:
+    /// zero, or tied to the previous step's), `y_i` into `yk` and `dF_i/dc_k` into `dfk`.
+    fn solve(&self, k: usize, yk: &mut [Vec4], dfk: &mut f64, w: &mut ParamWork) {
         let (model, np) = (self.model, self.np);
         for (qp, ((q, b), t)) in
             w.q.iter_mut()
@@ -664,9 +647,12 @@ impl ParamStep<'_> {
         }
         force_into(model, self.finite, &w.field_b, &mut w.full);
         model.dofs.restrict(&w.full, &mut w.eq);
-        self.system
-            .solve_dirichlet_with(model, &mut w.eq, self.zero, &mut w.solve)?;
+        self.contact
+            .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
         expand_into(model, &w.eq, &mut w.full);
+        if !w.du_prev.is_empty() {
+            w.du_prev.copy_from_slice(&w.full);
+        }
         strains_into(model, self.finite, &w.full, &mut w.strain);
         for (qp, y) in yk.iter_mut().enumerate() {
             let bv = Vec4(w.strain[qp]);
@@ -683,12 +669,7 @@ impl ParamStep<'_> {
             &mut w.full,
             &mut w.du,
         );
-        *dfk = -self
-            .active
-            .iter()
-            .map(|&a| w.full[2 * model.candidates[a as usize] + 1])
-            .sum::<f64>();
-        Ok(())
+        *dfk = -force_dofs(model, self.rec).map(|d| w.full[d]).sum::<f64>();
     }
 }
 
@@ -711,9 +692,6 @@ struct Sweep {
     dflow: Vec<Vec4>,
     m_acc: Mat4,
     mu_zero: bool,
-    /// Friction: the cotangents of the sticking nodes' prescribed tangential values of
-    /// the step after the current one, times its `1 + g kappa` (candidate, value).
-    stick: Vec<(usize, f64)>,
 }
 
 impl Sweep {
@@ -724,7 +702,6 @@ impl Sweep {
             dflow: vec![Vec4::ZERO; c.len()],
             m_acc: Mat4::ZERO,
             mu_zero: true,
-            stick: Vec::new(),
         }
     }
 
@@ -742,6 +719,14 @@ impl Sweep {
         }
         self.grad
     }
+}
+
+/// The dofs whose internal force sums to `-F_i` at step `rec`: the vertical dofs of its
+/// active candidates (`e_A`).
+fn force_dofs<'a>(model: &'a Model, rec: &'a StepRecord) -> impl Iterator<Item = usize> + 'a {
+    rec.active
+        .iter()
+        .map(|&k| 2 * model.candidates[k as usize] + 1)
 }
 
 /// Scatters an equation vector `eq` into the full dof vector `full` (0 on fixed dofs).

@@ -19,7 +19,7 @@ pub mod normal;
 pub mod punch;
 pub mod system;
 
-pub use constraint::RecordedContact;
+pub use constraint::{ForceCotangent, RecordedContact, StepTangent};
 pub use direct::{
     Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
     nodal_pressures,

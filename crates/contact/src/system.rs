@@ -124,7 +124,7 @@ impl ConstrainedSystem {
     ///
     /// # Errors
     /// [`FeError`] if the analysis fails.
-    pub fn new(model: &Model) -> Result<ConstrainedSystem, FeError> {
+    pub(crate) fn new(model: &Model) -> Result<ConstrainedSystem, FeError> {
         Ok(ConstrainedSystem {
             chol: SparseCholesky::analyse(&model.pattern)?,
             k_values: vec![0.0; model.pattern.nnz()],
@@ -176,7 +176,7 @@ impl ConstrainedSystem {
     /// changed are re-formed and their differences added (`fe::Pattern::assemble_b_c_b_delta`;
     /// [`ConstrainedSystem::forget_preconditioner`] restarts from a full sum). Returns `true`
     /// if it assembled.
-    pub fn set_tangent(
+    pub(crate) fn set_tangent(
         &mut self,
         model: &Model,
         tangents: &[Mat4],
@@ -206,7 +206,7 @@ impl ConstrainedSystem {
 
     /// Sets the tangent from element matrices (lower triangles; finite strain, where the
     /// element matrices are not `sum w B^T C B`): never reused, always a full sum.
-    pub fn set_tangent_elements(&mut self, model: &Model, ke: &[[[f64; 16]; 16]]) -> bool {
+    pub(crate) fn set_tangent_elements(&mut self, model: &Model, ke: &[[[f64; 16]; 16]]) -> bool {
         let t0 = std::time::Instant::now();
         self.new_key(None);
         model.pattern.assemble_elements(ke, &mut self.k_values);
@@ -217,7 +217,7 @@ impl ConstrainedSystem {
 
     /// As [`ConstrainedSystem::set_tangent`] with the same tangent `c_mat` at every Gauss
     /// point (an affine law), always reusable under `key = (c, dt)`.
-    pub fn set_tangent_uniform(&mut self, model: &Model, c_mat: &Mat4, key: (&[f64], f64)) -> bool {
+    pub(crate) fn set_tangent_uniform(&mut self, model: &Model, c_mat: &Mat4, key: (&[f64], f64)) -> bool {
         let t0 = std::time::Instant::now();
         let fresh = self.new_key(Some(key));
         if fresh {
@@ -254,7 +254,7 @@ impl ConstrainedSystem {
     }
 
     /// Marks the z-dofs of the active candidates as constrained.
-    pub fn set_active(&mut self, model: &Model, active: &[bool]) {
+    pub(crate) fn set_active(&mut self, model: &Model, active: &[bool]) {
         self.constrained.fill(false);
         for (k, _) in active.iter().enumerate().filter(|(_, a)| **a) {
             if let Some(e) = model.dofs.equation(2 * model.candidates[k] + 1) {
@@ -266,7 +266,7 @@ impl ConstrainedSystem {
     /// Sets the frames of the active nodes for normal contact (call after
     /// [`ConstrainedSystem::set_active`]; every frame's `ez` must be constrained). An empty
     /// slice is vertical contact.
-    pub fn set_frames(&mut self, frames: &[NodeFrame]) {
+    pub(crate) fn set_frames(&mut self, frames: &[NodeFrame]) {
         if self.frames != frames {
             self.frames.clear();
             self.frames.extend_from_slice(frames);
@@ -312,7 +312,7 @@ impl ConstrainedSystem {
     ///
     /// # Errors
     /// [`FeError::NotPositiveDefinite`] if the constrained tangent is not SPD.
-    pub fn factorize(&mut self, model: &Model) -> Result<(), FeError> {
+    pub(crate) fn factorize(&mut self, model: &Model) -> Result<(), FeError> {
         let n = self.constrained.len();
         let m = self.constrained.iter().filter(|&&c| c).count();
         // capacitance: reusable tangent, and the columns stay a small multiple of K's factor
@@ -439,7 +439,7 @@ impl ConstrainedSystem {
     /// the last matrix: what follows then depends on the tangents alone (call it at the
     /// start of any computation that must not depend on earlier ones, and after a failure
     /// that may have left non-finite values behind).
-    pub fn forget_assembly(&mut self) {
+    pub(crate) fn forget_assembly(&mut self) {
         self.elements.forget_sum();
     }
 
@@ -451,7 +451,7 @@ impl ConstrainedSystem {
     /// one order rounds differently from one grown in another.) The adjoint sweep and the
     /// forward sensitivities start with it, so that their bits do not depend on which of
     /// them ran first at a point.
-    pub fn forget_factorizations(&mut self) {
+    pub(crate) fn forget_factorizations(&mut self) {
         self.forget_assembly();
         self.k_key = None;
         self.factor_for = None;
@@ -478,7 +478,7 @@ impl ConstrainedSystem {
     /// assembly sum every element afresh: a time step that starts with this depends on its
     /// initial state alone, not on the factor or the assembly updates an earlier step left
     /// behind, so that replaying it from a checkpoint repeats it bit for bit.
-    pub fn forget_preconditioner(&mut self) {
+    pub(crate) fn forget_preconditioner(&mut self) {
         self.forget_assembly();
         self.factor_ok = self.factor_ok && self.k_key.is_some();
         self.last_pcg = 0;
@@ -493,7 +493,7 @@ impl ConstrainedSystem {
     ///
     /// # Errors
     /// As [`ConstrainedSystem::factorize`].
-    pub fn prepare_inexact(&mut self, model: &Model) -> Result<(), FeError> {
+    pub(crate) fn prepare_inexact(&mut self, model: &Model) -> Result<(), FeError> {
         if self.k_key.is_some()
             || !self.factor_ok
             || self.last_pcg >= REFRESH_PCG
@@ -517,7 +517,7 @@ impl ConstrainedSystem {
     ///
     /// # Errors
     /// [`FeError::NotPositiveDefinite`] if CG fails and the fallback factorization too.
-    pub fn solve_inexact(
+    pub(crate) fn solve_inexact(
         &mut self,
         model: &Model,
         b: &mut [f64],
@@ -683,76 +683,63 @@ impl ConstrainedSystem {
     ///
     /// # Panics
     /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
-    pub fn solve_dirichlet(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+    pub(crate) fn solve_dirichlet(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         let t0 = std::time::Instant::now();
-        if self.capacitance || self.slip_idx.is_empty() {
-            self.solve_symmetric(model, b, xbar);
-        } else {
-            rotate_in(&self.frames, b);
-            self.solve_slip(model, b, xbar);
-            rotate_out(&self.frames, b);
-        }
+        self.solve_own(model, b, xbar);
         self.seconds[2] += t0.elapsed().as_secs_f64();
     }
 
     /// [`ConstrainedSystem::solve_dirichlet_with`] with the system's own work space,
-    /// counted; the caller has checked there is no slipping frame (or capacitance mode).
-    fn solve_symmetric(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+    /// counted.
+    fn solve_own(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         let mut scratch = std::mem::take(&mut self.scratch);
-        self.solve_dirichlet_with(model, b, xbar, &mut scratch)
-            .expect("callers take this path only without slipping frames");
+        self.solve_dirichlet_with(model, b, xbar, &mut scratch);
         self.scratch = scratch;
         self.chol.n_solves += 1;
     }
 
     /// The work space of [`ConstrainedSystem::solve_dirichlet_with`].
-    pub fn solve_scratch(&self) -> SolveScratch {
+    pub(crate) fn solve_scratch(&self) -> SolveScratch {
         self.chol.scratch()
     }
 
     /// [`ConstrainedSystem::solve_dirichlet`] with the system shared and the solve's work
     /// space given (from [`ConstrainedSystem::solve_scratch`]): several threads may solve
-    /// with one factorized system at once, with the same arithmetic, so the same bits.
+    /// with one factorized system at once, with the same arithmetic, so the same bits
+    /// (slipping frames included: their Woodbury correction reads the system only).
     /// These solves are neither timed nor counted.
-    ///
-    /// # Errors
-    /// [`FeError::Factorization`] with slipping frames (Coulomb friction in direct mode),
-    /// whose solve needs the system's own work space: use
-    /// [`ConstrainedSystem::solve_dirichlet`].
     ///
     /// # Panics
     /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
-    pub fn solve_dirichlet_with(
+    pub(crate) fn solve_dirichlet_with(
         &self,
         model: &Model,
         b: &mut [f64],
         xbar: &[f64],
         scratch: &mut SolveScratch,
-    ) -> Result<(), FeError> {
+    ) {
         if self.capacitance {
             if self.frames.is_empty() {
                 self.solve_capacitance(b, xbar, scratch);
             } else {
                 self.solve_capacitance_frames(b, xbar, scratch);
             }
-            return Ok(());
-        }
-        if !self.slip_idx.is_empty() {
-            return Err(FeError::Factorization(
-                "a shared solve with slipping frames: use solve_dirichlet".into(),
-            ));
+            return;
         }
         rotate_in(&self.frames, b);
-        self.dirichlet_rhs(model, b, xbar);
-        self.chol.solve_with(b, scratch);
+        if self.slip_idx.is_empty() {
+            self.dirichlet_rhs(model, b, xbar);
+            self.chol.solve_with(b, scratch);
+        } else {
+            self.solve_slip(model, b, xbar, scratch);
+        }
         rotate_out(&self.frames, b);
-        Ok(())
     }
 
     /// The direct solve with slipping frames (`b` rotated): the slipping rows' right-hand
     /// side `b_t + coef b_m` less their prescribed columns, the symmetric solve, and the
     /// Woodbury correction `y = y0 - Z (I + W^T Z)^-1 W^T y0`.
-    fn solve_slip(&mut self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+    fn solve_slip(&self, model: &Model, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
         for &i in &self.slip_idx {
             let f = self.frames[i];
             if let Some(er) = f.er {
@@ -760,7 +747,7 @@ impl ConstrainedSystem {
             }
         }
         self.dirichlet_rhs(model, b, xbar);
-        self.chol.solve_in_place(b);
+        self.chol.solve_with(b, scratch);
         let ns = self.slip_idx.len();
         let mut h: Vec<f64> = self
             .slip_idx
@@ -778,9 +765,14 @@ impl ConstrainedSystem {
     /// The transposed solve of the adjoint (docs/validation-contact.md §7): the transpose
     /// of [`ConstrainedSystem::solve_dirichlet`]'s map `(b, xbar) -> x` applied to a
     /// cotangent `g` of `x`. On entry `b` holds `g` (physical equation vector); on exit it
-    /// holds the cotangent of the right-hand side `b` (physical), and the returned vector
-    /// holds, per frame (same order as [`ConstrainedSystem::set_frames`]), the cotangent of
-    /// the prescribed tangential value `xbar` of a sticking node (0 for other frames).
+    /// holds the cotangent of the right-hand side `b` (physical), and `stick` holds, per
+    /// frame (same order as [`ConstrainedSystem::set_frames`]), the cotangent of the
+    /// prescribed tangential value `xbar` of a sticking node (0 for other frames).
+    /// `v_p` gives the result's values on the prescribed equations `P` (the data of a
+    /// cotangent that enters there, as a prescribed value enters the forward solve): read
+    /// only without friction frames, where the system is symmetric and this is
+    /// [`ConstrainedSystem::solve_dirichlet`] itself; with friction frames it must be zero
+    /// on `P` (the Coulomb adjoint shifts its data instead, `constraint::coulomb`).
     ///
     /// With the rotated `K^ = Q^T K Q + D`, `F` the free and `P` the prescribed equations,
     /// `A = S + E W^T` the forward's matrix on `F` (slipping rows `(t + c m) . K~ + d t`):
@@ -793,16 +785,29 @@ impl ConstrainedSystem {
     ///
     /// # Panics
     /// If [`ConstrainedSystem::factorize`] has not succeeded for the current tangent.
-    pub fn solve_transposed(&mut self, model: &Model, b: &mut [f64]) -> Vec<f64> {
+    pub(crate) fn solve_transposed(
+        &mut self,
+        model: &Model,
+        b: &mut [f64],
+        v_p: &[f64],
+        stick: &mut Vec<f64>,
+    ) {
         let t0 = std::time::Instant::now();
-        let mut stick = vec![0.0; self.frames.len()];
+        stick.clear();
+        stick.resize(self.frames.len(), 0.0);
         if self.capacitance || !self.friction() {
-            // symmetric, no sticking dof: the cotangent of b is the solve with xbar = 0
-            let zero = vec![0.0; b.len()];
-            self.solve_symmetric(model, b, &zero);
+            // symmetric, no sticking dof: the cotangent of b is the solve itself
+            self.solve_own(model, b, v_p);
             self.seconds[2] += t0.elapsed().as_secs_f64();
-            return stick;
+            return;
         }
+        debug_assert!(
+            self.constrained
+                .iter()
+                .zip(v_p)
+                .all(|(&c, &v)| !c || v == 0.0),
+            "a transposed solve with friction frames takes no prescribed cotangent"
+        );
         rotate_in(&self.frames, b);
         let g = b.to_vec();
         for (x, &c) in b.iter_mut().zip(&self.constrained) {
@@ -851,7 +856,6 @@ impl ConstrainedSystem {
         }
         rotate_out(&self.frames, b);
         self.seconds[2] += t0.elapsed().as_secs_f64();
-        stick
     }
 
     /// The capacitance mode with frames: the unconstrained factorization (once per
@@ -1537,7 +1541,8 @@ mod tests {
         };
         let g = vec_of(3);
         let mut v = g.clone();
-        let pi = sys.solve_transposed(&model, &mut v);
+        let mut pi = Vec::new();
+        sys.solve_transposed(&model, &mut v, &vec![0.0; n], &mut pi);
         let mut plain = g.clone();
         sys.solve_dirichlet(&model, &mut plain, &vec![0.0; n]);
         let diff = v

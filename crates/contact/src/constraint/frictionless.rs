@@ -4,8 +4,14 @@
 //! is prescribed, the tangential equation `t . f_int = 0` is solved with the curvature
 //! stiffness `-lambda kappa / (1 + g kappa)` (docs/validation-contact.md §2).
 //! [`super::coulomb`] builds friction on this piece.
+//!
+//! Adjoint: each step's system is the forward's rotated one (`Q^T K Q + D` with `D` on
+//! the tangential dofs, frames from the recorded displacement and reactions); the
+//! adjoint's data become `m . V = rho m_z` on the normal dofs plus the source
+//! `rho d t_z` on the tangential ones, so that the transposed recursion of the vertical
+//! case holds (docs/validation-contact.md).
 
-use super::{Constraint, ContactSet, Iterate};
+use super::{Constraint, ContactSet, Iterate, Step};
 use crate::StepRecord;
 use crate::model::Model;
 use crate::newton::StepFailure;
@@ -146,8 +152,22 @@ impl Constraint for Frictionless<'_> {
         rec: &StepRecord,
         u: &[f64],
         _f_int: Option<&[f64]>,
-    ) -> Vec<NodeFrame> {
-        self.model.frames(&rec.active, &rec.lambda, u, rec.depth)
+    ) -> Result<Vec<NodeFrame>, String> {
+        Ok(self.model.frames(&rec.active, &rec.lambda, u, rec.depth))
+    }
+
+    /// `m . V = rho m_z` on the active nodes, and the source `rho d t_z` along `t` on
+    /// their tangential dofs (the curvature stiffness `d` couples the tangential motion
+    /// to the vertical force).
+    fn adjoint_rhs(&mut self, step: &Step<'_>, rho: f64, g: &mut [f64], v_p: &mut [f64]) {
+        for f in step.frames {
+            v_p[f.ez] = rho * f.m[1];
+            if let Some(er) = f.er {
+                let src = rho * f.d * f.t[1];
+                g[er] += src * f.t[0];
+                g[f.ez] += src * f.t[1];
+            }
+        }
     }
 }
 

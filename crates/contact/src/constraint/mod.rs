@@ -18,12 +18,28 @@
 //! 5. each solve: [`Constraint::impose`] (the node frames of the constrained system) and
 //!    [`Constraint::prescribe`] (the prescribed increments of the constrained dofs).
 //!
-//! A new kind of contact is a new file implementing [`Constraint`] and one line in
-//! [`for_model`].
+//! The adjoint sweep and the forward sensitivities (`crates/adjoint`) transpose or
+//! differentiate each converged step with the same piece, through [`RecordedContact`]:
+//!
+//! 6. a recorded step: [`Constraint::recorded_frames`] (the frames its system is
+//!    transposed with); the adjoint: [`Constraint::force_cotangent`] (how the cost's
+//!    `dJ/dF_i` enters), [`Constraint::adjoint_rhs`] (its part of the right-hand side and
+//!    the adjoint's values on the constrained dofs), [`Constraint::adjoint_carry`] (what
+//!    a step passes to the one before it: friction's sticking ties); the sensitivities:
+//!    [`Constraint::sensitivity_ties`] (prescribed values of a step that depend on the
+//!    previous step's displacement variation).
+//!
+//! A new kind of contact is a new file implementing [`Constraint`] (forward and adjoint
+//! together) and one line in [`for_model`].
+
+mod recorded;
 
 pub(crate) mod coulomb;
 pub(crate) mod frictionless;
 pub(crate) mod vertical;
+
+pub use recorded::{ForceCotangent, RecordedContact, StepTangent};
+pub(crate) use recorded::Tie;
 
 use crate::StepRecord;
 use crate::friction::Status;
@@ -200,38 +216,71 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
     /// displacement `u` (all dofs), with its internal force `f_int` (all dofs; given when
     /// [`Constraint::frames_need_force`]): the system the adjoint and the sensitivities
     /// transpose. Empty for vertical contact.
-    fn recorded_frames(&self, rec: &StepRecord, u: &[f64], f_int: Option<&[f64]>)
-    -> Vec<NodeFrame>;
+    ///
+    /// # Errors
+    /// A message when the record does not fit the constraint (friction: an active node
+    /// without a frame, or a stick/slip status missing).
+    fn recorded_frames(
+        &self,
+        rec: &StepRecord,
+        u: &[f64],
+        f_int: Option<&[f64]>,
+    ) -> Result<Vec<NodeFrame>, String>;
+
+    /// How the cost's `dJ/dF_i` enters the adjoint of a step ([`ForceCotangent`]).
+    fn force_cotangent(&self) -> ForceCotangent {
+        ForceCotangent::Prescribed
+    }
+
+    /// The constraint's part of the adjoint of the recorded step `step` with the cost's
+    /// `rho = dJ/dF_i`: adds its terms to the right-hand side `g` (equations, holding the
+    /// body's `sum_g w B^T (C S - I) mu_{i+1}` on entry) and writes the adjoint's values
+    /// on the constrained equations into `v_p` (zero on entry; with
+    /// [`ForceCotangent::Shifted`] it must stay zero).
+    fn adjoint_rhs(&mut self, step: &Step<'_>, rho: f64, g: &mut [f64], v_p: &mut [f64]);
+
+    /// After the transposed solve of the step: `stick` holds, per frame, the cotangent of
+    /// a sticking node's prescribed tangential value; the constraint keeps what the step
+    /// passes to the one before it (its [`Constraint::adjoint_rhs`] adds it there).
+    fn adjoint_carry(&mut self, _step: &Step<'_>, _stick: &[f64]) {}
+
+    /// Whether [`Constraint::adjoint_carry`] left a load for the step before (the sweep
+    /// may skip a step only without one).
+    fn adjoint_pending(&self) -> bool {
+        false
+    }
+
+    /// Drops what an earlier sweep carried (start of a sweep).
+    fn adjoint_reset(&mut self) {}
+
+    /// Whether a step's prescribed values depend on the previous step's motion (the
+    /// sensitivities then keep each parameter's displacement variation).
+    fn ties_steps(&self) -> bool {
+        false
+    }
+
+    /// The forward sensitivities of step `step`: the prescribed values of its constrained
+    /// equations that depend on the previous step `prev` (record and displacement), as
+    /// [`Tie`]s on the previous displacement variation (none without friction).
+    fn sensitivity_ties(
+        &self,
+        _step: &Step<'_>,
+        _prev: Option<(&StepRecord, &[f64])>,
+        _ties: &mut Vec<Tie>,
+    ) {
+    }
 }
 
-/// The contact constraint of a model as the adjoint and the sensitivities see a
-/// converged recorded step: the frames its system is transposed with (the same piece
-/// as the direct solver's, `Constraint`).
-#[derive(Debug)]
-pub struct RecordedContact<'m>(Box<dyn Constraint + 'm>);
-
-impl<'m> RecordedContact<'m> {
-    /// The constraint of `model`'s contact kind.
-    pub fn new(model: &'m Model) -> RecordedContact<'m> {
-        RecordedContact(for_model(model))
-    }
-
-    /// Whether [`RecordedContact::frames`] needs the step's internal force (Coulomb
-    /// friction: the reactions and the slipping nodes' curvature stiffness come from it).
-    pub fn needs_internal_force(&self) -> bool {
-        self.0.frames_need_force()
-    }
-
-    /// The frames of the active nodes of the converged step `rec` at its displacement
-    /// `u` (all dofs), with its internal force `f_int` (all dofs, N) when
-    /// [`RecordedContact::needs_internal_force`] ([`Model::frames`],
-    /// [`Model::friction_frames`]; empty for vertical contact).
-    ///
-    /// # Panics
-    /// If the internal force is needed and `f_int` is `None`.
-    pub fn frames(&self, rec: &StepRecord, u: &[f64], f_int: Option<&[f64]>) -> Vec<NodeFrame> {
-        self.0.recorded_frames(rec, u, f_int)
-    }
+/// A converged recorded step as the constraint's adjoint reads it: its record, its
+/// displacement (all dofs) and the frames [`Constraint::recorded_frames`] gave it.
+#[derive(Clone, Copy)]
+pub(crate) struct Step<'a> {
+    /// The step's record.
+    pub rec: &'a StepRecord,
+    /// The converged displacement (all dofs, mm).
+    pub u: &'a [f64],
+    /// The frames of its active nodes (same order as `rec.active` under friction).
+    pub frames: &'a [NodeFrame],
 }
 
 /// The constraint of `model`'s contact kind.

@@ -1,9 +1,10 @@
 //! The paper's vertical contact ([`crate::ContactKind::Vertical`]): the gap of candidate
 //! `k` at its reference radius, `g_k = phi(r_k) - U - u_z,k`, the vertical dof of an
 //! active node prescribed, `u_z,k = phi(r_k) - U`, and its reaction
-//! `lambda_k = -f_int,z,k`.
+//! `lambda_k = -f_int,z,k`. In the adjoint, `V_z,k = dJ/dF_i` on the active nodes
+//! (docs/theory.md §3).
 
-use super::{Constraint, ContactSet, Iterate};
+use super::{Constraint, ContactSet, Iterate, Step};
 use crate::StepRecord;
 use crate::model::Model;
 use crate::system::{ConstrainedSystem, NodeFrame};
@@ -80,7 +81,16 @@ impl Constraint for Vertical<'_> {
         _rec: &StepRecord,
         _u: &[f64],
         _f_int: Option<&[f64]>,
-    ) -> Vec<NodeFrame> {
-        Vec::new()
+    ) -> Result<Vec<NodeFrame>, String> {
+        Ok(Vec::new())
+    }
+
+    /// The adjoint's vertical displacement of an active node is the cost's `dJ/dF_i`.
+    fn adjoint_rhs(&mut self, step: &Step<'_>, rho: f64, _g: &mut [f64], v_p: &mut [f64]) {
+        for &k in &step.rec.active {
+            if let Some(e) = self.model.dofs.equation(self.zdof(k as usize)) {
+                v_p[e] = rho;
+            }
+        }
     }
 }

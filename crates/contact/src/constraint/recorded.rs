@@ -1,0 +1,252 @@
+//! The contact side of the adjoint sweep and the forward sensitivities: a model's
+//! constraint ([`super::Constraint`], the direct solver's piece) with the constrained
+//! system of a converged recorded step ([`RecordedContact`]). This is the one interface
+//! `crates/adjoint` uses; the system's solve modes stay private to this crate.
+//!
+//! One step of the reversed-time sweep, as `crates/adjoint` drives it (docs/solver.md):
+//!
+//! 1. [`RecordedContact::prepare`]: the step's tangent, its active set, the constraint's
+//!    frames ([`super::Constraint::recorded_frames`]), the factorization;
+//! 2. the body's right-hand side `g = sum_g w B^T (C S - I) mu_{i+1}` (the adjoint crate;
+//!    with [`ForceCotangent::Shifted`] less `rho K e_A`);
+//! 3. [`RecordedContact::adjoint_solve`]: the constraint's terms of `g` and its values on
+//!    the constrained equations ([`super::Constraint::adjoint_rhs`]), the transposed
+//!    solve, what the step passes to the one before ([`super::Constraint::adjoint_carry`]);
+//! 4. the Gauss-point back-substitution (the adjoint crate; with
+//!    [`ForceCotangent::Shifted`] from `V + rho e_A`).
+//!
+//! A drive that makes the depth an unknown (a prescribed force) borders step 3 with its
+//! own row and column: the hook is [`RecordedContact::adjoint_solve`] (docs/solver.md).
+
+use indentify_fe::{FeError, SolveScratch};
+use indentify_laws::Mat4;
+
+use super::{Constraint, Step, for_model};
+use crate::StepRecord;
+use crate::model::Model;
+use crate::system::{ConstrainedSystem, NodeFrame};
+
+/// How a constraint takes the cost's `rho = dJ/dF_i` into the adjoint of a step
+/// (`F_i = -e_A . f_int`, `e_A` the vertical dofs of the active nodes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ForceCotangent {
+    /// As the adjoint's values on the constrained equations (`m . V = rho m_z`), the data
+    /// of the transposed solve: vertical and frictionless normal contact.
+    Prescribed,
+    /// As a shift of the adjoint displacement, `V' = V + rho e_A`, with `rho K e_A` taken
+    /// from the right-hand side and zero values on the constrained equations: Coulomb
+    /// friction, whose sticking rows tie a step to the previous one.
+    Shifted,
+}
+
+/// The tangent of a recorded step.
+#[derive(Clone, Copy, Debug)]
+pub enum StepTangent<'a> {
+    /// One tangent at every Gauss point (an affine law), reusable while the parameters
+    /// `params` and the step length `dt` (s) stay the same.
+    Uniform {
+        /// The tangent `C`.
+        tangent: &'a Mat4,
+        /// The law's parameters.
+        params: &'a [f64],
+        /// The step length (s).
+        dt: f64,
+    },
+    /// The tangent of every Gauss point (small strain).
+    Points(&'a [Mat4]),
+    /// The element matrices (lower triangles; finite strain).
+    Elements(&'a [[[f64; 16]; 16]]),
+}
+
+/// A prescribed value of the forward sensitivities tied to the previous step's
+/// displacement variation `du`: `xbar[eq] = coef (t . du_node)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tie {
+    /// The prescribed equation.
+    pub eq: usize,
+    /// The node whose previous variation it reads.
+    pub node: usize,
+    /// The factor.
+    pub coef: f64,
+    /// The direction `(r, z)`.
+    pub t: [f64; 2],
+}
+
+/// The contact constraint of a model with the constrained system of its recorded steps:
+/// what the adjoint sweep and the forward sensitivities need of the contact (the same
+/// piece as the direct solver's).
+#[derive(Debug)]
+pub struct RecordedContact<'m> {
+    model: &'m Model,
+    constraint: Box<dyn Constraint + 'm>,
+    system: ConstrainedSystem,
+    /// The frames of the prepared step.
+    frames: Vec<NodeFrame>,
+    /// Scratch: the active set as flags.
+    active: Vec<bool>,
+    /// The adjoint's values on the constrained equations (zero between solves).
+    v_p: Vec<f64>,
+    /// The cotangents of the sticking nodes' prescribed values (per frame).
+    stick: Vec<f64>,
+    /// The prepared step's sensitivity ties.
+    ties: Vec<Tie>,
+}
+
+impl<'m> RecordedContact<'m> {
+    /// The constraint of `model`'s contact kind and its system (symbolic analysis once).
+    ///
+    /// # Errors
+    /// [`FeError`] if the symbolic analysis fails.
+    pub fn new(model: &'m Model) -> Result<RecordedContact<'m>, FeError> {
+        Ok(RecordedContact {
+            model,
+            constraint: for_model(model),
+            system: ConstrainedSystem::new(model)?,
+            frames: Vec::new(),
+            active: vec![false; model.candidates.len()],
+            v_p: vec![0.0; model.dofs.n_eq],
+            stick: Vec::new(),
+            ties: Vec::new(),
+        })
+    }
+
+    /// Starts a computation from a new system's state (no factorization, no assembly sum,
+    /// nothing carried from an earlier sweep): its bits depend on its inputs alone.
+    pub fn begin(&mut self) {
+        self.system.forget_factorizations();
+        self.constraint.adjoint_reset();
+    }
+
+    /// Numeric factorizations done so far.
+    pub fn factorizations(&self) -> usize {
+        self.system.factorizations()
+    }
+
+    /// Whether [`RecordedContact::prepare`] needs the step's internal force (Coulomb
+    /// friction: the reactions and the slipping nodes' curvature stiffness come from it).
+    pub fn needs_internal_force(&self) -> bool {
+        self.constraint.frames_need_force()
+    }
+
+    /// How the cost's `dJ/dF_i` enters the adjoint ([`ForceCotangent`]).
+    pub fn force_cotangent(&self) -> ForceCotangent {
+        self.constraint.force_cotangent()
+    }
+
+    /// Whether the sweep carries a load into the step before the last one swept (it may
+    /// then not be skipped).
+    pub fn adjoint_pending(&self) -> bool {
+        self.constraint.adjoint_pending()
+    }
+
+    /// Whether the forward sensitivities of a step read the previous step's displacement
+    /// variation ([`RecordedContact::sensitivity_solve`]'s `du_prev`).
+    pub fn ties_steps(&self) -> bool {
+        self.constraint.ties_steps()
+    }
+
+    /// Sets the system of the converged step `rec` at its displacement `u` (all dofs):
+    /// the tangent, the active set, the constraint's frames (from the internal force
+    /// `f_int`, all dofs, when [`RecordedContact::needs_internal_force`]), and factorizes.
+    ///
+    /// # Errors
+    /// A message if the record does not fit the constraint or the factorization fails.
+    pub fn prepare(
+        &mut self,
+        rec: &StepRecord,
+        u: &[f64],
+        f_int: Option<&[f64]>,
+        tangent: StepTangent<'_>,
+    ) -> Result<(), String> {
+        let model = self.model;
+        match tangent {
+            StepTangent::Uniform {
+                tangent,
+                params,
+                dt,
+            } => {
+                self.system.set_tangent_uniform(model, tangent, (params, dt));
+            }
+            StepTangent::Points(t) => {
+                self.system.set_tangent(model, t, None);
+            }
+            StepTangent::Elements(ke) => {
+                self.system.set_tangent_elements(model, ke);
+            }
+        }
+        self.active.fill(false);
+        for &k in &rec.active {
+            self.active[k as usize] = true;
+        }
+        self.system.set_active(model, &self.active);
+        self.frames = self.constraint.recorded_frames(rec, u, f_int)?;
+        self.system.set_frames(&self.frames);
+        self.system.factorize(model).map_err(|e| e.to_string())
+    }
+
+    /// The contact part of one step of the adjoint sweep, on the prepared step `rec`
+    /// (displacement `u`) with the cost's `rho = dJ/dF_i`: `g` (equations) holds the
+    /// body's right-hand side on entry and the adjoint displacement `V` on exit (the
+    /// constraint's terms added, its values on the constrained equations, the transposed
+    /// solve); what the step passes to the one before is kept for the next call.
+    pub fn adjoint_solve(&mut self, rec: &StepRecord, u: &[f64], rho: f64, g: &mut [f64]) {
+        let step = Step {
+            rec,
+            u,
+            frames: &self.frames,
+        };
+        self.constraint.adjoint_rhs(&step, rho, g, &mut self.v_p);
+        // a drive with the depth as an unknown borders this solve (docs/solver.md)
+        self.system
+            .solve_transposed(self.model, g, &self.v_p, &mut self.stick);
+        self.v_p.fill(0.0);
+        self.constraint.adjoint_carry(&step, &self.stick);
+    }
+
+    /// Forms the prescribed values of the prepared step `rec` (displacement `u`) that
+    /// depend on the previous step `prev` (its record and displacement; `None` for the
+    /// first step), for [`RecordedContact::sensitivity_solve`].
+    pub fn prepare_sensitivities(
+        &mut self,
+        rec: &StepRecord,
+        u: &[f64],
+        prev: Option<(&StepRecord, &[f64])>,
+    ) {
+        self.ties.clear();
+        let step = Step {
+            rec,
+            u,
+            frames: &self.frames,
+        };
+        self.constraint.sensitivity_ties(&step, prev, &mut self.ties);
+    }
+
+    /// The work space of one [`RecordedContact::sensitivity_solve`] (one per thread).
+    pub fn solve_scratch(&self) -> SolveScratch {
+        self.system.solve_scratch()
+    }
+
+    /// One parameter's solve of the forward sensitivities on the prepared step: `b`
+    /// (equations) holds the right-hand side on entry and the displacement variation on
+    /// exit, with the constrained equations prescribed (zero, or tied to the previous
+    /// step's variation `du_prev`, all dofs; read only when
+    /// [`RecordedContact::ties_steps`]). `xbar` (equations) is the caller's scratch, zero
+    /// on entry and exit. Several threads may solve at once, each with its own `xbar`
+    /// and `scratch` (from [`RecordedContact::solve_scratch`]): the same bits.
+    pub fn sensitivity_solve(
+        &self,
+        b: &mut [f64],
+        du_prev: &[f64],
+        xbar: &mut [f64],
+        scratch: &mut SolveScratch,
+    ) {
+        for t in &self.ties {
+            let (n, d) = (t.node, du_prev);
+            xbar[t.eq] = t.coef * (t.t[0] * d[2 * n] + t.t[1] * d[2 * n + 1]);
+        }
+        self.system.solve_dirichlet_with(self.model, b, xbar, scratch);
+        for t in &self.ties {
+            xbar[t.eq] = 0.0;
+        }
+    }
+}
