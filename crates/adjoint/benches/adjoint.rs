@@ -1,41 +1,53 @@
 //! Benchmarks of the adjoint sweep against the forward solve on R1 (Maxwell) and R2
-//! (Norton-Hoff) of docs/theory.md §11, and the forward sensitivities of every parameter.
+//! (Norton-Hoff) of docs/theory.md §11 under vertical contact, and R1 under normal contact
+//! with Coulomb friction (mu = 0.1), and the forward sensitivities of every parameter.
 //! `cargo bench -p indentify-adjoint`; the ratio adjoint / forward is printed.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use indentify_adjoint::Adjoint;
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_contact::{
+    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
 use indentify_laws::{Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
-fn bench_adjoint(c: &mut Criterion) {
+fn reference_model(contact: ContactKind) -> Model {
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
-    let model = Model::new(
+    Model::with_contact(
         mesh,
         Punch::Cone {
             half_angle_deg: 68.0,
         },
+        contact,
     )
-    .expect("model");
+    .expect("model")
+}
+
+fn bench_adjoint(c: &mut Criterion) {
+    let model = reference_model(ContactKind::Vertical);
+    let friction = reference_model(ContactKind::normal_with_friction(0.1).expect("friction"));
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
-    let cases: [(&str, &dyn Law, Vec<f64>); 2] = [
-        ("r1_maxwell", &Maxwell, vec![20000.0, 0.3, 30000.0]),
+    let r1 = vec![20000.0, 0.3, 30000.0];
+    let cases: [(&str, &dyn Law, Vec<f64>, &Model); 3] = [
+        ("r1_maxwell", &Maxwell, r1.clone(), &model),
         (
             "r2_norton_hoff",
             &NortonHoff,
             vec![1e5, 0.3, 1500.0, 5.0, 500.0],
+            &model,
         ),
+        ("r1_maxwell_friction", &Maxwell, r1, &friction),
     ];
     let mut group = c.benchmark_group("adjoint");
     group.sample_size(10);
-    for (name, law, params) in cases {
-        let mut solver = DirectSolver::new(&model).expect("solver");
+    for (name, law, params, model) in cases {
+        let mut solver = DirectSolver::new(model).expect("solver");
         let traj = solver
             .run(law, &params, &schedule, &SolverOptions::default())
             .expect("run");
         // a cost with rho_i = F_i (data = 0): every step contributes
         let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
-        let mut adj = Adjoint::new(&model).expect("adjoint");
+        let mut adj = Adjoint::new(model).expect("adjoint");
         let g = adj.gradient(law, &params, &traj, &rho).expect("gradient");
         eprintln!(
             "{name}: forward {:.1} ms, adjoint {:.1} ms (ratio {:.2}), adjoint factorizations {}, trajectory {:.1} MB",
