@@ -130,7 +130,9 @@ fn a_reused_workspace_gives_a_new_ones_bits() {
 
 /// The forward sensitivities run their parameters in parallel on a pool with threads:
 /// the same bits on 1 and 3 threads (each parameter's solve has its own work space and
-/// the same arithmetic).
+/// the same arithmetic), Coulomb friction included (its slipping rows' solve shares the
+/// factorized system, and each parameter keeps its own previous-step variation for the
+/// sticking ties). With `pinned.rs` (1 thread) this pins the parallel bits too.
 #[test]
 fn sensitivities_do_not_depend_on_the_thread_count() {
     let norton = [1e5, 0.3, 1500.0, 5.0, 500.0];
@@ -142,6 +144,14 @@ fn sensitivities_do_not_depend_on_the_thread_count() {
         ),
         ("normal", common::small_model(cone(), ContactKind::Normal)),
         ("finite", common::finite_model(cone())),
+        (
+            "friction 0.2",
+            common::small_model(cone(), ContactKind::normal_with_friction(0.2).unwrap()),
+        ),
+        (
+            "finite, friction 0.2",
+            common::finite_model_with_friction(cone(), 0.2),
+        ),
     ];
     for (name, model) in &models {
         for (law, c) in [
@@ -149,6 +159,10 @@ fn sensitivities_do_not_depend_on_the_thread_count() {
             (&NortonHoff, &norton[..]),
         ] {
             let t = run(model, law, c);
+            if name.contains("friction") {
+                let slipping = t.steps.iter().flat_map(|s| &s.slip).any(|&s| s != 0);
+                assert!(slipping, "{name}: the run has slipping node-steps");
+            }
             let on = |threads: usize| {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
