@@ -79,7 +79,7 @@ pub fn small_model(punch: Punch, kind: ContactKind) -> Model {
 /// first `checked` parameters (a parameter on its bound, sY = 0, has no central
 /// difference); the contact zone must grow and be lost. Returns the worst relative
 /// differences (fd, sensitivities).
-#[allow(clippy::too_many_arguments, dead_code)]
+#[allow(dead_code)]
 pub fn whole_history_check(
     model: &Model,
     law: &dyn Law,
@@ -95,7 +95,7 @@ pub fn whole_history_check(
 
 /// [`whole_history_check`] over any schedule `sched` (which must load into contact and
 /// release it), e.g. one whose steps are solved in sub-steps.
-#[allow(clippy::too_many_arguments, dead_code)]
+#[allow(dead_code)]
 pub fn whole_history_check_on(
     model: &Model,
     law: &dyn Law,
