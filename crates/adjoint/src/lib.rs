@@ -397,8 +397,7 @@ impl<'m> Adjoint<'m> {
         } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data, no contact and nothing carried, mu_i = 0
-        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending()
-        {
+        if sweep.mu_zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending() {
             return Ok(());
         }
         sweep.mu_zero = false;

@@ -217,7 +217,12 @@ impl ConstrainedSystem {
 
     /// As [`ConstrainedSystem::set_tangent`] with the same tangent `c_mat` at every Gauss
     /// point (an affine law), always reusable under `key = (c, dt)`.
-    pub(crate) fn set_tangent_uniform(&mut self, model: &Model, c_mat: &Mat4, key: (&[f64], f64)) -> bool {
+    pub(crate) fn set_tangent_uniform(
+        &mut self,
+        model: &Model,
+        c_mat: &Mat4,
+        key: (&[f64], f64),
+    ) -> bool {
         let t0 = std::time::Instant::now();
         let fresh = self.new_key(Some(key));
         if fresh {

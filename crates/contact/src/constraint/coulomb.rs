@@ -35,9 +35,7 @@
 //! `K e_A`, and the frames' reactions the finite internal force.
 
 use super::frictionless::Frictionless;
-use super::{
-    Constraint, ContactSet, ForceCotangent, Iterate, StatusFlip, Step, Tie, Tolerances,
-};
+use super::{Constraint, ContactSet, ForceCotangent, Iterate, StatusFlip, Step, Tie, Tolerances};
 use crate::StepRecord;
 use crate::friction;
 use crate::model::Model;

@@ -38,8 +38,8 @@ pub(crate) mod coulomb;
 pub(crate) mod frictionless;
 pub(crate) mod vertical;
 
-pub use recorded::{ForceCotangent, RecordedContact, StepTangent};
 pub(crate) use recorded::Tie;
+pub use recorded::{ForceCotangent, RecordedContact, StepTangent};
 
 use crate::StepRecord;
 use crate::friction::Status;

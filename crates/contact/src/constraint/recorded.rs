@@ -165,7 +165,8 @@ impl<'m> RecordedContact<'m> {
                 params,
                 dt,
             } => {
-                self.system.set_tangent_uniform(model, tangent, (params, dt));
+                self.system
+                    .set_tangent_uniform(model, tangent, (params, dt));
             }
             StepTangent::Points(t) => {
                 self.system.set_tangent(model, t, None);
@@ -218,7 +219,8 @@ impl<'m> RecordedContact<'m> {
             u,
             frames: &self.frames,
         };
-        self.constraint.sensitivity_ties(&step, prev, &mut self.ties);
+        self.constraint
+            .sensitivity_ties(&step, prev, &mut self.ties);
     }
 
     /// The work space of one [`RecordedContact::sensitivity_solve`] (one per thread).
@@ -244,7 +246,8 @@ impl<'m> RecordedContact<'m> {
             let (n, d) = (t.node, du_prev);
             xbar[t.eq] = t.coef * (t.t[0] * d[2 * n] + t.t[1] * d[2 * n + 1]);
         }
-        self.system.solve_dirichlet_with(self.model, b, xbar, scratch);
+        self.system
+            .solve_dirichlet_with(self.model, b, xbar, scratch);
         for t in &self.ties {
             xbar[t.eq] = 0.0;
         }
