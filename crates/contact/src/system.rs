@@ -1,5 +1,6 @@
 //! The constrained tangent system shared by the direct solver, the adjoint sweep and the
-//! forward sensitivities: `K = sum_g w_g B^T C_g B` on a fixed pattern, with the active
+//! forward sensitivities (these two through [`crate::RecordedContact`]; the solve modes
+//! are private to this crate): `K = sum_g w_g B^T C_g B` on a fixed pattern, with the active
 //! contact dofs prescribed, and a cache that skips re-assembly and re-factorization when
 //! neither the tangent (linear laws: same parameters and step length) nor the active set
 //! changed.
@@ -15,7 +16,7 @@
 //!   contact zone growing by one node then costs one solve instead of one factorization,
 //!   and the result is the direct one to round-off.
 //!
-//! Normal contact ([`crate::ContactKind::Normal`], [`ConstrainedSystem::set_frames`]):
+//! Normal contact ([`crate::ContactKind::Normal`], `ConstrainedSystem::set_frames`):
 //! the two dofs of an active node are rotated into the surface frame `(t, m)` (the same
 //! pattern: both dofs of a node share their structure), `K~ = Q^T K Q + D` with the
 //! curvature stiffness `D` on the tangential dof; the normal dof (in the `u_z` slot) is
