@@ -435,6 +435,28 @@ mod tests {
         }
     }
 
+    /// The system shall give every block of the adapted laws (Elastic, Maxwell,
+    /// Norton-Hoff) equal to finite differences to 1e-6 through the shared checks.
+    #[test]
+    fn law_material_blocks_match_finite_differences() {
+        let mut rng = crate::plastic::tests::Rng(5);
+        for (law, c) in cases() {
+            let mat = LawMaterial(law);
+            for _ in 0..30 {
+                let s0 = rng.vec4() * 600.0;
+                let deps = rng.vec4() * 10f64.powf(-4.0 + 1.5 * (rng.next() + 1.0));
+                let dt = 10f64.powf(-2.0 + 2.0 * rng.next());
+                let pt = crate::testing::Point {
+                    c: &c,
+                    y0: &s0.0,
+                    deps,
+                    dt,
+                };
+                crate::testing::check_material(&mat, &pt, 1e-6).unwrap();
+            }
+        }
+    }
+
     #[test]
     fn dense_solve_solves_and_refuses_singular() {
         let mut a = vec![4.0, 1.0, 0.0, 1.0, 3.0, 1.0, 0.0, 1.0, 2.0];

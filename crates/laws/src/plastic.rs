@@ -454,7 +454,7 @@ impl Material for Plastic {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::hardening::Table;
     use crate::testing::{Point, check_material};
