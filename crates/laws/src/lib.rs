@@ -17,6 +17,7 @@ pub mod maxwell;
 pub mod norton_hoff;
 pub mod plastic;
 pub mod prony;
+pub mod registry;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 
@@ -30,6 +31,7 @@ pub use maxwell::Maxwell;
 pub use norton_hoff::NortonHoff;
 pub use plastic::{Plastic, Rate};
 pub use prony::Prony;
+pub use registry::{Built, LawEntry, REGISTRY, SpecValue};
 
 /// Names accepted by [`law_by_name`], in the order of increasing complexity.
 pub const LAW_NAMES: [&str; 3] = ["elastic", "maxwell", "norton-hoff"];

@@ -7,11 +7,12 @@ use crate::LawError;
 use crate::elastic::{
     E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative, isotropic_operator,
 };
-use crate::hardening::{Hardening, SY};
+use crate::hardening::{Hardening, SY, Table};
 use crate::law::{LocalFailure, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 use crate::material::{InternalInfo, Material, MaterialUpdate, Regime, Step, stress_of};
 use crate::norton_hoff::{K_INFO, M_INFO, solve_overstress};
+use crate::registry::{Built, Fields, LawEntry, SpecValue, ordered_params};
 
 /// The rate form of a [`Plastic`] law.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -453,10 +454,141 @@ impl Material for Plastic {
     }
 }
 
+/// The registry entry: `Plastic(E, nu, sY, hardening: H, rate: R)` with `H` one of
+/// `Linear(H: ..)`, `Power(n: ..)`, `Voce(Q: .., b: ..)`, `Swift(eps0: .., n: ..)`,
+/// `Table(points: [(eps_p, sigma), ...])` and `R` omitted (rate-independent) or
+/// `Norton(K: .., m: ..)`.
+pub const ENTRY: LawEntry = LawEntry {
+    name: "plastic",
+    variant: "Plastic",
+    summary: "J2 plasticity with isotropic hardening (Linear, Power, Voce, Swift, Table), \
+              rate-independent or with Norton overstress",
+    example: "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Power(n: 0.2), \
+              rate: Norton(K: 200.0, m: 3.0))",
+    build: build_spec,
+};
+
+const HARDENING_KINDS: &str = "Linear(H: ..), Power(n: ..), Voce(Q: .., b: ..), Swift(eps0: .., n: ..), \
+                               Table(points: [(eps_p, sigma), ...])";
+
+fn table_points(h: &mut Fields<'_>) -> Result<Vec<(f64, f64)>, LawError> {
+    let Some(SpecValue::List(items)) = h.get("points") else {
+        return Err(h.error(
+            "points",
+            "missing or not a list of (eps_p, sigma) pairs".into(),
+        ));
+    };
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, v)| match v {
+            SpecValue::Tuple(p) | SpecValue::List(p) => match p.as_slice() {
+                [SpecValue::Number(e), SpecValue::Number(s)] => Ok((*e, *s)),
+                _ => Err(h.error(
+                    &format!("points[{i}]"),
+                    "expected a pair (eps_p, sigma)".into(),
+                )),
+            },
+            _ => Err(h.error(
+                &format!("points[{i}]"),
+                "expected a pair (eps_p, sigma)".into(),
+            )),
+        })
+        .collect()
+}
+
+fn build_hardening(
+    f: &mut Fields<'_>,
+    values: &mut Vec<(&'static str, f64)>,
+) -> Result<Hardening, LawError> {
+    let (name, fields) = match f.get("hardening") {
+        Some(SpecValue::Variant { name, fields }) => (name.as_str(), fields),
+        Some(other) => {
+            return Err(f.error(
+                "hardening",
+                format!("expected one of {HARDENING_KINDS}, got {other:?}"),
+            ));
+        }
+        None => return Err(f.error("hardening", format!("missing (one of {HARDENING_KINDS})"))),
+    };
+    let mut h = Fields::new("plastic", "hardening.", fields);
+    let (form, accepted): (Hardening, &[&str]) = match name {
+        "Linear" => {
+            values.push(("H", h.number("H")?));
+            (Hardening::Linear, &["H"])
+        }
+        "Power" => {
+            values.push(("n", h.number("n")?));
+            (Hardening::Power, &["n"])
+        }
+        "Voce" => {
+            values.push(("Q", h.number("Q")?));
+            values.push(("b", h.number("b")?));
+            (Hardening::Voce, &["Q", "b"])
+        }
+        "Swift" => {
+            values.push(("eps0", h.number("eps0")?));
+            values.push(("n", h.number("n")?));
+            (Hardening::Swift, &["eps0", "n"])
+        }
+        "Table" => (
+            Hardening::Table(Table::new(&table_points(&mut h)?)?),
+            &["points"],
+        ),
+        other => {
+            return Err(f.error(
+                "hardening",
+                format!("unknown hardening kind `{other}`; one of Linear, Power, Voce, Swift, Table ({HARDENING_KINDS})"),
+            ));
+        }
+    };
+    h.finish(accepted)?;
+    Ok(form)
+}
+
+fn build_spec(fields: &[(String, SpecValue)]) -> Result<Built, LawError> {
+    let mut f = Fields::new("plastic", "", fields);
+    let mut values = vec![
+        ("E", f.number("E")?),
+        ("nu", f.number("nu")?),
+        ("sY", f.number("sY")?),
+    ];
+    let hardening = build_hardening(&mut f, &mut values)?;
+    let rate = match f.get("rate") {
+        None => Rate::Independent,
+        Some(SpecValue::Variant { name, fields }) if name == "None" && fields.is_empty() => {
+            Rate::Independent
+        }
+        Some(SpecValue::Variant { name, fields }) if name == "Norton" => {
+            let mut r = Fields::new("plastic", "rate.", fields);
+            values.push(("K", r.number("K")?));
+            values.push(("m", r.number("m")?));
+            r.finish(&["K", "m"])?;
+            Rate::Norton
+        }
+        Some(other) => {
+            let what = match other {
+                SpecValue::Variant { name, .. } => format!("unknown rate kind `{name}`"),
+                v => format!("expected a rate kind, got {v:?}"),
+            };
+            return Err(f.error(
+                "rate",
+                format!("{what}; one of Norton(K: .., m: ..), or omit it for rate-independent plasticity"),
+            ));
+        }
+    };
+    f.finish(&["E", "nu", "sY", "hardening", "rate"])?;
+    let material = Plastic::new(hardening, rate);
+    let params = ordered_params(&material, &values)?;
+    Ok(Built {
+        material: Box::new(material),
+        params,
+    })
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::hardening::Table;
     use crate::testing::{Point, check_material};
     use crate::{Law, NortonHoff};
 

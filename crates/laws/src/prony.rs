@@ -9,6 +9,7 @@ use crate::elastic::{
 use crate::law::{LocalFailure, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 use crate::material::{InternalInfo, Material, MaterialUpdate, Regime, Step, stress_of};
+use crate::registry::{Built, Fields, LawEntry, SpecValue, ordered_params};
 
 /// The largest number of Prony terms.
 pub const MAX_TERMS: usize = 8;
@@ -322,6 +323,48 @@ impl Material for Prony {
     }
 }
 
+/// The registry entry: `Prony(E, nu, terms: [(g: .., tau: ..), ...])`, parameters
+/// `E, nu, g1, tau1, g2, tau2, ...`.
+pub const ENTRY: LawEntry = LawEntry {
+    name: "prony",
+    variant: "Prony",
+    summary: "generalized Maxwell viscoelasticity in shear (Prony series), bulk elastic",
+    example: "Prony(E: 3000.0, nu: 0.35, terms: [(g: 0.3, tau: 0.1), (g: 0.2, tau: 2.0)])",
+    build: build_spec,
+};
+
+const G_NAMES: [&str; MAX_TERMS] = ["g1", "g2", "g3", "g4", "g5", "g6", "g7", "g8"];
+const TAU_NAMES: [&str; MAX_TERMS] = [
+    "tau1", "tau2", "tau3", "tau4", "tau5", "tau6", "tau7", "tau8",
+];
+
+fn build_spec(fields: &[(String, SpecValue)]) -> Result<Built, LawError> {
+    let mut f = Fields::new("prony", "", fields);
+    let mut values = vec![("E", f.number("E")?), ("nu", f.number("nu")?)];
+    let Some(SpecValue::List(terms)) = f.get("terms") else {
+        return Err(f.error(
+            "terms",
+            "missing or not a list [(g: .., tau: ..), ...]".into(),
+        ));
+    };
+    let material = Prony::new(terms.len())?;
+    for (i, t) in terms.iter().enumerate() {
+        let SpecValue::Variant { fields: tf, .. } = t else {
+            return Err(f.error(&format!("terms[{i}]"), "expected (g: .., tau: ..)".into()));
+        };
+        let mut tf = Fields::new("prony", &format!("terms[{i}]."), tf);
+        values.push((G_NAMES[i], tf.number("g")?));
+        values.push((TAU_NAMES[i], tf.number("tau")?));
+        tf.finish(&["g", "tau"])?;
+    }
+    f.finish(&["E", "nu", "terms"])?;
+    let params = ordered_params(&material, &values)?;
+    Ok(Built {
+        material: Box::new(material),
+        params,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -437,7 +480,7 @@ mod tests {
             let dt = t_end / n as f64;
             let mut steps = vec![(Shear::Strain(e), 0.0)];
             steps.extend(std::iter::repeat_n((Shear::Strain(0.0), dt), n));
-            let path = shear_history(&law, &c, &vec![0.0; 16], &steps).unwrap();
+            let path = shear_history(&law, &c, &[0.0; 16], &steps).unwrap();
             let s = path.last().unwrap().sigma();
             assert!(s[0].abs() + s[1].abs() + s[2].abs() < 1e-12 * s[3].abs());
             let exact: f64 = 1.0
