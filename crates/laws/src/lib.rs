@@ -20,6 +20,8 @@ pub mod prony;
 pub mod registry;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
+#[cfg(test)]
+mod validation;
 
 pub use elastic::Elastic;
 pub use hardening::{Hardening, Table};
