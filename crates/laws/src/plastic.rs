@@ -190,7 +190,7 @@ impl Plastic {
     /// `q_tr - sigma_y(p0 + dt x^m) - K x - 3G dt x^m = 0`. For `Linear` this is
     /// Norton-Hoff's scalar equation with `3G dt` replaced by `(3G + H) dt` (its solver);
     /// otherwise Newton from that solution at the slope `H'(p0)`, kept inside
-    /// `[0, x_nh]`, `x_nh` the root without hardening (hardening only lowers it).
+    /// `[0, min(d/K, (d/(3G dt))^(1/m))]` (hardening only lowers the root).
     fn return_norton(
         &self,
         c: &[f64],
@@ -205,17 +205,18 @@ impl Plastic {
         if let Some(h) = self.hardening.linear_modulus(c) {
             return solve_overstress(k, (g3 + h) * dt, m, d).map_err(wrap);
         }
-        let (hi0, it0) = solve_overstress(k, g3 * dt, m, d).map_err(wrap)?;
+        // without hardening either term alone reaching `d` bounds the root
+        let hi0 = (d / k).min((d / (g3 * dt)).powf(1.0 / m));
         let h0 = self.hardening.value(c, p0).1;
-        let (mut x, it1) = solve_overstress(k, (g3 + h0) * dt, m, d).map_err(wrap)?;
+        let (mut x, it0) = solve_overstress(k, (g3 + h0) * dt, m, d).map_err(wrap)?;
         let sy0 = q_tr - d;
-        let (mut lo, mut hi) = (0.0, hi0);
+        let (mut lo, mut hi) = (0.0, hi0 * (1.0 + 1e-12));
         for it in 1..=200u32 {
             let xm1 = x.powf(m - 1.0);
             let (sy, h) = self.hardening.value(c, p0 + dt * xm1 * x);
             let f = d - (sy - sy0) - k * x - g3 * dt * xm1 * x;
             if f.abs() <= 1e-14 * q_tr || hi - lo <= 1e-16 * hi {
-                return Ok((x, it0 + it1 + it));
+                return Ok((x, it0 + it));
             }
             if f > 0.0 {
                 lo = x;
