@@ -136,10 +136,12 @@ fn uniaxial_tension_unloading_compression_follow_the_hardening_curve() {
 /// Reference: at a constant strain rate `r`, Norton's stress exceeds the rate-independent
 /// flow stress by the overstress `K (dp/dt)^(1/m)`, with `dp/dt -> r` once plastic flow is
 /// established, so `sigma_Norton - sigma_RI ~ K r^(1/m)` and tends to 0 as `K -> 0` or
-/// `r -> 0`. Checked at 3 % strain (100 steps) for every hardening form, `m = 3`, with `K`
-/// from 10 to 0.01 MPa s^(1/3) and `r` from 1e-1 to 1e-5 /s: the difference over
-/// `K r^(1/m)` stays within [0.8, 1.01] (it is `(dp/dt / r)^(1/m)` with `dp/dt < r`
-/// while hardening takes some of the strain rate elastically).
+/// `r -> 0`. More precisely, with `H'` the hardening slope, plastic flow takes the share
+/// `dp/dt = r E / (E + H')` of the strain rate, and the overstress lowers `p` by
+/// `(sigma_N - sigma_RI) / E`, which lowers `sigma_y` by `H'` times that: the difference
+/// tends to `K r^(1/m) (E / (E + H'))^(1 + 1/m)`. Checked at 3 % strain (100 steps) for
+/// every hardening form, `m = 3`, `K` from 10 to 0.01 MPa s^(1/3) and `r` from 1e-1 to
+/// 1e-5 /s: the difference over `K r^(1/m)` equals that factor to 1e-3.
 #[test]
 fn norton_tends_to_the_rate_independent_curve() {
     for form in FORMS {
@@ -154,6 +156,11 @@ fn norton_tends_to_the_rate_independent_curve() {
             .unwrap()
             .sigma()[1];
         let ki = c_nt.len() - 2;
+        // the asymptote: (E / (E + H'))^(1 + 1/m) with H' the slope at p_RI(3 %)
+        let p_ri = bisect(|p| flow_stress(form, p) / E + p - e1);
+        let h = (flow_stress(form, p_ri + 1e-7) - flow_stress(form, p_ri - 1e-7)) / 2e-7;
+        let expected = (E / (E + h)).powf(1.0 + 1.0 / 3.0);
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         for k in [10.0, 1.0, 0.1, 0.01] {
             for r in [1e-1, 1e-3, 1e-5] {
                 c_nt[ki] = k;
@@ -165,12 +172,16 @@ fn norton_tends_to_the_rate_independent_curve() {
                     .unwrap()
                     .sigma()[1];
                 let ratio = (s - s_ri) / (k * r.powf(1.0 / 3.0));
+                (lo, hi) = (lo.min(ratio), hi.max(ratio));
                 assert!(
-                    (0.8..=1.01).contains(&ratio),
-                    "{form} K {k} r {r}: {s} vs {s_ri}, ratio {ratio}"
+                    (ratio - expected).abs() <= 1e-3,
+                    "{form} K {k} r {r}: {s} vs {s_ri}, ratio {ratio} vs {expected}"
                 );
             }
         }
         assert!(nt.check_params(&c_nt).is_ok());
+        eprintln!(
+            "{form}: sigma_RI(3%) = {s_ri:.3} MPa, (sigma_N - sigma_RI) / (K r^(1/m)) in [{lo:.4}, {hi:.4}]"
+        );
     }
 }
