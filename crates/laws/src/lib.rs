@@ -8,6 +8,8 @@
 pub mod elastic;
 #[cfg(test)]
 mod example_law;
+#[cfg(test)]
+mod example_material;
 pub mod hardening;
 pub mod law;
 pub mod logstrain;

@@ -272,6 +272,73 @@ impl<L: Law + ?Sized + 'static> Material for LawMaterial<L> {
     }
 }
 
+/// A generic update for a law that writes only its residual and blocks: Newton on
+/// `R(y_1) = 0` from `y_1 = y_0` with `A = dR/dy_1`, converged when every row of the
+/// residual is below 1e-12 of the size of its terms (`sum_j |A_ij y_1j|` plus the
+/// strain increment), the tangent `-[A^-1 E]` from the blocks; `regime` is the branch the
+/// residual is evaluated in (`Smooth` for one smooth residual). Allocates (a few vectors
+/// of `m` and `m^2`): meant for prototypes and for laws whose residual is smooth, not for
+/// the production laws of this crate, which write closed forms or scalar return maps.
+///
+/// # Errors
+/// [`LocalFailure`] on a singular `A`, a non-finite iterate, or after 50 iterations.
+pub fn newton_update(
+    mat: &dyn Material,
+    c: &[f64],
+    y0: &[f64],
+    deps: &Vec4,
+    dt: f64,
+    regime: Regime,
+    y1: &mut [f64],
+) -> Result<MaterialUpdate, LocalFailure> {
+    let m = mat.state_len();
+    let fail = |reason: String| LocalFailure {
+        reason: format!("{}: {reason}", mat.name()),
+        suggested_dt_factor: 0.5,
+    };
+    if !dt.is_finite() || dt < 0.0 || !deps.is_finite() || y0[..m].iter().any(|v| !v.is_finite()) {
+        return Err(fail(format!("invalid input dt = {dt}, deps = {deps:?}")));
+    }
+    y1[..m].copy_from_slice(&y0[..m]);
+    let (mut r, mut a) = (vec![0.0; m], vec![0.0; m * m]);
+    for it in 0..50u32 {
+        let step = Step {
+            y0,
+            y1,
+            deps,
+            dt,
+            regime,
+        };
+        mat.residual(c, &step, &mut r);
+        mat.jac_state(c, &step, &mut a);
+        let converged = (0..m).all(|i| {
+            let terms: f64 = (0..m).map(|j| (a[i * m + j] * y1[j]).abs()).sum::<f64>()
+                + if i < 4 { deps.max_abs() } else { 0.0 };
+            r[i].abs() <= 1e-12 * terms.max(1e-300)
+        });
+        if converged {
+            let tangent = tangent_from_blocks(mat, c, &step)?;
+            return Ok(MaterialUpdate {
+                tangent,
+                iterations: it,
+                regime,
+            });
+        }
+        if !dense_solve(&mut a, m, &mut r) {
+            return Err(fail(format!("singular local Jacobian at iteration {it}")));
+        }
+        for (y, d) in y1.iter_mut().zip(&r) {
+            *y -= d;
+        }
+        if y1[..m].iter().any(|v| !v.is_finite()) {
+            return Err(fail(format!("non-finite state at iteration {it}")));
+        }
+    }
+    Err(fail(
+        "local Newton did not converge in 50 iterations".into(),
+    ))
+}
+
 /// Solves the dense `m x m` system `a x = b` in place (`b` becomes `x`) by Gaussian
 /// elimination with partial pivoting; `a` is overwritten. `false` when a pivot is below
 /// `1e-14` of the largest entry or not finite. No allocation.
