@@ -716,6 +716,65 @@ pub(crate) mod tests {
         );
     }
 
+    /// The elastic/plastic switch (docs/theory.md §12): where the trial stress sits on the
+    /// yield surface, the update is continuous in `sY` but its derivative jumps; each
+    /// side's derivative is the one the blocks of its own regime give (`-A^-1 P`, regime
+    /// held). Uniaxial trial stress `q_tr = 400 MPa`, `Linear(H: 2000)`: below
+    /// `sY = 400` the step is plastic and `d sigma_zz / d sY = 3G/(3G + H)`-weighted, above
+    /// it elastic and 0.
+    #[test]
+    fn the_switch_is_continuous_with_a_jump_in_the_derivative() {
+        let law = Plastic::new(Hardening::Linear, Rate::Independent);
+        let (e, nu, h) = (7e4, 0.3, 2000.0);
+        // a deviatoric strain increment whose trial von Mises stress is 400 MPa
+        let g2 = e / (1.0 + nu);
+        let dir = Vec4([-0.5, 1.0, -0.5, 0.0]);
+        let deps = dir * (400.0 / (1.5 * g2));
+        let sigma = |sy: f64| {
+            let mut y1 = [0.0; 5];
+            let up = law
+                .update(&[e, nu, sy, h], &[0.0; 5], &deps, 1.0, &mut y1)
+                .unwrap();
+            (y1, up.regime)
+        };
+        let (below, rb) = sigma(400.0 - 1e-9);
+        let (above, ra) = sigma(400.0 + 1e-9);
+        assert_eq!((rb, ra), (Regime::Plastic, Regime::Elastic));
+        assert!(
+            (below[1] - above[1]).abs() < 1e-6,
+            "continuous: {} vs {}",
+            below[1],
+            above[1]
+        );
+        // one-sided derivatives from the blocks of each regime
+        let slope = |sy: f64| {
+            let c = [e, nu, sy, h];
+            let (y1, regime) = sigma(sy);
+            let step = Step {
+                y0: &[0.0; 5],
+                y1: &y1,
+                deps: &deps,
+                dt: 1.0,
+                regime,
+            };
+            let (mut a, mut p) = (vec![0.0; 25], vec![0.0; 20]);
+            law.jac_state(&c, &step, &mut a);
+            law.jac_params(&c, &step, &mut p);
+            let mut col: Vec<f64> = (0..5).map(|i| -p[i * 4 + 2]).collect();
+            assert!(crate::material::dense_solve(&mut a, 5, &mut col));
+            col[1]
+        };
+        let (d_below, d_above) = (slope(399.0), slope(401.0));
+        assert_eq!(d_above, 0.0);
+        // deviatoric zz part of the unit uniaxial-like direction: s_zz = (2/3) q, and
+        // q = sY + H dp with dp = (q_tr - sY)/(3G + H): dq/dsY = 3G/(3G + H)
+        let expected = 2.0 / 3.0 * (1.5 * g2) / (1.5 * g2 + h);
+        assert!((d_below - expected).abs() < 1e-9, "{d_below} vs {expected}");
+        // and finite differences on each side agree with them
+        let fd = |sy: f64| (sigma(sy + 1e-3).0[1] - sigma(sy - 1e-3).0[1]) / 2e-3;
+        assert!((fd(399.0) - d_below).abs() < 1e-6 && fd(401.0).abs() < 1e-12);
+    }
+
     /// The system shall refuse negative or non-finite hardening and rate parameters,
     /// naming the parameter and its range.
     #[test]
