@@ -10,7 +10,7 @@ use crate::mandel::{Mat4, Vec4};
 use crate::material::{
     InternalInfo, Material, MaterialUpdate, Regime, Step, newton_update, stress_of,
 };
-use crate::registry::{Built, Fields, LawEntry, SpecFields, ordered_params};
+use crate::registry::{Built, Fields, LawEntry, SpecFields, number, ordered_params};
 
 /// Burgers solid, parameters `c = [E, nu, eta, Gk, etak]` (MPa, -, MPa s, MPa, MPa s);
 /// state `y = [sigma, ek]`, `ek` the Kelvin element's (deviatoric) strain. Strain
@@ -167,6 +167,13 @@ pub const ENTRY: LawEntry = LawEntry {
     variant: "Burgers",
     summary: "Burgers viscoelasticity (Maxwell and Kelvin-Voigt in series, in shear)",
     example: "Burgers(E: 3000.0, nu: 0.35, eta: 50000.0, Gk: 800.0, etak: 2000.0)",
+    fields: &[
+        number("E"),
+        number("nu"),
+        number("eta"),
+        number("Gk"),
+        number("etak"),
+    ],
     build: build_spec,
 };
 

@@ -12,7 +12,10 @@ use crate::law::{LocalFailure, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 use crate::material::{InternalInfo, Material, MaterialUpdate, Regime, Step, stress_of};
 use crate::norton_hoff::{K_INFO, M_INFO, solve_overstress};
-use crate::registry::{Built, Fields, LawEntry, SpecValue, ordered_params};
+use crate::registry::{
+    Built, FieldKind, FieldSchema, Fields, LawEntry, SpecValue, VariantSchema, number,
+    ordered_params,
+};
 
 /// The rate form of a [`Plastic`] law.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -466,6 +469,49 @@ pub const ENTRY: LawEntry = LawEntry {
               rate-independent or with Norton overstress",
     example: "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Power(n: 0.2), \
               rate: Norton(K: 200.0, m: 3.0))",
+    fields: &[
+        number("E"),
+        number("nu"),
+        number("sY"),
+        FieldSchema {
+            name: "hardening",
+            kind: FieldKind::OneOf(&[
+                VariantSchema {
+                    name: "Linear",
+                    fields: &[number("H")],
+                },
+                VariantSchema {
+                    name: "Power",
+                    fields: &[number("n")],
+                },
+                VariantSchema {
+                    name: "Voce",
+                    fields: &[number("Q"), number("b")],
+                },
+                VariantSchema {
+                    name: "Swift",
+                    fields: &[number("eps0"), number("n")],
+                },
+                VariantSchema {
+                    name: "Table",
+                    fields: &[FieldSchema {
+                        name: "points",
+                        kind: FieldKind::Pairs,
+                        optional: false,
+                    }],
+                },
+            ]),
+            optional: false,
+        },
+        FieldSchema {
+            name: "rate",
+            kind: FieldKind::OneOf(&[VariantSchema {
+                name: "Norton",
+                fields: &[number("K"), number("m")],
+            }]),
+            optional: true,
+        },
+    ],
     build: build_spec,
 };
 

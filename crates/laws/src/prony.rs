@@ -9,7 +9,9 @@ use crate::elastic::{
 use crate::law::{LocalFailure, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 use crate::material::{InternalInfo, Material, MaterialUpdate, Regime, Step, stress_of};
-use crate::registry::{Built, Fields, LawEntry, SpecValue, ordered_params};
+use crate::registry::{
+    Built, FieldKind, FieldSchema, Fields, LawEntry, SpecValue, number, ordered_params,
+};
 
 /// The largest number of Prony terms.
 pub const MAX_TERMS: usize = 8;
@@ -330,6 +332,15 @@ pub const ENTRY: LawEntry = LawEntry {
     variant: "Prony",
     summary: "generalized Maxwell viscoelasticity in shear (Prony series), bulk elastic",
     example: "Prony(E: 3000.0, nu: 0.35, terms: [(g: 0.3, tau: 0.1), (g: 0.2, tau: 2.0)])",
+    fields: &[
+        number("E"),
+        number("nu"),
+        FieldSchema {
+            name: "terms",
+            kind: FieldKind::ListOf(&[number("g"), number("tau")]),
+            optional: false,
+        },
+    ],
     build: build_spec,
 };
 

@@ -43,6 +43,49 @@ pub type SpecFields = [(String, SpecValue)];
 /// A registered constructor.
 pub type Constructor = fn(&SpecFields) -> Result<Built, LawError>;
 
+/// The shape of one field of a law's configuration variant, so that a configuration
+/// reader can parse it (nested variant names included) without knowing the law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FieldKind {
+    /// A number.
+    Number,
+    /// One of these named variants (`hardening: Voce(Q: .., b: ..)`).
+    OneOf(&'static [VariantSchema]),
+    /// A list of anonymous structs with these fields (`terms: [(g: .., tau: ..), ...]`).
+    ListOf(&'static [FieldSchema]),
+    /// A list of number pairs (`points: [(eps_p, sigma), ...]`).
+    Pairs,
+}
+
+/// One field of a variant: name, shape, and whether it may be omitted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSchema {
+    /// Field name as written in configurations.
+    pub name: &'static str,
+    /// Its shape.
+    pub kind: FieldKind,
+    /// `true` when the field may be omitted (`rate` of `Plastic`).
+    pub optional: bool,
+}
+
+/// A named variant and its fields (`Voce` with `Q`, `b`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VariantSchema {
+    /// Variant name.
+    pub name: &'static str,
+    /// Its fields.
+    pub fields: &'static [FieldSchema],
+}
+
+/// A required number field (for schemas).
+pub const fn number(name: &'static str) -> FieldSchema {
+    FieldSchema {
+        name,
+        kind: FieldKind::Number,
+        optional: false,
+    }
+}
+
 /// One registered law.
 #[derive(Clone, Copy, Debug)]
 pub struct LawEntry {
@@ -54,6 +97,8 @@ pub struct LawEntry {
     pub summary: &'static str,
     /// A complete configuration example of the variant.
     pub example: &'static str,
+    /// The fields of the variant and their shapes (what a configuration reader parses).
+    pub fields: &'static [FieldSchema],
     /// The constructor from the variant's named fields.
     pub build: Constructor,
 }
@@ -194,6 +239,7 @@ const ELASTIC: LawEntry = LawEntry {
     variant: "Elastic",
     summary: "linear isotropic elasticity",
     example: "Elastic(E: 200000.0, nu: 0.3)",
+    fields: &[number("E"), number("nu")],
     build: |f| build_law(&Elastic, f),
 };
 const MAXWELL: LawEntry = LawEntry {
@@ -201,6 +247,7 @@ const MAXWELL: LawEntry = LawEntry {
     variant: "Maxwell",
     summary: "Maxwell viscoelasticity (deviatoric dashpot)",
     example: "Maxwell(E: 3000.0, nu: 0.35, eta: 20000.0)",
+    fields: &[number("E"), number("nu"), number("eta")],
     build: |f| build_law(&Maxwell, f),
 };
 const NORTON_HOFF: LawEntry = LawEntry {
@@ -208,6 +255,13 @@ const NORTON_HOFF: LawEntry = LawEntry {
     variant: "NortonHoff",
     summary: "Norton-Hoff elastoviscoplasticity with a yield stress",
     example: "NortonHoff(E: 100000.0, nu: 0.3, K: 1500.0, m: 5.0, sY: 500.0)",
+    fields: &[
+        number("E"),
+        number("nu"),
+        number("K"),
+        number("m"),
+        number("sY"),
+    ],
     build: |f| build_law(&NortonHoff, f),
 };
 
@@ -281,6 +335,71 @@ mod tests {
         .unwrap();
         assert_eq!(b.params, [3000.0, 0.35, 0.3, 0.1, 0.2, 2.0]);
         assert_eq!(b.material.n_internal(), 8);
+    }
+
+    /// A valid value for a parameter name (the schema test's numbers).
+    fn sample(name: &str) -> f64 {
+        match name {
+            "E" | "Gk" => 1000.0,
+            "nu" => 0.3,
+            "m" => 2.0,
+            "g" => 0.2,
+            _ => 0.5,
+        }
+    }
+
+    fn sample_fields(fields: &[FieldSchema], pick: usize) -> Vec<(String, SpecValue)> {
+        fields
+            .iter()
+            .map(|f| {
+                let v = match f.kind {
+                    FieldKind::Number => SpecValue::Number(sample(f.name)),
+                    FieldKind::OneOf(vs) => {
+                        let v = &vs[pick % vs.len()];
+                        SpecValue::Variant {
+                            name: v.name.into(),
+                            fields: sample_fields(v.fields, pick),
+                        }
+                    }
+                    FieldKind::ListOf(inner) => SpecValue::List(vec![
+                        SpecValue::Variant {
+                            name: String::new(),
+                            fields: sample_fields(inner, pick),
+                        };
+                        2
+                    ]),
+                    FieldKind::Pairs => SpecValue::List(
+                        [(0.0, 1.0), (1.0, 2.0)]
+                            .iter()
+                            .map(|&(a, b)| {
+                                SpecValue::Tuple(vec![SpecValue::Number(a), SpecValue::Number(b)])
+                            })
+                            .collect(),
+                    ),
+                };
+                (f.name.to_string(), v)
+            })
+            .collect()
+    }
+
+    /// The system shall describe every law's fields by a schema that its constructor
+    /// accepts: a specification generated from the schema (every variant of every
+    /// `OneOf`, optional fields given and omitted) builds.
+    #[test]
+    fn schemas_agree_with_the_constructors() {
+        for e in REGISTRY {
+            for pick in 0..5 {
+                let all = sample_fields(e.fields, pick);
+                (e.build)(&all).unwrap_or_else(|err| panic!("{} pick {pick}: {err}", e.name));
+                let required: Vec<(String, SpecValue)> = all
+                    .iter()
+                    .zip(e.fields)
+                    .filter(|(_, f)| !f.optional)
+                    .map(|(v, _)| v.clone())
+                    .collect();
+                (e.build)(&required).unwrap_or_else(|err| panic!("{} required: {err}", e.name));
+            }
+        }
     }
 
     /// The system shall name what is wrong: an unknown law, hardening or rate kind, an
