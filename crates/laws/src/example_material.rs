@@ -250,6 +250,19 @@ mod tests {
         });
     }
 
+    /// The guide (docs/adding-a-law.md §4) shows this file's law, verbatim.
+    #[test]
+    fn the_guide_shows_this_code() {
+        let me = include_str!("example_material.rs");
+        let guide = include_str!("../../../docs/adding-a-law.md");
+        let start = me.find("use crate::LawError;").unwrap();
+        let end = me.find("#[cfg(test)]\nmod tests").unwrap();
+        assert!(
+            guide.contains(me[start..end].trim_end()),
+            "docs/adding-a-law.md's Burgers example differs from example_material.rs"
+        );
+    }
+
     /// The entry builds the law with its parameters in order.
     #[test]
     fn entry_builds_the_law() {
