@@ -35,7 +35,7 @@ pub use maxwell::Maxwell;
 pub use norton_hoff::NortonHoff;
 pub use plastic::{Plastic, Rate};
 pub use prony::Prony;
-pub use registry::{Built, LawEntry, REGISTRY, SpecValue};
+pub use registry::{Built, LawEntry, REGISTRY, SpecValue, VARIANTS};
 
 /// Names accepted by [`law_by_name`], in the order of increasing complexity.
 pub const LAW_NAMES: [&str; 3] = ["elastic", "maxwell", "norton-hoff"];

@@ -137,6 +137,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// The stress-only [`Law`] this material adapts ([`LawMaterial`]), `None` for a law with
+    /// internal variables: a solver keeps the `Law` fast paths (`affine_update`,
+    /// `elastic_domain`, the adjoint of docs/theory.md §3) and their bits for these.
+    fn as_law(&self) -> Option<&'static dyn Law> {
+        None
+    }
+
     /// The local residual `R` of the branch `step.regime`, into `r` (length `m`).
     fn residual(&self, c: &[f64], step: &Step<'_>, r: &mut [f64]);
 
@@ -208,11 +215,14 @@ pub fn check_param_ranges(
 /// `E = -I`, `P = dr/dc` ([`Law::residual_param_derivative`]); the update is the law's,
 /// so the stress and tangent are the same bits.
 #[derive(Clone, Copy, Debug)]
-pub struct LawMaterial<L: 'static + ?Sized>(pub &'static L);
+pub struct LawMaterial(pub &'static dyn Law);
 
-impl<L: Law + ?Sized + 'static> Material for LawMaterial<L> {
+impl Material for LawMaterial {
     fn name(&self) -> &'static str {
         self.0.name()
+    }
+    fn as_law(&self) -> Option<&'static dyn Law> {
+        Some(self.0)
     }
     fn params(&self) -> &[ParamInfo] {
         self.0.params()
@@ -439,6 +449,7 @@ mod tests {
             assert_eq!(mat.n_internal(), 0);
             assert_eq!(mat.state_len(), 4);
             assert_eq!(mat.name(), law.name());
+            assert!(mat.as_law().is_some());
             let mut s = Vec4::ZERO;
             let mut y = [0.0; 4];
             for i in 0..40 {

@@ -112,6 +112,10 @@ pub const REGISTRY: &[LawEntry] = &[
     crate::prony::ENTRY,
 ];
 
+/// The configuration variants of [`REGISTRY`], in its order (for a reader's
+/// `deserialize_enum`; checked against the registry by a test).
+pub const VARIANTS: &[&str] = &["Elastic", "Maxwell", "NortonHoff", "Plastic", "Prony"];
+
 /// The entry whose name (`plastic`) or variant (`Plastic`) is `key`.
 pub fn entry(key: &str) -> Option<&'static LawEntry> {
     REGISTRY.iter().find(|e| e.name == key || e.variant == key)
@@ -286,6 +290,8 @@ mod tests {
     /// the law's order, and find entries by name and variant.
     #[test]
     fn every_entry_builds_and_is_found() {
+        let variants: Vec<&str> = REGISTRY.iter().map(|e| e.variant).collect();
+        assert_eq!(variants, VARIANTS);
         for e in REGISTRY {
             assert_eq!(entry(e.name).unwrap().variant, e.variant);
             assert_eq!(entry(e.variant).unwrap().name, e.name);
