@@ -8,20 +8,34 @@
 pub mod elastic;
 #[cfg(test)]
 mod example_law;
+#[cfg(test)]
+mod example_material;
+pub mod hardening;
 pub mod law;
 pub mod logstrain;
 pub mod mandel;
+pub mod material;
 pub mod maxwell;
 pub mod norton_hoff;
+pub mod plastic;
+pub mod prony;
+pub mod registry;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 #[cfg(test)]
-mod testing;
+mod validation;
 
 pub use elastic::Elastic;
+pub use hardening::{Hardening, Table};
 pub use law::{ElasticDomain, Law, LocalFailure, LocalUpdate, ParamInfo};
 pub use logstrain::LogStrain;
 pub use mandel::{Mat4, Vec4};
+pub use material::{InternalInfo, LawMaterial, Material, MaterialUpdate, Regime, Step};
 pub use maxwell::Maxwell;
 pub use norton_hoff::NortonHoff;
+pub use plastic::{Plastic, Rate};
+pub use prony::Prony;
+pub use registry::{Built, LawEntry, REGISTRY, SpecValue, VARIANTS};
 
 /// Names accepted by [`law_by_name`], in the order of increasing complexity.
 pub const LAW_NAMES: [&str; 3] = ["elastic", "maxwell", "norton-hoff"];
@@ -60,6 +74,17 @@ pub enum LawError {
         expected: usize,
         /// Given count.
         got: usize,
+    },
+    /// A structural field of a law's specification (a hardening table, a list of Prony
+    /// terms, a kind name) that is not allowed.
+    #[error("{law}: `{field}`: {message}")]
+    Spec {
+        /// Law name.
+        law: &'static str,
+        /// The field, as written in configurations (`hardening.points[2]`, `terms`).
+        field: String,
+        /// What is wrong and the allowed range.
+        message: String,
     },
     /// The cost is not differentiable at these parameters.
     #[error("{law}: not differentiable with respect to `{name}` at {value}: {why}")]

@@ -31,7 +31,7 @@ use crate::mandel::{Mat4, Vec4};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NortonHoff;
 
-const K_INFO: ParamInfo = ParamInfo {
+pub(crate) const K_INFO: ParamInfo = ParamInfo {
     name: "K",
     unit: "MPa s^(1/m)",
     description: "viscosity (drag stress) of the Norton power law",
@@ -40,7 +40,7 @@ const K_INFO: ParamInfo = ParamInfo {
     max: f64::INFINITY,
     max_inclusive: false,
 };
-const M_INFO: ParamInfo = ParamInfo {
+pub(crate) const M_INFO: ParamInfo = ParamInfo {
     name: "m",
     unit: "-",
     description: "Norton exponent (m > 1 needed for the adjoint)",
@@ -141,7 +141,7 @@ fn failure(reason: String) -> LocalFailure {
 /// # Errors
 /// [`LocalFailure`] when the bracket is not finite (non-positive or non-finite inputs)
 /// or after 200 iterations.
-fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalFailure> {
+pub(crate) fn solve_overstress(k: f64, b: f64, m: f64, d: f64) -> Result<(f64, u32), LocalFailure> {
     if b == 0.0 {
         return Ok((d / k, 0));
     }
