@@ -326,7 +326,7 @@ impl<'m> DirectSolver<'m> {
 
     /// Runs a history whose segments prescribe the depth or the force
     /// ([`LoadHistory`]): under load control the depth of each step is an unknown solved
-    /// with the force equation (docs/theory.md §14); the trajectory records the depths
+    /// with the force equation (docs/theory.md §12); the trajectory records the depths
     /// reached and the forces carried. A history of depth segments only runs as
     /// [`DirectSolver::run`] does on its schedule (the same bits).
     ///

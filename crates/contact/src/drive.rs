@@ -5,7 +5,7 @@
 //! prescribe the depth or the force `P(t)`: in a load-controlled step the depth is one
 //! more unknown with the scalar equation `sum_k lambda_k = P`, solved by the Newton
 //! driver's bordered update on the same factorization (`newton.rs`, `Newton::border`;
-//! docs/theory.md §14). The constraints never read the drive: they take the iterate's
+//! docs/theory.md §12). The constraints never read the drive: they take the iterate's
 //! depth (`constraint::Iterate::depth`), so a depth that changes between Newton
 //! iterations needs no change in them (docs/solver.md).
 

@@ -240,7 +240,7 @@ impl Schedule {
 /// linearly over `duration` (s) in `steps` equal steps to the punch `depth` (mm) or to the
 /// punch `force` (N), exactly one of the two. A depth-controlled segment after a
 /// load-controlled one starts from the depth the load reached; a load-controlled segment
-/// starts from the force the last step carried (docs/theory.md §14).
+/// starts from the force the last step carried (docs/theory.md §12).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HistorySegment {

@@ -693,7 +693,7 @@ impl<'m> Newton<'m> {
 }
 
 impl Newton<'_> {
-    /// Load control's bordered update (docs/theory.md §14): the first solve left
+    /// Load control's bordered update (docs/theory.md §12): the first solve left
     /// `du_1` in `self.rhs` (`K du_1 = -R` with the constraint's increments); the depth
     /// column `du_2 = w - v` comes from one more solve with the same factorization,
     /// `K w = K v` with the constrained equations held (`v`: 1 on the active candidates'

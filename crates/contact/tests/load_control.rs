@@ -1,4 +1,4 @@
-//! Load control (`DirectSolver::run_history` with force segments; docs/theory.md §14,
+//! Load control (`DirectSolver::run_history` with force segments; docs/theory.md §12,
 //! docs/validation-load-control.md): a depth-controlled run's force history, prescribed
 //! as the load, drives the punch back to the same depths (to solver tolerance) for every
 //! contact kind, both kinematics and every law; mixed histories (depth, then load, then

@@ -672,7 +672,7 @@ pub fn library_law(name: &str) -> Result<&'static dyn Law> {
 
 /// The punch's history: consecutive piecewise-linear segments from `t = 0`, `h = 0`,
 /// each prescribing the depth `(duration, depth, steps)` or the force `(duration, force,
-/// steps)` (load control, docs/theory.md §14; `simulate` only for now).
+/// steps)` (load control, docs/theory.md §12; `simulate` only for now).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename = "history")]
 pub struct History {

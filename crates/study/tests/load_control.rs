@@ -1,7 +1,7 @@
 //! Load control in configurations: `history` segments with `force` (N), `simulate`
 //! writing t, h, F, a for a mixed history; `identify` and `gradient-check` refusing
 //! load-controlled histories and `data.drive: Force` with a message naming the field
-//! (their gradient needs the adjoint of the bordered system, docs/theory.md §14); bad
+//! (their gradient needs the adjoint of the bordered system, docs/theory.md §12); bad
 //! segments naming theirs.
 
 use indentify_study::gradient::{self, GradientOptions};
