@@ -23,9 +23,9 @@
 use indentify_laws::{Law, Vec4};
 
 use crate::ContactError;
-use crate::drive::{DepthDrive, Drive};
+use crate::drive::{DepthDrive, Drive, ForceDrive};
 use crate::friction::Status;
-use crate::history::Schedule;
+use crate::history::{LoadHistory, Schedule};
 use crate::model::Model;
 use crate::newton::{Newton, State, StepFailure, StepSpec};
 use crate::system::ConstrainedSystem;
@@ -324,6 +324,52 @@ impl<'m> DirectSolver<'m> {
         Ok(traj)
     }
 
+    /// Runs a history whose segments prescribe the depth or the force
+    /// ([`LoadHistory`]): under load control the depth of each step is an unknown solved
+    /// with the force equation (docs/theory.md §13); the trajectory records the depths
+    /// reached and the forces carried. A history of depth segments only runs as
+    /// [`DirectSolver::run`] does on its schedule (the same bits).
+    ///
+    /// # Errors
+    /// As [`DirectSolver::run`]; a load-controlled step whose force cannot be carried
+    /// fails with the reason ([`ContactError::StepFailed`]). A load-controlled run saves
+    /// no checkpoints ([`SolverOptions::checkpoint_every`] is ignored): replays drive by
+    /// depth.
+    pub fn run_history(
+        &mut self,
+        law: &dyn Law,
+        c: &[f64],
+        history: &LoadHistory,
+        opts: &SolverOptions,
+    ) -> Result<Trajectory, ContactError> {
+        if !history.is_load_controlled() {
+            return self.run(law, c, &history.schedule, opts);
+        }
+        law.check_params(c)?;
+        let schedule = &history.schedule;
+        let mut traj = Trajectory {
+            params: c.to_vec(),
+            ..Default::default()
+        };
+        let state = State::initial(self.model, schedule.t[0], 0.0);
+        let run = Run {
+            law,
+            c,
+            schedule,
+            drive: &ForceDrive(history),
+            opts,
+        };
+        // no checkpoints: a replay (the adjoint's) drives by depth only
+        let stretch = Stretch {
+            j0: 0,
+            j1: schedule.t.len() - 1,
+            record: opts.record_fields,
+            every: 0,
+        };
+        self.advance(&run, state, &stretch, &mut traj)?;
+        Ok(traj)
+    }
+
     /// Replays the run from `checkpoint` up to schedule index `j_end`, recording fields:
     /// the returned trajectory's `fields[0]` is the checkpoint's state and its steps are
     /// those of the original run from `checkpoint.steps_done` on (the computation is
@@ -424,13 +470,15 @@ impl<'m> DirectSolver<'m> {
                 .map(|t| (t, 0u32))
                 .collect();
             while let Some(&(t1, level)) = targets.last() {
+                let (depth, load) = run.drive.step(t1, &state);
                 let spec = StepSpec {
                     law: run.law,
                     c: run.c,
                     opts,
                     state: &state,
                     t1,
-                    depth: run.drive.depth_at(t1),
+                    depth,
+                    load,
                 };
                 match self.newton.step(&spec, &mut traj.timing) {
                     Ok((rec_state, mut rec)) => {

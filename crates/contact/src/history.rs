@@ -236,6 +236,169 @@ impl Schedule {
     }
 }
 
+/// One segment of a history that may prescribe the force instead of the depth: move
+/// linearly over `duration` (s) in `steps` equal steps to the punch `depth` (mm) or to the
+/// punch `force` (N), exactly one of the two. A depth-controlled segment after a
+/// load-controlled one starts from the depth the load reached; a load-controlled segment
+/// starts from the force the last step carried (docs/theory.md §13).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HistorySegment {
+    /// Duration (s), > 0.
+    pub duration: f64,
+    /// Punch depth at the end of the segment (mm): a depth-controlled segment.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth: Option<f64>,
+    /// Punch force at the end of the segment (N, > 0): a load-controlled segment.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<f64>,
+    /// Number of time steps, >= 1.
+    pub steps: usize,
+}
+
+impl From<Segment> for HistorySegment {
+    fn from(s: Segment) -> HistorySegment {
+        HistorySegment {
+            duration: s.duration,
+            depth: Some(s.depth),
+            force: None,
+            steps: s.steps,
+        }
+    }
+}
+
+/// What a segment of a [`LoadHistory`] prescribes at its end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// The punch depth (mm).
+    Depth(f64),
+    /// The punch force (N, > 0).
+    Force(f64),
+}
+
+/// A history whose segments prescribe the depth or the force: the schedule's times, and
+/// the end time and target of every segment. `schedule.depth` holds the prescribed depths
+/// of depth-controlled points and, at load-controlled points, the last prescribed depth
+/// before them (a placeholder: the depth there is an unknown of the run, recorded in the
+/// trajectory).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadHistory {
+    /// The time grid (and the depths where prescribed).
+    pub schedule: Schedule,
+    /// `(t_end, target)` of every segment, in time order.
+    pub ends: Vec<(f64, Target)>,
+}
+
+impl LoadHistory {
+    /// The history of consecutive segments from `t = 0`, depth 0, force 0.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `history.segments[].depth` / `.force` for a segment
+    /// with both or neither, a negative, zero or non-finite force; and the errors of
+    /// [`Schedule::from_segments`].
+    pub fn from_segments(segments: &[HistorySegment]) -> Result<LoadHistory, ContactError> {
+        let mut plain = Vec::with_capacity(segments.len());
+        let mut ends = Vec::with_capacity(segments.len());
+        let (mut t, mut last_depth) = (0.0, 0.0);
+        for (i, s) in segments.iter().enumerate() {
+            let target = match (s.depth, s.force) {
+                (Some(d), None) => Target::Depth(d),
+                (None, Some(f)) => {
+                    if !(f.is_finite() && f > 0.0) {
+                        return Err(ContactError::Input {
+                            field: "history.segments[].force",
+                            value: format!("{f} (segment {i})"),
+                            allowed: "a finite force > 0 N (a force of 0 leaves the depth \
+                                      undetermined: end an unloading in depth control, \
+                                      `depth: 0.0`)"
+                                .into(),
+                        });
+                    }
+                    Target::Force(f)
+                }
+                (d, f) => {
+                    return Err(ContactError::Input {
+                        field: "history.segments[].depth",
+                        value: format!(
+                            "{} (segment {i})",
+                            if d.is_some() && f.is_some() {
+                                "both depth and force"
+                            } else {
+                                "neither depth nor force"
+                            }
+                        ),
+                        allowed: "exactly one of `depth` (mm, depth control) and `force` \
+                                  (N, load control) per segment"
+                            .into(),
+                    });
+                }
+            };
+            if let Target::Depth(d) = target {
+                last_depth = d;
+            }
+            plain.push(Segment {
+                duration: s.duration,
+                depth: last_depth,
+                steps: s.steps,
+            });
+            t += s.duration;
+            ends.push((t, target));
+        }
+        let schedule = Schedule::from_segments(&plain)?;
+        // the segments' end times as the schedule accumulates them (bit for bit)
+        let mut j = 0;
+        for (end, s) in ends.iter_mut().zip(segments) {
+            j += s.steps;
+            end.0 = schedule.t[j];
+        }
+        Ok(LoadHistory { schedule, ends })
+    }
+
+    /// A history prescribing a measured force record `(t_i, F_i)` (s, N), one
+    /// load-controlled segment per interval; the first point is the initial state (its
+    /// force is not read: the run starts stress-free).
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] as [`Schedule::from_record`], and for a force that is not
+    /// finite and > 0 after the first point (naming `data.force` and the index).
+    pub fn from_force_record(t: &[f64], force: &[f64]) -> Result<LoadHistory, ContactError> {
+        let zeros = vec![0.0; force.len()];
+        let schedule = Schedule::from_record(t, &zeros)?;
+        if t.len() != force.len() {
+            return Err(ContactError::Input {
+                field: "data.force",
+                value: format!("{} times and {} forces", t.len(), force.len()),
+                allowed: "as many forces as times".into(),
+            });
+        }
+        let mut ends = Vec::with_capacity(t.len() - 1);
+        for i in 1..t.len() {
+            if !(force[i].is_finite() && force[i] > 0.0) {
+                return Err(ContactError::Input {
+                    field: "data.force",
+                    value: format!("F[{i}] = {}", force[i]),
+                    allowed: "a finite force > 0 N at every point after the first (load \
+                              control cannot prescribe a zero force)"
+                        .into(),
+                });
+            }
+            ends.push((t[i], Target::Force(force[i])));
+        }
+        Ok(LoadHistory { schedule, ends })
+    }
+
+    /// Whether some segment prescribes the force.
+    pub fn is_load_controlled(&self) -> bool {
+        self.ends.iter().any(|e| matches!(e.1, Target::Force(_)))
+    }
+
+    /// The segment a step ending at time `t` (s) belongs to: its end time and target.
+    pub fn segment_at(&self, t: f64) -> (f64, Target) {
+        let i = self.ends.partition_point(|e| e.0 < t);
+        self.ends[i.min(self.ends.len() - 1)]
+    }
+}
+
 /// The trapezoid of docs/theory.md §11: ramp to `h_max` in `t_load`, hold `t_hold`, unload to 0
 /// in `t_unload`, `steps` per segment.
 pub fn trapezoid(

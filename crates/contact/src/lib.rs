@@ -24,7 +24,9 @@ pub use direct::{
     Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
     nodal_pressures,
 };
-pub use history::{MAX_SUBSTEPS, Schedule, Segment, trapezoid};
+pub use history::{
+    HistorySegment, LoadHistory, MAX_SUBSTEPS, Schedule, Segment, Target, trapezoid,
+};
 pub use kinematics::Kinematics;
 pub use model::Model;
 pub use normal::ContactKind;

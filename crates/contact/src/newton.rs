@@ -20,6 +20,7 @@ use indentify_laws::{Law, Vec4};
 use crate::body::{Body, StepLaw};
 use crate::constraint::{self, Constraint, ContactSet, Iterate, StatusFlip, Tolerances};
 use crate::direct::{SolverOptions, StepRecord, Timing};
+use crate::drive::Load;
 use crate::kinematics::{self, FiniteFailure, Kinematics};
 use crate::model::Model;
 use crate::system::ConstrainedSystem;
@@ -41,6 +42,9 @@ pub(crate) enum StepFailure {
     Linear(String),
     /// A node in normal contact beyond the end of the punch surface: not cured by cutting.
     Geometry(String),
+    /// Load control: the prescribed force cannot be carried (no positive contact
+    /// stiffness, or a depth beyond the specimen), with the reason.
+    Load(String),
     /// Finite strain: an element inverted (`det F <= 0`) at Gauss point `qp`.
     Inverted {
         qp: usize,
@@ -67,7 +71,7 @@ impl std::fmt::Display for StepFailure {
                 write!(f, "active set cycling after {changes} changes")
             }
             StepFailure::Linear(m) => write!(f, "linear solve failed: {m}"),
-            StepFailure::Geometry(m) => write!(f, "{m}"),
+            StepFailure::Geometry(m) | StepFailure::Load(m) => write!(f, "{m}"),
             StepFailure::Inverted { qp, det, depth } => write!(
                 f,
                 "element {} is inverted (det F = {det:.3e} at its Gauss point {}) at the \
@@ -101,6 +105,8 @@ pub(crate) struct State {
     pub(crate) order: usize,
     /// Punch depth of the state (mm).
     pub(crate) depth: f64,
+    /// Punch force of the state (N): the sum of the active candidates' vertical reactions.
+    pub(crate) force: f64,
     /// Coulomb friction (empty without): the arc coordinate of every candidate's closest
     /// point at this state (the stick points of the next step).
     pub(crate) xi: Vec<f64>,
@@ -112,6 +118,8 @@ pub(crate) struct Increment {
     pub(crate) du: Vec<f64>,
     pub(crate) dt: f64,
     pub(crate) rate: f64,
+    /// The step's depth increment (mm).
+    pub(crate) depth: f64,
 }
 
 impl State {
@@ -134,9 +142,11 @@ impl State {
                 },
                 dt: 0.0,
                 rate: 0.0,
+                depth: 0.0,
             }),
             order: 1,
             depth: depth0,
+            force: 0.0,
             xi: if model.contact.friction() > 0.0 {
                 let u0 = vec![0.0; model.disc.n_dofs()];
                 (0..nc).map(|k| model.project(k, &u0, depth0).s).collect()
@@ -159,7 +169,8 @@ impl State {
 }
 
 /// A step to solve: the law and its parameters, the options, the converged state it
-/// starts from, its end time and the punch depth there (from the drive).
+/// starts from, its end time, the punch depth Newton starts from and, under load
+/// control, the prescribed force (both from the drive, `drive.rs`).
 pub(crate) struct StepSpec<'a> {
     pub law: &'a dyn Law,
     pub c: &'a [f64],
@@ -167,6 +178,7 @@ pub(crate) struct StepSpec<'a> {
     pub state: &'a State,
     pub t1: f64,
     pub depth: f64,
+    pub load: Option<Load>,
 }
 
 /// The time extrapolation of a nonlinear law's first iterate: the polynomial of degree 1
@@ -243,6 +255,9 @@ impl Extrapolation {
 /// The iterate of a step and its bookkeeping.
 struct Iteration {
     u: Vec<f64>,
+    /// The punch depth of the iterate (mm): the step's under depth control, an unknown
+    /// under load control.
+    depth: f64,
     sigma: Vec<Vec4>,
     set: ContactSet,
     /// The contact sets tried so far (cycling detection).
@@ -287,6 +302,11 @@ pub(crate) struct Newton<'m> {
     pub(crate) residuals: Vec<(f64, u32)>,
     /// Status changes proposed by the constraint (work space).
     flips: Vec<StatusFlip>,
+    /// Load control's work space (equation-sized): the active candidates' vertical
+    /// equations `v`, `K v`, and the depth column of the bordered system.
+    v: Vec<f64>,
+    kv: Vec<f64>,
+    col: Vec<f64>,
 }
 
 impl<'m> Newton<'m> {
@@ -306,6 +326,9 @@ impl<'m> Newton<'m> {
             constrained: vec![false; n],
             residuals: Vec::new(),
             flips: Vec::new(),
+            v: Vec::new(),
+            kv: Vec::new(),
+            col: Vec::new(),
         })
     }
 
@@ -322,6 +345,7 @@ impl<'m> Newton<'m> {
         let dt = spec.t1 - state.t;
         let mut it = Iteration {
             u: state.u.clone(),
+            depth: spec.depth,
             sigma: state.sigma.clone(),
             set: state.set.clone(),
             seen: Vec::new(),
@@ -335,6 +359,13 @@ impl<'m> Newton<'m> {
         let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         self.constraint
             .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
+        if spec.load.is_some() && !it.set.active.contains(&true) {
+            // load control out of contact: the trigger moves the punch to where its first
+            // candidate touches (a hair beyond), where the contact stiffness is positive
+            it.depth = touch_depth(self.model, &it.u) + 1e-9 * self.model.gap_length();
+            self.constraint
+                .predict(&mut it.set, &it.u, &last.du, ratio, it.depth);
+        }
         let affine = self
             .body
             .begin_step(self.model, spec.law, spec.c, state, dt)?;
@@ -351,10 +382,10 @@ impl<'m> Newton<'m> {
         // and relaxation the higher degrees predict 5-15 times closer: a Newton iteration
         // fewer per step). Affine laws converge in one solve from anywhere and keep their
         // cheap first pass.
-        let rate = if dt > 0.0 {
-            (spec.depth - state.depth) / dt
-        } else {
-            0.0
+        let rate = match spec.load {
+            Some(load) => load.rate,
+            None if dt > 0.0 => (spec.depth - state.depth) / dt,
+            None => 0.0,
         };
         let extra = Extrapolation::new(state, dt, rate, law.affine.is_some(), it.u.len());
         extra.apply(state, &mut it.u);
@@ -371,6 +402,9 @@ impl<'m> Newton<'m> {
                 // met (semi-smooth Newton): a wrong set is corrected without a full solve
                 if targets_met && (converged || r.rel <= spec.opts.active_set_check_tol) {
                     if let Check::Converged = self.check_sets(spec, &mut it, converged)? {
+                        if let Some(load) = spec.load {
+                            self.depth_within_specimen(it.depth, load.force)?;
+                        }
                         return Ok(self.finish(spec, &law, it, r, rate, &extra));
                     }
                 }
@@ -402,7 +436,7 @@ impl<'m> Newton<'m> {
                 StepFailure::Inverted { qp, det, .. } => StepFailure::Inverted {
                     qp,
                     det,
-                    depth: spec.depth,
+                    depth: it.depth,
                 },
                 other => other,
             })?;
@@ -425,6 +459,10 @@ impl<'m> Newton<'m> {
             }
         }
         res = res.max(self.constraint.residual(&it.set, &view));
+        if let Some(load) = spec.load {
+            // the drive's row: the punch force meets the prescribed one
+            res = res.max((punch_force(model, &it.set, view.f_int) - load.force).abs());
+        }
         let scale = fmax.max(spec.state.f_scale);
         let rel = if scale > 0.0 { res / scale } else { res };
         self.residuals.push((rel, it.changes));
@@ -446,7 +484,7 @@ impl<'m> Newton<'m> {
     ) -> Result<Check, StepFailure> {
         let model = self.model;
         let view = iterate(&self.body.f_int, spec, it);
-        let depth = spec.depth;
+        let depth = it.depth;
         let force = punch_force(model, &it.set, view.f_int);
         let tol = Tolerances {
             lambda: spec.opts.lambda_tol * force.abs().max(1e-300),
@@ -546,7 +584,7 @@ impl<'m> Newton<'m> {
             model,
             &it.set,
             view.f_int,
-            [spec.t1, dt, spec.depth],
+            [spec.t1, dt, it.depth],
             [it.iterations, it.changes],
         );
         self.constraint.record(&it.set, &view, &mut rec);
@@ -563,6 +601,8 @@ impl<'m> Newton<'m> {
             ..*p
         };
         let (p0, p1) = (older(&state.past[0]), older(&state.past[1]));
+        let force = rec.force;
+        let ddepth = it.depth - state.depth;
         let next = State {
             t: spec.t1,
             f_scale,
@@ -570,9 +610,19 @@ impl<'m> Newton<'m> {
             sigma: it.sigma,
             f_int: self.body.f_int.clone(),
             set: it.set,
-            past: [Increment { du, dt, rate }, p0, p1],
+            past: [
+                Increment {
+                    du,
+                    dt,
+                    rate,
+                    depth: ddepth,
+                },
+                p0,
+                p1,
+            ],
             order,
-            depth: spec.depth,
+            depth: it.depth,
+            force,
             xi: self.constraint.stick_points(),
         };
         (next, rec)
@@ -594,7 +644,7 @@ impl<'m> Newton<'m> {
         timing: &mut Timing,
     ) -> Result<(), StepFailure> {
         let model = self.model;
-        let depth = spec.depth;
+        let depth = it.depth;
         // the element tangents of this iterate (finite strain) are formed only now that a
         // solve needs them (a converged pass returned before)
         timing.local += self
@@ -627,6 +677,9 @@ impl<'m> Newton<'m> {
             .solve_inexact(model, &mut self.rhs, &self.aux, eta)
             .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
             .map_err(|f| distortion(model, f, &it.u, depth))?;
+        if let Some(load) = spec.load {
+            self.border(it, [load.force, spec.state.depth], eta)?;
+        }
         for (d, &e) in model.dofs.eq.iter().enumerate() {
             if e != NO_EQ {
                 it.u[d] += self.rhs[e as usize];
@@ -639,13 +692,119 @@ impl<'m> Newton<'m> {
     }
 }
 
+impl Newton<'_> {
+    /// Load control's bordered update (docs/theory.md §13): the first solve left
+    /// `du_1` in `self.rhs` (`K du_1 = -R` with the constraint's increments); the depth
+    /// column `du_2 = w - v` comes from one more solve with the same factorization,
+    /// `K w = K v` with the constrained equations held (`v`: 1 on the active candidates'
+    /// vertical equations: the constraints see the punch depth as a vertical translation
+    /// of their nodes), and the force row `F + g . du = P` with `g . du = -(K v) . du`
+    /// (the linearized sum of the vertical reactions) gives the depth increment
+    /// `dU = (P - F - g . du_1) / s` over the Schur complement `s = g . du_2 = v . K v -
+    /// (K v) . w`, the contact stiffness `dF/dU`. Leaves `du_1 + dU du_2` in `self.rhs`
+    /// and moves the iterate's depth by `dU`, limited to three times its distance from
+    /// the step's start depth `start` (or a tenth of the first element's width).
+    ///
+    /// # Errors
+    /// [`StepFailure::Load`] when `s` is not positive (no contact, or none that carries
+    /// load) or the depth leaves the specimen; [`StepFailure::Linear`] from the solve.
+    fn border(
+        &mut self,
+        it: &mut Iteration,
+        [force, start]: [f64; 2],
+        eta: f64,
+    ) -> Result<(), StepFailure> {
+        let model = self.model;
+        let n = model.dofs.n_eq;
+        if self.v.len() != n {
+            self.v = vec![0.0; n];
+            self.kv = vec![0.0; n];
+            self.col = vec![0.0; n];
+        }
+        self.v.fill(0.0);
+        for k in it.set.active() {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k] + 1) {
+                self.v[e] = 1.0;
+            }
+        }
+        self.kv.fill(0.0);
+        model
+            .pattern
+            .sym_mul_add(self.system.k_values(), &self.v, &mut self.kv);
+        self.col.copy_from_slice(&self.kv);
+        // the first solve's prescribed increments are spent: the depth column holds its
+        // constrained equations at zero
+        // s below is a difference of two close numbers: the depth column is solved
+        // tighter than Newton's forcing term
+        self.aux.fill(0.0);
+        self.system
+            .solve_inexact(model, &mut self.col, &self.aux, eta.min(1e-9))
+            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let g_du1 = -dot(&self.kv, &self.rhs);
+        let vkv = dot(&self.v, &self.kv);
+        let s = vkv - dot(&self.kv, &self.col);
+        let f = punch_force(model, &it.set, &self.body.f_int);
+        let n_active = it.set.active().count();
+        if !(s.is_finite() && s > 1e-12 * vkv.abs()) {
+            return Err(StepFailure::Load(format!(
+                "load control: the contact stiffness dF/dU = {s:.3e} N/mm is not positive \
+                 at the depth {} mm with {n_active} nodes in contact: the force {force} N \
+                 cannot be prescribed there (no contact that carries load); end the \
+                 segment in depth control",
+                it.depth
+            )));
+        }
+        // the depth moves at most to three times its distance from the step's start (or
+        // by a tenth of the first element's width): from a trigger, a single node's small stiffness
+        // would throw the punch far beyond the contact that then forms
+        let cap = (2.0 * (it.depth - start).abs()).max(0.1 * model.gap_length());
+        let du = ((force - f - g_du1) / s).clamp(-cap, cap);
+        for ((x, c), v) in self.rhs.iter_mut().zip(&self.col).zip(&self.v) {
+            *x += du * (c - v);
+        }
+        it.depth += du;
+        Ok(())
+    }
+
+    /// A converged load-controlled depth must lie within the specimen.
+    ///
+    /// # Errors
+    /// [`StepFailure::Load`] beyond half the specimen's height.
+    fn depth_within_specimen(&self, depth: f64, force: f64) -> Result<(), StepFailure> {
+        let height = -self
+            .model
+            .mesh
+            .nodes
+            .iter()
+            .map(|x| x[1])
+            .fold(0.0, f64::min);
+        if !(depth.abs() < 0.5 * height) {
+            return Err(StepFailure::Load(format!(
+                "load control: the force {force} N drives the punch to the depth {depth} mm, \
+                 beyond half the specimen's height ({height} mm): the contact cannot carry \
+                 it (a larger specimen, or a smaller force)"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The depth (mm) at which the punch touches the first candidate of the body deformed
+/// by `u`: the smallest `phi(r_k) - u_z,k` (the vertical gap closes there).
+fn touch_depth(model: &Model, u: &[f64]) -> f64 {
+    (0..model.candidates.len())
+        .map(|k| model.candidate_profile[k] - u[2 * model.candidates[k] + 1])
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// The constraint's view of the iterate `it` of step `spec` with the internal force
 /// `f_int`.
 fn iterate<'a>(f_int: &'a [f64], spec: &StepSpec<'a>, it: &'a Iteration) -> Iterate<'a> {
     Iterate {
         u: &it.u,
         f_int,
-        depth: spec.depth,
+        depth: it.depth,
         xi: &spec.state.xi,
     }
 }

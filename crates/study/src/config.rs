@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
-use indentify_contact::{ContactKind, Kinematics, Model, Punch, Schedule, Segment, SolverOptions};
+use indentify_contact::{
+    ContactKind, HistorySegment, Kinematics, LoadHistory, Model, Punch, Schedule, SolverOptions,
+};
 use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
@@ -126,6 +128,10 @@ pub struct DataSection {
     /// The test of a multi-test file, from 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub test: Option<usize>,
+    /// What the record prescribes: `Depth` (default) or `Force` (load control: the
+    /// record's force drives the punch; `simulate` only for now).
+    #[serde(default, skip_serializing_if = "Drive::is_depth")]
+    pub drive: Drive,
     /// Drift, zero point, compliance, segments and resampling (defaults: zero point and
     /// segments on, no resampling).
     #[serde(default)]
@@ -664,13 +670,37 @@ pub fn library_law(name: &str) -> Result<&'static dyn Law> {
     })
 }
 
-/// The punch's depth history: consecutive piecewise-linear segments from `t = 0`, `h = 0`.
+/// The punch's history: consecutive piecewise-linear segments from `t = 0`, `h = 0`,
+/// each prescribing the depth `(duration, depth, steps)` or the force `(duration, force,
+/// steps)` (load control, docs/theory.md §13; `simulate` only for now).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename = "history")]
 pub struct History {
-    /// Segments `(duration, depth, steps)` (the contact crate's own type).
-    pub segments: Vec<Segment>,
+    /// Segments (the contact crate's own type).
+    pub segments: Vec<HistorySegment>,
 }
+
+/// What a measured record prescribes (`data.drive`): its depth (the force is the
+/// observable, the default) or its force (load control: the depth is the observable).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Drive {
+    /// The record's depth drives the punch.
+    #[default]
+    Depth,
+    /// The record's force drives the punch (load control).
+    Force,
+}
+
+impl Drive {
+    fn is_depth(&self) -> bool {
+        *self == Drive::Depth
+    }
+}
+
+/// Why a load-controlled configuration is refused by every command but `simulate`.
+const LOAD_CONTROL_ONLY_SIMULATE: &str = "load control is supported by `simulate` only: \
+    fitting or checking gradients on a load-controlled history needs the adjoint of the \
+    bordered system, which is not written yet; use `simulate`, or drive by depth";
 
 /// Numerical options of the direct solver; every field is optional and defaults to
 /// [`SolverOptions::default`]. Whether fields are recorded is decided by the command.
@@ -837,7 +867,10 @@ impl Reference {
             kinematics: Kinematics::Small,
             law,
             history: Some(History {
-                segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30),
+                segments: indentify_contact::trapezoid(0.1, 1.0, 1.0, 1.0, 30)
+                    .into_iter()
+                    .map(Into::into)
+                    .collect(),
             }),
             data: None,
             solver: SolverConfig::default(),
@@ -920,7 +953,9 @@ impl Config {
         }
         match (&self.history, &self.data) {
             (Some(_), None) => {
-                self.schedule()?;
+                // load-controlled segments are valid here; the commands that cannot run
+                // them refuse them ([`Config::prepare`])
+                self.load_history()?;
             }
             (None, Some(d)) => {
                 if d.file.trim().is_empty() {
@@ -1154,12 +1189,31 @@ impl Config {
     ///
     /// # Errors
     /// No `history` (a configuration driven by `data`), an empty history, a non-positive
-    /// duration, zero steps or a non-finite depth.
+    /// duration, zero steps or a non-finite depth, a load-controlled segment
+    /// (`history.segments[].force`: [`Config::load_history`]).
     pub fn schedule(&self) -> Result<Schedule> {
+        let h = self.load_history()?;
+        if let Some(i) = self
+            .history
+            .iter()
+            .flat_map(|h| &h.segments)
+            .position(|s| s.force.is_some())
+        {
+            bail!("`history.segments[{i}].force`: {LOAD_CONTROL_ONLY_SIMULATE}");
+        }
+        Ok(h.schedule)
+    }
+
+    /// The prescribed history (`history`), whose segments may prescribe the force.
+    ///
+    /// # Errors
+    /// No `history`, or an invalid one (a segment with both or neither of `depth` and
+    /// `force`, a force that is not > 0, and the errors of [`Config::schedule`]).
+    pub fn load_history(&self) -> Result<LoadHistory> {
         let h = self.history.as_ref().ok_or_else(|| {
             anyhow!("the configuration has no `history`: its depth comes from `data`")
         })?;
-        Ok(Schedule::from_segments(&h.segments)?)
+        Ok(LoadHistory::from_segments(&h.segments)?)
     }
 
     /// The schedule (from `history`, or from the preprocessed record of `data`), the
@@ -1169,7 +1223,53 @@ impl Config {
     /// An invalid history or record, an invalid specimen, a mesh or model that cannot be
     /// built.
     pub fn prepare(&self, name: &str) -> Result<Prepared> {
+        if let Some(d) = &self.data {
+            if d.drive == Drive::Force {
+                bail!("`data.drive: Force` in `{name}`: {LOAD_CONTROL_ONLY_SIMULATE}");
+            }
+        }
+        // refuses load-controlled segments, naming them
+        if self.data.is_none() {
+            self.schedule()?;
+        }
+        Ok(self.prepare_driven(name)?.0)
+    }
+
+    /// As [`Config::prepare`], with load control: the history of a load-controlled
+    /// configuration (`history` with `force` segments, or `data.drive: Force`: the
+    /// record's force prescribed at its points) beside the prepared model, whose
+    /// `schedule` then holds the times (and the prescribed depths only).
+    ///
+    /// # Errors
+    /// As [`Config::prepare`]; a load-controlled record without a positive force column;
+    /// a load-controlled history without a depth to size an automatic specimen.
+    pub fn prepare_driven(&self, name: &str) -> Result<(Prepared, Option<LoadHistory>)> {
+        let mut load = None;
         let (schedule, measured) = match &self.data {
+            Some(d) if d.drive == Drive::Force => {
+                let m = d
+                    .load(self.base_dir.as_deref())
+                    .with_context(|| DataFailure(format!("cannot use the data of `{name}`")))?;
+                let (t, f) = (&m.record.t, &m.record.f);
+                if f.len() != t.len() || f.iter().skip(1).all(|&x| x == 0.0) {
+                    bail!(DataFailure(format!(
+                        "`data.drive: Force`: the record `{}` has no force column to \
+                         prescribe (load control needs the force at every point)",
+                        m.path.display()
+                    )));
+                }
+                let h = LoadHistory::from_force_record(t, f).with_context(|| {
+                    DataFailure(format!(
+                        "the force of the record `{}` cannot drive a load-controlled \
+                         simulation (`data.drive: Force`)",
+                        m.path.display()
+                    ))
+                })?;
+                // the measured depth sizes the specimen (the depth is not prescribed)
+                let s = Schedule::from_record(t, &m.record.h)?;
+                load = Some(h);
+                (s, Some(m))
+            }
             Some(d) => {
                 let m = d
                     .load(self.base_dir.as_deref())
@@ -1184,9 +1284,23 @@ impl Config {
                     })?;
                 (s, Some(m))
             }
-            None => (self.schedule()?, None),
+            None => {
+                let h = self.load_history()?;
+                let s = h.schedule.clone();
+                if h.is_load_controlled() {
+                    load = Some(h);
+                }
+                (s, None)
+            }
         };
         let h_max = schedule.depth.iter().copied().fold(0.0, f64::max);
+        if load.is_some() && h_max <= 0.0 && matches!(self.specimen.kind(), SpecimenKind::Auto(_)) {
+            bail!(
+                "`history` of `{name}` prescribes no positive depth: the automatic specimen \
+                 of a load-controlled history is sized by its depth-controlled segments (e.g. \
+                 the approach); add one, or give `specimen: Cylinder(...)`"
+            );
+        }
         let mesher = self.specimen.mesher(&self.punch, h_max)?;
         let (radius, height) = mesher.size();
         let mut warnings = validity(&self.punch, h_max, radius, height, name)?;
@@ -1215,14 +1329,17 @@ impl Config {
         let model = Model::with_contact(mesh, self.punch.clone(), self.contact)
             .and_then(|m| m.with_kinematics(self.kinematics))
             .with_context(|| format!("cannot build the model of `{name}`"))?;
-        Ok(Prepared {
-            schedule,
-            mesher,
-            model,
-            rim,
-            measured,
-            warnings,
-        })
+        Ok((
+            Prepared {
+                schedule,
+                mesher,
+                model,
+                rim,
+                measured,
+                warnings,
+            },
+            load,
+        ))
     }
 }
 
@@ -1811,7 +1928,7 @@ mod tests {
             }
         );
         let c = set(c, "history.segments.0.depth=0.2").unwrap();
-        assert_eq!(c.history.as_ref().unwrap().segments[0].depth, 0.2);
+        assert_eq!(c.history.as_ref().unwrap().segments[0].depth, Some(0.2));
         let c = set(c, "solver.max_cuts=3").unwrap();
         assert_eq!(c.solver.max_cuts, 3);
         let c = set(c, "punch.Cone.half_angle_deg=60").unwrap();

@@ -29,7 +29,9 @@
 use std::time::Instant;
 
 use anyhow::{Context as _, Result, anyhow, bail};
-use indentify_contact::{DirectSolver, Model, Schedule, Segment, SolverOptions};
+use indentify_contact::{
+    DirectSolver, HistorySegment, LoadHistory, Model, Schedule, SolverOptions,
+};
 use indentify_identify::{Evaluator, Problem, identifiability::INSENSITIVE};
 
 use crate::config::{Config, History, Mesher};
@@ -196,15 +198,15 @@ pub fn refine_schedule(
 ) -> Result<(Schedule, String)> {
     let n = schedule.n_steps();
     if let Some(h) = history {
-        let segments: Vec<Segment> = h
+        let segments: Vec<HistorySegment> = h
             .segments
             .iter()
-            .map(|s| Segment {
+            .map(|s| HistorySegment {
                 steps: 2 * s.steps,
                 ..*s
             })
             .collect();
-        let s = Schedule::from_segments(&segments)?;
+        let s = LoadHistory::from_segments(&segments)?.schedule;
         let text = format!(
             "every segment's steps doubled ({} steps, was {n})",
             s.n_steps()

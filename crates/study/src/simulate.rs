@@ -8,9 +8,9 @@ use std::time::Instant;
 use indentify_contact::{ContactError, DirectSolver, Trajectory};
 use indentify_identify::multiplicative_noise;
 
+use crate::config::Config;
 use crate::config::{Measured, Mesher};
 use crate::error::{Classify, Error, ErrorKind, Result};
-use crate::identify::prepare;
 use crate::output::{self, CurveRow};
 use crate::source::ConfigSource;
 
@@ -106,7 +106,7 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         .one_test(opts.test, "simulate", &name)
         .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
-    let prepared = prepare(&cfg, &name)?;
+    let (prepared, load) = prepare_driven(&cfg, &name)?;
     let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
     let solver_opts = cfg.solver.options(opts.vtu.is_some());
     // fail on unwritable outputs before solving
@@ -130,6 +130,12 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
     }
     if let Some((dir, step)) = &opts.matrix_market {
+        if load.is_some() {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!("--matrix-market replays a depth-driven run: `{name}` is load-controlled"),
+            ));
+        }
         if *step == 0 || *step > schedule.n_steps() {
             return Err(Error::msg(
                 ErrorKind::Config,
@@ -142,7 +148,11 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
     }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
-    let (trajectory, failure) = match solver.run(law, &params, &schedule, &solver_opts) {
+    let run = match &load {
+        Some(h) => solver.run_history(law, &params, h, &solver_opts),
+        None => solver.run(law, &params, &schedule, &solver_opts),
+    };
+    let (trajectory, failure) = match run {
         Ok(t) => (t, None),
         Err(ContactError::StepFailed {
             step,
@@ -205,6 +215,26 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         matrix,
         failure,
         seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// [`Config::prepare_driven`] with its errors classified as `identify::prepare` does: a
+/// record that cannot be read or drive a simulation is a data error, anything else a
+/// configuration error.
+fn prepare_driven(
+    cfg: &Config,
+    name: &str,
+) -> Result<(
+    crate::config::Prepared,
+    Option<indentify_contact::LoadHistory>,
+)> {
+    cfg.prepare_driven(name).map_err(|e| {
+        let kind = if e.downcast_ref::<crate::config::DataFailure>().is_some() {
+            ErrorKind::Data
+        } else {
+            ErrorKind::Config
+        };
+        Error::new(kind, e)
     })
 }
 

@@ -81,7 +81,10 @@ pub fn base_config(coarse: bool) -> crate::config::Config {
             *nz = 8;
         }
         cfg.history = Some(History {
-            segments: trapezoid(0.1, 1.0, 1.0, 1.0, 10),
+            segments: trapezoid(0.1, 1.0, 1.0, 1.0, 10)
+                .into_iter()
+                .map(Into::into)
+                .collect(),
         });
     }
     let mut id = Reference::R1Maxwell.identify_section();

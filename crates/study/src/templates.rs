@@ -124,6 +124,7 @@ pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
         file: d.file.clone(),
         format: indentify_records::Format::Auto,
         test: d.test,
+        drive: crate::config::Drive::Depth,
         preprocessing: indentify_records::Preprocessing {
             resample: Some(indentify_records::Resample {
                 n: 60,
@@ -360,19 +361,28 @@ fn history_block(out: &mut String, history: &crate::config::History) {
         .segments
         .iter()
         .map(|seg| {
-            let what = if seg.depth > previous {
+            // a load-controlled segment (`force`) is written as such
+            let (key, value) = match (seg.depth, seg.force) {
+                (_, Some(f)) => ("force", f),
+                (d, None) => ("depth", d.unwrap_or(previous)),
+            };
+            let what = if key == "force" {
+                "load control"
+            } else if value > previous {
                 "load"
-            } else if seg.depth < previous {
+            } else if value < previous {
                 "unload"
             } else {
                 "hold"
             };
-            previous = seg.depth;
+            if key == "depth" {
+                previous = value;
+            }
             (
                 format!(
-                    "(duration: {}, depth: {}, steps: {}),",
+                    "(duration: {}, {key}: {}, steps: {}),",
                     num(seg.duration),
-                    num(seg.depth),
+                    num(value),
                     seg.steps
                 ),
                 what.into(),

@@ -226,21 +226,22 @@ fn a_measured_record_gets_a_discretization_result() {
 #[test]
 fn refined_schedules_keep_the_original_times_at_even_indices() {
     use indentify_contact::{Schedule, Segment};
+    let segments = vec![
+        Segment {
+            duration: 0.3,
+            depth: 0.1,
+            steps: 3,
+        },
+        Segment {
+            duration: 0.7,
+            depth: 0.05,
+            steps: 5,
+        },
+    ];
+    let s = Schedule::from_segments(&segments).unwrap();
     let h = indentify_study::config::History {
-        segments: vec![
-            Segment {
-                duration: 0.3,
-                depth: 0.1,
-                steps: 3,
-            },
-            Segment {
-                duration: 0.7,
-                depth: 0.05,
-                steps: 5,
-            },
-        ],
+        segments: segments.into_iter().map(Into::into).collect(),
     };
-    let s = Schedule::from_segments(&h.segments).unwrap();
     let (fine, _) = discretization::refine_schedule(Some(&h), &s).unwrap();
     let r = Schedule::from_record(&s.t, &s.depth).unwrap();
     let (mid, text) = discretization::refine_schedule(None, &r).unwrap();
