@@ -64,6 +64,7 @@ impl Model {
         contact: ContactKind,
     ) -> Result<Model, ContactError> {
         punch.validate()?;
+        punch.require_profile()?;
         contact.validate()?;
         let surface = match contact {
             ContactKind::Vertical => None,

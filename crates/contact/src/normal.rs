@@ -280,7 +280,9 @@ impl Projection {
 /// - tabulated: the segments with every interior vertex rounded by the circular arc
 ///   tangent to both segments at a quarter of the shorter one from the vertex (the normal
 ///   is otherwise undefined at a kink); beyond the last point the last segment is
-///   extended (as the vertical gap's extrapolation) and flagged `beyond_end`.
+///   extended (as the vertical gap's extrapolation) and flagged `beyond_end`;
+/// - calibrated: its profile tabulated ([`crate::punch::AreaProfile::table`]), as a
+///   tabulated profile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Surface {
     pieces: Vec<Piece>,
@@ -307,6 +309,7 @@ impl Surface {
     /// [`ContactError::Input`] for an invalid punch.
     pub fn new(punch: &Punch) -> Result<Surface, ContactError> {
         punch.validate()?;
+        punch.require_profile()?;
         let inf = f64::INFINITY;
         let half_pi = std::f64::consts::FRAC_PI_2;
         let s = match punch.equivalent() {
@@ -361,6 +364,10 @@ impl Surface {
                 }
             }
             Punch::Tabulated { r, z } => Surface::tabulated(&r, &z),
+            Punch::Calibrated { area, .. } => {
+                let (r, z) = area.map(|a| a.table()).unwrap_or_default();
+                Surface::tabulated(&r, &z)
+            }
             Punch::Berkovich { .. } | Punch::Vickers { .. } | Punch::CubeCorner { .. } => {
                 unreachable!("presets are replaced by their equivalent profile")
             }

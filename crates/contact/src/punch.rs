@@ -23,7 +23,11 @@
 //!
 //! A flat punch's rim is a singular point of the solution: [`rim::treat_rim`] puts
 //! quarter-point elements around it.
+//!
+//! A calibrated tip ([`Punch::Calibrated`]) is the axisymmetric profile with the projected
+//! area of a calibrated area function at every depth ([`calibrated`]).
 
+pub mod calibrated;
 pub mod rim;
 pub mod specimen;
 
@@ -31,6 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::ContactError;
 
+pub use calibrated::AreaProfile;
 pub use rim::{Rim, treat_rim};
 pub use specimen::{AutoOptions, auto_specimen};
 
@@ -113,6 +118,18 @@ pub enum Punch {
         /// Heights above the tip, starting at 0, non-decreasing.
         z: Vec<f64>,
     },
+    /// A calibrated tip: the axisymmetric profile with the projected area of the tip
+    /// file's area function at every depth ([`calibrated`]). Config:
+    /// `Calibrated(file: "TIP.ron")`, the tip file of `indentify calibrate`, relative to the
+    /// configuration's folder. The application reads the file into `area` before a model
+    /// is built ([`Punch::calibrated`]); until then the punch has no profile.
+    Calibrated {
+        /// The tip file, as the configuration names it.
+        file: String,
+        /// Its area function (not part of the configuration).
+        #[serde(skip)]
+        area: Option<AreaProfile>,
+    },
 }
 
 fn check_angle(field: &'static str, a: f64) -> Result<(), ContactError> {
@@ -140,6 +157,32 @@ fn check_positive(field: &'static str, v: f64) -> Result<(), ContactError> {
 }
 
 impl Punch {
+    /// The calibrated tip of `file` with the area function `area` (read from that file).
+    pub fn calibrated(file: impl Into<String>, area: AreaProfile) -> Punch {
+        Punch::Calibrated {
+            file: file.into(),
+            area: Some(area),
+        }
+    }
+
+    /// The area function of a calibrated tip whose file has been read.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `punch.file` for a calibrated tip whose file has not
+    /// been read (a model needs its profile).
+    pub fn require_profile(&self) -> Result<(), ContactError> {
+        match self {
+            Punch::Calibrated { file, area: None } => Err(ContactError::Input {
+                field: "punch.file",
+                value: format!("`{file}` (not read)"),
+                allowed: "a calibrated tip whose tip file the application has read \
+                          (Punch::calibrated)"
+                    .into(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// Checks the geometric inputs.
     ///
     /// # Errors
@@ -200,6 +243,18 @@ impl Punch {
                 }
                 Ok(())
             }
+            Punch::Calibrated { file, .. } => {
+                if file.trim().is_empty() {
+                    Err(ContactError::Input {
+                        field: "punch.file",
+                        value: "\"\"".into(),
+                        allowed: "the path of a tip file (indentify calibrate --out TIP.ron)"
+                            .into(),
+                    })
+                } else {
+                    Ok(())
+                }
+            }
         }
     }
 
@@ -249,6 +304,7 @@ impl Punch {
                 };
                 z[i] + (z[i + 1] - z[i]) * (r - rs[i]) / (rs[i + 1] - rs[i])
             }
+            Punch::Calibrated { area, .. } => area.as_ref().map_or(f64::NAN, |a| a.height(r)),
         }
     }
 
@@ -281,6 +337,10 @@ impl Punch {
                 }
             }
             Punch::Tabulated { r, .. } => format!("tabulated ({} points)", r.len()),
+            Punch::Calibrated { file, area } => match area {
+                Some(a) => format!("calibrated tip `{file}` ({})", a.describe()),
+                None => format!("calibrated tip `{file}`"),
+            },
         }
     }
 
@@ -312,7 +372,10 @@ impl Punch {
             Punch::Berkovich { .. } => Some(BERKOVICH_HALF_ANGLE_DEG),
             Punch::Vickers { .. } => Some(VICKERS_HALF_ANGLE_DEG),
             Punch::CubeCorner { .. } => Some(CUBE_CORNER_HALF_ANGLE_DEG),
-            Punch::Sphere { .. } | Punch::Flat { .. } | Punch::Tabulated { .. } => None,
+            Punch::Sphere { .. }
+            | Punch::Flat { .. }
+            | Punch::Tabulated { .. }
+            | Punch::Calibrated { .. } => None,
         }
     }
 
@@ -322,7 +385,8 @@ impl Punch {
     /// Cone `h tan(alpha)`; sphere `sqrt(h (2R - h))`, R from h = R on (the wall); flat
     /// punch R; sphero-cone the sphere up to the blend height `R (1 - sin(alpha))`, the
     /// cone beyond; tabulated: linear inversion, infinite if the last segment is flat and
-    /// below h. Call on a validated punch.
+    /// below h; calibrated: `sqrt(A(h) / pi)` (NaN before its file is read). Call on a
+    /// validated punch.
     pub fn intersection_radius(&self, h: f64) -> f64 {
         if !(h > 0.0) {
             return 0.0;
@@ -364,6 +428,7 @@ impl Punch {
                     f64::INFINITY
                 }
             }
+            Punch::Calibrated { area, .. } => area.as_ref().map_or(f64::NAN, |a| a.radius(h)),
         }
     }
 
@@ -380,6 +445,10 @@ impl Punch {
         match self {
             Punch::Flat { radius } => *radius,
             Punch::Sphere { radius } => (PILE_UP_ALLOWANCE * a).min(*radius),
+            // a tip that ends (a sphere-like area) is bounded by its last radius
+            Punch::Calibrated { area: Some(p), .. } if p.depth_limit().is_finite() => {
+                (PILE_UP_ALLOWANCE * a).min(p.radius(p.depth_limit()))
+            }
             _ => PILE_UP_ALLOWANCE * a,
         }
     }

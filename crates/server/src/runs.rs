@@ -518,6 +518,20 @@ impl Runs {
 
     /// Refuses a configuration whose data files are not records of this workspace.
     fn check_files(&self, cfg: &Config, dir: &Path) -> Result<(), ApiError> {
+        // a calibrated tip names a file the server would read: refused (no tip uploads yet)
+        let punches = std::iter::once(&cfg.punch)
+            .chain(cfg.tests.iter().flatten().filter_map(|t| t.punch.as_ref()));
+        for p in punches {
+            if let indentify_study::Punch::Calibrated { file, .. } = p {
+                return Err(ApiError::bad_request(
+                    "config",
+                    vec![format!(
+                        "punch: Calibrated(file: \"{file}\") is not served: the server reads \
+                         no tip files; run it with the CLI (indentify simulate/identify)"
+                    )],
+                ));
+            }
+        }
         let mut files: Vec<&str> = cfg.data.iter().map(|d| d.file.as_str()).collect();
         for t in cfg.tests.iter().flatten() {
             files.extend(t.data.iter().map(|d| d.file.as_str()));

@@ -8,6 +8,7 @@
 
 mod design;
 mod identify;
+pub mod tip;
 
 use std::path::{Path, PathBuf};
 
@@ -1245,8 +1246,12 @@ impl Config {
     /// a load-controlled history without a depth to size an automatic specimen.
     pub fn prepare_driven(&self, name: &str) -> Result<(Prepared, Option<LoadHistory>)> {
         let mut load = None;
+        let resolved = tip::resolve(&self.punch, self.base_dir.as_deref())
+            .with_context(|| format!("cannot use the punch of `{name}`"))?;
+        let punch = &resolved.punch;
         let (schedule, measured) = match &self.data {
             Some(d) if d.drive == Drive::Force => {
+                let d = with_tip_compliance(d, &resolved)?;
                 let m = d
                     .load(self.base_dir.as_deref())
                     .with_context(|| DataFailure(format!("cannot use the data of `{name}`")))?;
@@ -1271,6 +1276,7 @@ impl Config {
                 (s, Some(m))
             }
             Some(d) => {
+                let d = with_tip_compliance(d, &resolved)?;
                 let m = d
                     .load(self.base_dir.as_deref())
                     .with_context(|| DataFailure(format!("cannot use the data of `{name}`")))?;
@@ -1301,9 +1307,9 @@ impl Config {
                  the approach); add one, or give `specimen: Cylinder(...)`"
             );
         }
-        let mesher = self.specimen.mesher(&self.punch, h_max)?;
+        let mesher = self.specimen.mesher(punch, h_max)?;
         let (radius, height) = mesher.size();
-        let mut warnings = validity(&self.punch, h_max, radius, height, name)?;
+        let mut warnings = validity(punch, h_max, radius, height, name)?;
         for w in &warnings {
             tracing::warn!("warning: {w}");
         }
@@ -1311,9 +1317,9 @@ impl Config {
             warnings.extend(m.warnings.iter().cloned());
         }
         let (mesh, moved, rim) = mesher
-            .build_for(&self.punch)
+            .build_for(punch)
             .with_context(|| format!("cannot mesh the specimen of `{name}`"))?;
-        if let (Some(from), Punch::Flat { radius }) = (moved, &self.punch) {
+        if let (Some(from), Punch::Flat { radius }) = (moved, punch) {
             tracing::info!(
                 "{name}: the element boundary at r = {} mm moved to the flat punch's radius {} mm \
                  (a corner node at its rim)",
@@ -1326,7 +1332,7 @@ impl Config {
             Rim::QuarterPoint { .. } => tracing::debug!("{name}: {}", rim.describe()),
             Rim::OffCorner { .. } => tracing::warn!("warning: {name}: {}", rim.describe()),
         }
-        let model = Model::with_contact(mesh, self.punch.clone(), self.contact)
+        let model = Model::with_contact(mesh, punch.clone(), self.contact)
             .and_then(|m| m.with_kinematics(self.kinematics))
             .with_context(|| format!("cannot build the model of `{name}`"))?;
         Ok((
@@ -1341,6 +1347,29 @@ impl Config {
             load,
         ))
     }
+}
+
+/// `d` with the calibrated tip's frame compliance as its compliance correction (when the
+/// tip file gives one and `data.preprocessing.compliance` is `Off`, its default).
+///
+/// # Errors
+/// Both the tip file and `data.preprocessing.compliance` give a frame compliance.
+fn with_tip_compliance(d: &DataSection, tip: &tip::ResolvedPunch) -> Result<DataSection> {
+    use indentify_records::Correction;
+    let mut d = d.clone();
+    if let Some(c) = tip.frame_compliance {
+        if d.preprocessing.compliance != Correction::Off {
+            bail!(
+                "the tip file `{}` gives a frame compliance ({c} mm/N) and \
+                 data.preprocessing.compliance is {:?}: give one of them (remove \
+                 data.preprocessing.compliance to use the tip's)",
+                tip.file.as_deref().unwrap_or(Path::new("?")).display(),
+                d.preprocessing.compliance
+            );
+        }
+        d.preprocessing.compliance = Correction::Value(c);
+    }
+    Ok(d)
 }
 
 /// The context of an error of [`Config::prepare`] that lies in the measured record (not in
@@ -1419,6 +1448,20 @@ pub fn validity(
             short(radius),
             short(10.0 * a)
         );
+    }
+    if let Punch::Calibrated {
+        area: Some(p),
+        file,
+    } = punch
+    {
+        if h_max >= p.depth_limit() {
+            bail!(
+                "{name}: the calibrated tip `{file}` ends at the depth {} mm (its area function \
+                 stops growing there) and the punch goes {} mm deep",
+                short(p.depth_limit()),
+                short(h_max)
+            );
+        }
     }
     let mut warnings = Vec::new();
     let equivalent = punch.equivalent();

@@ -256,10 +256,10 @@ fn refine_test(
 ) -> Result<(Vec<f64>, TestDiscretization)> {
     let fine_mesher = refine_mesher(t.mesher)?;
     let (mesh, _, _) = fine_mesher
-        .build_for(&t.config.punch)
+        .build_for(&test.model.punch)
         .context("cannot build the refined mesh")?;
     let elements = (test.model.mesh.elements.len(), mesh.elements.len());
-    let model = Model::with_contact(mesh, t.config.punch.clone(), t.config.contact)
+    let model = Model::with_contact(mesh, test.model.punch.clone(), t.config.contact)
         .and_then(|m| m.with_kinematics(t.config.kinematics))
         .context("cannot build the refined model")?;
     let (schedule, steps) = refine_schedule(t.config.history.as_ref(), &test.schedule)?;

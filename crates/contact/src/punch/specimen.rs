@@ -99,6 +99,7 @@ pub fn auto_specimen(
     options: &AutoOptions,
 ) -> Result<ZonedCylinderMesher, ContactError> {
     punch.validate()?;
+    punch.require_profile()?;
     options.validate()?;
     if !(h_max.is_finite() && h_max > 0.0) {
         return Err(ContactError::Input {
