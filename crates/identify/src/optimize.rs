@@ -133,9 +133,10 @@ pub struct StopCriteria {
     /// deviation at the new iterate, and the undamped Gauss-Newton step from there would
     /// too ([`StopReason::StepBelowSigma`]). The deviations are those of the
     /// identifiability summary (the run's [`NoiseModel`]) at the iterate. A parameter the
-    /// data leave undetermined there has an infinite deviation: the others decide, and the
-    /// run ends [`StopReason::Undetermined`] (not converged), as under the other rules; a
-    /// parameter on a bound that the Gauss-Newton step pushes out does not stop a run. `None`: off (the default here; configurations
+    /// data leave undetermined there (the others' deviations are then conditional on it,
+    /// and a valley moves them together), or one on a bound that the Gauss-Newton step
+    /// pushes out, never stops a run this way: the other rules do, with the undetermined
+    /// status as before. `None`: off (the default here; configurations
     /// default to [`DEFAULT_STEP_SIGMA`]).
     pub step_sigma: Option<f64>,
 }
@@ -671,9 +672,8 @@ impl<'a, 'p> Monitor<'a, 'p> {
 
     /// Whether the step from `prev` to `c` (physical parameters) and the undamped
     /// Gauss-Newton step from `c` move every free parameter by less than `fraction` of its
-    /// standard deviation at `c` ([`StopCriteria::step_sigma`]); parameters undetermined at
-    /// `c` (infinite deviation) are held out of the Gauss-Newton step, and the run then ends
-    /// as [`StopReason::Undetermined`]. False when anything cannot be computed. The forces and the Jacobian at
+    /// standard deviation at `c` ([`StopCriteria::step_sigma`]); false when a parameter is
+    /// undetermined at `c` or anything cannot be computed. The forces and the Jacobian at
     /// `c` come from the evaluator's cache (Levenberg-Marquardt has just linearized there).
     fn steps_below_sigma(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
         let o = self.objective;
@@ -703,19 +703,16 @@ impl<'a, 'p> Monitor<'a, 'p> {
                 measured: &p.target,
             }),
         );
-        // the undetermined parameters are held (their deviation is infinite): the run
-        // still ends with the undetermined status, never converged
-        let kept: Vec<Column> = columns
-            .into_iter()
-            .filter(|col| !id.undetermined.contains(&col.name))
-            .collect();
-        if kept.is_empty() {
+        // with a parameter undetermined the others' deviations are conditional on it
+        // (held), while a valley lets them move with it: never stop this way then (on
+        // anon-nh, with sY undetermined, stopping on the others' steps left m 1 sigma away)
+        if !id.undetermined.is_empty() {
             return false;
         }
-        let Some(gn) = gauss_newton_step(&jac, &forces, p, &kept) else {
+        let Some(gn) = gauss_newton_step(&jac, &forces, p, &columns) else {
             return false;
         };
-        kept.iter().zip(&gn).all(|(col, dy)| {
+        columns.iter().zip(&gn).all(|(col, dy)| {
             let Some(sd) = id
                 .names
                 .iter()
