@@ -21,7 +21,14 @@ use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
 
 /// The cases, in the order they run.
-const CASES: [&str; 6] = ["r1-map", "r2", "r2-noisy", "ht-nh", "anon-nh", "ht-nh-joint"];
+const CASES: [&str; 6] = [
+    "r1-map",
+    "r2",
+    "r2-noisy",
+    "ht-nh",
+    "anon-nh",
+    "ht-nh-joint",
+];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
 /// [--compare FILE]`.
