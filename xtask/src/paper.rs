@@ -734,6 +734,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         RelativeDecrease => "decrease",
         TargetCost => "target",
         RoundOff => "round-off",
+        StepBelowSigma { .. } => "step < sigma",
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",

@@ -80,8 +80,8 @@ pub use data::ForceRecord;
 pub use identifiability::{Identifiability, NoiseModel};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
-    BfgsStart, Cancel, IdentifyConfig, IdentifyResult, IterationRecord, Method, MultiStart,
-    ParamOutcome, StopCriteria, StopReason, identify, multistart, resume,
+    BfgsStart, Cancel, DEFAULT_STEP_SIGMA, IdentifyConfig, IdentifyResult, IterationRecord, Method,
+    MultiStart, ParamOutcome, StopCriteria, StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
 pub use problem::{Evaluator, Prefetch, Problem, Test};

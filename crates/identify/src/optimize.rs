@@ -127,7 +127,24 @@ pub struct StopCriteria {
     /// A stall at `J / J_ref` below this is the round-off floor of the forward solver:
     /// reported as converged ([`StopReason::RoundOff`]).
     pub roundoff_cost: f64,
+    /// Statistical stop of [`Method::LevenbergMarquardt`] (the other methods have no
+    /// Jacobian at their iterates and ignore it): stop when the last accepted step moved
+    /// every free parameter by less than this fraction of its Gauss-Newton standard
+    /// deviation at the new iterate, and the undamped Gauss-Newton step from there would
+    /// too ([`StopReason::StepBelowSigma`]). The deviations are those of the
+    /// identifiability summary (the run's [`NoiseModel`]) at the iterate. A parameter the
+    /// data leave undetermined there (the others' deviations are then conditional on it,
+    /// and a valley moves them together), or one on a bound that the Gauss-Newton step
+    /// pushes out, never stops a run this way: the other rules do, with the undetermined
+    /// status as before. `None`: off (the default here; configurations
+    /// default to [`DEFAULT_STEP_SIGMA`]).
+    pub step_sigma: Option<f64>,
 }
+
+/// The fraction of a standard deviation of [`StopCriteria::step_sigma`] that
+/// configurations use unless told otherwise: a step below a tenth of a deviation changes
+/// nothing the user reads.
+pub const DEFAULT_STEP_SIGMA: f64 = 0.1;
 
 impl Default for StopCriteria {
     fn default() -> Self {
@@ -138,6 +155,7 @@ impl Default for StopCriteria {
             max_iterations: 100,
             max_line_search_evaluations: 30,
             roundoff_cost: 1e-16,
+            step_sigma: None,
         }
     }
 }
@@ -237,6 +255,14 @@ impl IdentifyConfig {
             s.target_cost,
             "a finite value >= 0",
         )?;
+        if let Some(f) = s.step_sigma {
+            check(
+                f > 0.0 && f.is_finite(),
+                "stop.step_sigma",
+                f,
+                "a finite fraction > 0 of a standard deviation, or None (off)",
+            )?;
+        }
         check(
             s.max_line_search_evaluations >= 1,
             "stop.max_line_search_evaluations",
@@ -293,6 +319,13 @@ pub enum StopReason {
     TargetCost,
     /// No further decrease possible with `J` at the forward solver's round-off.
     RoundOff,
+    /// Levenberg-Marquardt's last step, and the Gauss-Newton step from where it ended,
+    /// moved every free parameter by less than `fraction` of its standard deviation
+    /// ([`StopCriteria::step_sigma`]).
+    StepBelowSigma {
+        /// The fraction of a standard deviation.
+        fraction: f64,
+    },
     /// The iteration limit.
     MaxIterations,
     /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
@@ -328,6 +361,7 @@ impl StopReason {
                 | StopReason::RelativeDecrease
                 | StopReason::TargetCost
                 | StopReason::RoundOff
+                | StopReason::StepBelowSigma { .. }
         )
     }
 }
@@ -339,6 +373,9 @@ impl std::fmt::Display for StopReason {
             StopReason::RelativeDecrease => write!(f, "relative decrease below tolerance"),
             StopReason::TargetCost => write!(f, "target cost reached"),
             StopReason::RoundOff => write!(f, "cost at the solver's round-off"),
+            StopReason::StepBelowSigma { fraction } => {
+                write!(f, "last step < {fraction} \u{3c3} for every parameter")
+            }
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
             StopReason::Stalled(why) => write!(f, "stalled: {why}"),
@@ -517,6 +554,31 @@ impl<'p> Objective<'p> {
         Ok((f, g))
     }
 
+    /// `grad f(y)` from the sensitivity Jacobian, `sum_i w_i (F_i - F_i^exp) dF_i/dc` (the
+    /// adjoint gradient to round-off), for a method that needs the Jacobian at `y` anyway.
+    fn gradient_from_jacobian(&self, y: &[f64]) -> Result<Vec<f64>, IdentifyError> {
+        let c = self.param.to_physical(y);
+        let (forces, jac) = {
+            let mut ev = self.eval.borrow_mut();
+            (ev.forces(&c)?, ev.jacobian(&c)?)
+        };
+        let p = self.eval.borrow().problem();
+        let mut dj = vec![0.0; c.len()];
+        for ((row, w), (f, d)) in jac.iter().zip(&p.weights).zip(forces.iter().zip(&p.target)) {
+            let r = w * (f - d);
+            for (g, j) in dj.iter_mut().zip(row) {
+                *g += r * j;
+            }
+        }
+        let s = self.kappa.get() / self.j_ref;
+        Ok(self
+            .param
+            .scaled_gradient(y, &c, &dj)
+            .iter()
+            .map(|v| v * s)
+            .collect())
+    }
+
     /// Keeps `e` for the caller and gives argmin its text.
     pub fn fail(&self, e: IdentifyError) -> ArgminError {
         let msg = e.to_string();
@@ -542,6 +604,10 @@ pub(crate) struct Monitor<'a, 'p> {
     pub skipped_updates: Cell<usize>,
     /// The run's stop request.
     cancel: Cancel,
+    /// [`StopCriteria::step_sigma`] when the method honours it (Levenberg-Marquardt).
+    step_sigma: Option<f64>,
+    /// The noise model of the deviations [`StopCriteria::step_sigma`] compares with.
+    noise: NoiseModel,
 }
 
 impl<'a, 'p> Monitor<'a, 'p> {
@@ -567,10 +633,9 @@ impl<'a, 'p> Monitor<'a, 'p> {
             seconds: self.offset.seconds + seconds,
         };
         // the same iterate may be reported twice (argmin's final check): record it once
-        let repeated = self
-            .history
-            .borrow()
-            .last()
+        let previous = self.history.borrow().last().cloned();
+        let repeated = previous
+            .as_ref()
             .is_some_and(|l| l.iteration == rec.iteration && l.params == rec.params);
         if !repeated {
             (self.observer.borrow_mut())(&rec);
@@ -584,6 +649,14 @@ impl<'a, 'p> Monitor<'a, 'p> {
             Some(StopReason::GradientNorm)
         } else if iter > 0 && prev.is_finite() && prev - cost <= s.relative_decrease_tol * prev {
             Some(StopReason::RelativeDecrease)
+        } else if let Some(fraction) =
+            self.step_sigma
+                .filter(|_| iter > 0 && !repeated)
+                .filter(|&fr| {
+                    previous.is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
+                })
+        {
+            Some(StopReason::StepBelowSigma { fraction })
         } else if rec.iteration >= s.max_iterations {
             Some(StopReason::MaxIterations)
         } else if self.cancel.is_raised() {
@@ -595,6 +668,69 @@ impl<'a, 'p> Monitor<'a, 'p> {
             *self.reason.borrow_mut() = reason.clone();
         }
         reason
+    }
+
+    /// Whether the step from `prev` to `c` (physical parameters) and the undamped
+    /// Gauss-Newton step from `c` move every free parameter by less than `fraction` of its
+    /// standard deviation at `c` ([`StopCriteria::step_sigma`]); false when a parameter is
+    /// undetermined at `c` or anything cannot be computed. The forces and the Jacobian at
+    /// `c` come from the evaluator's cache (Levenberg-Marquardt has just linearized there).
+    fn steps_below_sigma(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
+        let o = self.objective;
+        let p = o.eval.borrow().problem();
+        let (forces, jac) = {
+            let mut ev = o.eval.borrow_mut();
+            match (ev.forces(c), ev.jacobian(c)) {
+                (Ok(f), Ok(j)) => (f, j),
+                _ => return false,
+            }
+        };
+        let columns: Vec<Column> = o
+            .param
+            .free
+            .iter()
+            .map(|f| Column::of(f, c[f.index]))
+            .collect();
+        let id = Identifiability::with_noise(
+            &jac,
+            &p.weights,
+            p.cost_of(&forces),
+            c,
+            &columns,
+            self.noise,
+            Some(Forces {
+                fitted: &forces,
+                measured: &p.target,
+            }),
+        );
+        // with a parameter undetermined the others' deviations are conditional on it
+        // (held), while a valley lets them move with it: never stop this way then (on
+        // anon-nh, with sY undetermined, stopping on the others' steps left m 1 sigma away)
+        if !id.undetermined.is_empty() {
+            return false;
+        }
+        let Some(gn) = gauss_newton_step(&jac, &forces, p, &columns) else {
+            return false;
+        };
+        columns.iter().zip(&gn).all(|(col, dy)| {
+            let Some(sd) = id
+                .names
+                .iter()
+                .position(|n| *n == col.name)
+                .map(|k| id.std_dev[k])
+                .filter(|sd| sd.is_finite() && *sd > 0.0)
+            else {
+                return false;
+            };
+            let k = col.index;
+            // the Gauss-Newton step projected onto the box: a parameter on a bound that
+            // the step pushes out does not move (and is not called converged by this rule)
+            let next = (c[k] + dy * col.dc_dy).clamp(col.lower, col.upper);
+            let at_bound = next == col.lower || next == col.upper;
+            (c[k] - prev[k]).abs() < fraction * sd
+                && (next - c[k]).abs() < fraction * sd
+                && !(at_bound && (dy * col.dc_dy).abs() >= fraction * sd)
+        })
     }
 
     /// The stopping rules.
@@ -757,8 +893,12 @@ fn run(
     });
     let objective = Objective::new(eval, param, config.stop.max_line_search_evaluations);
     let y0 = objective.param.to_scaled(&objective.param.base);
-    // kappa from the start's gradient (one forward + one adjoint, cached for the optimizer)
-    let (_, g0) = objective.value_and_gradient(&y0)?;
+    // kappa from the start's gradient: one forward + one adjoint, cached for the optimizer;
+    // Levenberg-Marquardt takes it from the sensitivities it needs there anyway
+    let g0 = match config.method {
+        Method::LevenbergMarquardt => objective.gradient_from_jacobian(&y0)?,
+        _ => objective.value_and_gradient(&y0)?.1,
+    };
     let c0 = objective.param.to_physical(&y0);
     let initial_cost = objective.eval.borrow_mut().cost(&c0)?;
     let initial_forces = objective.eval.borrow_mut().forces(&c0)?;
@@ -777,6 +917,11 @@ fn run(
         reason: RefCell::new(None),
         skipped_updates: Cell::new(0),
         cancel: config.cancel.clone(),
+        step_sigma: config
+            .stop
+            .step_sigma
+            .filter(|_| config.method == Method::LevenbergMarquardt),
+        noise: config.noise,
     };
     let outcome = match config.method {
         Method::Bfgs => run_bfgs(&monitor, &y0, config.bfgs_start),
@@ -927,6 +1072,41 @@ fn run(
         forces,
         identifiability,
     })
+}
+
+/// The undamped Gauss-Newton step `dy = -(S^T S)^-1 S^T r` in the scaled variables of
+/// `columns` at a point with forces `forces` and Jacobian `jac` (physical, one row per
+/// datum); `S_ik = sqrt(w_i) dF_i/dc_k dc_k/dy_k`, `r_i = sqrt(w_i) (F_i - F_i^exp)`.
+/// `None` when `S^T S` is not numerically positive definite.
+fn gauss_newton_step(
+    jac: &[Vec<f64>],
+    forces: &[f64],
+    p: &Problem,
+    columns: &[Column],
+) -> Option<Vec<f64>> {
+    let n = columns.len();
+    let mut ata = vec![vec![0.0; n]; n];
+    let mut atr = vec![0.0; n];
+    for ((row, w), (f, d)) in jac.iter().zip(&p.weights).zip(forces.iter().zip(&p.target)) {
+        if *w <= 0.0 {
+            continue;
+        }
+        let sw = w.sqrt();
+        let s: Vec<f64> = columns
+            .iter()
+            .map(|col| sw * row[col.index] * col.dc_dy)
+            .collect();
+        let r = sw * (f - d);
+        for a in 0..n {
+            atr[a] += s[a] * r;
+            for b in 0..n {
+                ata[a][b] += s[a] * s[b];
+            }
+        }
+    }
+    let d = crate::linalg::solve_spd(&ata, &atr)?;
+    let d: Vec<f64> = d.iter().map(|v| -v).collect();
+    d.iter().all(|v| v.is_finite()).then_some(d)
 }
 
 fn offset_sum<T: Default>(r: Option<&IterationRecord>, f: impl Fn(&IterationRecord) -> T) -> T {

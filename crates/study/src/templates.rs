@@ -568,6 +568,13 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
                 format!("roundoff_cost: {},", num(st.roundoff_cost)),
                 "J / J_ref under which a stall counts as converged".into(),
             ),
+            (
+                match st.step_sigma {
+                    Some(f) => format!("step_sigma: {},", num(f)),
+                    None => "step_sigma: None,".into(),
+                },
+                "Lm: stop when the last step moves every parameter by < this x its std. dev. (None: off)".into(),
+            ),
         ],
     );
     out.push_str("        ),\n");

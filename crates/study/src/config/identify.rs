@@ -13,8 +13,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    BfgsStart, IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization, Scaling,
-    StopCriteria,
+    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization,
+    Scaling, StopCriteria,
 };
 use indentify_laws::Law;
 use serde::{Deserialize, Serialize};
@@ -295,6 +295,11 @@ pub struct StopSection {
     pub max_line_search_evaluations: usize,
     /// A stall with `J / J_ref` below this is the solver's round-off: converged.
     pub roundoff_cost: f64,
+    /// Levenberg-Marquardt only: stop when the last step, and the Gauss-Newton step from
+    /// where it ended, move every free parameter by less than this fraction of its
+    /// standard deviation (`None`: off; default
+    /// `indentify_identify::DEFAULT_STEP_SIGMA` = 0.1).
+    pub step_sigma: Option<f64>,
 }
 
 impl Default for StopSection {
@@ -307,6 +312,7 @@ impl Default for StopSection {
             max_iterations: d.max_iterations,
             max_line_search_evaluations: d.max_line_search_evaluations,
             roundoff_cost: d.roundoff_cost,
+            step_sigma: Some(DEFAULT_STEP_SIGMA),
         }
     }
 }
@@ -320,6 +326,7 @@ impl StopSection {
             max_iterations: self.max_iterations,
             max_line_search_evaluations: self.max_line_search_evaluations,
             roundoff_cost: self.roundoff_cost,
+            step_sigma: self.step_sigma,
         }
     }
 }
@@ -600,6 +607,15 @@ impl IdentifySection {
                 st.relative_decrease_tol.to_string(),
                 "a value in [0, 1)",
             ));
+        }
+        if let Some(f) = st.step_sigma {
+            if !(f > 0.0 && f.is_finite()) {
+                return Err(field(
+                    "stop.step_sigma",
+                    f.to_string(),
+                    "a finite fraction > 0 of a standard deviation, or None (off)",
+                ));
+            }
         }
         if st.max_line_search_evaluations == 0 {
             return Err(field(

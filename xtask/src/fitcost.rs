@@ -1,0 +1,312 @@
+//! `cargo xtask fit-cost`: the cost of a whole identification in forward runs of the same
+//! configuration, on one thread. For each case (R2 with Levenberg-Marquardt, the real
+//! records ht-nh, anon-nh and the 4-test joint ht-nh, one indent of the synthetic R1
+//! Maxwell map) it times forward runs at the start (a warm-up, then `rounds` runs at new
+//! points, before and again after the fit: back to back), then the fit itself (the
+//! optimizer and its final identifiability summary, as `indentify identify` runs it,
+//! without the discretization check or the report), and prints the fit's wall time over
+//! the median forward run with the iterations, the forward, adjoint and sensitivity solves
+//! and the stop reason. `--json FILE` keeps the numbers and the fitted parameters with
+//! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
+//! (another version of the code), the ratio before and after and every parameter's shift
+//! in standard deviations, `|after - before| / sigma`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indentify_identify::{Evaluator, IdentifyResult};
+use indentify_study::ConfigSource;
+use indentify_study::identify::{self, IdentifyOptions};
+use serde_json::{Value, json};
+
+/// The cases, in the order they run.
+const CASES: [&str; 6] = [
+    "r1-map",
+    "r2",
+    "r2-noisy",
+    "ht-nh",
+    "anon-nh",
+    "ht-nh-joint",
+];
+
+/// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
+/// [--compare FILE]`.
+pub fn run(args: &[String]) -> Result<()> {
+    let mut only: Option<Vec<String>> = None;
+    let mut quick = false;
+    let mut rounds = 3usize;
+    let mut json_out: Option<PathBuf> = None;
+    let mut compare: Option<PathBuf> = None;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_default();
+        match a.as_str() {
+            "--only" => only = Some(val().split(',').map(str::to_string).collect()),
+            "--quick" => quick = true,
+            "--rounds" => rounds = val().parse().context("--rounds: a number >= 1")?,
+            "--json" => json_out = Some(PathBuf::from(val())),
+            "--compare" => compare = Some(PathBuf::from(val())),
+            other => bail!("unknown option {other}"),
+        }
+    }
+    if rounds == 0 {
+        bail!("--rounds takes a number >= 1");
+    }
+    if let Some(o) = &only {
+        if let Some(bad) = o.iter().find(|c| !CASES.contains(&c.as_str())) {
+            bail!("--only: unknown case `{bad}` (cases: {})", CASES.join(", "));
+        }
+    }
+    // quick: the two cheap cases, one forward run on each side of the fit
+    let cases: Vec<&str> = CASES
+        .iter()
+        .copied()
+        .filter(|c| match &only {
+            Some(o) => o.iter().any(|x| x == c),
+            None => !quick || matches!(*c, "r1-map" | "r2"),
+        })
+        .collect();
+    if quick {
+        rounds = 1;
+    }
+    let before: Option<Value> = match &compare {
+        Some(p) => Some(serde_json::from_str(
+            &std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
+        )?),
+        None => None,
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let mut results = Vec::new();
+    println!(
+        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | adjoint | sensitivity | stop |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for case in cases {
+        let m = measure(&root, case, rounds)?;
+        println!(
+            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} |",
+            m["forward_s"].as_f64().unwrap_or(f64::NAN),
+            m["fit_s"].as_f64().unwrap_or(f64::NAN),
+            m["ratio"].as_f64().unwrap_or(f64::NAN),
+            m["iterations"],
+            m["forward_solves"],
+            m["adjoint_solves"],
+            m["sensitivity_solves"],
+            m["stop"].as_str().unwrap_or("")
+        );
+        results.push(m);
+    }
+    if let Some(b) = &before {
+        println!("\n{}", compare_table(b, &results));
+    }
+    if let Some(p) = &json_out {
+        std::fs::write(p, serde_json::to_string_pretty(&Value::Array(results))?)
+            .with_context(|| format!("writing {}", p.display()))?;
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// The options of a case.
+fn options(root: &Path, case: &str) -> Result<IdentifyOptions> {
+    let path = |p: &str| ConfigSource::Path(root.join(p));
+    let mut o = match case {
+        "r2" | "r2-noisy" => IdentifyOptions::new(path("examples/r2-norton-hoff.ron")),
+        "ht-nh" => IdentifyOptions::new(path("examples/real/ht-nh.ron")),
+        "anon-nh" => IdentifyOptions::new(path("examples/real/anon-nh.ron")),
+        "ht-nh-joint" => IdentifyOptions::new(path("examples/real/ht-nh-joint.ron")),
+        "r1-map" => {
+            // one indent (phase A, 2% noise) of the synthetic map of `cargo xtask make-map`
+            let dir = std::env::temp_dir().join("indentify-fit-cost-map");
+            let map = indentify_study::synthetic::make_map(
+                &dir,
+                &indentify_study::synthetic::MapOptions {
+                    n: 2,
+                    ..Default::default()
+                },
+            )?;
+            let mut o = IdentifyOptions::new(ConfigSource::Path(map.base.clone()));
+            o.data = Some(dir.join("records").join("p00_00.csv"));
+            o
+        }
+        other => bail!("unknown case {other}"),
+    };
+    if case == "r2-noisy" {
+        o.noise = Some((0.02, 1));
+    }
+    o.refine = false;
+    o.figures = false;
+    o.jobs = Some(1);
+    Ok(o)
+}
+
+/// Times `rounds` forward runs at new points near `start` (after a warm-up) on `problem`'s
+/// pool.
+fn forward_times(
+    problem: &indentify_identify::Problem,
+    start: &[f64],
+    rounds: usize,
+    first: usize,
+) -> Result<Vec<f64>> {
+    let point = |r: usize| -> Vec<f64> {
+        start
+            .iter()
+            .map(|v| v * (1.0 + 1e-6 * (r as f64 + 1.0)))
+            .collect()
+    };
+    problem.install(|| -> Result<Vec<f64>> {
+        let mut ev = Evaluator::new(problem)?;
+        ev.cost(&point(first + rounds))?;
+        let mut t = Vec::with_capacity(rounds);
+        for r in 0..rounds {
+            let clock = Instant::now();
+            ev.cost(&point(first + r))?;
+            t.push(clock.elapsed().as_secs_f64());
+        }
+        Ok(t)
+    })
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// One case: forward runs, the fit, forward runs again.
+fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
+    let opts = options(root, case)?;
+    let resolved = identify::resolve(&opts)?;
+    let mut s = identify::setup(resolved, &opts)?;
+    s.problem.set_threads(1)?;
+    let start: Vec<f64> = s
+        .id_cfg
+        .params
+        .iter()
+        .map(|p| p.value.unwrap_or(0.0))
+        .collect();
+    let mut fwd = forward_times(&s.problem, &start, rounds, 0)?;
+    let clock = Instant::now();
+    let r: IdentifyResult = s.problem.install(|| {
+        indentify_identify::identify(&s.problem, &s.id_cfg, &mut |rec| {
+            eprintln!(
+                "  {case}: iteration {} J = {:.6e} ({:.1} s)",
+                rec.iteration, rec.cost, rec.seconds
+            );
+        })
+    })?;
+    let fit = clock.elapsed().as_secs_f64();
+    fwd.extend(forward_times(&s.problem, &start, rounds, rounds + 1)?);
+    let forward = median(&mut fwd);
+    let params: Vec<Value> = r
+        .params
+        .iter()
+        .filter(|p| p.free)
+        .map(|p| {
+            let sd = r.identifiability.as_ref().and_then(|id| {
+                id.names
+                    .iter()
+                    .position(|n| *n == p.name)
+                    .map(|k| id.std_dev[k])
+            });
+            json!({ "name": p.name, "value": p.value, "sd": sd })
+        })
+        .collect();
+    Ok(json!({
+        "case": case,
+        "forward_s": forward,
+        "fit_s": fit,
+        "ratio": fit / forward,
+        "iterations": r.iterations,
+        "forward_solves": r.forward_solves,
+        "adjoint_solves": r.adjoint_solves,
+        "sensitivity_solves": r.sensitivity_solves,
+        "stop": r.stop_reason.to_string(),
+        "converged": r.stop_reason.is_converged(),
+        "cost": r.cost,
+        "params": params,
+    }))
+}
+
+/// Before (an earlier `--json`) against after: the ratios, then every parameter's shift
+/// in the after run's standard deviations (the before one's when after has none).
+fn compare_table(before: &Value, after: &[Value]) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| case | fit / forward before | after | iterations before | after |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    let find = |case: &str| -> Option<&Value> {
+        before
+            .as_array()
+            .and_then(|a| a.iter().find(|b| b["case"] == case))
+    };
+    for a in after {
+        let case = a["case"].as_str().unwrap_or("");
+        if let Some(b) = find(case) {
+            let _ = writeln!(
+                s,
+                "| {case} | {:.1} | {:.1} | {} | {} |",
+                b["ratio"].as_f64().unwrap_or(f64::NAN),
+                a["ratio"].as_f64().unwrap_or(f64::NAN),
+                b["iterations"],
+                a["iterations"]
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\n| case | parameter | before | after | sigma | abs(after - before) / sigma |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for a in after {
+        let case = a["case"].as_str().unwrap_or("");
+        let Some(b) = find(case) else { continue };
+        let empty = Vec::new();
+        let bp = b["params"].as_array().unwrap_or(&empty);
+        for p in a["params"].as_array().unwrap_or(&empty) {
+            let Some(q) = bp.iter().find(|q| q["name"] == p["name"]) else {
+                continue;
+            };
+            let (va, vb) = (
+                p["value"].as_f64().unwrap_or(f64::NAN),
+                q["value"].as_f64().unwrap_or(f64::NAN),
+            );
+            let sd = p["sd"]
+                .as_f64()
+                .filter(|v| v.is_finite())
+                .or_else(|| q["sd"].as_f64())
+                .unwrap_or(f64::NAN);
+            let _ = writeln!(
+                s,
+                "| {case} | {} | {} | {} | {} | {:.3} |",
+                p["name"].as_str().unwrap_or(""),
+                sig(vb),
+                sig(va),
+                sig(sd),
+                (va - vb).abs() / sd
+            );
+        }
+    }
+    s
+}
+
+/// Six significant digits.
+fn sig(v: f64) -> String {
+    if v.is_finite() && v != 0.0 {
+        let d = (5 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.d$}")
+    } else {
+        format!("{v}")
+    }
+}
