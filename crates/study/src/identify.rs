@@ -624,7 +624,12 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         s.id_cfg.identifiability = true;
     }
 
-    // the history, once every input is known good
+    // the folder marked as holding a run in progress (the earlier run moved aside under
+    // --force), then the history, once every input is known good
+    if let Some(p) = &paths {
+        let what = format!("the identification of `{}`", s.name);
+        crate::run_folder::begin(&p.dir, opts.force && !opts.resume, &what).kind(ErrorKind::Io)?;
+    }
     let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &s.names)?;
     observer.started(&RunInfo {
         resumed_at: resume_from.as_ref().map(|r| r.iteration),
@@ -666,6 +671,8 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     }
     if let Some(p) = paths {
         outcome.files = Some(write_report(&p, &outcome, opts, &s)?);
+        // every file of the run written: the mark goes last
+        crate::run_folder::finish(&p.dir).kind(ErrorKind::Io)?;
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
