@@ -577,17 +577,43 @@ pub fn run(opts: &BatchOptions, observer: &dyn BatchObserver) -> Result<BatchSum
     Ok(summary)
 }
 
+impl IndentStatus {
+    /// A failed status of `indent` with no message yet.
+    fn failed(indent: &Indent) -> IndentStatus {
+        IndentStatus {
+            id: indent.id.clone(),
+            x: indent.x,
+            y: indent.y,
+            state: State::Failed,
+            message: String::new(),
+            error_kind: None,
+            names: Vec::new(),
+            units: Vec::new(),
+            values: Vec::new(),
+            std_dev: Vec::new(),
+            free: Vec::new(),
+            r2: None,
+            rms_rel: None,
+            iterations: 0,
+            seconds: 0.0,
+            adequacy: None,
+            caveats: Vec::new(),
+        }
+    }
+}
+
 /// Identifies one indent; never fails: a failure is its status.
 fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
     let t0 = Instant::now();
     let dir = opts.out.join("indents").join(&indent.id);
-    let config = match (&indent.config, &opts.config) {
-        (Some(c), _) | (None, Some(c)) => ConfigSource::Path(c.clone()),
-        (None, None) => unreachable!("read_manifest requires a configuration per indent"),
-    };
-    let mut sets = indent.sets.clone();
-    if let Some(t) = indent.test {
-        sets.push(format!("data.test={t}"));
+    let (config, sets) = indent_source(indent, opts.config.as_deref());
+    if let Err(e) = check_test_column(indent, &config) {
+        return IndentStatus {
+            message: e.messages().join(": "),
+            error_kind: Some(e.kind().name().to_string()),
+            seconds: t0.elapsed().as_secs_f64(),
+            ..IndentStatus::failed(indent)
+        };
     }
     let id_opts = IdentifyOptions {
         config,
@@ -610,25 +636,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         // the indents are the parallel work: one thread each
         jobs: Some(1),
     };
-    let mut status = IndentStatus {
-        id: indent.id.clone(),
-        x: indent.x,
-        y: indent.y,
-        state: State::Failed,
-        message: String::new(),
-        error_kind: None,
-        names: Vec::new(),
-        units: Vec::new(),
-        values: Vec::new(),
-        std_dev: Vec::new(),
-        free: Vec::new(),
-        r2: None,
-        rms_rel: None,
-        iterations: 0,
-        seconds: 0.0,
-        adequacy: None,
-        caveats: Vec::new(),
-    };
+    let mut status = IndentStatus::failed(indent);
     match identify::run(&id_opts, &mut ()) {
         Ok(o) => {
             status.state = if o.converged() {
@@ -885,6 +893,82 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
         }
     }
     Ok(written)
+}
+
+/// Checks every indent of `manifest` as its run will read it, without solving anything:
+/// its configuration (the row's or `base`) loads with the row's configuration columns
+/// applied (`law.foo` unknown, `law.E=-5` out of range), its identification settings
+/// resolve with `overrides`, a `test` column meets a configuration that reads a record
+/// (`data`), and its data file exists. `batch slurm` calls it before writing a job array,
+/// so that a manifest that would fail on every indent fails before anything is queued.
+///
+/// # Errors
+/// The first bad indent, naming the manifest, its line and id.
+pub fn validate(manifest: &Manifest, base: Option<&Path>, overrides: &Overrides) -> Result<()> {
+    for indent in &manifest.indents {
+        check_indent(indent, base, overrides).map_err(|e| {
+            e.context(format!(
+                "{}:{}: indent `{}`",
+                manifest.path.display(),
+                indent.line,
+                indent.id
+            ))
+        })?;
+    }
+    Ok(())
+}
+
+/// The configuration of `indent` and its `--set` paths (its columns, then `data.test`).
+fn indent_source(indent: &Indent, base: Option<&Path>) -> (ConfigSource, Vec<String>) {
+    let config = match (&indent.config, base) {
+        (Some(c), _) => c.clone(),
+        (None, Some(b)) => b.to_path_buf(),
+        (None, None) => unreachable!("read_manifest requires a configuration per indent"),
+    };
+    let mut sets = indent.sets.clone();
+    if let Some(t) = indent.test {
+        sets.push(format!("data.test={t}"));
+    }
+    (ConfigSource::Path(config), sets)
+}
+
+/// A `test` column needs a configuration that reads a record (`data`): with one that
+/// simulates its `history`, `data.test` has nothing to apply to.
+fn check_test_column(indent: &Indent, config: &ConfigSource) -> Result<()> {
+    let Some(t) = indent.test else {
+        return Ok(());
+    };
+    if config.load(&indent.sets)?.data.is_none() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "the `test` column ({t}) picks a test of a multi-test record, but `{}` has no \
+                 `data` section (it simulates its `history`): use a configuration that reads a \
+                 record, or leave the `test` cell empty",
+                config.name()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// [`validate`] for one indent.
+fn check_indent(indent: &Indent, base: Option<&Path>, overrides: &Overrides) -> Result<()> {
+    let (config, sets) = indent_source(indent, base);
+    check_test_column(indent, &config)?;
+    if let Some(d) = &indent.data {
+        if !d.is_file() {
+            return Err(Error::msg(
+                ErrorKind::Data,
+                format!("its data file `{}` does not exist", d.display()),
+            ));
+        }
+    }
+    let mut opts = IdentifyOptions::new(config);
+    opts.sets = sets;
+    opts.data = indent.data.clone();
+    opts.overrides = overrides.clone();
+    identify::resolve(&opts).map(|_| ())
 }
 
 /// A Slurm job array running the shards of a batch.

@@ -245,8 +245,9 @@ fn report(s: &BatchSummary) {
 }
 
 fn slurm(a: &SlurmArgs) -> Result<()> {
-    // the manifest must be valid before a job is queued
-    batch::read_manifest(&a.manifest, a.config.as_deref())?;
+    // the manifest and every indent's configuration must be valid before a job is queued
+    let manifest = batch::read_manifest(&a.manifest, a.config.as_deref())?;
+    batch::validate(&manifest, a.config.as_deref(), &Default::default())?;
     let script = batch::slurm_script(&SlurmOptions {
         manifest: a.manifest.clone(),
         out: a.out.clone(),
