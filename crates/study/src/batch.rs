@@ -430,6 +430,8 @@ pub struct BatchSummary {
     pub results: PathBuf,
     /// The map figures written.
     pub figures: Vec<PathBuf>,
+    /// Why there are no maps, or indents left out of them (positions missing), in words.
+    pub maps_note: Option<String>,
     /// Wall time (s).
     pub seconds: f64,
 }
@@ -732,6 +734,7 @@ fn gather(out: &Path, manifest: &Manifest) -> Result<BatchSummary> {
     let results = out.join("results.csv");
     crate::atomic::write(&results, results_csv(&statuses, &names)).kind(ErrorKind::Io)?;
     let figures = write_maps(out, &statuses, &names)?;
+    let maps_note = maps_note(manifest, &statuses);
     Ok(BatchSummary {
         total: manifest.indents.len(),
         in_shard: manifest.indents.len(),
@@ -741,7 +744,54 @@ fn gather(out: &Path, manifest: &Manifest) -> Result<BatchSummary> {
         missing,
         results,
         figures,
+        maps_note,
         seconds: 0.0,
+    })
+}
+
+/// Why no map is drawn (no indent has both `x` and `y`), or how many indents the maps
+/// leave out; `None` when every indent with a status is on them.
+fn maps_note(manifest: &Manifest, statuses: &[IndentStatus]) -> Option<String> {
+    if statuses.is_empty() {
+        return None;
+    }
+    let placed = statuses
+        .iter()
+        .filter(|s| s.x.is_some() && s.y.is_some())
+        .count();
+    if placed == statuses.len() {
+        return None;
+    }
+    let missing: Vec<&str> = [
+        ("x", manifest.indents.iter().all(|i| i.x.is_none())),
+        ("y", manifest.indents.iter().all(|i| i.y.is_none())),
+    ]
+    .into_iter()
+    .filter_map(|(c, none)| none.then_some(c))
+    .collect();
+    Some(if placed == 0 {
+        let why = if missing.is_empty() {
+            "no indent has both `x` and `y`".to_string()
+        } else {
+            format!(
+                "the manifest has no {} column",
+                missing
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            )
+        };
+        format!(
+            "no maps are drawn: {why} (each indent's position in mm; results.csv has every \
+             result)"
+        )
+    } else {
+        format!(
+            "{} of {} indents have no `x` or `y` and are left out of the maps",
+            statuses.len() - placed,
+            statuses.len()
+        )
     })
 }
 

@@ -115,6 +115,17 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
             .parent()
             .filter(|d| !d.as_os_str().is_empty())
             .map_or_else(|| PathBuf::from("."), PathBuf::from);
+        if p.is_dir() {
+            return Err(Error::msg(
+                ErrorKind::Io,
+                format!(
+                    "cannot write the curve file `{}`: it is a folder; give a file name, e.g. \
+                     `{}`",
+                    p.display(),
+                    p.join("curve.csv").display()
+                ),
+            ));
+        }
         if !dir.is_dir() {
             return Err(Error::msg(
                 ErrorKind::Io,

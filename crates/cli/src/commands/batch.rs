@@ -66,7 +66,7 @@ pub struct RunArgs {
     pub method: Option<MethodName>,
 
     /// Iteration limit of every indent.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = super::parse_usize)]
     pub max_iter: Option<usize>,
 
     /// Also draw each indent's figures and report.md (slower).
@@ -239,6 +239,9 @@ fn report(s: &BatchSummary) {
                 .parent()
                 .map_or(String::new(), |p| p.display().to_string())
         ));
+    }
+    if let Some(note) = &s.maps_note {
+        text.push_str(&format!("  maps: {note}\n"));
     }
     text.push_str(&format!("  wall time {:.1} s\n", s.seconds));
     print!("{text}");
