@@ -1,6 +1,6 @@
 //! What a user sees on the edges: a negative count named with its range, a refused run
 //! that leaves no folder behind, `simulate --out` given a folder refused before the solve,
-//! a force implausible for its tip
+//! each test of a joint configuration with its own noise, a force implausible for its tip
 //! and depth warned about, a batch without positions saying why it draws no map, and a
 //! Ctrl-C during the discretization check skipping it and saying so.
 
@@ -69,6 +69,54 @@ fn simulate_out_a_folder_is_refused_before_the_solve() {
         &tmp.path().display().to_string(),
     ]);
     assert_rejected(&o, &["is a folder", "curve.csv"], "a folder");
+}
+
+/// `F_noisy / F - 1` of a simulated test with and without noise.
+fn relative_noise(test: &str) -> Vec<f64> {
+    let r2 = example("r2-multi-rate.ron");
+    let run = |noise: bool| {
+        let mut args = vec![
+            "-q",
+            "simulate",
+            &r2,
+            "--test",
+            test,
+            "--set",
+            "specimen.nr=4",
+            "--set",
+            "specimen.nz=4",
+        ];
+        if noise {
+            args.extend(["--noise", "0.05", "--seed", "7"]);
+        }
+        let o = indentify(&args);
+        assert_ok(&o);
+        parse_curve(&stdout(&o))
+    };
+    let (clean, noisy) = (run(false), run(true));
+    clean
+        .iter()
+        .zip(&noisy)
+        .filter(|(c, _)| c[2].abs() > 0.0)
+        .map(|(c, n)| n[2] / c[2] - 1.0)
+        .collect()
+}
+
+#[test]
+fn simulate_draws_each_tests_own_noise_as_identify_does() {
+    let (one, two) = (relative_noise("1"), relative_noise("2"));
+    assert_eq!(one.len(), two.len());
+    assert!(one.iter().all(|r| r.abs() <= 0.05 + 1e-12));
+    let same = one
+        .iter()
+        .zip(&two)
+        .filter(|(a, b)| (*a - *b).abs() < 1e-12)
+        .count();
+    assert!(
+        same < 3,
+        "tests 1 and 2 share {same} of {} draws",
+        one.len()
+    );
 }
 
 #[test]
