@@ -199,7 +199,6 @@ fn batch_slurm_validates_every_indent_before_writing_a_job_array() {
             "id,test\na,2\n",
             vec!["m.csv:2", "`test` column (2)", "no `data` section"],
         ),
-        ("id,data\na,missing.csv\n", vec!["m.csv:2", "missing.csv"]),
     ] {
         std::fs::write(d.join("m.csv"), manifest).unwrap();
         let out = d.join("run");

@@ -948,9 +948,10 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
 /// Checks every indent of `manifest` as its run will read it, without solving anything:
 /// its configuration (the row's or `base`) loads with the row's configuration columns
 /// applied (`law.foo` unknown, `law.E=-5` out of range), its identification settings
-/// resolve with `overrides`, a `test` column meets a configuration that reads a record
-/// (`data`), and its data file exists. `batch slurm` calls it before writing a job array,
-/// so that a manifest that would fail on every indent fails before anything is queued.
+/// resolve with `overrides`, and a `test` column meets a configuration that reads a record
+/// (`data`). `batch slurm` calls it before writing a job array, so that a manifest that
+/// would fail on every indent fails before anything is queued. A missing or bad data file
+/// is one indent's failure, recorded in its status as in any batch, not a refusal.
 ///
 /// # Errors
 /// The first bad indent, naming the manifest, its line and id.
@@ -1006,14 +1007,6 @@ fn check_test_column(indent: &Indent, config: &ConfigSource) -> Result<()> {
 fn check_indent(indent: &Indent, base: Option<&Path>, overrides: &Overrides) -> Result<()> {
     let (config, sets) = indent_source(indent, base);
     check_test_column(indent, &config)?;
-    if let Some(d) = &indent.data {
-        if !d.is_file() {
-            return Err(Error::msg(
-                ErrorKind::Data,
-                format!("its data file `{}` does not exist", d.display()),
-            ));
-        }
-    }
     let mut opts = IdentifyOptions::new(config);
     opts.sets = sets;
     opts.data = indent.data.clone();
