@@ -148,6 +148,28 @@ class Result:
     tests: list["TestFit"]
     """A joint fit's tests in the configuration's order (empty for one test); `fit` then
     holds their curves end to end."""
+    discretization: Optional["Discretization"]
+    """The discretization check (None with refine=False or after an interruption)."""
+    caveats: list[str]
+    """What makes the result less than it looks (empty when nothing)."""
+
+class Discretization(TypedDict):
+    """The fit re-run on a 2x refined mesh with twice the steps (`identify(refine=True)`)."""
+
+    mesh: str
+    steps: str
+    rms: float
+    """RMS of the force change (N)."""
+    rms_rel: float
+    """RMS of the force change over the largest force."""
+    max_abs: float
+    """Largest force change (N)."""
+    shift: dict[str, Optional[float]]
+    """Parameter shift the refinement implies (None: held or undetermined)."""
+    relative_shift: dict[str, Optional[float]]
+    exceeds_std: list[str]
+    """Parameters whose shift exceeds their standard deviation."""
+    seconds: float
 
 class TestFit(TypedDict):
     """One test of a joint fit (`tests: [...]`)."""
@@ -268,8 +290,12 @@ def identify(
     noise: Optional[float] = None,
     seed: int = 1,
     noise_model: Optional[NoiseModel] = None,
+    refine: bool = True,
 ) -> Result:
     """Identifies the parameters (GIL released; Ctrl-C stops after the iteration).
+
+    refine=False skips the discretization check (the fit re-run on a refined mesh; its
+    result is Result.discretization). free: a list of names, or one name as a str.
 
     A joint configuration (tests: [...]) is fitted as a whole (Result.tests). noise_model
     replaces the configuration's identify.noise."""

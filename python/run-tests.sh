@@ -5,7 +5,8 @@
 #   python/run-tests.sh [PYTEST ARGS...]      e.g. python/run-tests.sh -k identify -x
 #
 # Needs python3 (>= 3.9, with venv and pip), cargo and access to PyPI (maturin, pytest,
-# numpy). The virtual environment is ${INDENTIFY_VENV:-target/python-venv} (relative to the
+# numpy, and mypy: the type stub's test runs it on a probe, and here it must run, not skip).
+# The virtual environment is ${INDENTIFY_VENV:-target/python-venv} (relative to the
 # workspace root), kept between runs; the Rust build goes to CARGO_TARGET_DIR when set,
 # else the workspace's own target/, so the release build is shared with `cargo build --release`.
 set -euo pipefail
@@ -30,9 +31,9 @@ if [ ! -x "$venv/bin/python" ]; then
     fi
 fi
 py="$venv/bin/python"
-echo "== installing maturin, pytest, numpy (PyPI)"
+echo "== installing maturin, pytest, numpy, mypy (PyPI)"
 "$py" -m pip install --quiet --disable-pip-version-check --upgrade pip
-"$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2" pytest numpy
+"$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2" pytest numpy mypy
 
 profile="${INDENTIFY_PY_PROFILE:-dev}"
 echo "== building and installing the package (cargo profile $profile)"
@@ -45,7 +46,7 @@ VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" \
 
 echo "== pytest"
 set +e
-"$py" -m pytest python/tests "$@"
+INDENTIFY_REQUIRE_MYPY=1 "$py" -m pytest python/tests "$@"
 status=$?
 set -e
 exit $status

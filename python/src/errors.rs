@@ -57,9 +57,91 @@ fn raise<T: pyo3::PyTypeInfo>(kind: &str, messages: Vec<String>) -> PyErr {
     err
 }
 
-/// The study layer's error as the exception of its kind.
+/// The command-line flags the study layer's messages name, and the Python arguments
+/// that take their place.
+const FLAGS: [(&str, &str); 11] = [
+    ("--max-iter", "max_iterations"),
+    ("--no-refine", "refine=False"),
+    ("--free", "free"),
+    ("--fixed", "fixed"),
+    ("--start", "start"),
+    ("--method", "method"),
+    ("--noise", "noise"),
+    ("--seed", "seed"),
+    ("--force", "force=True"),
+    ("--data", "data"),
+    ("--out", "out"),
+];
+
+/// A study-layer message in the words of the Python package: `--set a=1 --set b=2`
+/// becomes `sets {a=1, b=2}`, each flag its argument (`--noise -1` becomes `noise=-1`,
+/// `--force` `force=True`), and the hint to resume (a command-line option) says so.
+pub fn python_words(msg: &str) -> String {
+    let msg = msg.replace(
+        "continue it with --resume, replace it with --force, or choose another --out",
+        "replace it with force=True, choose another out, or continue it on the command line \
+         (indentify identify ... --resume)",
+    );
+    // `--set A --set B` -> `sets {A, B}`
+    let mut out = String::new();
+    let mut rest = msg.as_str();
+    while let Some(k) = rest.find("--set ") {
+        out.push_str(&rest[..k]);
+        rest = &rest[k..];
+        let mut items = Vec::new();
+        while let Some(tail) = rest.strip_prefix("--set ") {
+            let end = tail
+                .find(|c: char| c.is_whitespace() || c == ')' || c == ':' || c == ';')
+                .unwrap_or(tail.len());
+            items.push(tail[..end].to_string());
+            rest = &tail[end..];
+            match rest.strip_prefix(" --set ") {
+                Some(_) => rest = &rest[1..],
+                None => break,
+            }
+        }
+        out.push_str(&format!("sets {{{}}}", items.join(", ")));
+    }
+    out.push_str(rest);
+    for (flag, arg) in FLAGS {
+        let mut done = String::new();
+        let mut rest = out.as_str();
+        while let Some(k) = rest.find(flag) {
+            let after = &rest[k + flag.len()..];
+            let boundary = !after.starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-');
+            done.push_str(&rest[..k]);
+            if !boundary {
+                done.push_str(flag);
+                rest = after;
+                continue;
+            }
+            done.push_str(arg);
+            // `--noise -1 is ...` -> `noise=-1 is ...`
+            let number = after.strip_prefix(' ').and_then(|t| {
+                let end = t
+                    .find(|c: char| c.is_whitespace() || c == ',')
+                    .unwrap_or(t.len());
+                t[..end].parse::<f64>().ok().map(|_| end)
+            });
+            match number {
+                Some(end) if !arg.contains('=') => {
+                    done.push('=');
+                    done.push_str(&after[1..=end]);
+                    rest = &after[1 + end..];
+                }
+                _ => rest = after,
+            }
+        }
+        done.push_str(rest);
+        out = done;
+    }
+    out
+}
+
+/// The study layer's error as the exception of its kind, in the Python package's words
+/// ([`python_words`]).
 pub fn study_error(e: StudyError) -> PyErr {
-    let messages = e.messages();
+    let messages: Vec<String> = e.messages().iter().map(|m| python_words(m)).collect();
     match e.kind() {
         ErrorKind::Config => raise::<ConfigError>("config", messages),
         ErrorKind::Data => raise::<DataError>("data", messages),

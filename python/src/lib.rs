@@ -48,10 +48,13 @@ fn read_record(
     py: Python<'_>,
     path: &Bound<'_, PyAny>,
     format: Option<&str>,
-    test: Option<usize>,
+    test: Option<i128>,
     preprocessing: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Record> {
     let path = path_arg(path, "path")?;
+    let test = test
+        .map(|t| count(t, "test", 1).map(|t| t as usize))
+        .transpose()?;
     let format = match format {
         None => indentify_study::records::Format::Auto,
         Some(name) => indentify_study::records::Format::from_name(name).ok_or_else(|| {
@@ -127,12 +130,15 @@ fn simulate<'py>(
     config: Option<&Bound<'py, PyAny>>,
     sets: Option<&Bound<'py, PyAny>>,
     noise: Option<f64>,
-    seed: u64,
-    test: Option<usize>,
+    seed: i128,
+    test: Option<i128>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let seed = count(seed, "seed", 0)?;
     let mut opts = SimulateOptions::new(config_source(config)?);
     opts.sets = sets_arg(sets)?;
-    opts.test = test;
+    opts.test = test
+        .map(|t| count(t, "test", 1).map(|t| t as usize))
+        .transpose()?;
     opts.noise = noise.map(|a| (a, seed));
     let outcome = py
         .detach(|| study_simulate::run(&opts))
@@ -173,12 +179,14 @@ fn gradient(
     config: Option<&Bound<'_, PyAny>>,
     data: Option<&Bound<'_, PyAny>>,
     sets: Option<&Bound<'_, PyAny>>,
-    test: Option<usize>,
+    test: Option<i128>,
 ) -> PyResult<GradientResult> {
     let (data, _temp) = data_arg(data)?;
     let mut opts = GradientOptions::new(config_source(config)?, data);
     opts.sets = sets_arg(sets)?;
-    opts.test = test;
+    opts.test = test
+        .map(|t| count(t, "test", 1).map(|t| t as usize))
+        .transpose()?;
     let outcome = py
         .detach(|| study_gradient::run(&opts))
         .map_err(study_error)?;
@@ -238,7 +246,7 @@ impl Observer for PyObserver {
 #[pyo3(signature = (
     config=None, data=None, sets=None, progress=None, *, out=None, force=false, method=None,
     max_iterations=None, free=None, fixed=None, start=None, noise=None, seed=1,
-    noise_model=None
+    noise_model=None, refine=true
 ))]
 #[allow(clippy::too_many_arguments)]
 fn identify(
@@ -250,14 +258,19 @@ fn identify(
     out: Option<&Bound<'_, PyAny>>,
     force: bool,
     method: Option<&str>,
-    max_iterations: Option<usize>,
-    free: Option<Vec<String>>,
+    max_iterations: Option<i128>,
+    free: Option<&Bound<'_, PyAny>>,
     fixed: Option<&Bound<'_, PyAny>>,
     start: Option<&Bound<'_, PyAny>>,
     noise: Option<f64>,
-    seed: u64,
+    seed: i128,
     noise_model: Option<&Bound<'_, PyAny>>,
+    refine: bool,
 ) -> PyResult<IdentifyResult> {
+    let seed = count(seed, "seed", 0)?;
+    let max_iterations = max_iterations
+        .map(|n| count(n, "max_iterations", 0).map(|n| n as usize))
+        .transpose()?;
     let callback = match progress.filter(|p| !p.is_none()) {
         Some(p) if p.is_callable() => Some(p.clone().unbind()),
         Some(p) => {
@@ -278,9 +291,10 @@ fn identify(
     };
     opts.force = force;
     opts.figures = opts.out.is_some();
+    opts.refine = refine;
     opts.noise = noise.map(|a| (a, seed));
     opts.overrides = Overrides {
-        free,
+        free: names_arg(free, "free")?,
         fixed: fixed_arg(fixed)?,
         starts: match start.filter(|s| !s.is_none()) {
             None => Vec::new(),
@@ -364,15 +378,15 @@ fn design<'py>(
     py: Python<'py>,
     config: Option<&Bound<'py, PyAny>>,
     sets: Option<&Bound<'py, PyAny>>,
-    free: Option<Vec<String>>,
+    free: Option<&Bound<'py, PyAny>>,
     fixed: Option<&Bound<'py, PyAny>>,
     out: Option<&Bound<'py, PyAny>>,
-    jobs: Option<usize>,
+    jobs: Option<i128>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut opts = DesignOptions::new(config_source(config)?);
     opts.sets = sets_arg(sets)?;
     opts.overrides = Overrides {
-        free,
+        free: names_arg(free, "free")?,
         fixed: fixed_arg(fixed)?,
         ..Overrides::default()
     };
@@ -380,7 +394,9 @@ fn design<'py>(
         Some(o) => Some(path_arg(o, "out")?),
         None => None,
     };
-    opts.jobs = jobs;
+    opts.jobs = jobs
+        .map(|j| count(j, "jobs", 1).map(|j| j as usize))
+        .transpose()?;
     let d = py
         .detach(|| study_design::run(&opts))
         .map_err(study_error)?;
@@ -447,19 +463,84 @@ fn fixed_arg(fixed: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(String, Option<f
             Ok(names) if !f.is_instance_of::<pyo3::types::PyString>() => {
                 names.into_iter().map(|n| (n, None)).collect()
             }
-            _ => f
-                .extract::<std::collections::HashMap<String, Option<f64>>>()
-                .map_err(|_| {
-                    PyTypeError::new_err(format!(
-                        "fixed: expected a dict {{name: value or None}} or a list of names, \
-                         got {}",
-                        type_name(f)
-                    ))
-                })?
-                .into_iter()
-                .collect(),
+            _ if f.is_instance_of::<PyDict>() => {
+                let mut out = Vec::new();
+                for (k, v) in f.cast::<PyDict>()?.iter() {
+                    let name: String = k.extract().map_err(|_| {
+                        PyTypeError::new_err(format!(
+                            "fixed: the keys are parameter names (str), got {} {}",
+                            type_name(&k),
+                            k.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+                        ))
+                    })?;
+                    let value = match v.is_none() {
+                        true => None,
+                        false => Some(v.extract::<f64>().map_err(|_| {
+                            PyTypeError::new_err(format!(
+                                "fixed[{name:?}] = {}: expected a number (the value to hold \
+                                 {name} at) or None (its law value), got {}",
+                                v.repr().map_or_else(|_| "?".into(), |r| r.to_string()),
+                                type_name(&v)
+                            ))
+                        })?),
+                    };
+                    out.push((name, value));
+                }
+                out
+            }
+            _ => {
+                return Err(PyTypeError::new_err(format!(
+                    "fixed: expected a dict {{name: value or None}} or a list of names, got {}",
+                    type_name(f)
+                )));
+            }
         },
     })
+}
+
+/// A list of parameter names (`free=`): a list or tuple of str, or one name as a str
+/// (`free="E"` is `free=["E"]`).
+fn names_arg(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<Vec<String>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(s) = obj.cast::<pyo3::types::PyString>() {
+        return Ok(Some(vec![s.to_cow()?.into_owned()]));
+    }
+    let wrong = || {
+        PyTypeError::new_err(format!(
+            "{what}: expected a list of parameter names such as [\"E\", \"eta\"] (or one name \
+             as a str), got {}",
+            type_name(obj)
+        ))
+    };
+    if !(obj.is_instance_of::<PyList>() || obj.is_instance_of::<pyo3::types::PyTuple>()) {
+        return Err(wrong());
+    }
+    let mut names = Vec::new();
+    for (i, item) in obj.try_iter()?.enumerate() {
+        let item = item?;
+        names.push(item.extract::<String>().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "{what}[{i}] = {}: expected a parameter name (str), got {}",
+                item.repr().map_or_else(|_| "?".into(), |r| r.to_string()),
+                type_name(&item)
+            ))
+        })?);
+    }
+    Ok(Some(names))
+}
+
+/// An integer argument that must be at least `min` (0 or 1), as `u64`: a negative or too
+/// small one is a `ConfigError` naming the argument and its range (not an
+/// `OverflowError` without a name).
+fn count(v: i128, what: &str, min: u64) -> PyResult<u64> {
+    match u64::try_from(v) {
+        Ok(n) if n >= min => Ok(n),
+        _ => Err(config_error(format!(
+            "{what} = {v} is not allowed: expected an integer {what} >= {min}"
+        ))),
+    }
 }
 
 /// Writes a synthetic two-phase Maxwell map into `dir`: an n x n grid of indents over a
@@ -477,13 +558,15 @@ fn fixed_arg(fixed: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(String, Option<f
 fn make_map<'py>(
     py: Python<'py>,
     dir: &Bound<'py, PyAny>,
-    n: usize,
+    n: i128,
     noise: f64,
-    seed: u64,
+    seed: i128,
     coarse: bool,
     spacing: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let dir: PathBuf = path_arg(dir, "dir")?;
+    let n = count(n, "n", 1)? as usize;
+    let seed = count(seed, "seed", 0)?;
     let opts = MapOptions {
         n,
         spacing,

@@ -298,6 +298,50 @@ pub struct IdentifyResult {
     /// curves, as `Result.fit`). `Result.fit` then holds every test's curves end to end.
     #[pyo3(get)]
     tests: Py<PyList>,
+    /// The discretization check (the fit re-run on a 2x refined mesh with twice the
+    /// steps): a dict `mesh`, `steps` (the refined discretization in words), `rms` (N),
+    /// `rms_rel`, `max_abs` (N) of the force change, `shift` and `relative_shift`
+    /// ({name: value, None for a held or undetermined parameter}), `exceeds_std` (the
+    /// names whose shift exceeds their standard deviation) and `seconds`; None with
+    /// `refine=False`, after an interruption, or when the refined run failed (then a
+    /// caveat says so).
+    #[pyo3(get)]
+    discretization: Py<PyAny>,
+    /// What makes the result less than it looks, one short clause each (systematic
+    /// residuals, discretization shifts beyond the deviations, undetermined parameters,
+    /// values at a bound); empty when there is nothing to add.
+    #[pyo3(get)]
+    caveats: Vec<String>,
+}
+
+/// The discretization check as a dict (None when not run).
+fn discretization_dict(py: Python<'_>, o: &IdentifyOutcome) -> PyResult<Py<PyAny>> {
+    let Some(d) = &o.discretization else {
+        return Ok(py.None());
+    };
+    let dict = PyDict::new(py);
+    dict.set_item("mesh", &d.mesh)?;
+    dict.set_item("steps", &d.steps)?;
+    dict.set_item("rms", d.rms)?;
+    dict.set_item("rms_rel", d.rms_rel)?;
+    dict.set_item("max_abs", d.max_abs)?;
+    let shift = PyDict::new(py);
+    let relative = PyDict::new(py);
+    let mut exceeds = Vec::new();
+    for (k, name) in o.names.iter().enumerate() {
+        shift.set_item(name, d.shift.get(k).copied().flatten())?;
+        relative.set_item(name, d.relative_shift.get(k).copied().flatten())?;
+        if let (Some(Some(s)), Some(sd)) = (d.shift.get(k), o.std_dev(name)) {
+            if s.abs() > sd {
+                exceeds.push(*name);
+            }
+        }
+    }
+    dict.set_item("shift", shift)?;
+    dict.set_item("relative_shift", relative)?;
+    dict.set_item("exceeds_std", exceeds)?;
+    dict.set_item("seconds", d.seconds)?;
+    Ok(dict.into_any().unbind())
 }
 
 /// A fit quality as a dict (None when not computable).
@@ -432,6 +476,8 @@ impl IdentifyResult {
             truth,
             files,
             tests: tests.unbind(),
+            discretization: discretization_dict(py, o)?,
+            caveats: o.caveats(),
         })
     }
 }

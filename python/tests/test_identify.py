@@ -86,7 +86,8 @@ def test_a_report_directory_is_written_and_protected(coarse, tmp_path):
     assert r.files["result"] == str(out / "result.json")
     with pytest.raises(indentify.IoError) as e:
         indentify.identify(R1, sets=coarse, out=out, max_iterations=3)
-    assert e.value.kind == "io" and "--force" in str(e.value)
+    assert e.value.kind == "io" and "force=True" in str(e.value)
+    assert "--force" not in str(e.value) and "--out" not in str(e.value)
     indentify.identify(R1, sets=coarse, out=out, max_iterations=3, force=True)
 
 
@@ -162,3 +163,54 @@ def _tries(full):
         if raised and seconds < full.wall_seconds and 0 < iterations < len(full.history):
             return
     pytest.fail(f"Ctrl-C did not stop the run: (delay, raised, seconds, iterations) = {tries}")
+
+
+def test_refine_false_skips_the_discretization_check_which_is_returned_when_run(coarse):
+    r = indentify.identify(R1, sets=coarse, refine=False)
+    assert r.converged and r.discretization is None
+    r = indentify.identify(R1, sets=coarse)
+    d = r.discretization
+    assert set(d) == {
+        "mesh", "steps", "rms", "rms_rel", "max_abs", "shift", "relative_shift",
+        "exceeds_std", "seconds",
+    }
+    assert set(d["shift"]) == {"E", "nu", "eta"}
+    assert d["shift"]["nu"] is None and isinstance(d["shift"]["E"], float)
+    assert d["relative_shift"]["E"] == pytest.approx(d["shift"]["E"] / r.params["E"])
+    assert d["rms"] > 0 and 0 < d["rms_rel"] < 1 and d["max_abs"] >= d["rms"]
+    # exact data: the deviations are at round-off, so the refinement's shift exceeds them
+    assert set(d["exceeds_std"]) <= {"E", "eta"}
+    assert isinstance(r.caveats, list) and all(isinstance(c, str) for c in r.caveats)
+
+
+def test_bad_arguments_are_named_as_python_arguments(coarse):
+    with pytest.raises(indentify.ConfigError) as e:
+        indentify.identify(R1, sets={**coarse, "law.E": -1}, refine=False)
+    msg = str(e.value)
+    assert "--set" not in msg and "sets {" in msg and "law.E=-1" in msg, msg
+    # one name as a str is a list of one
+    r = indentify.identify(R1, sets=coarse, free="E", refine=False, max_iterations=2)
+    assert r.free == {"E": True, "nu": False, "eta": False}
+    with pytest.raises(TypeError, match=r"free\[1\] = 3: expected a parameter name"):
+        indentify.identify(R1, sets=coarse, free=["E", 3])
+    with pytest.raises(TypeError, match=r"free: expected a list of parameter names"):
+        indentify.identify(R1, sets=coarse, free=3)
+    with pytest.raises(TypeError, match=r"fixed\[\"eta\"\] = 'x': expected a number"):
+        indentify.identify(R1, sets=coarse, fixed={"eta": "x"})
+    # negative integers name their argument and range
+    cases = [
+        (lambda: indentify.identify(R1, sets=coarse, max_iterations=-1), "max_iterations = -1"),
+        (lambda: indentify.identify(R1, sets=coarse, noise=0.01, seed=-3), "seed = -3"),
+        (lambda: indentify.simulate(R1, sets=coarse, test=0), "test = 0"),
+        (lambda: indentify.gradient(R1, sets=coarse, test=-1), "test = -1"),
+        (lambda: indentify.read_record(REAL_MAXWELL, test=-2), "test = -2"),
+        (lambda: indentify.make_map("unused", n=-2), "n = -2"),
+        (lambda: indentify.design(R1, jobs=-4), "jobs = -4"),
+    ]
+    for call, needle in cases:
+        with pytest.raises(indentify.ConfigError, match="is not allowed: expected an integer"):
+            try:
+                call()
+            except indentify.ConfigError as err:
+                assert needle in str(err), str(err)
+                raise

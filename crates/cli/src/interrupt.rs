@@ -15,7 +15,8 @@ pub fn cancel_on_ctrl_c() -> Cancel {
             std::process::exit(130);
         }
         eprintln!(
-            "\ninterrupt: stopping after the current iteration (press Ctrl-C again to quit now)"
+            "\ninterrupt: stopping after the current iteration, or skipping the discretization \
+             check if it runs (press Ctrl-C again to quit now)"
         );
         flag.raise();
     });

@@ -562,6 +562,11 @@ fn honest_stop(config: &str, method: &str, start: &str, truth: &[(&str, f64)]) -
         md.contains("## Identifiability") && md.contains("**undetermined**"),
         "{md}"
     );
+    // the determined parameters' deviations are conditional on the undetermined ones held:
+    // the console, result.json and report.md say so
+    assert!(table.contains("conditional on"), "{table}");
+    assert!(v["caveats"].to_string().contains("conditional on"), "{v}");
+    assert!(md.contains("conditional"), "{md}");
     undetermined
 }
 

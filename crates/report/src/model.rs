@@ -376,7 +376,21 @@ impl Report {
             .map(|p| p.name.as_str())
             .collect();
         if !undetermined.is_empty() {
-            out.push(format!("undetermined: {}", undetermined.join(", ")));
+            let determined = self
+                .parameters
+                .iter()
+                .any(|p| !p.fixed && !self.is_undetermined(&p.name));
+            out.push(format!(
+                "undetermined: {}{}",
+                undetermined.join(", "),
+                match (determined, undetermined.len()) {
+                    (false, _) => "",
+                    (true, 1) => " (the other σ hold it fixed: conditional, can be far too small)",
+                    (true, _) => {
+                        " (the other σ hold them fixed: conditional, can be far too small)"
+                    }
+                }
+            ));
         }
         let bound: Vec<String> = self
             .parameters

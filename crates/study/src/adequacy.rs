@@ -146,7 +146,14 @@ impl IdentifyOutcome {
         if let Some(i) = &self.result.identifiability
             && !i.undetermined.is_empty()
         {
-            out.push(format!("undetermined: {}", i.undetermined.join(", ")));
+            out.push(undetermined_caveat(
+                &i.undetermined,
+                self.result
+                    .params
+                    .iter()
+                    .filter(|p| p.free && !i.undetermined.contains(&p.name))
+                    .count(),
+            ));
         }
         let bound: Vec<String> = self
             .result
@@ -199,4 +206,23 @@ impl IdentifyOutcome {
         }
         text
     }
+}
+
+/// The caveat of undetermined parameters: which, and that the `determined` others'
+/// standard deviations are conditional on them (computed with them held at their values,
+/// so they leave out the undetermined direction and can be far too small).
+pub fn undetermined_caveat(undetermined: &[&str], determined: usize) -> String {
+    let names = undetermined.join(", ");
+    if determined == 0 {
+        return format!("undetermined: {names}");
+    }
+    let (them, value) = if undetermined.len() == 1 {
+        ("it", "its value")
+    } else {
+        ("them", "their values")
+    };
+    format!(
+        "undetermined: {names}; the other standard deviations are conditional on {them} held \
+         at {value} (they leave out the undetermined direction and can be far too small)"
+    )
 }

@@ -51,6 +51,38 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Checks, before any solve and without creating anything, that the folder `dir` (which
+/// does not exist yet) could be created: its nearest existing ancestor is a writable
+/// folder.
+///
+/// # Errors
+/// An ancestor that is a file, or a folder that cannot be written, named.
+pub fn check_creatable_dir(dir: &Path) -> Result<()> {
+    let absolute = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let Some(existing) = absolute.ancestors().skip(1).find(|a| a.exists()) else {
+        anyhow::bail!(
+            "cannot create the directory `{}`: no existing parent",
+            dir.display()
+        );
+    };
+    anyhow::ensure!(
+        existing.is_dir(),
+        "cannot create the directory `{}`: `{}` is a file",
+        dir.display(),
+        existing.display()
+    );
+    let probe = temporary(&existing.join("probe"));
+    std::fs::write(&probe, b"").with_context(|| {
+        format!(
+            "cannot create the directory `{}`: cannot write in `{}`",
+            dir.display(),
+            existing.display()
+        )
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +101,10 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, ["result.json"]);
+        assert!(check_creatable_dir(&dir.path().join("c/d")).is_ok());
+        assert!(!dir.path().join("c").exists(), "checked, not created");
+        let e = check_creatable_dir(&p.join("sub")).unwrap_err().to_string();
+        assert!(e.contains("is a file"), "{e}");
         assert!(ensure_writable_dir(&dir.path().join("a/b")).is_ok());
     }
 }

@@ -430,6 +430,8 @@ pub struct BatchSummary {
     pub results: PathBuf,
     /// The map figures written.
     pub figures: Vec<PathBuf>,
+    /// Why there are no maps, or indents left out of them (positions missing), in words.
+    pub maps_note: Option<String>,
     /// Wall time (s).
     pub seconds: f64,
 }
@@ -577,17 +579,43 @@ pub fn run(opts: &BatchOptions, observer: &dyn BatchObserver) -> Result<BatchSum
     Ok(summary)
 }
 
+impl IndentStatus {
+    /// A failed status of `indent` with no message yet.
+    fn failed(indent: &Indent) -> IndentStatus {
+        IndentStatus {
+            id: indent.id.clone(),
+            x: indent.x,
+            y: indent.y,
+            state: State::Failed,
+            message: String::new(),
+            error_kind: None,
+            names: Vec::new(),
+            units: Vec::new(),
+            values: Vec::new(),
+            std_dev: Vec::new(),
+            free: Vec::new(),
+            r2: None,
+            rms_rel: None,
+            iterations: 0,
+            seconds: 0.0,
+            adequacy: None,
+            caveats: Vec::new(),
+        }
+    }
+}
+
 /// Identifies one indent; never fails: a failure is its status.
 fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
     let t0 = Instant::now();
     let dir = opts.out.join("indents").join(&indent.id);
-    let config = match (&indent.config, &opts.config) {
-        (Some(c), _) | (None, Some(c)) => ConfigSource::Path(c.clone()),
-        (None, None) => unreachable!("read_manifest requires a configuration per indent"),
-    };
-    let mut sets = indent.sets.clone();
-    if let Some(t) = indent.test {
-        sets.push(format!("data.test={t}"));
+    let (config, sets) = indent_source(indent, opts.config.as_deref());
+    if let Err(e) = check_test_column(indent, &config) {
+        return IndentStatus {
+            message: e.messages().join(": "),
+            error_kind: Some(e.kind().name().to_string()),
+            seconds: t0.elapsed().as_secs_f64(),
+            ..IndentStatus::failed(indent)
+        };
     }
     let id_opts = IdentifyOptions {
         config,
@@ -610,25 +638,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         // the indents are the parallel work: one thread each
         jobs: Some(1),
     };
-    let mut status = IndentStatus {
-        id: indent.id.clone(),
-        x: indent.x,
-        y: indent.y,
-        state: State::Failed,
-        message: String::new(),
-        error_kind: None,
-        names: Vec::new(),
-        units: Vec::new(),
-        values: Vec::new(),
-        std_dev: Vec::new(),
-        free: Vec::new(),
-        r2: None,
-        rms_rel: None,
-        iterations: 0,
-        seconds: 0.0,
-        adequacy: None,
-        caveats: Vec::new(),
-    };
+    let mut status = IndentStatus::failed(indent);
     match identify::run(&id_opts, &mut ()) {
         Ok(o) => {
             status.state = if o.converged() {
@@ -724,6 +734,7 @@ fn gather(out: &Path, manifest: &Manifest) -> Result<BatchSummary> {
     let results = out.join("results.csv");
     crate::atomic::write(&results, results_csv(&statuses, &names)).kind(ErrorKind::Io)?;
     let figures = write_maps(out, &statuses, &names)?;
+    let maps_note = maps_note(manifest, &statuses);
     Ok(BatchSummary {
         total: manifest.indents.len(),
         in_shard: manifest.indents.len(),
@@ -733,7 +744,54 @@ fn gather(out: &Path, manifest: &Manifest) -> Result<BatchSummary> {
         missing,
         results,
         figures,
+        maps_note,
         seconds: 0.0,
+    })
+}
+
+/// Why no map is drawn (no indent has both `x` and `y`), or how many indents the maps
+/// leave out; `None` when every indent with a status is on them.
+fn maps_note(manifest: &Manifest, statuses: &[IndentStatus]) -> Option<String> {
+    if statuses.is_empty() {
+        return None;
+    }
+    let placed = statuses
+        .iter()
+        .filter(|s| s.x.is_some() && s.y.is_some())
+        .count();
+    if placed == statuses.len() {
+        return None;
+    }
+    let missing: Vec<&str> = [
+        ("x", manifest.indents.iter().all(|i| i.x.is_none())),
+        ("y", manifest.indents.iter().all(|i| i.y.is_none())),
+    ]
+    .into_iter()
+    .filter_map(|(c, none)| none.then_some(c))
+    .collect();
+    Some(if placed == 0 {
+        let why = if missing.is_empty() {
+            "no indent has both `x` and `y`".to_string()
+        } else {
+            format!(
+                "the manifest has no {} column",
+                missing
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            )
+        };
+        format!(
+            "no maps are drawn: {why} (each indent's position in mm; results.csv has every \
+             result)"
+        )
+    } else {
+        format!(
+            "{} of {} indents have no `x` or `y` and are left out of the maps",
+            statuses.len() - placed,
+            statuses.len()
+        )
     })
 }
 
@@ -885,6 +943,75 @@ fn write_maps(out: &Path, statuses: &[IndentStatus], names: &[String]) -> Result
         }
     }
     Ok(written)
+}
+
+/// Checks every indent of `manifest` as its run will read it, without solving anything:
+/// its configuration (the row's or `base`) loads with the row's configuration columns
+/// applied (`law.foo` unknown, `law.E=-5` out of range), its identification settings
+/// resolve with `overrides`, and a `test` column meets a configuration that reads a record
+/// (`data`). `batch slurm` calls it before writing a job array, so that a manifest that
+/// would fail on every indent fails before anything is queued. A missing or bad data file
+/// is one indent's failure, recorded in its status as in any batch, not a refusal.
+///
+/// # Errors
+/// The first bad indent, naming the manifest, its line and id.
+pub fn validate(manifest: &Manifest, base: Option<&Path>, overrides: &Overrides) -> Result<()> {
+    for indent in &manifest.indents {
+        check_indent(indent, base, overrides).map_err(|e| {
+            e.context(format!(
+                "{}:{}: indent `{}`",
+                manifest.path.display(),
+                indent.line,
+                indent.id
+            ))
+        })?;
+    }
+    Ok(())
+}
+
+/// The configuration of `indent` and its `--set` paths (its columns, then `data.test`).
+fn indent_source(indent: &Indent, base: Option<&Path>) -> (ConfigSource, Vec<String>) {
+    let config = match (&indent.config, base) {
+        (Some(c), _) => c.clone(),
+        (None, Some(b)) => b.to_path_buf(),
+        (None, None) => unreachable!("read_manifest requires a configuration per indent"),
+    };
+    let mut sets = indent.sets.clone();
+    if let Some(t) = indent.test {
+        sets.push(format!("data.test={t}"));
+    }
+    (ConfigSource::Path(config), sets)
+}
+
+/// A `test` column needs a configuration that reads a record (`data`): with one that
+/// simulates its `history`, `data.test` has nothing to apply to.
+fn check_test_column(indent: &Indent, config: &ConfigSource) -> Result<()> {
+    let Some(t) = indent.test else {
+        return Ok(());
+    };
+    if config.load(&indent.sets)?.data.is_none() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "the `test` column ({t}) picks a test of a multi-test record, but `{}` has no \
+                 `data` section (it simulates its `history`): use a configuration that reads a \
+                 record, or leave the `test` cell empty",
+                config.name()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// [`validate`] for one indent.
+fn check_indent(indent: &Indent, base: Option<&Path>, overrides: &Overrides) -> Result<()> {
+    let (config, sets) = indent_source(indent, base);
+    check_test_column(indent, &config)?;
+    let mut opts = IdentifyOptions::new(config);
+    opts.sets = sets;
+    opts.data = indent.data.clone();
+    opts.overrides = overrides.clone();
+    identify::resolve(&opts).map(|_| ())
 }
 
 /// A Slurm job array running the shards of a batch.

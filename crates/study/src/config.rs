@@ -1315,6 +1315,10 @@ impl Config {
         }
         if let Some(m) = &measured {
             warnings.extend(m.warnings.iter().cloned());
+            if let Some(w) = force_plausibility(&self.punch, m) {
+                tracing::warn!("warning: {w}");
+                warnings.push(w);
+            }
         }
         let (mesh, moved, rim) = mesher
             .build_for(punch)
@@ -1370,6 +1374,54 @@ fn with_tip_compliance(d: &DataSection, tip: &tip::ResolvedPunch) -> Result<Data
         d.preprocessing.compliance = Correction::Value(c);
     }
     Ok(d)
+}
+
+/// Mean contact pressures (MPa) beyond which a record's force cannot be right for its
+/// depth and tip: above 2e5 MPa (200 GPa, twice the hardness of diamond) or below 1e-5 MPa
+/// (10 Pa, softer than the softest gels).
+pub const PLAUSIBLE_PRESSURE: (f64, f64) = (1e-5, 2e5);
+
+/// A warning when the record's largest force, over the tip's projected area at the depth
+/// where it is reached (`pi a^2`, `a` the profile's radius at that depth), is a mean
+/// pressure no material gives ([`PLAUSIBLE_PRESSURE`]): typically a force column in the
+/// wrong unit (`Fn (kN)` for mN).
+pub fn force_plausibility(punch: &Punch, m: &Measured) -> Option<String> {
+    let raw = &m.raw;
+    let (i, f) = raw
+        .f
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, f64::NEG_INFINITY), |best, (i, f)| {
+            if f > best.1 { (i, f) } else { best }
+        });
+    let h = raw.h.get(i).copied()?;
+    let a = punch.intersection_radius(h);
+    if !(f > 0.0 && h > 0.0 && a.is_finite() && a > 0.0) {
+        return None;
+    }
+    let p = f / (std::f64::consts::PI * a * a);
+    let (low, high) = PLAUSIBLE_PRESSURE;
+    if p >= low && p <= high {
+        return None;
+    }
+    Some(format!(
+        "`{}`: its largest force {} N at a depth of {} mm gives a mean pressure of {} MPa on \
+         the tip ({}), {} any material (plausible: {} to {} MPa): check the force and depth \
+         units of the file's header (e.g. `Fn (mN)`, `Depth (nm)`)",
+        m.path.display(),
+        short(f),
+        short(h),
+        short(p),
+        punch.describe(),
+        if p > high {
+            "harder than"
+        } else {
+            "softer than"
+        },
+        short(low),
+        short(high)
+    ))
 }
 
 /// The context of an error of [`Config::prepare`] that lies in the measured record (not in

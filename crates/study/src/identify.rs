@@ -624,7 +624,12 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         s.id_cfg.identifiability = true;
     }
 
-    // the history, once every input is known good
+    // the folder marked as holding a run in progress (the earlier run moved aside under
+    // --force), then the history, once every input is known good
+    if let Some(p) = &paths {
+        let what = format!("the identification of `{}`", s.name);
+        crate::run_folder::begin(&p.dir, opts.force && !opts.resume, &what).kind(ErrorKind::Io)?;
+    }
     let (mut history, resume_from) = open_history(paths.as_ref(), opts.resume, &s.names)?;
     observer.started(&RunInfo {
         resumed_at: resume_from.as_ref().map(|r| r.iteration),
@@ -651,21 +656,14 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     let mut outcome = outcome(&s, result, resume_from.is_some())?;
     outcome.multistart = multistart;
     outcome.profiles = profiles;
-    if opts.refine && !opts.cancel.is_raised() {
-        let tests: Vec<disc::TestInputs<'_>> = s
-            .tests
-            .iter()
-            .map(|t| disc::TestInputs {
-                name: t.label.clone(),
-                config: &t.config,
-                mesher: &t.mesher,
-                solver: &t.solver_opts,
-            })
-            .collect();
-        add_discretization(&mut outcome, &tests, &s.problem, &s.name);
+    let s = std::sync::Arc::new(s);
+    if opts.refine {
+        discretization_check(&mut outcome, &s, &opts.cancel);
     }
     if let Some(p) = paths {
         outcome.files = Some(write_report(&p, &outcome, opts, &s)?);
+        // every file of the run written: the mark goes last
+        crate::run_folder::finish(&p.dir).kind(ErrorKind::Io)?;
     }
     outcome.wall_seconds = wall.elapsed().as_secs_f64();
     Ok(outcome)
@@ -861,23 +859,68 @@ pub fn test_seed(seed: u64, k: usize) -> u64 {
         .next_u64()
 }
 
+/// What a run interrupted before or during the discretization check says.
+pub const DISCRETIZATION_SKIPPED: &str = "interrupted: the discretization check was skipped \
+     (no refined-mesh error in this report; run again without interrupting, or with \
+     --no-refine to skip it on purpose)";
+
 /// The discretization error of `outcome`'s fit ([`disc::compute`]: every test refined, the
-/// tests in parallel), its summary logged and its warnings added; a failure is a warning,
-/// never an error (the fit stands).
-fn add_discretization(
-    outcome: &mut IdentifyOutcome,
-    tests: &[disc::TestInputs<'_>],
-    problem: &Problem,
-    name: &str,
-) {
+/// tests in parallel) on a thread of its own, so that an interruption (`cancel`) skips it
+/// at once: a refined run cannot stop midway, and its thread is left to end on its own.
+/// Its summary is logged and its warnings added; a failure or a skip is a warning, never
+/// an error (the fit stands).
+fn discretization_check(outcome: &mut IdentifyOutcome, s: &std::sync::Arc<Setup>, cancel: &Cancel) {
+    let skipped = |outcome: &mut IdentifyOutcome| {
+        tracing::warn!("warning: {DISCRETIZATION_SKIPPED}");
+        outcome.warnings.push(DISCRETIZATION_SKIPPED.to_string());
+    };
+    if cancel.is_raised() {
+        return skipped(outcome);
+    }
+    tracing::info!(
+        "  discretization check: the fit re-run on a 2x refined mesh with twice the steps \
+         (Ctrl-C skips it)"
+    );
+    let (tx, rx) = std::sync::mpsc::channel();
+    let setup = std::sync::Arc::clone(s);
+    let c = outcome.result.c.clone();
     let free: Vec<bool> = outcome.result.params.iter().map(|p| p.free).collect();
-    let computed = disc::compute(&disc::Inputs {
-        tests,
-        problem,
-        c: &outcome.result.c,
-        free: &free,
-        name,
-    });
+    let spawned = std::thread::Builder::new()
+        .name("discretization check".into())
+        .spawn(move || {
+            let tests: Vec<disc::TestInputs<'_>> = setup
+                .tests
+                .iter()
+                .map(|t| disc::TestInputs {
+                    name: t.label.clone(),
+                    config: &t.config,
+                    mesher: &t.mesher,
+                    solver: &t.solver_opts,
+                })
+                .collect();
+            let _ = tx.send(disc::compute(&disc::Inputs {
+                tests: &tests,
+                problem: &setup.problem,
+                c: &c,
+                free: &free,
+                name: &setup.name,
+            }));
+        });
+    let computed = match spawned {
+        Err(e) => Err(anyhow!("cannot start its thread: {e}")),
+        Ok(_) => loop {
+            match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+                Ok(r) => break r,
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) if cancel.is_raised() => {
+                    return skipped(outcome);
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    break Err(anyhow!("its thread ended without a result"));
+                }
+            }
+        },
+    };
     match computed {
         Ok(d) => {
             tracing::info!("{}", d.summary());
@@ -1025,7 +1068,13 @@ struct Paths {
 /// Checks the report directory before any solve: writable, and not holding another run's
 /// history unless resuming it or forced.
 fn check_report_dir(out: &Path, resume: bool, force: bool) -> Result<Paths> {
-    crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
+    // an existing folder must be writable now; a new one is created once every input is
+    // known good (crate::run_folder::begin), so a refused run leaves no empty folder
+    if out.exists() {
+        crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
+    } else {
+        crate::atomic::check_creatable_dir(out).kind(ErrorKind::Io)?;
+    }
     let paths = Paths {
         dir: out.to_path_buf(),
         history: out.join("history.csv"),

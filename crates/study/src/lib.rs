@@ -37,6 +37,7 @@ pub mod gradient;
 pub mod history;
 pub mod identify;
 pub mod output;
+pub mod run_folder;
 pub mod simulate;
 pub mod solve;
 pub mod source;

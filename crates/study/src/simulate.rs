@@ -115,6 +115,17 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
             .parent()
             .filter(|d| !d.as_os_str().is_empty())
             .map_or_else(|| PathBuf::from("."), PathBuf::from);
+        if p.is_dir() {
+            return Err(Error::msg(
+                ErrorKind::Io,
+                format!(
+                    "cannot write the curve file `{}`: it is a folder; give a file name, e.g. \
+                     `{}`",
+                    p.display(),
+                    p.join("curve.csv").display()
+                ),
+            ));
+        }
         if !dir.is_dir() {
             return Err(Error::msg(
                 ErrorKind::Io,
@@ -175,6 +186,10 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     };
     let mut rows = output::curve(&schedule, &trajectory);
     if let Some((a, seed)) = opts.noise {
+        // test K of a joint configuration draws its own noise, as `identify` does
+        let seed = opts.test.map_or(seed, |k| {
+            crate::identify::test_seed(seed, k.saturating_sub(1))
+        });
         let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
         for (r, f) in rows.iter_mut().zip(multiplicative_noise(&forces, a, seed)) {
             r.f = f;

@@ -66,7 +66,7 @@ pub struct RunArgs {
     pub method: Option<MethodName>,
 
     /// Iteration limit of every indent.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = super::parse_usize)]
     pub max_iter: Option<usize>,
 
     /// Also draw each indent's figures and report.md (slower).
@@ -240,13 +240,17 @@ fn report(s: &BatchSummary) {
                 .map_or(String::new(), |p| p.display().to_string())
         ));
     }
+    if let Some(note) = &s.maps_note {
+        text.push_str(&format!("  maps: {note}\n"));
+    }
     text.push_str(&format!("  wall time {:.1} s\n", s.seconds));
     print!("{text}");
 }
 
 fn slurm(a: &SlurmArgs) -> Result<()> {
-    // the manifest must be valid before a job is queued
-    batch::read_manifest(&a.manifest, a.config.as_deref())?;
+    // the manifest and every indent's configuration must be valid before a job is queued
+    let manifest = batch::read_manifest(&a.manifest, a.config.as_deref())?;
+    batch::validate(&manifest, a.config.as_deref(), &Default::default())?;
     let script = batch::slurm_script(&SlurmOptions {
         manifest: a.manifest.clone(),
         out: a.out.clone(),

@@ -51,7 +51,7 @@ pub struct Args {
     pub start: Vec<String>,
 
     /// Iteration limit (overrides identify.stop.max_iterations).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = super::parse_usize)]
     pub max_iter: Option<usize>,
 
     /// Continue from the last line of DIR/history.csv (quasi-Newton curvature restarts).
@@ -90,7 +90,7 @@ pub struct Args {
 
     /// Seed of the noise generator and of the multi-start's Latin hypercube (SplitMix64;
     /// default 1). Needs --noise or --starts.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = super::parse_count)]
     pub seed: Option<u64>,
 
     /// Multi-start: N starts drawn by Latin-hypercube sampling of the scaled box of the
@@ -319,6 +319,13 @@ pub fn run(args: &Args) -> Result<()> {
             r.iterations,
             r.cost,
         );
+    }
+    if opts.cancel.is_raised() {
+        // converged, then interrupted during the discretization check (skipped, said above)
+        tracing::warn!(
+            "interrupted after the fit: the report is written without the discretization check"
+        );
+        std::process::exit(130);
     }
     Ok(())
 }

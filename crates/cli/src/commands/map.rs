@@ -65,7 +65,14 @@ pub struct Args {
     pub noise: Option<f64>,
 
     /// Seed of the noise (SplitMix64).
-    #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        requires = "noise",
+        allow_negative_numbers = true,
+        value_parser = super::parse_count
+    )]
     pub seed: u64,
 
     /// Identify exactly these parameters (comma-separated); the others are held.

@@ -44,7 +44,14 @@ pub struct Args {
     pub at_step: Option<usize>,
 
     /// Seed of the noise generator (with --noise).
-    #[arg(long, value_name = "N", default_value_t = 1, requires = "noise")]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        requires = "noise",
+        allow_negative_numbers = true,
+        value_parser = super::parse_count
+    )]
     pub seed: u64,
 
     /// Override a scalar of the configuration by its dotted path (repeatable), e.g.
