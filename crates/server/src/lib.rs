@@ -15,6 +15,7 @@
 //! server, and runs queue behind a bounded number of workers.
 
 pub mod api;
+mod jobs;
 mod page;
 pub mod records;
 pub mod runs;
