@@ -244,6 +244,11 @@ fn a_batch_publishes_each_indent_as_it_finishes() {
             "is not a record",
         ),
         ("id,test\na b,1\n".to_string(), "is not allowed"),
+        // no path from a manifest reaches the filesystem: `data` names records by id
+        (
+            "id,data\na,../../../../etc/passwd\n".to_string(),
+            "is not a record",
+        ),
     ] {
         refused(
             &s,
