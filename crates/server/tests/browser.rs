@@ -505,3 +505,102 @@ fn a_batch_map_and_an_analysis_in_headless_chromium() {
     d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
     d.screenshot(&out.join("analyze.png"));
 }
+
+#[test]
+fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
+    let Some((d, _s, out, _profile)) = open_page() else {
+        return;
+    };
+    // design: the template's candidates on a coarse mesh, ranked in a table
+    choose(&d, "#command", "design");
+    d.until(
+        "the design template",
+        "document.querySelector('#config').value.includes('candidates')",
+        30.0,
+    );
+    d.send_keys("#sets", "specimen.nr=6\nspecimen.nz=6");
+    d.click("#run");
+    d.until(
+        "the ranked candidates",
+        "document.querySelectorAll('#design-table tr').length >= 4",
+        300.0,
+    );
+    let first = d.js("return document.querySelector('#design-table tr:nth-child(2) td:nth-child(1)').textContent;");
+    assert_eq!(first, json!("1"));
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("design.png"));
+
+    // a cost map of R1 (the Maxwell template without a record) over E and eta, 3 x 3
+    choose(&d, "#command", "map");
+    d.until(
+        "the Maxwell template",
+        "!document.querySelector('#config').value.includes('candidates')",
+        30.0,
+    );
+    d.js("document.querySelector('#sets').value = ''; document.querySelector('#map-grid').value = '3'; return 0;");
+    choose(&d, "#map-through", "law");
+    d.click("#run");
+    d.until(
+        "the cost map",
+        "document.querySelectorAll('#costmap-svg rect').length >= 9 && document.querySelector('#result-summary').textContent.includes('Cost map')",
+        300.0,
+    );
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("costmap.png"));
+
+    // a joint fit of tests 1 and 2 of a multi-test record, test 2 weighted
+    let record = repo()
+        .join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &record.display().to_string());
+    d.until(
+        "the record's 4 tests",
+        "document.querySelectorAll('#tests tbody tr').length === 4",
+        60.0,
+    );
+    d.until(
+        "the record template",
+        "document.querySelector('#config').value.includes('../../records/')",
+        30.0,
+    );
+    choose(&d, "#command", "identify");
+    d.click("#tests input.joint[data-test='1']");
+    d.click("#tests input.joint[data-test='2']");
+    d.send_keys("#tests input.weight[data-test='2']", "2");
+    d.until(
+        "the joint note",
+        "document.querySelector('#joint-note').textContent.includes('Joint fit of tests 1, 2')",
+        5.0,
+    );
+    d.send_keys(
+        "#sets",
+        "data.preprocessing.resample.n=20\ndata.substeps=1\nidentify.stop.max_iterations=1",
+    );
+    d.click("#no-refine");
+    d.click("#run");
+    d.until(
+        "the end of the joint fit",
+        "['done','failed','cancelled'].includes(document.querySelector('#run-status').textContent)",
+        300.0,
+    );
+    assert_eq!(
+        d.js("return document.querySelector('#run-status').textContent;"),
+        json!("done"),
+        "{}",
+        d.js("return document.querySelector('#run-error').textContent;")
+    );
+    d.until(
+        "the parameter table",
+        "document.querySelector('#param-table tr[data-param=\"E\"]')",
+        30.0,
+    );
+    let links =
+        d.js("return [...document.querySelectorAll('#downloads a')].map(a => a.textContent);");
+    assert!(
+        links.to_string().contains("test-2/"),
+        "a page per test: {links}"
+    );
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("joint.png"));
+}

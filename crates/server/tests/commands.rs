@@ -326,3 +326,35 @@ fn design_ranks_its_candidates_and_map_computes_a_cost_map() {
         "expected fit, law or start",
     );
 }
+
+#[test]
+fn profiles_of_a_fit_are_in_its_result() {
+    let s = serve(|_| {});
+    let rid = upload(s.addr, BERKOVICH);
+    // the elastic law on the record: one free parameter (E), so its profile is a row of
+    // forward solves at fixed E
+    let t = get(s.addr, &format!("/api/templates/elastic?record={rid}"));
+    assert_eq!(t.status, 200);
+    let id = run_id(&submit(
+        s.addr,
+        json!({"command": "identify", "config": t.text(), "no_refine": true, "profiles": true,
+               "sets": small(20)}),
+    ));
+    let v = wait(s.addr, &id);
+    assert_eq!(v["status"], "done", "{v}");
+    assert!(v["cli"].as_str().unwrap().ends_with("--profiles"));
+    let p = &v["result"]["profiles"][0];
+    assert_eq!(p["name"], "E", "{}", v["result"]);
+    let j = v["result"]["J"].as_f64().unwrap();
+    assert_eq!(p["J"].as_f64(), Some(j));
+    assert!(p["threshold"].as_f64().unwrap() > 0.0);
+    let pts = p["points"].as_array().unwrap();
+    assert!(pts.len() >= 3, "{p}");
+    // J along the profile is never below the optimum's (to the fit's tolerance), and
+    // the optimum is among the points
+    for q in pts {
+        assert!(q[1].as_f64().unwrap() >= j * (1.0 - 1e-6), "{q} below {j}");
+    }
+    let e = p["value"].as_f64().unwrap();
+    assert!(pts.iter().any(|q| q[0].as_f64() == Some(e)));
+}

@@ -473,7 +473,7 @@ function renderCostMap(res) {
   const cw = (W - L - R) / nx, ch = (H - T - B) / ny;
   for (let j = 0; j < ny; j++) for (let i = 0; i < nx; i++) {
     const v = J[j * nx + i];
-    const r = svg('rect', { x: L + i * cw, y: H - B - (j + 1) * ch, width: cw + 0.5, height: ch + 0.5, fill: isFinite(v) && v > 0 ? colour((Math.log10(v) - lo) / (hi - lo || 1)) : '#ccc' });
+    const r = svg('rect', { x: L + i * cw, y: H - B - (j + 1) * ch, width: cw + 0.5, height: ch + 0.5, fill: !isFinite(v) ? '#ccc' : colour(v > 0 ? (Math.log10(v) - lo) / (hi - lo || 1) : 0) });
     const tt = svg('title'); tt.textContent = `${res.names[0]} = ${sig(res.x[i], 4)}, ${res.names[1]} = ${sig(res.y[j], 4)}: J = ${sig(v, 4)} N²`; r.append(tt);
     root.append(r);
   }
@@ -490,7 +490,7 @@ function renderCostMap(res) {
   lab(W - R + 34, H - B, sig(Math.pow(10, lo), 2), 'start');
   lab(W - R + 23, H - B + 14, 'J (N²)');
   $('#costmap').replaceChildren(root);
-  $('#result-summary').textContent = `Cost map of ${res.names.join(' × ')} (${nx} × ${ny} points) through ${res.through}: J at the centre ${sig(res.J_centre, 4)} N², lowest grid point ${res.names[0]} = ${sig(res.grid_min[0], 4)}, ${res.names[1]} = ${sig(res.grid_min[1], 4)} (J = ${sig(res.grid_min[2], 4)} N²)` + (res.failed ? `; ${res.failed} points failed to solve (grey)` : '');
+  $('#result-summary').textContent = `Cost map of ${res.names.join(' × ')} (${nx} × ${ny} points) through ${res.through}: J at the centre ${sig(res.J_centre, 4)} N², lowest grid point ${res.names[0]} = ${sig(res.grid_min[0], 4)}, ${res.names[1]} = ${sig(res.grid_min[1], 4)} (J = ${sig(res.grid_min[2], 4)} N²)` + (res.failed ? `; ${res.failed} points failed to solve (grey)` : '') + '; colour: log J, J = 0 the lowest';
 }
 
 function renderProfiles(profiles) {
