@@ -358,3 +358,48 @@ fn profiles_of_a_fit_are_in_its_result() {
     let e = p["value"].as_f64().unwrap();
     assert!(pts.iter().any(|q| q[0].as_f64() == Some(e)));
 }
+
+#[test]
+fn a_running_batch_can_be_cancelled_and_keeps_what_finished() {
+    let s = serve(|_| {});
+    let rid = upload(s.addr, MULTI);
+    let id = run_id(&submit(
+        s.addr,
+        json!({"command": "batch", "record": rid, "sets": small(30)}),
+    ));
+    for _ in 0..2000 {
+        if get(s.addr, &format!("/api/runs/{id}")).json()["status"] == "running" {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let r = request(
+        s.addr,
+        "DELETE",
+        &format!("/api/runs/{id}"),
+        &[("X-Indentify", "1")],
+        b"",
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(
+        r.json()["message"]
+            .as_str()
+            .unwrap()
+            .contains("cancel asked")
+    );
+    let v = wait(s.addr, &id);
+    assert_eq!(v["status"], "cancelled", "{v}");
+    assert!(
+        v["message"].as_str().unwrap().contains("indents finished"),
+        "{v}"
+    );
+    // an indent that finished has its files; the interrupted ones are still pending
+    for i in v["progress"]["indents"].as_array().unwrap() {
+        let path = format!(
+            "/api/runs/{id}/files/indents/{}/status.json",
+            i["id"].as_str().unwrap()
+        );
+        let has = get(s.addr, &path).status == 200;
+        assert_eq!(has, i["state"] != "pending", "{i}");
+    }
+}
