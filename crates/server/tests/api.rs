@@ -539,7 +539,13 @@ fn load_20_queued_runs_and_5_event_clients() {
         .map(|k| {
             let addr = s.addr;
             let id = ids[ids.len() - 1 - k].clone();
-            std::thread::spawn(move || events(addr, &id).len())
+            // an open page: the page, its script, the runs list, then the run's events
+            std::thread::spawn(move || {
+                for path in ["/", "/app.js", "/style.css", "/api/runs", "/api/laws"] {
+                    assert_eq!(get(addr, path).status, 200, "{path}");
+                }
+                events(addr, &id).len()
+            })
         })
         .collect();
     // the API stays responsive while the queue drains
