@@ -504,6 +504,36 @@ fn a_batch_map_and_an_analysis_in_headless_chromium() {
     assert!(e.as_str().unwrap().parse::<f64>().unwrap() > 0.0, "{e}");
     d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
     d.screenshot(&out.join("analyze.png"));
+
+    // profile likelihoods drawn: the elastic law on test 1 (one free parameter, E)
+    choose(&d, "#command", "identify");
+    choose(&d, "#law", "elastic");
+    d.until(
+        "the elastic template",
+        "document.querySelector('#config').value.includes('law: Elastic(')",
+        30.0,
+    );
+    d.js("document.querySelector('#sets').value = 'data.preprocessing.resample.n=20\\ndata.substeps=1'; return 0;");
+    d.click("#no-refine");
+    d.click("#profiles");
+    d.click("#run");
+    d.until(
+        "the profile of E",
+        "document.querySelector('#profile-plots .profile[data-param=\"E\"] polyline')",
+        600.0,
+    );
+    d.until(
+        "the run's end",
+        "document.querySelector('#run-status').textContent === 'done' && document.querySelector('#param-table tr[data-param=\"E\"]')",
+        60.0,
+    );
+    let h = d.js("const p = document.querySelector('#profile-plots .profile[data-param=\"E\"] svg'); return p ? p.getBoundingClientRect().height : 0;");
+    assert!(
+        h.as_f64().unwrap() > 100.0,
+        "the profile is drawn: height {h}"
+    );
+    d.js("document.querySelector('#profile-plots').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("profiles.png"));
 }
 
 #[test]

@@ -340,7 +340,7 @@ function renderProgress(m) {
 
 function clearResult() {
   for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads',
-    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profiles']) $(s).replaceChildren();
+    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots']) $(s).replaceChildren();
   $('#result-summary').textContent = '';
 }
 
@@ -494,7 +494,7 @@ function renderCostMap(res) {
 }
 
 function renderProfiles(profiles) {
-  const box = $('#profiles');
+  const box = $('#profile-plots');
   for (const p of profiles) {
     const div = el('div', { class: 'plot profile', 'data-param': p.name });
     box.append(div);
