@@ -370,6 +370,14 @@ async fn template(
     Path(law): Path<String>,
     Query(q): Query<TemplateQuery>,
 ) -> Result<Response, ApiError> {
+    if law == "design" {
+        // the candidates to rank: examples/r2-design.ron
+        return Ok((
+            [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+            crate::jobs::DESIGN_TEMPLATE,
+        )
+            .into_response());
+    }
     let r = reference(&law)?;
     let text = match &q.record {
         None => indentify_study::templates::template(r),
@@ -470,7 +478,7 @@ async fn get_run(State(st): Shared, Path(id): Path<String>) -> Result<axum::Json
     let run = st.runs.get(&id)?;
     blocking(move || {
         let meta = run.meta();
-        let result = std::fs::read(run.dir().join("result.json"))
+        let result = std::fs::read(run.dir().join(crate::runs::result_file(&meta.command)))
             .ok()
             .and_then(|b| serde_json::from_slice::<Value>(&b).ok());
         let mut v = serde_json::to_value(&meta).map_err(ApiError::internal)?;

@@ -1,7 +1,8 @@
 //! `indentify serve`: the study pipelines behind a local HTTP API and a browser page.
 //!
 //! One process: an axum server on tokio answers the page (HTML, JS and CSS compiled in,
-//! no third-party code) and the API of docs/web.md; runs (`identify`, `simulate`) are
+//! no third-party code) and the API of docs/web.md; runs (`identify`, `simulate`,
+//! `analyze`, `design`, `batch`, `map`; joint fits of a record's tests) are
 //! checked when submitted, exactly as the CLI checks its configuration, then executed by a
 //! fixed pool of worker threads calling `indentify_study` (the same options, observer and
 //! cancellation as the CLI). Everything a run writes goes into `WORKSPACE/runs/<id>/`: the
@@ -15,6 +16,7 @@
 //! server, and runs queue behind a bounded number of workers.
 
 pub mod api;
+mod jobs;
 mod page;
 pub mod records;
 pub mod runs;

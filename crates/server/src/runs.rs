@@ -20,8 +20,8 @@ use serde_json::{Value, json};
 use tokio::sync::broadcast;
 
 use crate::api::ApiError;
-use crate::records;
 use crate::workspace::{Workspace, normalize, safe_relative};
+use crate::{jobs, records};
 
 /// Seconds since the Unix epoch.
 pub fn now() -> f64 {
@@ -31,7 +31,21 @@ pub fn now() -> f64 {
 }
 
 /// The commands a run may execute.
-pub const COMMANDS: [&str; 2] = ["identify", "simulate"];
+pub const COMMANDS: [&str; 6] = ["identify", "simulate", "analyze", "design", "batch", "map"];
+
+/// The commands a `DELETE` can stop while they run (their pipelines take a [`Cancel`]).
+pub const CANCELLABLE: [&str; 2] = ["identify", "batch"];
+
+/// The file of a run's folder that `GET /api/runs/{id}` answers as `result`.
+pub fn result_file(command: &str) -> &'static str {
+    match command {
+        "analyze" => "analysis.json",
+        "design" => "design.json",
+        "batch" => "batch.json",
+        "map" => "map.json",
+        _ => "result.json",
+    }
+}
 
 /// A run's state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -85,6 +99,10 @@ pub struct Progress {
     pub eta: Option<f64>,
     /// J of every iteration so far (the first 1000).
     pub costs: Vec<f64>,
+    /// A batch: every indent of the manifest (`id`, `x`, `y`, `state`: `pending` until it
+    /// ends, then its status's state, `values`, `std_dev`, `names`, `rms_rel`, `message`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub indents: Vec<Value>,
 }
 
 /// An error as the CLI prints it: the kind and the message chain, outermost first.
@@ -155,24 +173,67 @@ pub struct RunRequest {
     /// identify: skip the discretization error (`--no-refine`).
     #[serde(default)]
     pub no_refine: bool,
+    /// identify: a joint fit of these tests of `record` (each with an optional weight),
+    /// built from the record's template or `config` (which then needs a `data` section).
+    #[serde(default)]
+    pub tests: Option<Vec<TestPick>>,
+    /// identify: profile-likelihood intervals of every free parameter (`--profiles`).
+    #[serde(default)]
+    pub profiles: bool,
+    /// analyze: the tip (`berkovich`, `cone:DEG`, `sphere:UM`, `flat:UM`; `--tip`).
+    #[serde(default)]
+    pub tip: Option<String>,
+    /// analyze: Poisson's ratio of the sample (`--nu`, default 0.3).
+    #[serde(default)]
+    pub nu: Option<f64>,
+    /// map: the two parameters (`--pair`).
+    #[serde(default)]
+    pub pair: Option<Vec<String>>,
+    /// map: points per side (`--grid`, default 9, at most [`MAX_MAP_GRID`] here).
+    #[serde(default)]
+    pub grid: Option<usize>,
+    /// map: half-width in the scaled variables (`--span`, default 0.5).
+    #[serde(default)]
+    pub span: Option<f64>,
+    /// map: the slice's centre, `fit`, `law` or `start` (`--through`, default `fit`).
+    #[serde(default)]
+    pub through: Option<String>,
+    /// batch: the manifest (CSV text; its `data` cells name records by id). Without it,
+    /// every test of `record` is an indent.
+    #[serde(default)]
+    pub manifest: Option<String>,
 }
 
-/// What a worker needs to execute a run.
-#[derive(Clone, Debug)]
-struct Spec {
-    sets: Vec<String>,
-    max_iter: Option<usize>,
-    refine: bool,
+/// A test of a joint fit (`tests` of a run request).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TestPick {
+    /// The record's test, from 1.
+    pub test: usize,
+    /// Its weight in the joint cost (default `1 / (n F_max^2)`).
+    #[serde(default)]
+    pub weight: Option<f64>,
+}
+
+/// The largest map the server computes (points per side; the CLI allows more).
+pub const MAX_MAP_GRID: usize = 41;
+
+/// What a worker needs to execute a run: the `--set` overrides config.ron still needs
+/// and the request (its command's options).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Spec {
+    pub(crate) sets: Vec<String>,
+    pub(crate) req: RunRequest,
 }
 
 /// A run in memory.
 pub struct Run {
     /// Its id.
     pub id: String,
-    dir: PathBuf,
+    pub(crate) dir: PathBuf,
     meta: Mutex<RunMeta>,
-    cancel: Cancel,
-    spec: Spec,
+    pub(crate) cancel: Cancel,
+    pub(crate) spec: Spec,
     events: broadcast::Sender<Arc<String>>,
     saved: Mutex<Option<Instant>>,
 }
@@ -212,7 +273,7 @@ impl Run {
 
     /// Changes the metadata, publishes the snapshot and writes status.json (at most once a
     /// second unless `force` or the run ended).
-    fn update(&self, force: bool, f: impl FnOnce(&mut RunMeta)) {
+    pub(crate) fn update(&self, force: bool, f: impl FnOnce(&mut RunMeta)) {
         let snapshot = {
             let mut m = lock(&self.meta);
             f(&mut m);
@@ -232,6 +293,9 @@ impl Run {
         }
     }
 }
+
+/// A record named by a request: its id, its path from a run folder, its record.json.
+pub(crate) type RecordRef = (String, String, Value);
 
 /// Every run, the queue and the workers' rendezvous.
 pub struct Runs {
@@ -286,16 +350,7 @@ impl Runs {
                 continue;
             };
             let interrupted = !meta.status.is_final();
-            let run = Run::new(
-                id.clone(),
-                dir,
-                meta,
-                Spec {
-                    sets: Vec::new(),
-                    max_iter: None,
-                    refine: true,
-                },
-            );
+            let run = Run::new(id.clone(), dir, meta, Spec::default());
             if interrupted {
                 run.update(true, |m| {
                     m.status = Status::Failed;
@@ -383,10 +438,75 @@ impl Runs {
             .ws
             .run_dir(&id)
             .ok_or_else(|| ApiError::internal("bad run id"))?;
-        let name = "config.ron";
         let record = self.resolve_record(&req)?;
-        let text = match (&req.config, &record) {
+        let prepared = if req.command == "analyze" {
+            jobs::prepare_analyze(&req, record.as_ref(), &user_sets)?
+        } else {
+            self.prepare_config(&req, &id, &dir, record.as_ref(), user_sets)?
+        };
+        let meta = RunMeta {
+            id: id.clone(),
+            command: req.command.clone(),
+            status: Status::Queued,
+            created: now(),
+            started: None,
+            finished: None,
+            record: record.map(|r| r.0),
+            test: req.test,
+            sets: prepared.sets.clone(),
+            cli: prepared.cli,
+            progress: Progress {
+                stage: "queued".into(),
+                ..Progress::default()
+            },
+            summary: None,
+            error: None,
+            message: None,
+        };
+        std::fs::create_dir_all(&dir).map_err(ApiError::io)?;
+        for (name, bytes) in &prepared.files {
+            if let Err(e) = indentify_study::atomic::write(&dir.join(name), bytes) {
+                let _ = std::fs::remove_dir_all(&dir);
+                return Err(ApiError::internal(e));
+            }
+        }
+        if req.command == "batch" {
+            // the manifest as study reads it (ids, columns, numbers), before anything runs
+            let read = indentify_study::batch::read_manifest(
+                &dir.join(jobs::MANIFEST),
+                Some(&dir.join("config.ron")),
+            );
+            if let Err(e) = read {
+                let _ = std::fs::remove_dir_all(&dir);
+                return Err(ApiError::study(&e));
+            }
+        }
+        let spec = Spec {
+            sets: prepared.sets,
+            req,
+        };
+        let run = Run::new(id.clone(), dir, meta, spec);
+        run.update(true, |_| {});
+        lock(&self.table).insert(id.clone(), Arc::clone(&run));
+        lock(&self.queue).push_back(run);
+        self.ready.notify_one();
+        Ok(id)
+    }
+
+    /// The files, `--set` list and command line of a run that loads a configuration
+    /// (every command but `analyze`): the configuration checked as the CLI checks it.
+    fn prepare_config(
+        &self,
+        req: &RunRequest,
+        id: &str,
+        dir: &Path,
+        record: Option<&RecordRef>,
+        user_sets: Vec<String>,
+    ) -> Result<jobs::Prepared, ApiError> {
+        let name = "config.ron";
+        let text = match (&req.config, record) {
             (Some(t), _) => t.clone(),
+            (None, _) if req.command == "design" => jobs::DESIGN_TEMPLATE.to_string(),
             (None, Some((_, rel, info))) => {
                 crate::api::record_template(Reference::R1Maxwell, rel, info, req.test, None)?
             }
@@ -399,7 +519,7 @@ impl Runs {
         };
         let cfg = source.load(&user_sets).map_err(|e| ApiError::study(&e))?;
         let mut sets = Vec::new();
-        if let Some((rid, rel, _)) = &record {
+        if let Some((rid, rel, _)) = record {
             if cfg.data.is_none() {
                 let why = if cfg.tests.is_some() {
                     "it is a joint configuration: its records are named by each entry of \
@@ -423,70 +543,59 @@ impl Runs {
         }
         sets.extend(user_sets);
         let mut cfg = source.load(&sets).map_err(|e| ApiError::study(&e))?;
-        cfg.base_dir = Some(dir.clone());
-        self.check_files(&cfg, &dir)?;
-        // config.ron: the resolved configuration, annotated, when it has no `tests` (the
-        // annotated form writes one test); a joint one is kept as sent, with its --set.
-        let (ron, run_sets) = if cfg.tests.is_none() {
-            let header = vec![format!(
-                "Written by `indentify serve` for run {id} ({}); every --set applied.",
-                req.command
-            )];
-            (
-                indentify_study::templates::annotated(&cfg, &header),
-                Vec::new(),
-            )
-        } else {
-            (text, sets)
+        cfg.base_dir = Some(dir.to_path_buf());
+        let joint = match &req.tests {
+            Some(picks) => Some(jobs::joint_config(
+                &cfg,
+                picks,
+                record,
+                req.command.as_str(),
+            )?),
+            None => None,
         };
-        let cli = cli_line(&req, &run_sets);
-        let meta = RunMeta {
-            id: id.clone(),
-            command: req.command.clone(),
-            status: Status::Queued,
-            created: now(),
-            started: None,
-            finished: None,
-            record: record.map(|r| r.0),
-            test: req.test,
-            sets: run_sets.clone(),
-            cli,
-            progress: Progress {
-                stage: "queued".into(),
-                ..Progress::default()
-            },
-            summary: None,
-            error: None,
-            message: None,
-        };
-        std::fs::create_dir_all(&dir).map_err(ApiError::io)?;
-        if let Err(e) = indentify_study::atomic::write(&dir.join(name), ron.as_bytes()) {
-            let _ = std::fs::remove_dir_all(&dir);
-            return Err(ApiError::internal(e));
+        if let Some(j) = &joint {
+            cfg = ConfigSource::Text {
+                text: j.clone(),
+                name: name.to_string(),
+            }
+            .load(&[])
+            .map_err(|e| ApiError::study(&e))?;
+            cfg.base_dir = Some(dir.to_path_buf());
         }
-        let run = Run::new(
-            id.clone(),
-            dir,
-            meta,
-            Spec {
-                sets: run_sets,
-                max_iter: req.max_iter,
-                refine: !req.no_refine,
-            },
-        );
-        run.update(true, |_| {});
-        lock(&self.table).insert(id.clone(), Arc::clone(&run));
-        lock(&self.queue).push_back(run);
-        self.ready.notify_one();
-        Ok(id)
+        self.check_files(&cfg, dir)?;
+        jobs::check_command(req, &cfg)?;
+        // config.ron: the resolved configuration, annotated, when it has no `tests` (the
+        // annotated form writes one test) and no `design`; a joint one built here is
+        // written whole; one sent by the user is kept as sent, with its --set.
+        let (ron, run_sets) = match joint {
+            Some(j) => (j, Vec::new()),
+            None if cfg.tests.is_none() && cfg.design.is_none() => {
+                let header = vec![format!(
+                    "Written by `indentify serve` for run {id} ({}); every --set applied.",
+                    req.command
+                )];
+                (
+                    indentify_study::templates::annotated(&cfg, &header),
+                    Vec::new(),
+                )
+            }
+            None => (text, sets),
+        };
+        let mut files = vec![(name.to_string(), ron.into_bytes())];
+        if req.command == "batch" {
+            let manifest = jobs::manifest_text(&self.ws, req, record)?;
+            files.push((jobs::MANIFEST.to_string(), manifest.into_bytes()));
+        }
+        Ok(jobs::Prepared {
+            cli: cli_line(req, &run_sets),
+            files,
+            sets: run_sets,
+        })
     }
 
     /// The record a request names (its id, its path relative to a run folder, its
     /// record.json), checked against the request's test number.
-    fn resolve_record(
-        &self,
-        req: &RunRequest,
-    ) -> Result<Option<(String, String, serde_json::Value)>, ApiError> {
+    fn resolve_record(&self, req: &RunRequest) -> Result<Option<RecordRef>, ApiError> {
         Ok(match &req.record {
             Some(rid) => {
                 let info = records::load(&self.ws, rid)?;
@@ -577,11 +686,14 @@ impl Runs {
         }
         let meta = run.meta();
         match meta.status {
-            Status::Running if meta.command == "identify" => {
+            Status::Running if CANCELLABLE.contains(&meta.command.as_str()) => {
                 run.cancel.raise();
                 run.update(true, |m| {
-                    m.message =
-                        Some("cancel asked: stopping after the iteration in progress".into());
+                    m.message = Some(if m.command == "batch" {
+                        "cancel asked: stopping after the indents in progress".into()
+                    } else {
+                        "cancel asked: stopping after the iteration in progress".into()
+                    });
                 });
                 Ok(run.meta())
             }
@@ -590,8 +702,10 @@ impl Runs {
                 "state",
                 vec![format!(
                     "run `{id}` is a {} run, which cannot be stopped midway: it finishes on \
-                     its own",
-                    meta.command
+                     its own (only {} runs stop on request: {})",
+                    meta.command,
+                    CANCELLABLE.join(" and "),
+                    jobs::why_not_cancellable(&meta.command)
                 )],
             )),
             s => Err(ApiError::new(
@@ -670,6 +784,10 @@ fn execute(run: &Arc<Run>) {
     let outcome =
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command.as_str() {
             "identify" => run_identify(run),
+            "analyze" => jobs::run_analyze(run),
+            "design" => jobs::run_design(run),
+            "batch" => jobs::run_batch(run),
+            "map" => jobs::run_map(run),
             _ => run_simulate(run),
         }));
     let (status, summary, error, message) = match outcome {
@@ -705,9 +823,9 @@ fn execute(run: &Arc<Run>) {
     });
 }
 
-type End = (Status, Option<Value>, Option<ErrorBody>, Option<String>);
+pub(crate) type End = (Status, Option<Value>, Option<ErrorBody>, Option<String>);
 
-fn error_body(e: &indentify_study::Error) -> ErrorBody {
+pub(crate) fn error_body(e: &indentify_study::Error) -> ErrorBody {
     ErrorBody {
         kind: e.kind().name().into(),
         messages: e.messages(),
@@ -759,8 +877,9 @@ fn run_identify(run: &Run) -> Result<End, ErrorBody> {
     opts.sets = run.spec.sets.clone();
     opts.out = Some(run.dir.clone());
     opts.cancel = run.cancel.clone();
-    opts.refine = run.spec.refine;
-    opts.overrides.max_iterations = run.spec.max_iter;
+    opts.refine = !run.spec.req.no_refine;
+    opts.overrides.max_iterations = run.spec.req.max_iter;
+    opts.profiles = jobs::profiles(&run.spec.req);
     let mut web = Web {
         run,
         start: Instant::now(),
@@ -864,7 +983,7 @@ fn run_simulate(run: &Run) -> Result<End, ErrorBody> {
     }
 }
 
-/// The files of a run folder (two levels deep; no hidden or temporary files), with sizes.
+/// The files of a run folder (three levels deep; no hidden or temporary files), with sizes.
 pub fn files(dir: &Path) -> Vec<Value> {
     let mut out = Vec::new();
     let mut walk = vec![(dir.to_path_buf(), String::new(), 0)];
@@ -879,7 +998,8 @@ pub fn files(dir: &Path) -> Vec<Value> {
                 continue;
             }
             let Ok(ft) = e.file_type() else { continue };
-            if ft.is_dir() && depth < 1 {
+            // two levels: a joint fit's test-K/ and a batch's indents/ID/
+            if ft.is_dir() && depth < 2 {
                 walk.push((e.path(), format!("{rel}/"), depth + 1));
             } else if ft.is_file() {
                 let size = e.metadata().map_or(0, |m| m.len());
@@ -893,10 +1013,15 @@ pub fn files(dir: &Path) -> Vec<Value> {
 
 /// The command line that repeats a run from its folder.
 fn cli_line(req: &RunRequest, run_sets: &[String]) -> String {
-    let mut cli = format!("indentify {} config.ron --out .", req.command);
-    if req.command == "simulate" {
-        cli = "indentify simulate config.ron --out curve.csv".into();
-    }
+    let mut cli = match req.command.as_str() {
+        "simulate" => "indentify simulate config.ron --out curve.csv".to_string(),
+        "batch" => format!(
+            "indentify batch {} --config config.ron --out .",
+            jobs::MANIFEST
+        ),
+        "map" => jobs::map_cli(req),
+        c => format!("indentify {c} config.ron --out ."),
+    };
     for s in run_sets {
         cli.push_str(&format!(" --set '{s}'"));
     }
@@ -906,6 +1031,9 @@ fn cli_line(req: &RunRequest, run_sets: &[String]) -> String {
         }
         if req.no_refine {
             cli.push_str(" --no-refine");
+        }
+        if req.profiles {
+            cli.push_str(" --profiles");
         }
     }
     cli

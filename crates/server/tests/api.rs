@@ -173,13 +173,13 @@ fn malformed_requests_get_the_clis_messages() {
         r.json()["messages"],
         json!(cli(indentify_study::DEFAULT_CONFIG, &["law.nu=0.7"]))
     );
-    let r = submit(s.addr, json!({"command": "analyze"}));
+    let r = submit(s.addr, json!({"command": "calibrate"}));
     assert_eq!(r.status, 400);
     assert!(
         r.json()["error"]
             .as_str()
             .unwrap()
-            .contains("identify, simulate")
+            .contains("identify, simulate, analyze, design, batch, map")
     );
     let r = submit(s.addr, json!({"command": "simulate", "bogus": 1}));
     assert_eq!(r.status, 400);
@@ -539,7 +539,13 @@ fn load_20_queued_runs_and_5_event_clients() {
         .map(|k| {
             let addr = s.addr;
             let id = ids[ids.len() - 1 - k].clone();
-            std::thread::spawn(move || events(addr, &id).len())
+            // an open page: the page, its script, the runs list, then the run's events
+            std::thread::spawn(move || {
+                for path in ["/", "/app.js", "/style.css", "/api/runs", "/api/laws"] {
+                    assert_eq!(get(addr, path).status, 200, "{path}");
+                }
+                events(addr, &id).len()
+            })
         })
         .collect();
     // the API stays responsive while the queue drains

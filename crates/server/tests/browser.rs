@@ -382,3 +382,255 @@ fn a_short_fit_in_headless_chromium() {
         out.display()
     );
 }
+
+/// The browser, the driver and a served workspace for one test; `None` (skipped) without
+/// Chromium outside CI.
+fn open_page() -> Option<(Driver, Served, PathBuf, tempfile::TempDir)> {
+    let driver = find(&["chromedriver"], "CHROMEDRIVER");
+    let chromium = find(
+        &["chromium", "chromium-browser", "google-chrome"],
+        "CHROMIUM",
+    );
+    let (Some(driver), Some(chromium)) = (driver, chromium) else {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "chromium and chromedriver are required under CI"
+        );
+        eprintln!("SKIPPED headless browser test: chromium and chromedriver not found");
+        return None;
+    };
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("browser");
+    std::fs::create_dir_all(&out).unwrap();
+    let s = serve(|_| {});
+    let profile = tempfile::tempdir().unwrap();
+    let d = start_driver(&driver, &chromium, profile.path());
+    d.call(
+        "POST",
+        "/url",
+        json!({"url": format!("http://127.0.0.1:{}/", s.addr.port())}),
+    );
+    d.until("the page", "document.body.dataset.ready === '1'", 30.0);
+    Some((d, s, out, profile))
+}
+
+/// Sets a `<select>` and tells the page.
+fn choose(d: &Driver, css: &str, value: &str) {
+    d.js(&format!(
+        "const e = document.querySelector('{css}'); e.value = '{value}'; \
+         e.dispatchEvent(new Event('change')); return 0;"
+    ));
+}
+
+#[test]
+fn a_batch_map_and_an_analysis_in_headless_chromium() {
+    let Some((d, _s, out, _profile)) = open_page() else {
+        return;
+    };
+    // a multi-test record (4 indents of a creep map) through the file input
+    let record = repo()
+        .join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &record.display().to_string());
+    d.until(
+        "the record's 4 tests",
+        "document.querySelectorAll('#tests tbody tr').length === 4",
+        60.0,
+    );
+    d.until(
+        "the record template",
+        "document.querySelector('#config').value.includes('../../records/')",
+        30.0,
+    );
+    // batch: every test an indent, one iteration each on 20 points
+    choose(&d, "#command", "batch");
+    d.send_keys(
+        "#sets",
+        "data.preprocessing.resample.n=20\ndata.substeps=1\nidentify.stop.max_iterations=1",
+    );
+    d.click("#run");
+    d.until(
+        "the map's 4 indents",
+        "document.querySelectorAll('#batch-svg circle.pt').length === 4",
+        60.0,
+    );
+    d.until(
+        "a finished indent on the map",
+        "[...document.querySelectorAll('#batch-svg circle.pt')].some(c => c.dataset.state !== 'pending')",
+        300.0,
+    );
+    d.screenshot(&out.join("batch-progress.png"));
+    d.until(
+        "the end of the batch",
+        "['done','failed','cancelled'].includes(document.querySelector('#run-status').textContent)",
+        300.0,
+    );
+    assert_eq!(
+        d.js("return document.querySelector('#run-status').textContent;"),
+        json!("done")
+    );
+    d.until(
+        "every indent finished on the map",
+        "[...document.querySelectorAll('#batch-svg circle.pt')].every(c => ['converged','not_converged'].includes(c.dataset.state))",
+        30.0,
+    );
+    // one click away: an indent's parameters and fit
+    d.js("document.querySelector('#batch-svg circle[data-indent=\"test-3\"]').dispatchEvent(new MouseEvent('click')); return 0;");
+    d.until(
+        "the indent's parameter table",
+        "document.querySelector('#indent-table') && document.querySelector('#indent-view h3').textContent.includes('test-3')",
+        30.0,
+    );
+    d.until(
+        "the indent's fit",
+        "document.querySelectorAll('#indent-fit polyline').length >= 1",
+        30.0,
+    );
+    let e = d.js("return document.querySelector('#indent-table tr:nth-child(2) td:nth-child(2)').textContent;");
+    assert!(e.as_str().unwrap().parse::<f64>().unwrap() > 0.0, "{e}");
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("batch.png"));
+
+    // analyze: the Oliver-Pharr table of every test
+    choose(&d, "#command", "analyze");
+    d.js("document.querySelector('#an-tip').value = 'sphere:10'; return 0;");
+    d.click("#run");
+    d.until(
+        "the Oliver-Pharr table",
+        "document.querySelectorAll('#analysis-table tr').length === 5",
+        120.0,
+    );
+    let e = d.js("return document.querySelector('#analysis-table tr:nth-child(2) td:nth-child(2)').textContent;");
+    assert!(e.as_str().unwrap().parse::<f64>().unwrap() > 0.0, "{e}");
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("analyze.png"));
+
+    // profile likelihoods drawn: the elastic law on test 1 (one free parameter, E)
+    choose(&d, "#command", "identify");
+    choose(&d, "#law", "elastic");
+    d.until(
+        "the elastic template",
+        "document.querySelector('#config').value.includes('law: Elastic(')",
+        30.0,
+    );
+    d.js("document.querySelector('#sets').value = 'data.preprocessing.resample.n=20\\ndata.substeps=1'; return 0;");
+    d.click("#no-refine");
+    d.click("#profiles");
+    d.click("#run");
+    d.until(
+        "the profile of E",
+        "document.querySelector('#profile-plots .profile[data-param=\"E\"] polyline')",
+        600.0,
+    );
+    d.until(
+        "the run's end",
+        "document.querySelector('#run-status').textContent === 'done' && document.querySelector('#param-table tr[data-param=\"E\"]')",
+        60.0,
+    );
+    let h = d.js("const p = document.querySelector('#profile-plots .profile[data-param=\"E\"] svg'); return p ? p.getBoundingClientRect().height : 0;");
+    assert!(
+        h.as_f64().unwrap() > 100.0,
+        "the profile is drawn: height {h}"
+    );
+    d.js("document.querySelector('#profile-plots').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("profiles.png"));
+}
+
+#[test]
+fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
+    let Some((d, _s, out, _profile)) = open_page() else {
+        return;
+    };
+    // design: the template's candidates on a coarse mesh, ranked in a table
+    choose(&d, "#command", "design");
+    d.until(
+        "the design template",
+        "document.querySelector('#config').value.includes('candidates')",
+        30.0,
+    );
+    d.send_keys("#sets", "specimen.nr=6\nspecimen.nz=6");
+    d.click("#run");
+    d.until(
+        "the ranked candidates",
+        "document.querySelectorAll('#design-table tr').length >= 4",
+        300.0,
+    );
+    let first = d.js("return document.querySelector('#design-table tr:nth-child(2) td:nth-child(1)').textContent;");
+    assert_eq!(first, json!("1"));
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("design.png"));
+
+    // a cost map of R1 (the Maxwell template without a record) over E and eta, 3 x 3
+    choose(&d, "#command", "map");
+    d.until(
+        "the Maxwell template",
+        "!document.querySelector('#config').value.includes('candidates')",
+        30.0,
+    );
+    d.js("document.querySelector('#sets').value = ''; document.querySelector('#map-grid').value = '3'; return 0;");
+    choose(&d, "#map-through", "law");
+    d.click("#run");
+    d.until(
+        "the cost map",
+        "document.querySelectorAll('#costmap-svg rect').length >= 9 && document.querySelector('#result-summary').textContent.includes('Cost map')",
+        300.0,
+    );
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("costmap.png"));
+
+    // a joint fit of tests 1 and 2 of a multi-test record, test 2 weighted
+    let record = repo()
+        .join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &record.display().to_string());
+    d.until(
+        "the record's 4 tests",
+        "document.querySelectorAll('#tests tbody tr').length === 4",
+        60.0,
+    );
+    d.until(
+        "the record template",
+        "document.querySelector('#config').value.includes('../../records/')",
+        30.0,
+    );
+    choose(&d, "#command", "identify");
+    d.click("#tests input.joint[data-test='1']");
+    d.click("#tests input.joint[data-test='2']");
+    d.send_keys("#tests input.weight[data-test='2']", "2");
+    d.until(
+        "the joint note",
+        "document.querySelector('#joint-note').textContent.includes('Joint fit of tests 1, 2')",
+        5.0,
+    );
+    d.send_keys(
+        "#sets",
+        "data.preprocessing.resample.n=20\ndata.substeps=1\nidentify.stop.max_iterations=1",
+    );
+    d.click("#no-refine");
+    d.click("#run");
+    d.until(
+        "the end of the joint fit",
+        "['done','failed','cancelled'].includes(document.querySelector('#run-status').textContent)",
+        300.0,
+    );
+    assert_eq!(
+        d.js("return document.querySelector('#run-status').textContent;"),
+        json!("done"),
+        "{}",
+        d.js("return document.querySelector('#run-error').textContent;")
+    );
+    d.until(
+        "the parameter table",
+        "document.querySelector('#param-table tr[data-param=\"E\"]')",
+        30.0,
+    );
+    let links =
+        d.js("return [...document.querySelectorAll('#downloads a')].map(a => a.textContent);");
+    assert!(
+        links.to_string().contains("test-2/"),
+        "a page per test: {links}"
+    );
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("joint.png"));
+}

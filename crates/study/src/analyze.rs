@@ -703,6 +703,59 @@ pub fn tip_ron(tip: &Tip) -> String {
     )
 }
 
+/// A tip from its name, as `indentify analyze --tip` and the server take it: `berkovich`
+/// (or `vickers`, the same area function), `cone:HALF_ANGLE_DEG`, `sphere:RADIUS_UM`,
+/// `flat:RADIUS_UM`; a diamond tip, validated.
+///
+/// # Errors
+/// An unknown shape or a parameter that is not a number, naming the allowed forms.
+pub fn tip_from_name(s: &str) -> anyhow::Result<Tip> {
+    let (shape, value) = s.split_once(':').map_or((s, None), |(a, b)| (a, Some(b)));
+    let num = |what: &str| -> anyhow::Result<f64> {
+        let Some(v) = value else {
+            anyhow::bail!("--tip {s}: the {shape} needs its {what}, as {shape}:VALUE")
+        };
+        v.trim()
+            .parse::<f64>()
+            .map_err(|_| anyhow::anyhow!("--tip {s}: '{v}' is not a number ({what})"))
+    };
+    let area = match shape.trim().to_ascii_lowercase().as_str() {
+        "berkovich" | "vickers" => AreaFunction::Berkovich,
+        "cone" => AreaFunction::Cone {
+            half_angle_deg: num("half-angle in degrees")?,
+        },
+        "sphere" => AreaFunction::Sphere {
+            radius: num("radius in um")? * 1e-3,
+        },
+        "flat" => AreaFunction::Flat {
+            radius: num("radius in um")? * 1e-3,
+        },
+        other => anyhow::bail!(
+            "--tip {other} is not a known shape; expected berkovich, cone:HALF_ANGLE_DEG, \
+             sphere:RADIUS_UM or flat:RADIUS_UM"
+        ),
+    };
+    let tip = Tip::diamond(area);
+    tip.validate()?;
+    Ok(tip)
+}
+
+/// `epsilon` from its name: `tip` (the tip's own), `m` (from the unloading exponent) or a
+/// number.
+///
+/// # Errors
+/// Anything else, naming the allowed values.
+pub fn epsilon_from_name(s: &str) -> anyhow::Result<Epsilon> {
+    match s.trim() {
+        "tip" => Ok(Epsilon::Tip),
+        "m" => Ok(Epsilon::FromM),
+        v => v
+            .parse::<f64>()
+            .map(Epsilon::Value)
+            .map_err(|_| anyhow::anyhow!("--epsilon {v}: expected tip, m or a number")),
+    }
+}
+
 /// Reads a tip file.
 ///
 /// # Errors

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use indentify_study::analyze::{self, AnalyzeOptions, CalibrateOptions};
-use indentify_study::{AreaFunction, Epsilon, FitRange, Tip};
+use indentify_study::{Epsilon, FitRange, Tip};
 
 use crate::print;
 
@@ -71,49 +71,16 @@ pub struct Args {
     pub out: Option<PathBuf>,
 }
 
-/// A tip from its command-line name.
+/// A tip from its command-line name (`indentify_study::analyze::tip_from_name`).
 ///
 /// # Errors
 /// An unknown shape or a parameter that is not a number.
 pub fn tip_from_name(s: &str) -> Result<Tip> {
-    let (shape, value) = s.split_once(':').map_or((s, None), |(a, b)| (a, Some(b)));
-    let num = |what: &str| -> Result<f64> {
-        let Some(v) = value else {
-            bail!("--tip {s}: the {shape} needs its {what}, as {shape}:VALUE")
-        };
-        v.trim()
-            .parse::<f64>()
-            .map_err(|_| anyhow::anyhow!("--tip {s}: '{v}' is not a number ({what})"))
-    };
-    let area = match shape.trim().to_ascii_lowercase().as_str() {
-        "berkovich" | "vickers" => AreaFunction::Berkovich,
-        "cone" => AreaFunction::Cone {
-            half_angle_deg: num("half-angle in degrees")?,
-        },
-        "sphere" => AreaFunction::Sphere {
-            radius: num("radius in um")? * 1e-3,
-        },
-        "flat" => AreaFunction::Flat {
-            radius: num("radius in um")? * 1e-3,
-        },
-        other => bail!(
-            "--tip {other} is not a known shape; expected berkovich, cone:HALF_ANGLE_DEG, sphere:RADIUS_UM or flat:RADIUS_UM"
-        ),
-    };
-    let tip = Tip::diamond(area);
-    tip.validate()?;
-    Ok(tip)
+    analyze::tip_from_name(s)
 }
 
 fn epsilon(s: &str) -> Result<Epsilon> {
-    match s.trim() {
-        "tip" => Ok(Epsilon::Tip),
-        "m" => Ok(Epsilon::FromM),
-        v => v
-            .parse::<f64>()
-            .map(Epsilon::Value)
-            .map_err(|_| anyhow::anyhow!("--epsilon {v}: expected tip, m or a number")),
-    }
+    analyze::epsilon_from_name(s)
 }
 
 /// The fit range of `--fit-range LO,HI`; a count other than 2 gives NaN ends, which the

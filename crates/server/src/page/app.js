@@ -3,7 +3,7 @@
 'use strict';
 
 const $ = (sel) => document.querySelector(sel);
-const state = { records: [], record: null, test: 1, laws: {}, run: null, source: null, selected: new Set() };
+const state = { records: [], record: null, test: 1, laws: {}, run: null, source: null, selected: new Set(), joint: new Map(), indent: null, mapParam: null };
 
 // ---- API ---------------------------------------------------------------------------------
 async function api(path, opts = {}) {
@@ -158,9 +158,19 @@ function renderTests() {
   for (const t of r.tests) {
     const radio = el('input', { type: 'radio', name: 'test', value: t.index });
     radio.checked = t.index === state.test;
+    const pick = state.joint.get(t.index) || { on: false, weight: '' };
+    const jbox = el('input', { type: 'checkbox', class: 'joint', 'data-test': t.index });
+    jbox.checked = pick.on;
+    const wbox = el('input', { type: 'number', class: 'weight', step: 'any', min: '0', placeholder: 'default', 'data-test': t.index });
+    wbox.value = pick.weight;
+    for (const b of [jbox, wbox]) b.addEventListener('click', (ev) => ev.stopPropagation());
+    const keep = () => { state.joint.set(t.index, { on: jbox.checked, weight: wbox.value }); jointNote(); };
+    jbox.addEventListener('change', keep);
+    wbox.addEventListener('input', keep);
     const tr = el('tr', { class: 'clickable' + (t.index === state.test ? ' selected' : '') },
       el('td', {}, radio), el('td', { text: t.index }), el('td', { text: t.name }), el('td', { class: 'num', text: t.points }),
-      el('td', { class: 'num', text: sig(t.h_max * 1e6) }), el('td', { class: 'num', text: sig(t.f_max * 1e3) }), el('td', { text: t.tip || '–' }));
+      el('td', { class: 'num', text: sig(t.h_max * 1e6) }), el('td', { class: 'num', text: sig(t.f_max * 1e3) }), el('td', { text: t.tip || '–' }),
+      el('td', {}, jbox), el('td', {}, wbox));
     tr.addEventListener('click', () => { state.test = t.index; renderTests(); loadTemplate(); });
     body.append(tr);
   }
@@ -176,6 +186,21 @@ function renderTests() {
   for (const s of t.preprocessing) ul.append(el('li', { text: `${s.step}: ${s.description}` }));
   if (t.preprocessing_error) ul.append(el('li', { class: 'error', text: t.preprocessing_error }));
   prep.append(el('p', { text: 'Default preprocessing (zero point, segments, 60 resampled points):' }), ul);
+  jointNote();
+}
+
+// the ticked tests of a joint fit: [{test, weight?}] (two or more), or null
+function jointPicks() {
+  if (!state.record) return null;
+  const picks = [...state.joint.entries()].filter(([, p]) => p.on).sort((a, b) => a[0] - b[0])
+    .map(([k, p]) => (parseFloat(p.weight) > 0 ? { test: k, weight: parseFloat(p.weight) } : { test: k }));
+  return picks.length >= 2 ? picks : null;
+}
+
+function jointNote() {
+  const p = jointPicks();
+  $('#joint-note').textContent = p ? `Joint fit of tests ${p.map((x) => x.test).join(', ')} (identify, map): one law for all, each test with its weight.` :
+    (state.record && state.record.tests.length > 1 ? 'Tick two or more tests for a joint fit.' : '');
 }
 
 // ---- configuration -------------------------------------------------------------------------
@@ -191,12 +216,22 @@ function renderLaw() {
   body.replaceChildren();
   if (!l) return;
   for (const p of l.params) body.append(el('tr', {}, el('td', { text: p.name }), el('td', { text: p.unit }), el('td', { text: p.range }), el('td', { text: p.description })));
+  const names = l.params.map((p) => p.name).filter((n) => n !== 'nu');
+  for (const [sel, k] of [['#map-a', 0], ['#map-b', names.length - 1]]) {
+    $(sel).replaceChildren(...names.map((n) => el('option', { value: n, text: n })));
+    $(sel).value = names[k];
+  }
+}
+
+function renderOptions() {
+  const c = $('#command').value;
+  for (const o of document.querySelectorAll('.opts')) o.hidden = o.dataset.for !== c;
 }
 
 async function loadTemplate() {
-  const law = $('#law').value;
+  const law = $('#command').value === 'design' ? 'design' : $('#law').value;
   const q = new URLSearchParams();
-  if (state.record) {
+  if (state.record && law !== 'design') {
     q.set('record', state.record.id);
     if (state.record.tests.length > 1) q.set('test', state.test);
     if ($('#tip').value) q.set('tip', $('#tip').value);
@@ -216,6 +251,23 @@ async function submit() {
   const maxIter = parseInt($('#max-iter').value, 10);
   if (maxIter > 0 && body.command === 'identify') body.max_iter = maxIter;
   if ($('#no-refine').checked && body.command === 'identify') body.no_refine = true;
+  if ($('#profiles').checked && body.command === 'identify') body.profiles = true;
+  const joint = jointPicks();
+  if (joint && ['identify', 'map'].includes(body.command)) { body.record = state.record.id; body.tests = joint; }
+  if (body.command === 'map') {
+    Object.assign(body, { pair: [$('#map-a').value, $('#map-b').value], grid: parseInt($('#map-grid').value, 10) || 7, through: $('#map-through').value });
+  }
+  if (body.command === 'batch') {
+    if (state.record) body.record = state.record.id;
+    if ($('#manifest').value.trim()) body.manifest = $('#manifest').value;
+  }
+  if (body.command === 'analyze') {
+    for (const k of ['config', 'sets']) delete body[k];
+    if (state.record) body.record = state.record.id;
+    if (!$('#an-all').checked && state.record) body.test = state.test;
+    body.tip = $('#an-tip').value.trim() || 'berkovich';
+    body.nu = parseFloat($('#an-nu').value);
+  }
   try {
     const { id } = await api('/api/runs', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
     openRun(id);
@@ -257,10 +309,13 @@ function renderProgress(m) {
   badge.textContent = m.status;
   badge.className = `badge ${m.status}`;
   const p = m.progress || {};
-  $('#cancel').disabled = !(m.status === 'queued' || (m.status === 'running' && m.command === 'identify'));
+  $('#cancel').disabled = !(m.status === 'queued' || (m.status === 'running' && ['identify', 'batch'].includes(m.command)));
   let frac = 0;
   let text = `${m.command}: ${p.stage || m.status}`;
-  if (p.max_iterations) {
+  if (m.command === 'batch' && p.max_iterations) {
+    frac = Math.min(1, p.iteration / p.max_iterations);
+    text += ` — ${p.iteration} of ${p.max_iterations} indents finished, ${fmtTime((Date.now() / 1000) - (m.started || Date.now() / 1000))}`;
+  } else if (p.max_iterations) {
     frac = Math.min(1, p.iteration / p.max_iterations);
     text += ` — iteration ${p.iteration} of at most ${p.max_iterations}`;
     if (p.cost !== null && p.cost !== undefined) text += `, J = ${sig(p.cost, 5)} N²`;
@@ -278,12 +333,14 @@ function renderProgress(m) {
   if (p.costs && p.costs.length > 1) {
     plot($('#cost-plot'), [{ x: p.costs.map((_, i) => i), y: p.costs, color: '#1f6feb', label: 'J (N²)' }], { logy: true, xlabel: 'iteration', ylabel: 'J' });
   }
+  if (p.indents && p.indents.length) drawBatch(m);
   if (m.message) $('#run-message').textContent = m.message;
   if (m.error) $('#run-error').textContent = `${m.error.kind} error: ${m.error.messages.join('\n  ')}`;
 }
 
 function clearResult() {
-  for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads']) $(s).replaceChildren();
+  for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads',
+    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots']) $(s).replaceChildren();
   $('#result-summary').textContent = '';
 }
 
@@ -296,6 +353,11 @@ async function loadResult(id) {
   const has = (n) => files.some((f) => f.name === n);
   if (run.command === 'identify' && res) renderIdentify(run, res);
   if (run.command === 'simulate' && res) renderSimulate(res);
+  if (run.command === 'analyze' && res) renderAnalysis(res);
+  if (run.command === 'design' && res) renderDesign(res);
+  if (run.command === 'map' && res) renderCostMap(res);
+  if (run.command === 'batch') { drawBatch(run); renderBatchSummary(run); }
+  if (run.command === 'identify' && res && res.profiles) renderProfiles(res.profiles);
   if (has('fit.csv')) {
     const fit = parseCsv(await api(`/api/runs/${id}/files/fit.csv`));
     plot($('#fit-plot'), [
@@ -310,11 +372,11 @@ async function loadResult(id) {
     plot($('#fit-plot'), [{ x: c.h, y: c.F, label: 'simulated', color: '#d62728' }], { xlabel: 'depth h (µm)', ylabel: 'force F (mN)', xscale: 1e3, yscale: 1e3 });
   }
   const figs = $('#figures');
-  for (const f of files.filter((f) => f.name.endsWith('.svg'))) {
+  for (const f of files.filter((f) => f.name.endsWith('.svg') && !f.name.startsWith('indents/'))) {
     figs.append(el('figure', {}, el('img', { src: `/api/runs/${id}/files/${f.name}`, alt: f.name, loading: 'lazy' }), el('figcaption', { text: f.name })));
   }
   const dl = $('#downloads');
-  for (const f of files) {
+  for (const f of files.filter((f) => !f.name.startsWith('indents/'))) {
     dl.append(el('li', {}, el('a', { href: `/api/runs/${id}/files/${f.name}`, download: f.name.replace('/', '_'), text: f.name }), ` (${(f.bytes / 1024).toFixed(1)} kB)`));
   }
 }
@@ -362,6 +424,160 @@ function renderSimulate(res) {
   $('#result-summary').textContent = `${res.law} (${(res.params || []).join(', ')}), ${res.punch}; ${res.mesh}; ${res.steps} steps, ` +
     `${res.newton_iterations} Newton iterations; max force ${sig(res.max_force * 1e3, 5)} mN at h = ${sig(res.at_depth * 1e3, 4)} µm; ${sig(res.seconds, 3)} s` +
     (res.failure ? `; stopped: ${res.failure}` : '');
+}
+
+// ---- analyze, design, cost map, profiles, batch ------------------------------------------------
+function table(id, head, rows) {
+  const t = el('table', { class: 'grid', id });
+  t.append(el('tr', {}, ...head.map((h) => el('th', { text: h }))));
+  for (const r of rows) t.append(el('tr', {}, ...r.map((c, i) => el('td', { class: i ? 'num' : '', text: c }))));
+  return t;
+}
+
+function renderAnalysis(res) {
+  // analysis.json: N, mm, N/mm, MPa
+  $('#result-summary').textContent = `Oliver-Pharr analysis of ${res.file} (${res.format}), ν = ${res.nu}; fit range ${sig(100 * res.fit_range.lower, 3)}–${sig(100 * res.fit_range.upper, 3)}% of F_max (${res.fit_range_source})`;
+  const rows = res.tests.map((t) => [t.test || `test ${t.index}`, sig(t.E / 1e3, 4), sig(t.H / 1e3, 4), sig(t.Er / 1e3, 4), sig(t.S / 1e3, 4), sig(t.hc * 1e6, 4), sig(t.hmax * 1e6, 4), sig(t.Fmax * 1e3, 4), t.error || '']);
+  $('#analysis').append(table('analysis-table', ['test', 'E (GPa)', 'H (GPa)', 'E_r (GPa)', 'S (mN/nm)', 'h_c (nm)', 'h_max (nm)', 'F_max (mN)', 'error'], rows));
+}
+
+function renderDesign(res) {
+  $('#result-summary').textContent = `${res.candidates.length} candidate protocols at the nominal parameters, noise ${res.noise}; ranked by the information (log det), with each candidate's largest relative σ.`;
+  const names = res.names;
+  const rows = res.rank_d.map((k, r) => {
+    const c = res.candidates[k];
+    const rel = names.map((n) => { const p = c.params.find((q) => q.name === n); return p ? sig(100 * p.rel_std_dev, 3) + '%' : ''; });
+    return [String(r + 1), c.name, String(c.n_data), sig(Number(c.log_det), 4), `${c.worst[0]} ${sig(100 * c.worst[1], 3)}%`, ...rel,
+      c.undetermined.length ? c.undetermined.map((u) => u[0]).join(', ') : ''];
+  });
+  const t = table('design-table', ['rank', 'candidate', 'points', 'log det', 'worst σ/value', ...names.map((n) => `σ/${n}`), 'undetermined'], rows);
+  for (const tr of [...t.querySelectorAll('tr')].slice(1)) tr.children[1].className = '';
+  $('#design').append(t);
+}
+
+function colour(v) {
+  // 0..1 -> a blue-yellow ramp (perceptually ordered)
+  const t = Math.max(0, Math.min(1, v));
+  const a = [68, 1, 84], b = [33, 145, 140], c = [253, 231, 37];
+  const m = t < 0.5 ? [a, b, t * 2] : [b, c, (t - 0.5) * 2];
+  return `rgb(${m[0].map((x, i) => Math.round(x + (m[1][i] - x) * m[2])).join(',')})`;
+}
+
+function renderCostMap(res) {
+  const [nx, ny] = [res.x.length, res.y.length];
+  const W = 560, H = 420, L = 70, R = 80, T = 20, B = 44;
+  const J = res.J.map((v) => (v === null ? NaN : v));
+  const fin = J.filter((v) => isFinite(v) && v > 0);
+  const lo = Math.log10(Math.min(...fin)), hi = Math.log10(Math.max(...fin));
+  const root = svg('svg', { viewBox: `0 0 ${W} ${H}`, role: 'img', id: 'costmap-svg' });
+  const cw = (W - L - R) / nx, ch = (H - T - B) / ny;
+  for (let j = 0; j < ny; j++) for (let i = 0; i < nx; i++) {
+    const v = J[j * nx + i];
+    const r = svg('rect', { x: L + i * cw, y: H - B - (j + 1) * ch, width: cw + 0.5, height: ch + 0.5, fill: !isFinite(v) ? '#ccc' : colour(v > 0 ? (Math.log10(v) - lo) / (hi - lo || 1) : 0) });
+    const tt = svg('title'); tt.textContent = `${res.names[0]} = ${sig(res.x[i], 4)}, ${res.names[1]} = ${sig(res.y[j], 4)}: J = ${sig(v, 4)} N²`; r.append(tt);
+    root.append(r);
+  }
+  const lab = (x, y, text, anchor = 'middle', rot) => { const t = svg('text', { x, y, 'text-anchor': anchor }); if (rot) t.setAttribute('transform', `rotate(-90 ${x} ${y})`); t.textContent = text; root.append(t); };
+  for (const i of [0, Math.floor(nx / 2), nx - 1]) lab(L + (i + 0.5) * cw, H - B + 14, sig(res.x[i], 3));
+  for (const j of [0, Math.floor(ny / 2), ny - 1]) lab(L - 4, H - B - (j + 0.5) * ch + 4, sig(res.y[j], 3), 'end');
+  lab((L + W - R) / 2, H - 8, `${res.names[0]} (${res.units[0]})`);
+  lab(14, (T + H - B) / 2, `${res.names[1]} (${res.units[1]})`, 'middle', true);
+  const [cx, cy] = res.centre_pair;
+  const px = (x) => L + (res.x.findIndex((v) => v >= cx) + 0.5) * cw;
+  root.append(svg('circle', { cx: px(cx), cy: H - B - (res.y.findIndex((v) => v >= cy) + 0.5) * ch, r: 4, fill: 'none', stroke: '#fff', 'stroke-width': 2 }));
+  for (let k = 0; k <= 10; k++) root.append(svg('rect', { x: W - R + 16, y: T + (10 - k) * (H - T - B) / 11, width: 14, height: (H - T - B) / 11 + 0.5, fill: colour(k / 10) }));
+  lab(W - R + 34, T + 10, sig(Math.pow(10, hi), 2), 'start');
+  lab(W - R + 34, H - B, sig(Math.pow(10, lo), 2), 'start');
+  lab(W - R + 23, H - B + 14, 'J (N²)');
+  $('#costmap').replaceChildren(root);
+  $('#result-summary').textContent = `Cost map of ${res.names.join(' × ')} (${nx} × ${ny} points) through ${res.through}: J at the centre ${sig(res.J_centre, 4)} N², lowest grid point ${res.names[0]} = ${sig(res.grid_min[0], 4)}, ${res.names[1]} = ${sig(res.grid_min[1], 4)} (J = ${sig(res.grid_min[2], 4)} N²)` + (res.failed ? `; ${res.failed} points failed to solve (grey)` : '') + '; colour: log J, J = 0 the lowest';
+}
+
+function renderProfiles(profiles) {
+  const box = $('#profile-plots');
+  for (const p of profiles) {
+    const div = el('div', { class: 'plot profile', 'data-param': p.name });
+    box.append(div);
+    const xs = p.points.map((q) => q[0]), js = p.points.map((q) => q[1]);
+    plot(div, [
+      { x: xs, y: js, label: `J along ${p.name}`, color: '#1f6feb' },
+      { x: [Math.min(...xs), Math.max(...xs)], y: [p.J + p.threshold, p.J + p.threshold], label: '95% level', color: '#d62728', dash: '4 3' },
+      { x: [p.value], y: [p.J], color: '#222', dots: true },
+    ], { xlabel: `${p.name} (${p.unit}): interval ${p.lower.kind === 'crossed' ? sig(p.lower.value, 4) : '(' + p.lower.kind + ')'} – ${p.upper.kind === 'crossed' ? sig(p.upper.value, 4) : '(' + p.upper.kind + ')'}`, ylabel: 'J profile (N²)' });
+  }
+}
+
+// the batch's map: each indent at (x, y) (or along the manifest), coloured by a parameter
+function drawBatch(m) {
+  const ind = (m.progress && m.progress.indents) || [];
+  if (!ind.length) return;
+  const names = [...new Set(ind.flatMap((i) => (i.names || []).filter((_, k) => !i.free || i.free[k])))];
+  if (!state.mapParam || !names.includes(state.mapParam)) state.mapParam = names[0] || null;
+  const val = (i) => { const k = (i.names || []).indexOf(state.mapParam); return k >= 0 && i.values ? i.values[k] : NaN; };
+  const vs = ind.map(val).filter(isFinite);
+  const [v0, v1] = [Math.min(...vs), Math.max(...vs)];
+  const pos = ind.map((i, k) => [i.x ?? k + 1, i.y ?? 0]);
+  const xs = pos.map((p) => p[0]), ys = pos.map((p) => p[1]);
+  const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
+  const W = 560, H = 300, L = 50, R = 20, T = 30, B = 40;
+  const sx = (x1 - x0) || 1, sy = (y1 - y0) || 1;
+  const px = (x) => L + (x - x0) / sx * (W - L - R), py = (y) => (y1 === y0 ? (T + H - B) / 2 : H - B - (y - y0) / sy * (H - T - B));
+  const root = svg('svg', { viewBox: `0 0 ${W} ${H}`, role: 'img', id: 'batch-svg' });
+  root.append(svg('rect', { x: L - 12, y: T - 12, width: W - L - R + 24, height: H - T - B + 24, class: 'axis' }));
+  ind.forEach((i, k) => {
+    const v = val(i);
+    const fill = i.state === 'pending' ? '#fff' : (i.state === 'failed' ? '#c62828' : (isFinite(v) ? colour((v - v0) / ((v1 - v0) || 1)) : '#999'));
+    const c = svg('circle', { cx: px(pos[k][0]), cy: py(pos[k][1]), r: 9, fill, class: 'pt' + (state.indent === i.id ? ' sel' : ''), 'data-indent': i.id, 'data-state': i.state });
+    const tt = svg('title'); tt.textContent = `${i.id}: ${i.state}${isFinite(v) ? `, ${state.mapParam} = ${sig(v, 4)}` : ''}${i.message ? ' — ' + i.message : ''}`; c.append(tt);
+    if (i.state !== 'pending') c.addEventListener('click', () => openIndent(m.id, i.id));
+    root.append(c);
+  });
+  const t = svg('text', { x: L, y: 16 });
+  const done = ind.filter((i) => i.state !== 'pending').length;
+  t.textContent = `${done} of ${ind.length} indents; ${state.mapParam || '–'} ${vs.length ? `${sig(v0, 3)} (dark) to ${sig(v1, 3)} (light)` : ''}; red failed, white pending`;
+  root.append(t);
+  const sel = el('select', { id: 'batch-param' }, ...names.map((n) => el('option', { value: n, text: n })));
+  sel.value = state.mapParam || '';
+  sel.addEventListener('change', () => { state.mapParam = sel.value; drawBatch(m); });
+  $('#batch-map').replaceChildren(el('label', {}, 'Colour by ', sel), root);
+}
+
+function renderBatchSummary(run) {
+  const s = run.summary;
+  if (!s) return;
+  const c = Object.entries(s.counts || {}).map(([k, v]) => `${v} ${k}`).join(', ');
+  $('#result-summary').textContent = `Batch: ${s.total} indents, ${s.ran} run here (${c}); click an indent on the map; results.csv (and the maps, when the indents have x and y) among the downloads.`;
+}
+
+async function openIndent(run, id) {
+  state.indent = id;
+  const view = $('#indent-view');
+  view.replaceChildren(el('p', { class: 'muted', text: `loading ${id}…` }));
+  for (const c of document.querySelectorAll('#batch-svg .pt')) c.classList.toggle('sel', c.dataset.indent === id);
+  const base = `/api/runs/${run}/files/indents/${id}`;
+  const st = await api(`${base}/status.json`).catch(() => null);
+  const res = await api(`${base}/result.json`).catch(() => null);
+  view.replaceChildren(el('h3', { text: `Indent ${id}` }));
+  if (st) view.append(el('p', { class: st.state === 'failed' ? 'error' : '', text: `${st.state}${st.message ? ': ' + st.message : ''}; ${st.iterations} iterations, ${sig(st.seconds, 3)} s` }));
+  if (res) {
+    const rows = res.parameters.filter((p) => p.free).map((p) => {
+      const id2 = res.identifiability;
+      const und = id2 && id2.undetermined.includes(p.name);
+      return [p.name, sig(p.value, 6), und ? 'undetermined' : (id2 ? sig(id2.std_dev[p.name], 3) : ''), p.unit];
+    });
+    view.append(table('indent-table', ['parameter', 'value', 'σ', 'unit'], rows));
+    view.append(el('p', { text: `J = ${sig(res.J, 4)} N²${res.fit_quality ? `, R² = ${sig(res.fit_quality.r2, 6)}` : ''}` }));
+    const fit = await api(`${base}/fit.csv`).then(parseCsv).catch(() => null);
+    if (fit) {
+      const d = el('div', { class: 'plot', id: 'indent-fit' });
+      view.append(d);
+      plot(d, [{ x: fit.h, y: fit.F_data, label: 'data', color: '#222', dots: true }, { x: fit.h, y: fit.F_final, label: 'fit', color: '#d62728' }],
+        { xlabel: 'depth h (µm)', ylabel: 'force F (mN)', xscale: 1e3, yscale: 1e3 });
+    }
+    const links = el('p', {}, 'Files: ');
+    for (const n of ['result.json', 'fit.csv', 'status.json']) links.append(el('a', { href: `${base}/${n}`, download: `${id}_${n}`, text: n }), ' ');
+    view.append(links);
+  }
 }
 
 async function cancelRun() {
@@ -441,6 +657,8 @@ async function start() {
   $('#file-input').addEventListener('change', (ev) => upload(ev.target.files));
   $('#record-select').addEventListener('change', (ev) => showRecord(ev.target.value));
   $('#law').addEventListener('change', () => { renderLaw(); loadTemplate(); });
+  $('#command').addEventListener('change', () => { renderOptions(); if ($('#command').value === 'design' || state.lastCommand === 'design') loadTemplate(); state.lastCommand = $('#command').value; });
+  renderOptions();
   $('#tip').addEventListener('change', loadTemplate);
   $('#load-template').addEventListener('click', loadTemplate);
   $('#run').addEventListener('click', submit);
