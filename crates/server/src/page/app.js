@@ -245,6 +245,10 @@ async function loadTemplate() {
 async function submit() {
   const err = $('#submit-error');
   err.textContent = '';
+  // the badge must not show the previous run's end while this one is being submitted
+  const badge = $('#run-status');
+  badge.textContent = 'submitting';
+  badge.className = 'badge queued';
   const body = { command: $('#command').value, sets: $('#sets').value.split('\n').map((s) => s.trim()).filter(Boolean) };
   const cfg = $('#config').value;
   if (cfg.trim()) body.config = cfg;
@@ -272,7 +276,11 @@ async function submit() {
     const { id } = await api('/api/runs', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
     openRun(id);
     loadRuns();
-  } catch (e) { err.textContent = e.message; }
+  } catch (e) {
+    err.textContent = e.message;
+    badge.textContent = 'refused';
+    badge.className = 'badge failed';
+  }
 }
 
 // ---- a run ---------------------------------------------------------------------------------
