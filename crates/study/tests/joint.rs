@@ -208,7 +208,7 @@ fn joint_maxwell() -> String {
         "({HEAD} tests: [(name: \"fast\", history: {}), (name: \"slow\", history: {})], \
          identify: (params: {{\"E\": Free(start: 12000.0, lower: 1000.0, upper: 1e6), \
          \"nu\": Fixed(value: 0.3), \"eta\": Free(start: 60000.0, lower: 1000.0, upper: 1e7)}}, \
-         method: Lm))",
+         method: Lm, stop: (step_sigma: None)))",
         hist(0.2),
         hist(2.0)
     )
@@ -229,7 +229,9 @@ fn joint_options(jobs: usize) -> IdentifyOptions {
 /// `--starts` on a joint configuration shall run every start as a joint fit (in parallel)
 /// and report the clusters; every start shall reach the one minimum, which is the plain
 /// joint fit's optimum, and the outcome shall be bit-identical on 1 and 2 threads.
-/// Reference: the plain joint fit from the configuration's start (a different start).
+/// Reference: the plain joint fit from the configuration's start (a different start). The
+/// statistical stop is off here, so every start is followed to the minimum itself rather
+/// than to within a tenth of a standard deviation of it.
 #[test]
 fn joint_multistart_reaches_the_joint_optimum_bit_identically() {
     let plain = identify::run(&joint_options(2), &mut ()).unwrap();
