@@ -103,21 +103,35 @@ def test_simulate_and_gradient_pick_a_test_of_a_joint_config():
     assert set(grad) >= {"E", "eta"}
 
 
+# the statistical stop (`identify.stop.step_sigma`, a fraction of each parameter's standard
+# deviation) off: the fits are followed to the minimum itself, which the noise model of the
+# deviations cannot move
+SINGLE_TO_THE_MINIMUM = SINGLE.replace("method: Lm)", "method: Lm, stop: (step_sigma: None))")
+
+
 def test_noise_model_changes_the_deviations_not_the_parameters():
     noisy = dict(noise=0.02, seed=3)
-    base = indentify.identify(SINGLE, **noisy)
-    rel = indentify.identify(SINGLE, noise_model={"Relative": 0.01}, **noisy)
-    est = indentify.identify(SINGLE, noise_model="RelativeEstimated", **noisy)
-    absn = indentify.identify(SINGLE, noise_model={"Absolute": 1e-3}, **noisy)
+    base = indentify.identify(SINGLE_TO_THE_MINIMUM, **noisy)
+    rel = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Relative": 0.01}, **noisy)
+    est = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model="RelativeEstimated", **noisy)
+    absn = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Absolute": 1e-3}, **noisy)
     for r in (rel, est, absn):
         assert r.params == base.params
+    # with the statistical stop on (the default, 0.1), the stated noise sets the deviations
+    # the stop measures its steps in: each fit ends within a tenth of its own deviation of
+    # the minimum
+    for model in (None, {"Relative": 0.01}, "RelativeEstimated", {"Absolute": 1e-3}):
+        kw = dict(noisy) if model is None else dict(noisy, noise_model=model)
+        stopped = indentify.identify(SINGLE, **kw)
+        for k in ("E", "eta"):
+            assert abs(stopped.params[k] - base.params[k]) <= 0.1 * stopped.std[k], (model, k)
     # the sandwich covariance scales with the stated level: twice the level, twice sigma
-    rel2 = indentify.identify(SINGLE, noise_model={"Relative": 0.02}, **noisy)
+    rel2 = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Relative": 0.02}, **noisy)
     assert rel2.std["E"] == pytest.approx(2 * rel.std["E"], rel=1e-9)
     assert rel.std["E"] != pytest.approx(base.std["E"], rel=1e-6)
-    abs2 = indentify.identify(SINGLE, noise_model={"Absolute": 2e-3}, **noisy)
+    abs2 = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Absolute": 2e-3}, **noisy)
     assert abs2.std["eta"] == pytest.approx(2 * absn.std["eta"], rel=1e-9)
-    assert indentify.identify(SINGLE, noise_model="Residual", **noisy).std == base.std
+    assert indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model="Residual", **noisy).std == base.std
 
 
 @pytest.mark.parametrize(
