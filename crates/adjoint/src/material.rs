@@ -1,52 +1,377 @@
-//! The adjoint sweep and forward sensitivities of a material with internal variables,
-//! written once against its Jacobian blocks (docs/theory.md §12), the regime of every
-//! Gauss point held as recorded.
+//! The adjoint sweep of a material with internal variables, written once against its
+//! Jacobian blocks (docs/theory.md §12), the regime of every Gauss point held as
+//! recorded. Per Gauss point and step, with `y = [sigma, alpha]` (`m` numbers), the
+//! blocks `A = dR/dy_i`, `D = dR/dy_{i-1}`, `E = dR/d deps`, `P = dR/dc` of the recorded
+//! step and the carries `z = D_{i+1}^T mu_{i+1}`, `e = E_{i+1}^T mu_{i+1}`:
+//!
+//! 1. `K_i^T V_i = B* (e + E_i^T A_i^-T z)` (the contact's constraints as for every law);
+//! 2. `mu_i = -A_i^-T (z + Pi^T B V_i)`;
+//! 3. `dJ/dc -= sum_g w <mu_i, P_i>`; `z <- D_i^T mu_i`, `e <- E_i^T mu_i`.
+//!
+//! The tangent of the step's system is `C_i = -Pi A_i^-1 E_i` from the same blocks.
+//! Small strain, vertical and frictionless normal contact; finite strain and Coulomb
+//! friction are refused with a clear error (the forward solver refuses finite strain for
+//! these laws too).
 
-use indentify_contact::Trajectory;
-use indentify_laws::Material;
+use indentify_contact::{
+    ForceCotangent, Kinematics, StepFields, StepRecord, StepTangent, Trajectory,
+};
+use indentify_laws::material::{Step, dense_solve};
+use indentify_laws::{Mat4, Material, Vec4};
 
 use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
+
+/// The accumulators and per-point work of one sweep (allocated once per sweep).
+struct MatSweep {
+    m: usize,
+    np: usize,
+    /// `z = D_{i+1}^T mu_{i+1}` per point (`m` each).
+    z: Vec<f64>,
+    /// `e = E_{i+1}^T mu_{i+1}` per point.
+    e: Vec<Vec4>,
+    /// `G = A_i^-T Pi^T` per point (`m x 4`, row-major).
+    g: Vec<f64>,
+    /// `A_i^-T z` per point (`m` each).
+    az: Vec<f64>,
+    grad: Vec<f64>,
+    /// `mu_{i+1} = 0` everywhere (nothing swept yet).
+    zero: bool,
+    /// Point scratch: `y0, y1` (m each), `A`, `D` (m^2), `E` (4m), `P` (m np), two
+    /// m-vectors and an m^2 work matrix.
+    y0: Vec<f64>,
+    y1: Vec<f64>,
+    a: Vec<f64>,
+    at: Vec<f64>,
+    work: Vec<f64>,
+    d: Vec<f64>,
+    ej: Vec<f64>,
+    p: Vec<f64>,
+    x: Vec<f64>,
+}
+
+impl MatSweep {
+    fn new(mat: &dyn Material, np: usize, nq: usize) -> MatSweep {
+        let m = mat.state_len();
+        MatSweep {
+            m,
+            np,
+            z: vec![0.0; nq * m],
+            e: vec![Vec4::ZERO; nq],
+            g: vec![0.0; nq * m * 4],
+            az: vec![0.0; nq * m],
+            grad: vec![0.0; np],
+            zero: true,
+            y0: vec![0.0; m],
+            y1: vec![0.0; m],
+            a: vec![0.0; m * m],
+            at: vec![0.0; m * m],
+            work: vec![0.0; m * m],
+            d: vec![0.0; m * m],
+            ej: vec![0.0; m * 4],
+            p: vec![0.0; m * np],
+            x: vec![0.0; m],
+        }
+    }
+
+    /// Loads `y0, y1` of point `q` from the recorded fields.
+    fn load(&mut self, f0: &StepFields, f1: &StepFields, q: usize) {
+        let n = self.m - 4;
+        self.y0[..4].copy_from_slice(&f0.sigma[q].0);
+        self.y0[4..].copy_from_slice(&f0.alpha[q * n..(q + 1) * n]);
+        self.y1[..4].copy_from_slice(&f1.sigma[q].0);
+        self.y1[4..].copy_from_slice(&f1.alpha[q * n..(q + 1) * n]);
+    }
+
+    /// `x = A^-T b` from the transposed `A` in `self.at` (`b` in `self.x` on entry).
+    fn solve_transposed(&mut self) -> bool {
+        self.work.copy_from_slice(&self.at);
+        dense_solve(&mut self.work, self.m, &mut self.x)
+    }
+}
 
 impl Adjoint<'_> {
     /// [`Adjoint::gradient`] for a material without [`Material::as_law`].
     pub(crate) fn gradient_material(
         &mut self,
         mat: &dyn Material,
-        _c: &[f64],
-        _traj: &Trajectory,
-        _dj_df: &[f64],
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
     ) -> Result<Gradient, AdjointError> {
-        Err(unsupported(mat, "gradient"))
+        let start = std::time::Instant::now();
+        let f0 = self.contact.factorizations();
+        self.check_material(mat, c, traj, dj_df.len(), true)?;
+        self.contact.begin();
+        let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+        for i in (0..traj.steps.len()).rev() {
+            let fields = (&traj.fields[i], &traj.fields[i + 1]);
+            self.material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i])?;
+        }
+        Ok(Gradient {
+            dj_dc: sw.grad,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
     }
 
-    /// [`Adjoint::gradient_replayed`] for a material without [`Material::as_law`].
+    /// [`Adjoint::gradient_replayed`] for a material without [`Material::as_law`]: each
+    /// stretch between checkpoints replayed, swept backward and dropped.
     pub(crate) fn gradient_replayed_material(
         &mut self,
         mat: &dyn Material,
-        _c: &[f64],
-        _traj: &Trajectory,
-        _dj_df: &[f64],
-        _replay: Replay<'_, '_>,
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
+        replay: Replay<'_, '_>,
     ) -> Result<Gradient, AdjointError> {
-        Err(unsupported(mat, "checkpointed gradient"))
+        let Replay {
+            solver,
+            schedule,
+            opts,
+        } = replay;
+        if !std::ptr::eq(solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
+        }
+        let start = std::time::Instant::now();
+        let f0 = self.contact.factorizations();
+        let n = traj.steps.len();
+        self.check_material(mat, c, traj, dj_df.len(), false)?;
+        if traj.checkpoints.first().is_none_or(|cp| cp.steps_done != 0) {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: n,
+            });
+        }
+        self.contact.begin();
+        let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+        let last = schedule.t.len() - 1;
+        for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+            let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+                Some(next) => (next.schedule_index, next.steps_done),
+                None => (last, n),
+            };
+            let seg = solver
+                .replay(mat, c, schedule, opts, cp, j_end)
+                .map_err(|e| AdjointError::Replay(e.to_string()))?;
+            if seg.steps.len() != steps_end - cp.steps_done {
+                return Err(AdjointError::Replay(format!(
+                    "segment from schedule index {} replayed {} steps, the run had {}",
+                    cp.schedule_index,
+                    seg.steps.len(),
+                    steps_end - cp.steps_done
+                )));
+            }
+            for i in (0..seg.steps.len()).rev() {
+                let g = cp.steps_done + i;
+                let fields = (&seg.fields[i], &seg.fields[i + 1]);
+                self.material_step(mat, c, &mut sw, g, &seg.steps[i], fields, dj_df[g])?;
+            }
+        }
+        Ok(Gradient {
+            dj_dc: sw.grad,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
     }
 
-    /// [`Adjoint::sensitivities`] for a material without [`Material::as_law`].
+    /// [`Adjoint::sensitivities`] for a material without [`Material::as_law`]: not yet;
+    /// the gradient is.
     pub(crate) fn sensitivities_material(
         &mut self,
         mat: &dyn Material,
         _c: &[f64],
         _traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
-        Err(unsupported(mat, "forward sensitivities"))
+        Err(unsupported(
+            mat,
+            "forward sensitivities (use the adjoint gradient)",
+        ))
+    }
+
+    /// The inputs' checks: recorded fields (unless replayed), lengths, parameters, and
+    /// a model this sweep takes (small strain, no friction).
+    fn check_material(
+        &self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        n_rho: usize,
+        need_fields: bool,
+    ) -> Result<(), AdjointError> {
+        let n = traj.steps.len();
+        if need_fields && traj.fields.len() != n + 1 {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: n,
+            });
+        }
+        if n_rho != n {
+            return Err(AdjointError::Length {
+                expected: n,
+                got: n_rho,
+            });
+        }
+        mat.check_params(c)?;
+        mat.check_differentiable(c)?;
+        if self.model.kinematics == Kinematics::Finite {
+            return Err(unsupported(mat, "finite-strain gradient"));
+        }
+        if self.contact.force_cotangent() == ForceCotangent::Shifted {
+            return Err(unsupported(mat, "gradient with Coulomb friction"));
+        }
+        Ok(())
+    }
+
+    /// One step of the reversed-time sweep (steps 1-3 of the module's recursion).
+    #[allow(clippy::too_many_arguments)]
+    fn material_step(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        sw: &mut MatSweep,
+        i: usize,
+        rec: &StepRecord,
+        (f0, f1): (&StepFields, &StepFields),
+        rho: f64,
+    ) -> Result<(), AdjointError> {
+        if sw.zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending() {
+            return Ok(());
+        }
+        sw.zero = false;
+        let model = self.model;
+        let (m, np) = (sw.m, sw.np);
+        let nq = model.disc.n_qp();
+        let fail = |q: usize, what: &str| AdjointError::Step {
+            step: i,
+            t: rec.t,
+            reason: format!(
+                "{}: singular local Jacobian A at Gauss point {q} ({what})",
+                mat.name()
+            ),
+        };
+        // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
+        for q in 0..nq {
+            sw.load(f0, f1, q);
+            let deps = self.step_strain(f0, f1, q);
+            let step = Step {
+                y0: &sw.y0,
+                y1: &sw.y1,
+                deps: &deps,
+                dt: rec.dt,
+                regime: f1.regime[q],
+            };
+            mat.jac_state(c, &step, &mut sw.a);
+            mat.jac_strain(c, &step, &mut sw.ej);
+            for r in 0..m {
+                for k in 0..m {
+                    sw.at[k * m + r] = sw.a[r * m + k];
+                }
+            }
+            for j in 0..4 {
+                sw.x.fill(0.0);
+                sw.x[j] = 1.0;
+                if !sw.solve_transposed() {
+                    return Err(fail(q, "tangent"));
+                }
+                for k in 0..m {
+                    sw.g[(q * m + k) * 4 + j] = sw.x[k];
+                }
+            }
+            let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+            let mut ct = Mat4::ZERO;
+            for a in 0..4 {
+                for b in 0..4 {
+                    ct.0[a][b] = -(0..m)
+                        .map(|k| gq[k * 4 + a] * sw.ej[k * 4 + b])
+                        .sum::<f64>();
+                }
+            }
+            self.tangents[q] = ct;
+            sw.x.copy_from_slice(&sw.z[q * m..(q + 1) * m]);
+            if !sw.solve_transposed() {
+                return Err(fail(q, "adjoint"));
+            }
+            sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+            let mut src = sw.e[q];
+            for b in 0..4 {
+                src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+            }
+            self.field_b[q] = src;
+        }
+        let f_int = if self.contact.needs_internal_force() {
+            model.disc.internal_force(&f1.sigma, &mut self.full);
+            Some(self.full.as_slice())
+        } else {
+            None
+        };
+        let reason = |r: String| AdjointError::Step {
+            step: i,
+            t: rec.t,
+            reason: r,
+        };
+        self.contact
+            .prepare(rec, &f1.u, f_int, StepTangent::Points(&self.tangents))
+            .map_err(reason)?;
+        // K^T V = B* source, V = rho on the active dofs
+        model.disc.internal_force(&self.field_b, &mut self.full);
+        self.restrict();
+        let mut eq = std::mem::take(&mut self.eq);
+        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        self.eq = eq;
+        self.expand();
+        self.strains_of_full();
+        // mu = -(A^-T z + G B V); gradient; carries for the step before
+        for q in 0..nq {
+            sw.load(f0, f1, q);
+            let bv = self.strain[q];
+            let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+            for k in 0..m {
+                sw.x[k] = -(sw.az[q * m + k] + (0..4).map(|j| gq[k * 4 + j] * bv[j]).sum::<f64>());
+            }
+            let deps = self.step_strain(f0, f1, q);
+            let step = Step {
+                y0: &sw.y0,
+                y1: &sw.y1,
+                deps: &deps,
+                dt: rec.dt,
+                regime: f1.regime[q],
+            };
+            let w = model.disc.qp[q].w;
+            mat.jac_params(c, &step, &mut sw.p);
+            for (k, g) in sw.grad.iter_mut().enumerate() {
+                *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
+            }
+            mat.jac_previous(c, &step, &mut sw.d);
+            mat.jac_strain(c, &step, &mut sw.ej);
+            for k in 0..m {
+                sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
+            }
+            for b in 0..4 {
+                sw.e[q].0[b] = (0..m).map(|r| sw.ej[r * 4 + b] * sw.x[r]).sum();
+            }
+        }
+        Ok(())
+    }
+
+    /// The strain increment `B (u_1 - u_0)` at Gauss point `q` of a small-strain step.
+    fn step_strain(&self, f0: &StepFields, f1: &StepFields, q: usize) -> Vec4 {
+        let disc = &self.model.disc;
+        let e = q / indentify_fe::QP_PER_ELEMENT;
+        let dofs = disc.element_dofs(e);
+        let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
+        Vec4(disc.qp[q].strain(&due))
     }
 }
 
 /// The error for a combination this file does not take yet.
 fn unsupported(mat: &dyn Material, what: &str) -> AdjointError {
     AdjointError::Unsupported(format!(
-        "the {what} of law `{}` (internal variables) is not available in this model; \
-         use finite differences (`gradient: fd`)",
+        "the {what} of law `{}` (internal variables) is not available yet; use finite \
+         differences (`gradient: fd`)",
         mat.name()
     ))
 }
