@@ -9,9 +9,10 @@
 //! 3. `dJ/dc -= sum_g w <mu_i, P_i>`; `z <- D_i^T mu_i`, `e <- E_i^T mu_i`.
 //!
 //! The tangent of the step's system is `C_i = -Pi A_i^-1 E_i` from the same blocks.
-//! Small strain, vertical and frictionless normal contact; finite strain and Coulomb
-//! friction are refused with a clear error (the forward solver refuses finite strain for
-//! these laws too).
+//! Small strain, vertical, frictionless normal and Coulomb contact (whose `dJ/dF` enters
+//! as the shift `V' = V + rho e_A`: `rho B e_A` joins `z`'s stress rows in the source);
+//! finite strain is refused with a clear error (the forward solver refuses it for these
+//! laws too).
 
 use indentify_contact::{
     ForceCotangent, Kinematics, StepFields, StepRecord, StepTangent, Trajectory,
@@ -220,9 +221,6 @@ impl Adjoint<'_> {
         if self.model.kinematics == Kinematics::Finite {
             return Err(unsupported(mat, "finite-strain gradient"));
         }
-        if self.contact.force_cotangent() == ForceCotangent::Shifted {
-            return Err(unsupported(mat, "gradient with Coulomb friction"));
-        }
         Ok(())
     }
 
@@ -253,6 +251,16 @@ impl Adjoint<'_> {
                 mat.name()
             ),
         };
+        // Coulomb friction: dJ/dF enters as the shift `V' = V + rho e_A` (lib.rs), whose
+        // part `rho B e_A` joins `z`'s stress rows in the source
+        let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
+        if shifted {
+            self.full.fill(0.0);
+            for d in crate::force_dofs(model, rec) {
+                self.full[d] = 1.0;
+            }
+            self.strains_of_full();
+        }
         // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
         for q in 0..nq {
             sw.load(f0, f1, q);
@@ -296,6 +304,13 @@ impl Adjoint<'_> {
                 return Err(fail(q, "adjoint"));
             }
             sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+            if shifted {
+                let bea = self.strain[q];
+                let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+                for k in 0..m {
+                    sw.x[k] += rho * (0..4).map(|j| gq[k * 4 + j] * bea[j]).sum::<f64>();
+                }
+            }
             let mut src = sw.e[q];
             for b in 0..4 {
                 src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
@@ -323,6 +338,11 @@ impl Adjoint<'_> {
         self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
         self.eq = eq;
         self.expand();
+        if shifted {
+            for d in crate::force_dofs(model, rec) {
+                self.full[d] += rho;
+            }
+        }
         self.strains_of_full();
         // mu = -(A^-T z + G B V); gradient; carries for the step before
         for q in 0..nq {

@@ -2,7 +2,7 @@
 //! docs/theory.md §12) against central finite differences of whole load-hold-unload
 //! histories under frictionless normal contact: rate-independent J2 with linear
 //! hardening (regime held), J2 with power-law hardening and Norton overstress, and a
-//! two-term Prony solid; the checkpointed gradient equals the recorded one; a stress-only
+//! two-term Prony solid, and with Coulomb friction; the checkpointed gradient equals the recorded one; a stress-only
 //! law through `LawMaterial` and the same law's blocks give one gradient.
 
 use indentify_adjoint::check::central_difference;
@@ -14,6 +14,10 @@ use indentify_laws::{Hardening, Material, Plastic, Prony, Rate};
 use indentify_mesh::CylinderMesher;
 
 fn model() -> Model {
+    model_with(ContactKind::Normal)
+}
+
+fn model_with(kind: ContactKind) -> Model {
     let mesh = CylinderMesher {
         radius: 4.0,
         height: 4.0,
@@ -24,7 +28,7 @@ fn model() -> Model {
     }
     .build()
     .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, ContactKind::Normal).unwrap()
+    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind).unwrap()
 }
 
 fn schedule() -> Schedule {
@@ -51,11 +55,14 @@ fn cost(t: &Trajectory) -> f64 {
 /// Worst relative difference between the adjoint gradient and central differences (of
 /// the largest component), with `h_rel` the relative step.
 fn check(mat: &dyn Material, c: &[f64], h_rel: f64) -> f64 {
-    let m = model();
+    check_on(&model(), mat, c, h_rel)
+}
+
+fn check_on(m: &Model, mat: &dyn Material, c: &[f64], h_rel: f64) -> f64 {
     let s = schedule();
-    let mut solver = DirectSolver::new(&m).unwrap();
+    let mut solver = DirectSolver::new(m).unwrap();
     let t = solver.run(mat, c, &s, &opts()).unwrap();
-    let mut adj = Adjoint::new(&m).unwrap();
+    let mut adj = Adjoint::new(m).unwrap();
     let g = adj.gradient(mat, c, &t, &weights(t.steps.len())).unwrap();
     let n_steps = t.steps.len();
     let mut worst: f64 = 0.0;
@@ -108,6 +115,18 @@ fn plastic_power_norton_gradient_matches_fd() {
 fn prony_two_terms_gradient_matches_fd() {
     let p = Prony::new(2).unwrap();
     let w = check(&p, &[1e5, 0.3, 0.3, 0.2, 0.2, 2.0], 1e-6);
+    assert!(w < 1e-6, "{w:e}");
+}
+
+/// With Coulomb friction (mu = 0.1): rate-independent J2 and a Prony solid.
+#[test]
+fn materials_with_friction_gradient_matches_fd() {
+    let m = model_with(ContactKind::normal_with_friction(0.1).unwrap());
+    let pl = Plastic::new(Hardening::Linear, Rate::Independent);
+    let w = check_on(&m, &pl, &[1e5, 0.3, 500.0, 2000.0], 1e-6);
+    assert!(w < 1e-5, "{w:e}");
+    let p = Prony::new(2).unwrap();
+    let w = check_on(&m, &p, &[1e5, 0.3, 0.3, 0.2, 0.2, 2.0], 1e-6);
     assert!(w < 1e-6, "{w:e}");
 }
 
