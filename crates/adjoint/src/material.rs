@@ -179,18 +179,157 @@ impl Adjoint<'_> {
         })
     }
 
-    /// [`Adjoint::sensitivities`] for a material without [`Material::as_law`]: not yet;
-    /// the gradient is.
+    /// [`Adjoint::sensitivities`] for a material without [`Material::as_law`]: per step
+    /// and Gauss point the blocks of the recorded step (`A^-1` formed once), then per
+    /// parameter `k`, with the carries `dy_{i-1}` and `B du_{i-1}` (docs/theory.md §12):
+    /// `q = -D dy_{i-1} + E B du_{i-1} - P e_k`, `K du = -B* Pi A^-1 q` (the contact's
+    /// prescribed values as for every law), `dsigma = C B du + Pi A^-1 q`,
+    /// `dy_i = A^-1 (q - E B du)`, `dF_i = -e_A . B* dsigma`.
     pub(crate) fn sensitivities_material(
         &mut self,
         mat: &dyn Material,
-        _c: &[f64],
-        _traj: &Trajectory,
+        c: &[f64],
+        traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
-        Err(unsupported(
-            mat,
-            "forward sensitivities (use the adjoint gradient)",
-        ))
+        let start = std::time::Instant::now();
+        let model = self.model;
+        let n = traj.steps.len();
+        self.check_material(mat, c, traj, n, true)?;
+        self.contact.begin();
+        let (m, np, nq) = (mat.state_len(), c.len(), model.disc.n_qp());
+        let mut sw = MatSweep::new(mat, np, nq);
+        // per point of the step: A^-1, D, E, P
+        let mut ainv = vec![0.0; nq * m * m];
+        let mut dblk = vec![0.0; nq * m * m];
+        let mut eblk = vec![0.0; nq * m * 4];
+        let mut pblk = vec![0.0; nq * m * np];
+        // per parameter: dy (m per point) and B du (4 per point) of the previous step
+        let mut dy = vec![vec![0.0; nq * m]; np];
+        let mut bdu = vec![vec![[0.0; 4]; nq]; np];
+        let mut qv = vec![0.0; nq * m];
+        let mut h = vec![Vec4::ZERO; nq];
+        let mut df = vec![vec![0.0; np]; n];
+        // (one work space per parameter: friction ties each one's solve to its own
+        // previous displacement variation)
+        let mut works: Vec<crate::ParamWork> = (0..np)
+            .map(|_| crate::ParamWork::new(model, &self.contact))
+            .collect();
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
+            for q in 0..nq {
+                sw.load(f0, f1, q);
+                let deps = self.step_strain(f0, f1, q);
+                let step = Step {
+                    y0: &sw.y0,
+                    y1: &sw.y1,
+                    deps: &deps,
+                    dt: rec.dt,
+                    regime: f1.regime[q],
+                };
+                mat.jac_state(c, &step, &mut sw.a);
+                mat.jac_previous(c, &step, &mut dblk[q * m * m..(q + 1) * m * m]);
+                mat.jac_strain(c, &step, &mut eblk[q * m * 4..(q + 1) * m * 4]);
+                mat.jac_params(c, &step, &mut pblk[q * m * np..(q + 1) * m * np]);
+                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
+                for j in 0..m {
+                    sw.work.copy_from_slice(&sw.a);
+                    sw.x.fill(0.0);
+                    sw.x[j] = 1.0;
+                    if !dense_solve(&mut sw.work, m, &mut sw.x) {
+                        return Err(AdjointError::Step {
+                            step: i,
+                            t: rec.t,
+                            reason: format!(
+                                "{}: singular local Jacobian A at Gauss point {q}",
+                                mat.name()
+                            ),
+                        });
+                    }
+                    for r in 0..m {
+                        inv[r * m + j] = sw.x[r];
+                    }
+                }
+                let e = &eblk[q * m * 4..(q + 1) * m * 4];
+                let mut ct = Mat4::ZERO;
+                for a in 0..4 {
+                    for b in 0..4 {
+                        ct.0[a][b] = -(0..m).map(|k| inv[a * m + k] * e[k * 4 + b]).sum::<f64>();
+                    }
+                }
+                self.tangents[q] = ct;
+            }
+            let f_int = if self.contact.needs_internal_force() {
+                model.disc.internal_force(&f1.sigma, &mut self.full);
+                Some(self.full.as_slice())
+            } else {
+                None
+            };
+            self.contact
+                .prepare(rec, &f1.u, f_int, StepTangent::Points(&self.tangents))
+                .map_err(|reason| AdjointError::Step {
+                    step: i,
+                    t: rec.t,
+                    reason,
+                })?;
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            for k in 0..np {
+                let (dyk, bduk) = (&mut dy[k], &mut bdu[k]);
+                for q in 0..nq {
+                    let (d, e) = (&dblk[q * m * m..], &eblk[q * m * 4..]);
+                    let p = &pblk[q * m * np..];
+                    for r in 0..m {
+                        let mut v = -p[r * np + k];
+                        for j in 0..m {
+                            v -= d[r * m + j] * dyk[q * m + j];
+                        }
+                        for j in 0..4 {
+                            v += e[r * 4 + j] * bduk[q][j];
+                        }
+                        qv[q * m + r] = v;
+                    }
+                    let inv = &ainv[q * m * m..];
+                    let hq = Vec4(std::array::from_fn(|a| {
+                        (0..m).map(|j| inv[a * m + j] * qv[q * m + j]).sum::<f64>()
+                    }));
+                    h[q] = hq;
+                    self.field_b[q] = hq * -1.0;
+                }
+                let w = &mut works[k];
+                model.disc.internal_force(&self.field_b, &mut w.full);
+                model.dofs.restrict(&w.full, &mut w.eq);
+                self.contact
+                    .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+                crate::expand_into(model, &w.eq, &mut w.full);
+                if !w.du_prev.is_empty() {
+                    w.du_prev.copy_from_slice(&w.full);
+                }
+                model.disc.strains(&w.full, &mut w.strain);
+                for q in 0..nq {
+                    let b = Vec4(w.strain[q]);
+                    self.field_b[q] = self.tangents[q].mul_vec(&b) + h[q];
+                    let (inv, e) = (&ainv[q * m * m..], &eblk[q * m * 4..]);
+                    for r in 0..m {
+                        sw.x[r] = qv[q * m + r] - (0..4).map(|j| e[r * 4 + j] * b[j]).sum::<f64>();
+                    }
+                    for r in 0..m {
+                        dyk[q * m + r] = (0..m).map(|j| inv[r * m + j] * sw.x[j]).sum();
+                    }
+                    bduk[q] = b.0;
+                }
+                model.disc.internal_force(&self.field_b, &mut w.full);
+                df[i][k] = -crate::force_dofs(model, rec)
+                    .map(|d| w.full[d])
+                    .sum::<f64>();
+            }
+        }
+        Ok(Sensitivities {
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
     }
 
     /// The inputs' checks: recorded fields (unless replayed), lengths, parameters, and
