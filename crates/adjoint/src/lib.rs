@@ -76,9 +76,6 @@ pub enum AdjointError {
         /// What failed.
         reason: String,
     },
-    /// A combination the adjoint does not take (yet), said with what to use instead.
-    #[error("{0}")]
-    Unsupported(String),
     /// Replaying a checkpointed segment failed or did not reproduce the run.
     #[error("checkpoint replay: {0}")]
     Replay(String),

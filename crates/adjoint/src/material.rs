@@ -9,16 +9,16 @@
 //! 3. `dJ/dc -= sum_g w <mu_i, P_i>`; `z <- D_i^T mu_i`, `e <- E_i^T mu_i`.
 //!
 //! The tangent of the step's system is `C_i = -Pi A_i^-1 E_i` from the same blocks.
-//! Small strain, vertical, frictionless normal and Coulomb contact (whose `dJ/dF` enters
-//! as the shift `V' = V + rho e_A`: `rho B e_A` joins `z`'s stress rows in the source);
-//! finite strain is refused with a clear error (the forward solver refuses it for these
-//! laws too).
+//! Every model: small and finite strain (`B` becomes the step's `G_i`, the stiffness the
+//! forward's consistent tangent with its geometric part, `finite.rs`), vertical,
+//! frictionless normal and Coulomb contact (whose `dJ/dF` enters as the shift
+//! `V' = V + rho e_A`: under small strain `rho B e_A` joins `z`'s stress rows in the
+//! source, under finite strain the source gains `K (-rho e_A)` as the laws' sweep does).
 
-use indentify_contact::{
-    ForceCotangent, Kinematics, StepFields, StepRecord, StepTangent, Trajectory,
-};
+use indentify_contact::{ForceCotangent, StepFields, StepRecord, StepTangent, Trajectory};
+use indentify_fe::{Deformation, QP_PER_ELEMENT};
 use indentify_laws::material::{Step, dense_solve};
-use indentify_laws::{Mat4, Material, Vec4};
+use indentify_laws::{LogStrain, Mat4, Material, Vec4};
 
 use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
 
@@ -37,6 +37,9 @@ struct MatSweep {
     grad: Vec<f64>,
     /// `mu_{i+1} = 0` everywhere (nothing swept yet).
     zero: bool,
+    /// The step's strain increment at every point (small strain `B (u_1 - u_0)`, finite
+    /// strain the Hencky strains' difference).
+    deps: Vec<Vec4>,
     /// Point scratch: `y0, y1` (m each), `A`, `D` (m^2), `E` (4m), `P` (m np), two
     /// m-vectors and an m^2 work matrix.
     y0: Vec<f64>,
@@ -62,6 +65,7 @@ impl MatSweep {
             az: vec![0.0; nq * m],
             grad: vec![0.0; np],
             zero: true,
+            deps: vec![Vec4::ZERO; nq],
             y0: vec![0.0; m],
             y1: vec![0.0; m],
             a: vec![0.0; m * m],
@@ -217,9 +221,15 @@ impl Adjoint<'_> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
+            let fail = |reason: String| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason,
+            };
+            self.step_strains(f0, f1, &mut sw.deps).map_err(fail)?;
             for q in 0..nq {
                 sw.load(f0, f1, q);
-                let deps = self.step_strain(f0, f1, q);
+                let deps = sw.deps[q];
                 let step = Step {
                     y0: &sw.y0,
                     y1: &sw.y1,
@@ -259,19 +269,8 @@ impl Adjoint<'_> {
                 }
                 self.tangents[q] = ct;
             }
-            let f_int = if self.contact.needs_internal_force() {
-                model.disc.internal_force(&f1.sigma, &mut self.full);
-                Some(self.full.as_slice())
-            } else {
-                None
-            };
-            self.contact
-                .prepare(rec, &f1.u, f_int, StepTangent::Points(&self.tangents))
-                .map_err(|reason| AdjointError::Step {
-                    step: i,
-                    t: rec.t,
-                    reason,
-                })?;
+            self.prepare_material_step(rec, f1).map_err(fail)?;
+            let finite = self.finite.as_ref();
             let prev = i
                 .checked_sub(1)
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
@@ -299,7 +298,7 @@ impl Adjoint<'_> {
                     self.field_b[q] = hq * -1.0;
                 }
                 let w = &mut works[k];
-                model.disc.internal_force(&self.field_b, &mut w.full);
+                crate::force_into(model, finite, &self.field_b, &mut w.full);
                 model.dofs.restrict(&w.full, &mut w.eq);
                 self.contact
                     .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
@@ -307,7 +306,7 @@ impl Adjoint<'_> {
                 if !w.du_prev.is_empty() {
                     w.du_prev.copy_from_slice(&w.full);
                 }
-                model.disc.strains(&w.full, &mut w.strain);
+                crate::strains_into(model, finite, &w.full, &mut w.strain);
                 for q in 0..nq {
                     let b = Vec4(w.strain[q]);
                     self.field_b[q] = self.tangents[q].mul_vec(&b) + h[q];
@@ -320,7 +319,11 @@ impl Adjoint<'_> {
                     }
                     bduk[q] = b.0;
                 }
-                model.disc.internal_force(&self.field_b, &mut w.full);
+                match finite {
+                    None => model.disc.internal_force(&self.field_b, &mut w.full),
+                    // K du + sum w0 G^T Pi A^-1 q (geometric part included)
+                    Some(fs) => fs.delta_force(model, &h, &mut w.full, &mut w.du),
+                }
                 df[i][k] = -crate::force_dofs(model, rec)
                     .map(|d| w.full[d])
                     .sum::<f64>();
@@ -357,9 +360,6 @@ impl Adjoint<'_> {
         }
         mat.check_params(c)?;
         mat.check_differentiable(c)?;
-        if self.model.kinematics == Kinematics::Finite {
-            return Err(unsupported(mat, "finite-strain gradient"));
-        }
         Ok(())
     }
 
@@ -390,10 +390,17 @@ impl Adjoint<'_> {
                 mat.name()
             ),
         };
+        self.step_strains(f0, f1, &mut sw.deps)
+            .map_err(|reason| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason,
+            })?;
+        let finite = self.finite.is_some();
         // Coulomb friction: dJ/dF enters as the shift `V' = V + rho e_A` (lib.rs), whose
         // part `rho B e_A` joins `z`'s stress rows in the source
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
-        if shifted {
+        if shifted && !finite {
             self.full.fill(0.0);
             for d in crate::force_dofs(model, rec) {
                 self.full[d] = 1.0;
@@ -403,7 +410,7 @@ impl Adjoint<'_> {
         // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
         for q in 0..nq {
             sw.load(f0, f1, q);
-            let deps = self.step_strain(f0, f1, q);
+            let deps = sw.deps[q];
             let step = Step {
                 y0: &sw.y0,
                 y1: &sw.y1,
@@ -443,7 +450,7 @@ impl Adjoint<'_> {
                 return Err(fail(q, "adjoint"));
             }
             sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
-            if shifted {
+            if shifted && !finite {
                 let bea = self.strain[q];
                 let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
                 for k in 0..m {
@@ -456,22 +463,23 @@ impl Adjoint<'_> {
             }
             self.field_b[q] = src;
         }
-        let f_int = if self.contact.needs_internal_force() {
-            model.disc.internal_force(&f1.sigma, &mut self.full);
-            Some(self.full.as_slice())
-        } else {
-            None
-        };
         let reason = |r: String| AdjointError::Step {
             step: i,
             t: rec.t,
             reason: r,
         };
-        self.contact
-            .prepare(rec, &f1.u, f_int, StepTangent::Points(&self.tangents))
-            .map_err(reason)?;
+        self.prepare_material_step(rec, f1).map_err(reason)?;
         // K^T V = B* source, V = rho on the active dofs
-        model.disc.internal_force(&self.field_b, &mut self.full);
+        self.force_of_field_b();
+        if let (true, Some(fs)) = (shifted, &self.finite) {
+            // (finite strain: the shift's part of the source is K (-rho e_A))
+            self.e_a.clear();
+            self.e_a.resize(self.full.len(), 0.0);
+            for d in crate::force_dofs(model, rec) {
+                self.e_a[d] = -rho;
+            }
+            fs.add_k_times(model, &self.e_a, &mut self.full);
+        }
         self.restrict();
         let mut eq = std::mem::take(&mut self.eq);
         self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
@@ -487,11 +495,11 @@ impl Adjoint<'_> {
         for q in 0..nq {
             sw.load(f0, f1, q);
             let bv = self.strain[q];
+            let deps = sw.deps[q];
             let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
             for k in 0..m {
                 sw.x[k] = -(sw.az[q * m + k] + (0..4).map(|j| gq[k * 4 + j] * bv[j]).sum::<f64>());
             }
-            let deps = self.step_strain(f0, f1, q);
             let step = Step {
                 y0: &sw.y0,
                 y1: &sw.y1,
@@ -516,21 +524,65 @@ impl Adjoint<'_> {
         Ok(())
     }
 
-    /// The strain increment `B (u_1 - u_0)` at Gauss point `q` of a small-strain step.
-    fn step_strain(&self, f0: &StepFields, f1: &StepFields, q: usize) -> Vec4 {
+    /// The step's strain increment at every Gauss point into `out`: `B (u_1 - u_0)`
+    /// under small strain, `E(u_1) - E(u_0)` (Hencky strains, with the forward's own
+    /// routines) under finite strain.
+    ///
+    /// # Errors
+    /// A message naming the Gauss point where a recorded state is inverted.
+    fn step_strains(
+        &self,
+        f0: &StepFields,
+        f1: &StepFields,
+        out: &mut [Vec4],
+    ) -> Result<(), String> {
         let disc = &self.model.disc;
-        let e = q / indentify_fe::QP_PER_ELEMENT;
-        let dofs = disc.element_dofs(e);
-        let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
-        Vec4(disc.qp[q].strain(&due))
+        for e in 0..disc.elements.len() {
+            let dofs = disc.element_dofs(e);
+            let (u0, u1) = (disc.gather(e, &f0.u), disc.gather(e, &f1.u));
+            for g in 0..QP_PER_ELEMENT {
+                let q = QP_PER_ELEMENT * e + g;
+                let qp = &disc.qp[q];
+                out[q] = if self.finite.is_some() {
+                    let hencky = |ue: &[f64; 16]| {
+                        let def = Deformation::new(qp, ue);
+                        (def.det() > 0.0)
+                            .then(|| LogStrain::from_difference(&def.c_minus_one()))
+                            .flatten()
+                            .map(|ls| ls.e)
+                            .ok_or_else(|| format!("inverted recorded state at Gauss point {q}"))
+                    };
+                    hencky(&u1)? - hencky(&u0)?
+                } else {
+                    let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
+                    Vec4(qp.strain(&due))
+                };
+            }
+        }
+        Ok(())
     }
-}
 
-/// The error for a combination this file does not take yet.
-fn unsupported(mat: &dyn Material, what: &str) -> AdjointError {
-    AdjointError::Unsupported(format!(
-        "the {what} of law `{}` (internal variables) is not available yet; use finite \
-         differences (`gradient: fd`)",
-        mat.name()
-    ))
+    /// Sets the step's system from the tangents in `self.tangents`: under finite strain
+    /// the element tangents at `u_1` (material and geometric parts); with friction the
+    /// frames' reactions from the recorded stresses.
+    ///
+    /// # Errors
+    /// A message from the finite-strain operators or the contact.
+    fn prepare_material_step(&mut self, rec: &StepRecord, f1: &StepFields) -> Result<(), String> {
+        let model = self.model;
+        if let Some(fs) = self.finite.as_mut() {
+            fs.prepare(model, &f1.u, &f1.sigma, &self.tangents)?;
+        }
+        let f_int = if self.contact.needs_internal_force() {
+            crate::force_into(model, self.finite.as_ref(), &f1.sigma, &mut self.full);
+            Some(self.full.as_slice())
+        } else {
+            None
+        };
+        let tangent = match &self.finite {
+            Some(fs) => StepTangent::Elements(&fs.ke),
+            None => StepTangent::Points(&self.tangents),
+        };
+        self.contact.prepare(rec, &f1.u, f_int, tangent)
+    }
 }

@@ -2,14 +2,15 @@
 //! docs/theory.md §12) against central finite differences of whole load-hold-unload
 //! histories under frictionless normal contact: rate-independent J2 with linear
 //! hardening (regime held), J2 with power-law hardening and Norton overstress, and a
-//! two-term Prony solid, and with Coulomb friction; the forward sensitivities give the
+//! two-term Prony solid, with Coulomb friction, and under finite strain; the forward sensitivities give the
 //! adjoint's gradient (1e-9); the checkpointed gradient equals the recorded one; a stress-only
 //! law through `LawMaterial` and the same law's blocks give one gradient.
 
 use indentify_adjoint::check::central_difference;
 use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{
-    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, Trajectory, trapezoid,
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
+    trapezoid,
 };
 use indentify_laws::{Hardening, Material, Plastic, Prony, Rate};
 use indentify_mesh::CylinderMesher;
@@ -147,6 +148,26 @@ fn materials_with_friction_gradient_matches_fd() {
     let p = Prony::new(2).unwrap();
     let w = check_on(&m, &p, &[1e5, 0.3, 0.3, 0.2, 0.2, 2.0], 1e-6);
     assert!(w < 1e-6, "{w:e}");
+}
+
+/// Finite strain (Hencky space), frictionless and with Coulomb friction (mu = 0.1):
+/// J2 with power-law hardening and Norton overstress, and rate-independent J2.
+#[test]
+fn materials_under_finite_strain_gradient_matches_fd() {
+    for kind in [
+        ContactKind::Normal,
+        ContactKind::normal_with_friction(0.1).unwrap(),
+    ] {
+        let m = model_with(kind)
+            .with_kinematics(Kinematics::Finite)
+            .unwrap();
+        let pl = Plastic::new(Hardening::Power, Rate::Norton);
+        let w = check_on(&m, &pl, &[1e5, 0.3, 500.0, 0.2, 1500.0, 5.0], 1e-6);
+        assert!(w < 1e-6, "{w:e}");
+        let pl = Plastic::new(Hardening::Linear, Rate::Independent);
+        let w = check_on(&m, &pl, &[1e5, 0.3, 500.0, 2000.0], 1e-6);
+        assert!(w < 1e-5, "{w:e}");
+    }
 }
 
 /// The gradient of a run kept at checkpoints (replayed stretch by stretch) equals the

@@ -169,17 +169,16 @@ impl Body {
         sigma_out: &mut [Vec4],
         internal_out: &mut Internal,
     ) -> Result<(), StepFailure> {
-        let Some(law) = step.law else {
-            // (the solver refuses finite strain for these before the run)
-            return self.evaluate_material(model, step, u, sigma_out, internal_out);
-        };
         let (c, state, dt) = (step.c, step.state, step.dt);
-        let affine = step.affine.as_ref();
         let disc = &model.disc;
         if model.kinematics == Kinematics::Finite {
-            let domain = law.elastic_domain(c, dt);
+            let domain = step.law.and_then(|law| law.elastic_domain(c, dt));
             let input = FiniteIn {
-                law,
+                law: step.law,
+                material: step
+                    .law
+                    .is_none()
+                    .then_some((step.mat, state.internal.alpha.as_slice())),
                 c,
                 dt,
                 t0: &state.sigma,
@@ -191,10 +190,16 @@ impl Body {
                 f_int: &mut self.f_int,
                 tangents: &mut self.tangents,
                 points: &mut self.finite_points,
+                alpha: &mut internal_out.alpha,
+                regime: &mut internal_out.regime,
             };
             return kinematics::evaluate(disc, &input, u, out)
                 .map_err(|f| finite_failure(f, state.depth));
         }
+        let Some(law) = step.law else {
+            return self.evaluate_material(model, step, u, sigma_out, internal_out);
+        };
+        let affine = step.affine.as_ref();
         // (only affine laws use it: a nonlinear law's iterate is never compared)
         let at_start = affine.is_some() && u == state.u.as_slice();
         if at_start && affine.is_some_and(|(a, _)| *a == Mat4::IDENTITY) {

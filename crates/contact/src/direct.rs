@@ -580,23 +580,12 @@ struct Stretch {
     every: usize,
 }
 
-/// The checks of a run's material: its parameters, and a model it can run (a material
-/// with internal variables runs under small strain only, so far).
+/// The checks of a run's material: its parameters.
 ///
 /// # Errors
-/// [`ContactError::Parameters`] for inadmissible parameters; [`ContactError::Input`]
-/// for a material with internal variables under finite strain.
-fn check_material(model: &Model, mat: &dyn Material, c: &[f64]) -> Result<(), ContactError> {
+/// [`ContactError::Parameters`] for inadmissible parameters.
+fn check_material(_model: &Model, mat: &dyn Material, c: &[f64]) -> Result<(), ContactError> {
     mat.check_params(c)?;
-    if mat.as_law().is_none() && model.kinematics == crate::Kinematics::Finite {
-        return Err(ContactError::Input {
-            field: "model.kinematics",
-            value: format!("finite (law `{}` with internal variables)", mat.name()),
-            allowed: "small strain for laws with internal variables (the finite-strain \
-                      path takes the stress-only laws only, so far)"
-                .into(),
-        });
-    }
     Ok(())
 }
 
