@@ -51,6 +51,16 @@ struct MatSweep {
     ej: Vec<f64>,
     p: Vec<f64>,
     x: Vec<f64>,
+    /// The material's blocks depend on `(c, dt)` only ([`Material::is_linear`]): `A^-T`,
+    /// `G`, `D`, `E` and the tangent are formed once per step (in `ainvt`, `glin`, `d`,
+    /// `ej`, `ct`) and every point reuses them.
+    linear: bool,
+    /// `A^-T` (`m x m`, row-major) of a linear material's step.
+    ainvt: Vec<f64>,
+    /// `G = A^-T Pi^T` (`m x 4`) of a linear material's step.
+    glin: Vec<f64>,
+    /// The tangent `-G^T E` of a linear material's step.
+    ct: Mat4,
 }
 
 impl MatSweep {
@@ -75,7 +85,56 @@ impl MatSweep {
             ej: vec![0.0; m * 4],
             p: vec![0.0; m * np],
             x: vec![0.0; m],
+            linear: mat.is_linear(),
+            ainvt: vec![0.0; m * m],
+            glin: vec![0.0; m * 4],
+            ct: Mat4::ZERO,
         }
+    }
+
+    /// A linear material's step blocks from the state of point `q` (any point: they do not
+    /// depend on it): `A^-T`, `G = A^-T Pi^T`, `D`, `E` and the tangent `-G^T E`.
+    /// `false` when `A` is singular.
+    fn linear_blocks(&mut self, mat: &dyn Material, c: &[f64], deps: &Vec4, dt: f64) -> bool {
+        let m = self.m;
+        let step = Step {
+            y0: &self.y0,
+            y1: &self.y1,
+            deps,
+            dt,
+            regime: indentify_laws::material::Regime::Smooth,
+        };
+        mat.jac_state(c, &step, &mut self.a);
+        mat.jac_previous(c, &step, &mut self.d);
+        mat.jac_strain(c, &step, &mut self.ej);
+        for r in 0..m {
+            for k in 0..m {
+                self.at[k * m + r] = self.a[r * m + k];
+            }
+        }
+        for j in 0..m {
+            self.x.fill(0.0);
+            self.x[j] = 1.0;
+            if !self.solve_transposed() {
+                return false;
+            }
+            for k in 0..m {
+                self.ainvt[k * m + j] = self.x[k];
+            }
+        }
+        for k in 0..m {
+            for j in 0..4 {
+                self.glin[k * 4 + j] = self.ainvt[k * m + j];
+            }
+        }
+        for a in 0..4 {
+            for b in 0..4 {
+                self.ct.0[a][b] = -(0..m)
+                    .map(|k| self.glin[k * 4 + a] * self.ej[k * 4 + b])
+                    .sum::<f64>();
+            }
+        }
+        true
     }
 
     /// Loads `y0, y1` of point `q` from the recorded fields.
@@ -269,7 +328,7 @@ impl Adjoint<'_> {
                 }
                 self.tangents[q] = ct;
             }
-            self.prepare_material_step(rec, f1).map_err(fail)?;
+            self.prepare_material_step(rec, f1, None).map_err(fail)?;
             let finite = self.finite.as_ref();
             let prev = i
                 .checked_sub(1)
@@ -407,8 +466,38 @@ impl Adjoint<'_> {
             }
             self.strains_of_full();
         }
+        // a linear material: its blocks once for the step
+        let linear = sw.linear;
+        if linear {
+            sw.load(f0, f1, 0);
+            let deps = sw.deps[0];
+            if !sw.linear_blocks(mat, c, &deps, rec.dt) {
+                return Err(fail(0, "tangent"));
+            }
+            self.tangents.fill(sw.ct);
+        }
         // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
         for q in 0..nq {
+            if linear {
+                let z = &sw.z[q * m..(q + 1) * m];
+                for k in 0..m {
+                    let row = &sw.ainvt[k * m..(k + 1) * m];
+                    sw.x[k] = row.iter().zip(z).map(|(a, b)| a * b).sum();
+                }
+                sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+                if shifted && !finite {
+                    let bea = self.strain[q];
+                    for k in 0..m {
+                        sw.x[k] += rho * (0..4).map(|j| sw.glin[k * 4 + j] * bea[j]).sum::<f64>();
+                    }
+                }
+                let mut src = sw.e[q];
+                for b in 0..4 {
+                    src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                }
+                self.field_b[q] = src;
+                continue;
+            }
             sw.load(f0, f1, q);
             let deps = sw.deps[q];
             let step = Step {
@@ -468,7 +557,9 @@ impl Adjoint<'_> {
             t: rec.t,
             reason: r,
         };
-        self.prepare_material_step(rec, f1).map_err(reason)?;
+        let uniform = (linear && !finite).then_some(c);
+        self.prepare_material_step(rec, f1, uniform)
+            .map_err(reason)?;
         // K^T V = B* source, V = rho on the active dofs
         self.force_of_field_b();
         if let (true, Some(fs)) = (shifted, &self.finite) {
@@ -496,7 +587,11 @@ impl Adjoint<'_> {
             sw.load(f0, f1, q);
             let bv = self.strain[q];
             let deps = sw.deps[q];
-            let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+            let gq = if linear {
+                &sw.glin[..]
+            } else {
+                &sw.g[q * m * 4..(q + 1) * m * 4]
+            };
             for k in 0..m {
                 sw.x[k] = -(sw.az[q * m + k] + (0..4).map(|j| gq[k * 4 + j] * bv[j]).sum::<f64>());
             }
@@ -512,8 +607,10 @@ impl Adjoint<'_> {
             for (k, g) in sw.grad.iter_mut().enumerate() {
                 *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
             }
-            mat.jac_previous(c, &step, &mut sw.d);
-            mat.jac_strain(c, &step, &mut sw.ej);
+            if !linear {
+                mat.jac_previous(c, &step, &mut sw.d);
+                mat.jac_strain(c, &step, &mut sw.ej);
+            }
             for k in 0..m {
                 sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
             }
@@ -568,7 +665,15 @@ impl Adjoint<'_> {
     ///
     /// # Errors
     /// A message from the finite-strain operators or the contact.
-    fn prepare_material_step(&mut self, rec: &StepRecord, f1: &StepFields) -> Result<(), String> {
+    /// `uniform`: the parameters of a linear material under small strain, whose one
+    /// tangent (in `self.tangents[0]`) keys the reuse of the factorization as a linear
+    /// law's does.
+    fn prepare_material_step(
+        &mut self,
+        rec: &StepRecord,
+        f1: &StepFields,
+        uniform: Option<&[f64]>,
+    ) -> Result<(), String> {
         let model = self.model;
         if let Some(fs) = self.finite.as_mut() {
             fs.prepare(model, &f1.u, &f1.sigma, &self.tangents)?;
@@ -579,9 +684,14 @@ impl Adjoint<'_> {
         } else {
             None
         };
-        let tangent = match &self.finite {
-            Some(fs) => StepTangent::Elements(&fs.ke),
-            None => StepTangent::Points(&self.tangents),
+        let tangent = match (&self.finite, uniform) {
+            (Some(fs), _) => StepTangent::Elements(&fs.ke),
+            (None, Some(params)) => StepTangent::Uniform {
+                tangent: &self.tangents[0],
+                params,
+                dt: rec.dt,
+            },
+            (None, None) => StepTangent::Points(&self.tangents),
         };
         self.contact.prepare(rec, &f1.u, f_int, tangent)
     }
