@@ -8,9 +8,7 @@ use serde_json::Value;
 
 use indentify_contact::punch::AutoOptions;
 
-use crate::config::{
-    Config, DataSection, IdentifySection, LawSpec, ParamSetting, Reference, Specimen, library_law,
-};
+use crate::config::{Config, DataSection, IdentifySection, ParamSetting, Reference, Specimen};
 
 /// The annotated template of a reference problem.
 pub fn template(reference: Reference) -> String {
@@ -233,20 +231,20 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
         cfg.kinematics
     ));
 
-    let forms: Vec<String> = Reference::ALL
-        .iter()
-        .map(|r| {
-            let l = r.config().law;
-            let names: Vec<&str> = l.named_params().iter().map(|(n, _)| *n).collect();
-            format!("{}({})", l.variant(), names.join(", "))
-        })
-        .collect();
-    out.push_str(&format!(
-        "    // Constitutive law, one of {}.\n    law: {}(\n",
-        forms.join(", "),
-        cfg.law.variant()
-    ));
-    block(&mut out, "        ", &law_lines(&cfg.law));
+    let forms = crate::config::law_forms();
+    let mut line = String::from("    // Constitutive law, one of");
+    for (k, form) in forms.iter().enumerate() {
+        let sep = if k + 1 == forms.len() { "." } else { "," };
+        if line.len() + form.len() + 2 > 100 {
+            out.push_str(&line);
+            out.push('\n');
+            line = String::from("    //");
+        }
+        line.push_str(&format!(" {form}{sep}"));
+    }
+    out.push_str(&line);
+    out.push_str(&format!("\n    law: {}(\n", cfg.law.variant()));
+    block(&mut out, "        ", &cfg.law.lines());
     out.push_str("    ),\n");
 
     if let Some(history) = &cfg.history {
@@ -464,9 +462,7 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
          \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
          \x20   identify: (\n        params: {\n",
     );
-    let infos = library_law(cfg.law.name())
-        .map(|l| l.params())
-        .unwrap_or(&[]);
+    let infos = cfg.law.param_infos();
     let mut listed: Vec<&str> = cfg
         .law
         .named_params()
@@ -621,20 +617,6 @@ fn data_block(d: &DataSection) -> String {
         d.substeps
     ));
     out
-}
-
-fn law_lines(law: &LawSpec) -> Vec<(String, String)> {
-    let infos = library_law(law.name()).map(|l| l.params()).unwrap_or(&[]);
-    law.named_params()
-        .iter()
-        .map(|(name, v)| {
-            let note = infos.iter().find(|i| i.name == *name).map_or_else(
-                || "(no metadata in indentify_laws)".to_string(),
-                |i| format!("{} ({}), in {}", i.description, i.unit, i.range_text()),
-            );
-            (format!("{name}: {},", num(*v)), note)
-        })
-        .collect()
 }
 
 /// Appends `indent + code  // comment` lines with the comments aligned.
