@@ -287,3 +287,29 @@ fn identify_settings_use_registry_names() {
         "{e}"
     );
 }
+
+/// The system shall write an `init` template for every hardening form and for Prony that
+/// loads back to the law it was written from.
+#[test]
+fn init_templates_of_registry_laws_load() {
+    use indentify_study::templates::{LAW_TEMPLATES, law_template};
+    for (kind, text) in LAW_TEMPLATES {
+        let t = law_template(kind).unwrap();
+        let cfg = config::load_str(&t, kind, &[]).unwrap_or_else(|e| panic!("{kind}: {e:#}\n{t}"));
+        let want: LawSpec = ron::from_str(text).unwrap();
+        assert_eq!(cfg.law, want, "{kind}");
+        assert!(cfg.identify.is_some(), "{kind}");
+    }
+    for hardening in ["Linear", "Power", "Voce", "Swift", "Table"] {
+        assert!(
+            LAW_TEMPLATES.iter().any(|(_, t)| t.contains(hardening)),
+            "{hardening}"
+        );
+    }
+    assert!(
+        law_template("hooke")
+            .unwrap_err()
+            .to_string()
+            .contains("plastic-voce")
+    );
+}
