@@ -8,6 +8,7 @@
 
 mod design;
 mod identify;
+mod law;
 pub mod tip;
 
 use std::path::{Path, PathBuf};
@@ -17,7 +18,6 @@ use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
 use indentify_contact::{
     ContactKind, HistorySegment, Kinematics, LoadHistory, Model, Punch, Schedule, SolverOptions,
 };
-use indentify_laws::{LAW_NAMES, Law, LawError, law_by_name};
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
 
@@ -30,6 +30,7 @@ pub use identify::{
     BfgsStartName, IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName,
     fixed_item, name_value,
 };
+pub use law::{BuiltLaw, LawSpec, law_forms, solver_law, spec_text};
 
 /// A whole simulation: what `indentify simulate` reads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -544,133 +545,6 @@ impl Mesher {
     }
 }
 
-/// The law and its parameters; field names are the laws' [`indentify_laws::ParamInfo`]
-/// names, so `law.E`, `law.nu`, `law.eta`, `law.K`, `law.m`, `law.sY` in configs and `--set`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename = "law")]
-pub enum LawSpec {
-    /// Linear isotropic elasticity `[E, nu]`.
-    Elastic {
-        /// Young's modulus (MPa).
-        #[serde(rename = "E")]
-        e: f64,
-        /// Poisson's ratio.
-        nu: f64,
-    },
-    /// Maxwell viscoelasticity `[E, nu, eta]`: `g = P sigma / eta`.
-    Maxwell {
-        /// Young's modulus (MPa).
-        #[serde(rename = "E")]
-        e: f64,
-        /// Poisson's ratio.
-        nu: f64,
-        /// Viscosity (MPa s).
-        eta: f64,
-    },
-    /// Norton-Hoff viscoplasticity with yield `[E, nu, K, m, sY]`.
-    NortonHoff {
-        /// Young's modulus (MPa).
-        #[serde(rename = "E")]
-        e: f64,
-        /// Poisson's ratio.
-        nu: f64,
-        /// Viscous resistance (MPa s^(1/m)).
-        #[serde(rename = "K")]
-        k: f64,
-        /// Rate exponent.
-        m: f64,
-        /// Yield stress (MPa).
-        #[serde(rename = "sY")]
-        s_y: f64,
-    },
-}
-
-impl LawSpec {
-    /// The law's name as in `indentify_laws` (`elastic`, `maxwell`, `norton-hoff`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            LawSpec::Elastic { .. } => "elastic",
-            LawSpec::Maxwell { .. } => "maxwell",
-            LawSpec::NortonHoff { .. } => "norton-hoff",
-        }
-    }
-
-    /// The variant's name in configs (`Elastic`, `Maxwell`, `NortonHoff`).
-    pub fn variant(&self) -> &'static str {
-        match self {
-            LawSpec::Elastic { .. } => "Elastic",
-            LawSpec::Maxwell { .. } => "Maxwell",
-            LawSpec::NortonHoff { .. } => "NortonHoff",
-        }
-    }
-
-    /// `(name, value)` of every parameter, in the config's field order.
-    pub fn named_params(&self) -> Vec<(&'static str, f64)> {
-        match *self {
-            LawSpec::Elastic { e, nu } => vec![("E", e), ("nu", nu)],
-            LawSpec::Maxwell { e, nu, eta } => vec![("E", e), ("nu", nu), ("eta", eta)],
-            LawSpec::NortonHoff { e, nu, k, m, s_y } => {
-                vec![("E", e), ("nu", nu), ("K", k), ("m", m), ("sY", s_y)]
-            }
-        }
-    }
-
-    /// The library law and the parameter vector in the order of its `params()`, checked
-    /// against the admissible ranges.
-    ///
-    /// # Errors
-    /// A law this build does not provide, a parameter name the library does not know, or a
-    /// value outside its range (`law.nu = 0.5 is not allowed: expected a value in (-1, 0.5)`).
-    pub fn build(&self) -> Result<(&'static dyn Law, Vec<f64>)> {
-        let law = library_law(self.name())?;
-        let given = self.named_params();
-        let params = law
-            .params()
-            .iter()
-            .map(|info| {
-                given
-                    .iter()
-                    .find(|(n, _)| *n == info.name)
-                    .map(|&(_, v)| v)
-                    .ok_or_else(|| {
-                        anyhow!(
-                            "law `{}` of indentify_laws expects a parameter `{}` that the \
-                             configuration does not have (it has {})",
-                            law.name(),
-                            info.name,
-                            names(given.iter().map(|(n, _)| *n))
-                        )
-                    })
-            })
-            .collect::<Result<Vec<f64>>>()?;
-        match law.check_params(&params) {
-            Ok(()) => Ok((law, params)),
-            Err(LawError::Parameter { name, value, .. }) => {
-                let info = law.params().iter().find(|i| i.name == name);
-                let (range, what) = info.map_or_else(
-                    || (String::new(), String::new()),
-                    |i| (i.range_text(), format!(" ({}, {})", i.description, i.unit)),
-                );
-                bail!("law.{name} = {value} is not allowed: expected a value in {range}{what}")
-            }
-            Err(e) => Err(e.into()),
-        }
-    }
-}
-
-/// The `indentify_laws` law called `name`.
-///
-/// # Errors
-/// A name the library does not register (a CLI variant without a library law).
-pub fn library_law(name: &str) -> Result<&'static dyn Law> {
-    law_by_name(name).ok_or_else(|| {
-        anyhow!(
-            "law `{name}` is not available in indentify_laws (available: {})",
-            LAW_NAMES.join(", ")
-        )
-    })
-}
-
 /// The punch's history: consecutive piecewise-linear segments from `t = 0`, `h = 0`,
 /// each prescribing the depth `(duration, depth, steps)` or the force `(duration, force,
 /// steps)` (load control, docs/theory.md §13; `simulate` only for now).
@@ -834,23 +708,22 @@ impl Reference {
     /// in 1 s, 30 steps per segment.
     pub fn config(&self) -> Config {
         let law = match self {
-            Reference::R0Elastic => LawSpec::Elastic {
-                e: 20000.0,
-                nu: 0.3,
-            },
-            Reference::R1Maxwell => LawSpec::Maxwell {
-                e: 20000.0,
-                nu: 0.3,
-                eta: 30000.0,
-            },
-            Reference::R2NortonHoff => LawSpec::NortonHoff {
-                e: 1e5,
-                nu: 0.3,
-                k: 1500.0,
-                m: 5.0,
-                s_y: 500.0,
-            },
-        };
+            Reference::R0Elastic => LawSpec::numbers("Elastic", &[("E", 20000.0), ("nu", 0.3)]),
+            Reference::R1Maxwell => {
+                LawSpec::numbers("Maxwell", &[("E", 20000.0), ("nu", 0.3), ("eta", 30000.0)])
+            }
+            Reference::R2NortonHoff => LawSpec::numbers(
+                "NortonHoff",
+                &[
+                    ("E", 1e5),
+                    ("nu", 0.3),
+                    ("K", 1500.0),
+                    ("m", 5.0),
+                    ("sY", 500.0),
+                ],
+            ),
+        }
+        .expect("the reference laws are in the registry");
         let mesh = CylinderMesher::REFERENCE;
         Config {
             specimen: Specimen::Cylinder {
@@ -941,7 +814,7 @@ impl Config {
         }
         self.specimen.validate()?;
         self.punch.validate()?;
-        self.law.build()?;
+        self.law.material()?;
         if let Some(&(_, nu)) = self.law.named_params().iter().find(|(n, _)| *n == "nu") {
             if nu > NU_MAX {
                 bail!(
@@ -1123,7 +996,7 @@ impl Config {
             punch: t.punch.clone().unwrap_or_else(|| self.punch.clone()),
             contact: t.contact.unwrap_or(self.contact),
             kinematics: self.kinematics,
-            law: self.law,
+            law: self.law.clone(),
             history: t.history.clone(),
             data: t.data.clone(),
             solver: self.solver,
@@ -1848,7 +1721,8 @@ pub fn apply_sets(config: Config, sets: &[String]) -> Result<Config> {
         let (path, text) = set.split_once('=').ok_or_else(|| {
             anyhow!("--set `{set}` is not of the form key.path=value (e.g. --set law.E=25000)")
         })?;
-        set_scalar(&mut value, path.trim(), text.trim())
+        let path = law_set_path(&config.law, path.trim());
+        set_scalar(&mut value, &path, text.trim())
             .with_context(|| format!("cannot apply --set {set}"))?;
     }
     serde_json::from_value(value).map_err(|e| {
@@ -1857,6 +1731,19 @@ pub fn apply_sets(config: Config, sets: &[String]) -> Result<Config> {
             sets.join(" --set ")
         )
     })
+}
+
+/// `law.<parameter>` by the registry's parameter name (`law.n` -> `law.hardening.n`,
+/// `law.g2` -> `law.terms.1.g`); any other path unchanged.
+fn law_set_path(law: &LawSpec, path: &str) -> String {
+    let Some(rest) = path.strip_prefix("law.") else {
+        return path.to_string();
+    };
+    if rest.contains('.') || law.fields().iter().any(|(n, _)| n == rest) {
+        return path.to_string();
+    }
+    law.param_path(rest)
+        .map_or_else(|| path.to_string(), |p| format!("law.{p}"))
 }
 
 /// Replaces the scalar at dotted `path` of `root` by `text`, parsed like the old value.
@@ -2008,10 +1895,7 @@ mod tests {
         let c = set(r0(), "law.E=25000").unwrap();
         assert_eq!(
             c.law,
-            LawSpec::Elastic {
-                e: 25000.0,
-                nu: 0.3
-            }
+            LawSpec::numbers("Elastic", &[("E", 25000.0), ("nu", 0.3)]).unwrap()
         );
         let c = set(c, "specimen.nr=10").unwrap();
         assert!(matches!(c.specimen, Specimen::Cylinder { nr: 10, .. }));
@@ -2178,8 +2062,7 @@ mod tests {
         let names: Vec<_> = law.params().iter().map(|i| i.name).collect();
         assert_eq!(names, ["E", "nu"]);
         assert_eq!(p, [20000.0, 0.3]);
-        let e = LawSpec::Elastic { e: 1.0, nu: 0.5 }
-            .build()
+        let e = LawSpec::numbers("Elastic", &[("E", 1.0), ("nu", 0.5)])
             .unwrap_err()
             .to_string();
         assert!(e.contains("law.nu = 0.5") && e.contains("(-1, 0.5)"), "{e}");

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use indentify_contact::{DirectSolver, trapezoid};
 use indentify_identify::multiplicative_noise;
 
-use crate::config::{History, LawSpec, MethodName, ParamSetting, Reference, ScalingName, Specimen};
+use crate::config::{History, MethodName, ParamSetting, Reference, ScalingName, Specimen};
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::identify::prepare;
 use crate::output;
@@ -187,7 +187,7 @@ pub fn make_map(dir: &Path, o: &MapOptions) -> Result<MapFiles> {
         ],
     );
     crate::atomic::write(&base, text).kind(ErrorKind::Io)?;
-    debug_assert!(matches!(cfg.law, LawSpec::Maxwell { .. }));
+    debug_assert_eq!(cfg.law.variant(), "Maxwell");
     Ok(MapFiles {
         manifest: manifest_path,
         base,

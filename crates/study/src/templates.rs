@@ -8,9 +8,7 @@ use serde_json::Value;
 
 use indentify_contact::punch::AutoOptions;
 
-use crate::config::{
-    Config, DataSection, IdentifySection, LawSpec, ParamSetting, Reference, Specimen, library_law,
-};
+use crate::config::{Config, DataSection, IdentifySection, ParamSetting, Reference, Specimen};
 
 /// The annotated template of a reference problem.
 pub fn template(reference: Reference) -> String {
@@ -33,6 +31,92 @@ pub fn template(reference: Reference) -> String {
             ),
         ],
     )
+}
+
+/// The laws `indentify init` writes beyond the reference problems, by kind: J2 plasticity
+/// with each hardening form (and with a Norton rate), and a Prony series; each a law text
+/// the registry reads.
+pub const LAW_TEMPLATES: &[(&str, &str)] = &[
+    (
+        "plastic-linear",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Linear(H: 2000.0))",
+    ),
+    (
+        "plastic-power",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Power(n: 0.2))",
+    ),
+    (
+        "plastic-voce",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Voce(Q: 150.0, b: 40.0))",
+    ),
+    (
+        "plastic-swift",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Swift(eps0: 0.01, n: 0.2))",
+    ),
+    (
+        "plastic-table",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, \
+         hardening: Table(points: [(0.0, 300.0), (0.05, 360.0), (0.2, 420.0)]))",
+    ),
+    (
+        "plastic-norton",
+        "Plastic(E: 70000.0, nu: 0.3, sY: 300.0, hardening: Power(n: 0.2), \
+         rate: Norton(K: 200.0, m: 3.0))",
+    ),
+    (
+        "prony",
+        "Prony(E: 3000.0, nu: 0.35, terms: [(g: 0.3, tau: 0.1), (g: 0.2, tau: 1.0)])",
+    ),
+];
+
+/// The annotated template of the law `kind` of [`LAW_TEMPLATES`] on R1's specimen, cone and
+/// history, every parameter but nu identified from its law value within the law's range.
+///
+/// # Errors
+/// A kind not in [`LAW_TEMPLATES`] (listing them).
+pub fn law_template(kind: &str) -> anyhow::Result<String> {
+    let (_, text) = LAW_TEMPLATES
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "no template `{kind}`; templates: elastic, maxwell, norton-hoff, {}",
+                LAW_TEMPLATES
+                    .iter()
+                    .map(|(k, _)| *k)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })?;
+    let law: crate::config::LawSpec = ron::from_str(text)?;
+    let mut cfg = Reference::R1Maxwell.config();
+    let mut id = IdentifySection::default();
+    for (name, _) in law.named_params() {
+        let setting = if name == "nu" {
+            ParamSetting::Fixed { value: None }
+        } else {
+            ParamSetting::Free {
+                start: None,
+                lower: None,
+                upper: None,
+                scaling: None,
+            }
+        };
+        id.params.insert(name.to_string(), setting);
+    }
+    let summary = law.entry().summary;
+    cfg.law = law;
+    cfg.identify = Some(id);
+    Ok(annotated(
+        &cfg,
+        &[
+            format!("R1's specimen, cone and history with {summary}."),
+            format!(
+                "indentify configuration written by `indentify init {kind}`; check it with \
+                 `indentify check FILE.ron` (solving it needs the solver's internal-variable path)."
+            ),
+        ],
+    ))
 }
 
 /// What `init --data` knows of the record it writes a template for.
@@ -233,20 +317,20 @@ pub fn annotated(cfg: &Config, header: &[String]) -> String {
         cfg.kinematics
     ));
 
-    let forms: Vec<String> = Reference::ALL
-        .iter()
-        .map(|r| {
-            let l = r.config().law;
-            let names: Vec<&str> = l.named_params().iter().map(|(n, _)| *n).collect();
-            format!("{}({})", l.variant(), names.join(", "))
-        })
-        .collect();
-    out.push_str(&format!(
-        "    // Constitutive law, one of {}.\n    law: {}(\n",
-        forms.join(", "),
-        cfg.law.variant()
-    ));
-    block(&mut out, "        ", &law_lines(&cfg.law));
+    let forms = crate::config::law_forms();
+    let mut line = String::from("    // Constitutive law, one of");
+    for (k, form) in forms.iter().enumerate() {
+        let sep = if k + 1 == forms.len() { "." } else { "," };
+        if line.len() + form.len() + 2 > 100 {
+            out.push_str(&line);
+            out.push('\n');
+            line = String::from("    //");
+        }
+        line.push_str(&format!(" {form}{sep}"));
+    }
+    out.push_str(&line);
+    out.push_str(&format!("\n    law: {}(\n", cfg.law.variant()));
+    block(&mut out, "        ", &cfg.law.lines());
     out.push_str("    ),\n");
 
     if let Some(history) = &cfg.history {
@@ -464,9 +548,7 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
          \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
          \x20   identify: (\n        params: {\n",
     );
-    let infos = library_law(cfg.law.name())
-        .map(|l| l.params())
-        .unwrap_or(&[]);
+    let infos = cfg.law.param_infos();
     let mut listed: Vec<&str> = cfg
         .law
         .named_params()
@@ -621,20 +703,6 @@ fn data_block(d: &DataSection) -> String {
         d.substeps
     ));
     out
-}
-
-fn law_lines(law: &LawSpec) -> Vec<(String, String)> {
-    let infos = library_law(law.name()).map(|l| l.params()).unwrap_or(&[]);
-    law.named_params()
-        .iter()
-        .map(|(name, v)| {
-            let note = infos.iter().find(|i| i.name == *name).map_or_else(
-                || "(no metadata in indentify_laws)".to_string(),
-                |i| format!("{} ({}), in {}", i.description, i.unit, i.range_text()),
-            );
-            (format!("{name}: {},", num(*v)), note)
-        })
-        .collect()
 }
 
 /// Appends `indent + code  // comment` lines with the comments aligned.

@@ -8,7 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
 use indentify_study::templates::{
-    DataTemplate, data_path_for, data_template, parse_tip, template, tip_from_metadata,
+    DataTemplate, data_path_for, data_template, law_template, parse_tip, template,
+    tip_from_metadata,
 };
 
 /// Arguments of `indentify init`.
@@ -50,6 +51,20 @@ pub enum LawKind {
     Maxwell,
     /// Norton-Hoff viscoplasticity with a yield stress (R2).
     NortonHoff,
+    /// J2 plasticity, linear hardening (R1's cone and history).
+    PlasticLinear,
+    /// J2 plasticity, power-law hardening (Dao's form).
+    PlasticPower,
+    /// J2 plasticity, Voce saturation hardening.
+    PlasticVoce,
+    /// J2 plasticity, Swift hardening.
+    PlasticSwift,
+    /// J2 plasticity, a tabulated hardening curve.
+    PlasticTable,
+    /// J2 plasticity, power-law hardening and a Norton overstress rate.
+    PlasticNorton,
+    /// A Prony series (generalized Maxwell in shear).
+    Prony,
 }
 
 impl LawKind {
@@ -58,7 +73,15 @@ impl LawKind {
         match self {
             LawKind::Elastic => Reference::R0Elastic,
             LawKind::Maxwell => Reference::R1Maxwell,
-            LawKind::NortonHoff => Reference::R2NortonHoff,
+            _ => Reference::R2NortonHoff,
+        }
+    }
+
+    /// The registry template's kind (`plastic-power`), for a law beyond R0-R2.
+    pub fn registry_kind(self) -> Option<String> {
+        match self {
+            LawKind::Elastic | LawKind::Maxwell | LawKind::NortonHoff => None,
+            k => k.to_possible_value().map(|v| v.get_name().to_string()),
         }
     }
 }
@@ -69,6 +92,14 @@ impl LawKind {
 /// An unreadable record, an unwritable `--out`, a closed standard output.
 pub fn run(args: &Args) -> Result<()> {
     let reference = args.law.reference();
+    if let Some(kind) = args.law.registry_kind() {
+        if args.data.is_some() {
+            bail!(
+                "`init {kind} --data` is not available yet: write `init norton-hoff --data ...` \
+                 and replace its `law` by the one of `init {kind}`"
+            );
+        }
+    }
     let text = match &args.data {
         Some(file) => {
             let mut d = inspect(file, args)?;
@@ -82,7 +113,10 @@ pub fn run(args: &Args) -> Result<()> {
             }
             data_template(reference, &d)
         }
-        None => template(reference),
+        None => match args.law.registry_kind() {
+            Some(kind) => law_template(&kind)?,
+            None => template(reference),
+        },
     };
     match &args.out {
         Some(out) => {

@@ -16,10 +16,10 @@ use indentify_identify::{
     BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization,
     Scaling, StopCriteria,
 };
-use indentify_laws::Law;
+use indentify_laws::Material;
 use serde::{Deserialize, Serialize};
 
-use super::LawSpec;
+use super::{LawSpec, solver_law};
 
 /// The `identify: (...)` section.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -403,7 +403,7 @@ impl IdentifySection {
     /// parameter both in `--free` and `--fixed`, a `--start` for a held parameter.
     pub fn settings(
         section: Option<&IdentifySection>,
-        law: &dyn Law,
+        law: &dyn Material,
         overrides: &Overrides,
     ) -> Result<Vec<(&'static str, ParamSetting)>> {
         let names: Vec<&'static str> = law.params().iter().map(|i| i.name).collect();
@@ -497,14 +497,27 @@ impl IdentifySection {
         law: &LawSpec,
         overrides: &Overrides,
     ) -> Result<IdentifyConfig> {
-        let (lib_law, values) = law.build()?;
+        IdentifySection::resolve_with(section, law, overrides, true)
+    }
+
+    /// [`IdentifySection::resolve`]; without `need_solver`, a material today's solver cannot
+    /// take (internal variables, see [`solver_law`]) is checked by name and range only.
+    fn resolve_with(
+        section: Option<&IdentifySection>,
+        law: &LawSpec,
+        overrides: &Overrides,
+        need_solver: bool,
+    ) -> Result<IdentifyConfig> {
+        let built = law.material()?;
+        let mat = built.material.as_ref();
+        let values = &built.params;
         let defaults = IdentifySection::default();
         let s = section.unwrap_or(&defaults);
         s.validate_options()?;
-        let settings = IdentifySection::settings(section, lib_law, overrides)?;
+        let settings = IdentifySection::settings(section, mat, overrides)?;
         let specs: Vec<ParamSpec> = settings
             .iter()
-            .zip(&values)
+            .zip(values)
             .map(|((name, setting), &law_value)| match *setting {
                 ParamSetting::Free {
                     start,
@@ -512,7 +525,7 @@ impl IdentifySection {
                     upper,
                     scaling,
                 } => {
-                    let min = info_min(lib_law, name);
+                    let min = info_min(mat, name);
                     let auto = if lower.unwrap_or(min) >= 0.0 {
                         ScalingName::Log
                     } else {
@@ -537,18 +550,14 @@ impl IdentifySection {
                 },
             })
             .collect();
-        Parameterization::new(lib_law, &specs).map_err(|e| {
-            let field = match &e {
-                indentify_identify::IdentifyError::NothingFree => "identify.params".to_string(),
-                _ => specs
-                    .iter()
-                    .find(|p| e.to_string().contains(&format!("`{}`", p.name)))
-                    .map_or("identify.params".to_string(), |p| {
-                        format!("identify.params.{}", p.name)
-                    }),
-            };
-            anyhow!(e).context(format!("invalid identification setting `{field}`"))
-        })?;
+        let lib_law = match solver_law(&built) {
+            Ok((l, _)) => Some(l),
+            Err(e) if need_solver => return Err(e),
+            Err(_) => None,
+        };
+        if let Some(lib_law) = lib_law {
+            IdentifySection::check_specs(lib_law, &specs)?;
+        }
         let mut stop = s.stop.criteria();
         if let Some(n) = overrides.max_iterations {
             stop.max_iterations = n;
@@ -569,6 +578,24 @@ impl IdentifySection {
             },
             cancel: Default::default(),
         })
+    }
+
+    /// The identification library's check of the parameter specifications (starts within
+    /// bounds, bounds within the law's range, something free), naming the parameter.
+    fn check_specs(lib_law: &dyn indentify_laws::Law, specs: &[ParamSpec]) -> Result<()> {
+        Parameterization::new(lib_law, specs).map_err(|e| {
+            let field = match &e {
+                indentify_identify::IdentifyError::NothingFree => "identify.params".to_string(),
+                _ => specs
+                    .iter()
+                    .find(|p| e.to_string().contains(&format!("`{}`", p.name)))
+                    .map_or("identify.params".to_string(), |p| {
+                        format!("identify.params.{}", p.name)
+                    }),
+            };
+            anyhow!(e).context(format!("invalid identification setting `{field}`"))
+        })?;
+        Ok(())
     }
 
     /// Range checks of the options (the library repeats them; here they name the field).
@@ -632,14 +659,14 @@ impl IdentifySection {
     /// # Errors
     /// As [`IdentifySection::resolve`] without overrides.
     pub fn validate(&self, law: &LawSpec) -> Result<()> {
-        IdentifySection::resolve(Some(self), law, &Overrides::default())
+        IdentifySection::resolve_with(Some(self), law, &Overrides::default(), false)
             .map(|_| ())
             .context("invalid `identify` section")
     }
 }
 
 /// The admissible minimum of parameter `name` of `law`.
-fn info_min(law: &dyn Law, name: &str) -> f64 {
+fn info_min(law: &dyn Material, name: &str) -> f64 {
     law.params()
         .iter()
         .find(|i| i.name == name)
