@@ -5,8 +5,9 @@
 //! points, before and again after the fit: back to back), then the fit itself (the
 //! optimizer and its final identifiability summary, as `indentify identify` runs it,
 //! without the discretization check or the report), and prints the fit's wall time over
-//! the median forward run with the iterations, the forward, adjoint and sensitivity solves
-//! and the stop reason. `--json FILE` keeps the numbers and the fitted parameters with
+//! the median forward run with the iterations, the forward, adjoint and sensitivity solves,
+//! the rejected Levenberg-Marquardt trials (forward solves spent without progress) and the
+//! stop reason. `--json FILE` keeps the numbers and the fitted parameters with
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`.
@@ -82,18 +83,19 @@ pub fn run(args: &[String]) -> Result<()> {
         .unwrap_or_default();
     let mut results = Vec::new();
     println!(
-        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | adjoint | sensitivity | stop |"
+        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | stop |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
         let m = measure(&root, case, rounds)?;
         println!(
-            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} |",
+            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
             m["fit_s"].as_f64().unwrap_or(f64::NAN),
             m["ratio"].as_f64().unwrap_or(f64::NAN),
             m["iterations"],
             m["forward_solves"],
+            m["rejected_trials"],
             m["adjoint_solves"],
             m["sensitivity_solves"],
             m["stop"].as_str().unwrap_or("")
@@ -229,6 +231,7 @@ fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
         "forward_solves": r.forward_solves,
         "adjoint_solves": r.adjoint_solves,
         "sensitivity_solves": r.sensitivity_solves,
+        "rejected_trials": r.rejected_trials,
         "stop": r.stop_reason.to_string(),
         "converged": r.stop_reason.is_converged(),
         "cost": r.cost,
@@ -243,9 +246,9 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| case | fit / forward before | after | iterations before | after |"
+        "| case | fit / forward before | after | iterations before | after | forward solves before | after | rejected before | after | sensitivity before | after |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     let find = |case: &str| -> Option<&Value> {
         before
             .as_array()
@@ -256,11 +259,17 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
         if let Some(b) = find(case) {
             let _ = writeln!(
                 s,
-                "| {case} | {:.1} | {:.1} | {} | {} |",
+                "| {case} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 b["ratio"].as_f64().unwrap_or(f64::NAN),
                 a["ratio"].as_f64().unwrap_or(f64::NAN),
                 b["iterations"],
-                a["iterations"]
+                a["iterations"],
+                b["forward_solves"],
+                a["forward_solves"],
+                b["rejected_trials"],
+                a["rejected_trials"],
+                b["sensitivity_solves"],
+                a["sensitivity_solves"]
             );
         }
     }

@@ -436,6 +436,9 @@ pub struct IdentifyResult {
     pub adjoint_solves: usize,
     /// Sensitivity solves (LM, identifiability).
     pub sensitivity_solves: usize,
+    /// Levenberg-Marquardt trials that did not decrease the cost (each one forward solve
+    /// spent without progress; 0 for the other methods; this run only, not across resumes).
+    pub rejected_trials: usize,
     /// Requests (cost, gradient, forces, Jacobian) answered by the evaluation cache.
     pub cache_hits: usize,
     /// Distinct parameter points requested by this run (excluding a resumed run's past).
@@ -602,6 +605,8 @@ pub(crate) struct Monitor<'a, 'p> {
     pub reason: RefCell<Option<StopReason>>,
     /// BFGS updates skipped because the curvature condition failed.
     pub skipped_updates: Cell<usize>,
+    /// Levenberg-Marquardt trials that did not decrease the cost (one forward run each).
+    pub rejected_trials: Cell<usize>,
     /// The run's stop request.
     cancel: Cancel,
     /// [`StopCriteria::step_sigma`] when the method honours it (Levenberg-Marquardt).
@@ -916,6 +921,7 @@ fn run(
         prev_cost: Cell::new(f64::NAN),
         reason: RefCell::new(None),
         skipped_updates: Cell::new(0),
+        rejected_trials: Cell::new(0),
         cancel: config.cancel.clone(),
         step_sigma: config
             .stop
@@ -957,6 +963,7 @@ fn run(
     {
         reason = StopReason::RoundOff;
     }
+    let monitor_rejected = monitor.rejected_trials.get();
     let history = monitor.history.into_inner();
     let param = &objective.param;
     let identifiability = if config.identifiability {
@@ -1063,6 +1070,7 @@ fn run(
         adjoint_solves: offset_sum(resume_from, |r| r.adjoint_solves) + counts.adjoint,
         sensitivity_solves: offset_sum(resume_from, |r| r.sensitivity_solves)
             + counts.sensitivities,
+        rejected_trials: monitor_rejected,
         cache_hits: counts.cache_hits,
         distinct_points: counts.distinct_points,
         stop_reason: reason,
