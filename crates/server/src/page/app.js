@@ -303,6 +303,12 @@ function openRun(id) {
   es.addEventListener('status', (ev) => {
     const m = JSON.parse(ev.data);
     renderProgress(m);
+    // how late an iteration reaches the page: an upper bound, as the run's clock starts
+    // after `started` (same machine, same wall clock); read by the browser test
+    const p = m.progress || {};
+    if (m.status === 'running' && typeof p.cost === 'number' && m.started) {
+      (window.progressLags = window.progressLags || []).push(Date.now() / 1000 - (m.started + p.elapsed));
+    }
     if (['done', 'failed', 'cancelled'].includes(m.status)) {
       es.close();
       if (state.source === es) state.source = null;
