@@ -176,6 +176,13 @@ pub fn profile_side(
     let mut out: Vec<ProfilePoint> = Vec::new();
     let mut from = c_opt.to_vec();
     for i in 1..=points {
+        if config.cancel.is_raised() {
+            // a stop request ends the side after the re-fit in progress
+            return Ok((
+                out,
+                SideEnd::Failed("interrupted (a stop was asked)".into()),
+            ));
+        }
         let y = (y0 + i as f64 * step).clamp(lo, hi);
         if out.last().map_or(y == y0, |p| p.y == y) {
             return Ok((out, SideEnd::Bound));

@@ -111,6 +111,7 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/templates/{law}", get(template))
         .route("/api/records", get(list_records).post(upload))
         .route("/api/records/{id}", get(get_record))
+        .route("/api/tips", get(list_tips).post(upload_tip))
         .route("/api/runs", get(list_runs).post(submit))
         .route("/api/runs/{id}", get(get_run).delete(cancel))
         .route("/api/runs/{id}/events", get(events))
@@ -406,6 +407,25 @@ async fn list_records(State(st): Shared) -> Result<axum::Json<Value>, ApiError> 
     let runs = Arc::clone(&st.runs);
     let list = blocking(move || Ok(records::list(runs.workspace()))).await?;
     Ok(axum::Json(json!({ "records": list })))
+}
+
+async fn list_tips(State(st): Shared) -> Result<axum::Json<Value>, ApiError> {
+    let runs = Arc::clone(&st.runs);
+    let list = blocking(move || Ok(crate::tips::list(runs.workspace()))).await?;
+    Ok(axum::Json(json!({ "tips": list })))
+}
+
+/// `POST /api/tips?name=TIP.ron`: a calibrated tip file (`indentify calibrate`'s RON).
+async fn upload_tip(
+    State(st): Shared,
+    Query(q): Query<UploadQuery>,
+    body: Result<Bytes, axum::extract::rejection::BytesRejection>,
+) -> Result<(StatusCode, axum::Json<Value>), ApiError> {
+    let body = body.map_err(|e| ApiError::new(e.status(), "data", vec![e.body_text()]))?;
+    let name = q.name.unwrap_or_else(|| "tip.ron".into());
+    let runs = Arc::clone(&st.runs);
+    let info = blocking(move || crate::tips::store(runs.workspace(), &name, &body)).await?;
+    Ok((StatusCode::CREATED, axum::Json(info)))
 }
 
 #[derive(Deserialize)]

@@ -12,6 +12,7 @@ use indentify_study::batch::{self, BatchObserver, BatchOptions, IndentStatus};
 use indentify_study::config::{Config, TestSpec};
 use indentify_study::costmap::{self, MapOptions, Through};
 use indentify_study::design::{self, DesignOptions};
+use indentify_study::explore::StartsOptions;
 use indentify_study::identify::IdentifyOptions;
 use indentify_study::{ConfigSource, ProfileSettings};
 use serde_json::{Value, json};
@@ -19,7 +20,8 @@ use serde_json::{Value, json};
 use crate::api::ApiError;
 use crate::records;
 use crate::runs::{
-    End, ErrorBody, MAX_MAP_GRID, RecordRef, Run, RunRequest, Status, TestPick, error_body,
+    End, ErrorBody, MAX_MAP_GRID, MAX_STARTS, RecordRef, Run, RunRequest, Status, TestPick,
+    error_body,
 };
 use crate::workspace::{Workspace, normalize};
 
@@ -39,16 +41,35 @@ pub(crate) struct Prepared {
     pub(crate) cli: String,
 }
 
-/// Why a running `command` cannot be stopped (the answer of a refused `DELETE`).
-pub(crate) fn why_not_cancellable(command: &str) -> &'static str {
+/// When a running `command` stops after a `DELETE` (the answer's `message`).
+pub(crate) fn when_it_stops(command: &str) -> &'static str {
     match command {
+        "identify" => "stopping after the iteration (or profile re-fits) in progress",
+        "batch" => "stopping after the indents in progress",
+        "design" => "stopping after the candidates in progress",
+        "map" => "stopping after the grid points (or fit iteration) in progress",
         "simulate" => {
-            "a simulation's steps run inside the direct solver, whose step loop takes no stop \
-             request (only an identification's iterations and a batch's indents do)"
+            "the simulation is one forward run inside the direct solver, which takes no stop \
+             request: the run ends as cancelled when that forward run is over"
         }
-        "design" => "the design evaluates its candidates without a stop request",
-        "map" => "the cost map evaluates its grid without a stop request",
-        _ => "it takes a fraction of a second",
+        _ => "the analysis ends as cancelled when its pass over the record is over",
+    }
+}
+
+/// The message of a run that ended after a stop request without stopping itself.
+pub(crate) fn cancelled_message(command: &str, ended: Status, error: Option<&ErrorBody>) -> String {
+    let kept = match (command, ended) {
+        ("simulate", Status::Done) => "the forward run in progress finished; its curve is kept",
+        ("analyze", Status::Done) => "the analysis in progress finished; its tables are kept",
+        ("design" | "map", _) => "stopped before every evaluation was done; nothing written",
+        _ => "its files are kept",
+    };
+    match error {
+        Some(e) if !e.messages.iter().any(|m| m.contains("interrupted")) => format!(
+            "cancelled ({kept}); it had also failed: {}",
+            e.messages.join(": ")
+        ),
+        _ => format!("cancelled: {kept}"),
     }
 }
 
@@ -395,7 +416,7 @@ pub(crate) fn run_design(run: &Run) -> Result<End, ErrorBody> {
     let mut opts = DesignOptions::new(config_of(run));
     opts.sets = run.spec.sets.clone();
     opts.out = Some(run.dir.clone());
-    let d = design::run(&opts).map_err(|e| error_body(&e))?;
+    let d = design::run_cancellable(&opts, &run.cancel).map_err(|e| error_body(&e))?;
     let ranked: Vec<Value> = d
         .rank_d
         .iter()
@@ -527,6 +548,39 @@ fn relative(dir: &Path, p: &Path) -> Option<String> {
     p.strip_prefix(dir)
         .ok()
         .map(|r| r.to_string_lossy().replace('\\', "/"))
+}
+
+/// The multi-start options of a request: `starts` only for identify, 1 to [`MAX_STARTS`];
+/// `seed` only with `starts` (as the CLI's `--seed`).
+pub(crate) fn check_starts(req: &RunRequest) -> Result<(), ApiError> {
+    match (req.starts, req.seed) {
+        (None, None) => Ok(()),
+        (None, Some(_)) => Err(bad(
+            "config",
+            "seed needs starts: it seeds the multi-start's Latin-hypercube starts".into(),
+        )),
+        (Some(_), _) if req.command != "identify" => Err(bad(
+            "config",
+            format!(
+                "starts is an option of identify, not of {} (a multi-start of the fit)",
+                req.command
+            ),
+        )),
+        (Some(n), _) if !(1..=MAX_STARTS).contains(&n) => Err(bad(
+            "config",
+            format!(
+                "starts = {n} is not allowed here: expected 1 to {MAX_STARTS} starts (`indentify \
+                 identify --starts` takes up to 10000)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Multi-start settings of a request (`--starts N --seed S`).
+pub(crate) fn starts(req: &RunRequest) -> Option<StartsOptions> {
+    req.starts
+        .map(|n| StartsOptions::new(n, req.seed.unwrap_or(1)))
 }
 
 /// Profile settings of a request (`--profiles`).

@@ -20,6 +20,7 @@ mod jobs;
 mod page;
 pub mod records;
 pub mod runs;
+pub mod tips;
 pub mod workspace;
 
 use std::net::{IpAddr, SocketAddr};

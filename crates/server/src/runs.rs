@@ -33,8 +33,12 @@ pub fn now() -> f64 {
 /// The commands a run may execute.
 pub const COMMANDS: [&str; 6] = ["identify", "simulate", "analyze", "design", "batch", "map"];
 
-/// The commands a `DELETE` can stop while they run (their pipelines take a [`Cancel`]).
-pub const CANCELLABLE: [&str; 2] = ["identify", "batch"];
+/// The commands a `DELETE` can stop while they run: every one. An identification stops
+/// after its iteration in progress (or its profile re-fits in progress), a batch after its
+/// indents in progress, a design after its candidates in progress, a map after its grid
+/// points in progress; a simulation and an analysis (one forward run; one pass over the
+/// record's unloadings) end as cancelled when that pass is over.
+pub const CANCELLABLE: [&str; 6] = COMMANDS;
 
 /// The file of a run's folder that `GET /api/runs/{id}` answers as `result`.
 pub fn result_file(command: &str) -> &'static str {
@@ -180,6 +184,13 @@ pub struct RunRequest {
     /// identify: profile-likelihood intervals of every free parameter (`--profiles`).
     #[serde(default)]
     pub profiles: bool,
+    /// identify: a multi-start of this many Latin-hypercube starts (`--starts`, 1 to
+    /// [`MAX_STARTS`] here); result.json then has `multistart` (the distinct minima).
+    #[serde(default)]
+    pub starts: Option<usize>,
+    /// identify: the multi-start's seed (`--seed`, default 1; needs `starts`).
+    #[serde(default)]
+    pub seed: Option<u64>,
     /// analyze: the tip (`berkovich`, `cone:DEG`, `sphere:UM`, `flat:UM`; `--tip`).
     #[serde(default)]
     pub tip: Option<String>,
@@ -214,6 +225,9 @@ pub struct TestPick {
     #[serde(default)]
     pub weight: Option<f64>,
 }
+
+/// The most starts of a multi-start the server runs (the CLI allows 10,000).
+pub const MAX_STARTS: usize = 200;
 
 /// The largest map the server computes (points per side; the CLI allows more).
 pub const MAX_MAP_GRID: usize = 41;
@@ -274,6 +288,9 @@ impl Run {
     /// Changes the metadata, publishes the snapshot and writes status.json (at most once a
     /// second unless `force` or the run ended).
     pub(crate) fn update(&self, force: bool, f: impl FnOnce(&mut RunMeta)) {
+        // `saved` first: two threads' updates (a worker's final one and a DELETE's) reach
+        // status.json and the events in the order they changed the metadata
+        let mut saved = lock(&self.saved);
         let snapshot = {
             let mut m = lock(&self.meta);
             f(&mut m);
@@ -281,7 +298,6 @@ impl Run {
         };
         let text = serde_json::to_string(&snapshot).unwrap_or_default();
         let _ = self.events.send(Arc::new(text.clone()));
-        let mut saved = lock(&self.saved);
         let due = force
             || snapshot.status.is_final()
             || saved.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0);
@@ -433,6 +449,7 @@ impl Runs {
             ));
         }
         let user_sets = sets_of(req.sets.as_ref())?;
+        jobs::check_starts(&req)?;
         let id = self.new_id();
         let dir = self
             .ws
@@ -627,18 +644,22 @@ impl Runs {
 
     /// Refuses a configuration whose data files are not records of this workspace.
     fn check_files(&self, cfg: &Config, dir: &Path) -> Result<(), ApiError> {
-        // a calibrated tip names a file the server would read: refused (no tip uploads yet)
+        // a calibrated tip: only a tip uploaded to this workspace (POST /api/tips)
         let punches = std::iter::once(&cfg.punch)
             .chain(cfg.tests.iter().flatten().filter_map(|t| t.punch.as_ref()));
         for p in punches {
             if let indentify_study::Punch::Calibrated { file, .. } = p {
-                return Err(ApiError::bad_request(
-                    "config",
-                    vec![format!(
-                        "punch: Calibrated(file: \"{file}\") is not served: the server reads \
-                         no tip files; run it with the CLI (indentify simulate/identify)"
-                    )],
-                ));
+                if !self.ws.is_tip_file(&normalize(&dir.join(file))) {
+                    return Err(ApiError::bad_request(
+                        "config",
+                        vec![format!(
+                            "punch: Calibrated(file: \"{file}\") is not a tip of this \
+                             workspace: upload the tip file (POST /api/tips) and name it as \
+                             its answer's `punch` says (\"{}\")",
+                            crate::tips::relative_path("ID")
+                        )],
+                    ));
+                }
             }
         }
         let mut files: Vec<&str> = cfg.data.iter().map(|d| d.file.as_str()).collect();
@@ -661,12 +682,11 @@ impl Runs {
         Ok(())
     }
 
-    /// Cancels run `id`: a queued run at once, a running identification after its current
-    /// iteration.
+    /// Cancels run `id`: a queued run at once, a running one at its next stop point (see
+    /// [`CANCELLABLE`]).
     ///
     /// # Errors
-    /// An unknown run (404); a finished run, or a running simulation, which cannot be
-    /// stopped midway (409). Nothing is deleted in any case.
+    /// An unknown run (404); a finished run (409). Nothing is deleted in any case.
     pub fn cancel(&self, id: &str) -> Result<RunMeta, ApiError> {
         let run = self.get(id)?;
         let removed = {
@@ -686,28 +706,17 @@ impl Runs {
         }
         let meta = run.meta();
         match meta.status {
-            Status::Running if CANCELLABLE.contains(&meta.command.as_str()) => {
+            Status::Running => {
                 run.cancel.raise();
                 run.update(true, |m| {
-                    m.message = Some(if m.command == "batch" {
-                        "cancel asked: stopping after the indents in progress".into()
-                    } else {
-                        "cancel asked: stopping after the iteration in progress".into()
-                    });
+                    // the run may have ended in between: its final message stays
+                    if m.status == Status::Running {
+                        m.message =
+                            Some(format!("cancel asked: {}", jobs::when_it_stops(&m.command)));
+                    }
                 });
                 Ok(run.meta())
             }
-            Status::Running => Err(ApiError::new(
-                StatusCode::CONFLICT,
-                "state",
-                vec![format!(
-                    "run `{id}` is a {} run, which cannot be stopped midway: it finishes on \
-                     its own (only {} runs stop on request: {})",
-                    meta.command,
-                    CANCELLABLE.join(" and "),
-                    jobs::why_not_cancellable(&meta.command)
-                )],
-            )),
             s => Err(ApiError::new(
                 StatusCode::CONFLICT,
                 "state",
@@ -810,6 +819,18 @@ fn execute(run: &Arc<Run>) {
             )
         }
     };
+    // a stop request that the pipeline could only honour at its end (simulate, analyze) or
+    // that ended it with an `interrupted` error (design, map): the run is cancelled, and
+    // whatever it wrote is kept
+    let (status, error, message) = if run.cancel.is_raised() && status != Status::Cancelled {
+        (
+            Status::Cancelled,
+            None,
+            Some(jobs::cancelled_message(&command, status, error.as_ref())),
+        )
+    } else {
+        (status, error, message)
+    };
     run.update(true, |m| {
         m.status = status;
         m.finished = Some(now());
@@ -880,6 +901,7 @@ fn run_identify(run: &Run) -> Result<End, ErrorBody> {
     opts.refine = !run.spec.req.no_refine;
     opts.overrides.max_iterations = run.spec.req.max_iter;
     opts.profiles = jobs::profiles(&run.spec.req);
+    opts.starts = jobs::starts(&run.spec.req);
     let mut web = Web {
         run,
         start: Instant::now(),
@@ -1034,6 +1056,9 @@ fn cli_line(req: &RunRequest, run_sets: &[String]) -> String {
         }
         if req.profiles {
             cli.push_str(" --profiles");
+        }
+        if let Some(n) = req.starts {
+            cli.push_str(&format!(" --starts {n} --seed {}", req.seed.unwrap_or(1)));
         }
     }
     cli

@@ -19,7 +19,7 @@ impl Workspace {
     /// # Errors
     /// A folder that cannot be created or resolved.
     pub fn open(dir: &Path) -> Result<Workspace> {
-        for sub in ["records", "runs"] {
+        for sub in ["records", "runs", "tips"] {
             std::fs::create_dir_all(dir.join(sub)).with_context(|| {
                 format!("cannot create the workspace folder `{}`", dir.display())
             })?;
@@ -43,6 +43,29 @@ impl Workspace {
     /// `runs/`.
     pub fn runs(&self) -> PathBuf {
         self.root.join("runs")
+    }
+
+    /// `tips/` (uploaded calibrated tips).
+    pub fn tips(&self) -> PathBuf {
+        self.root.join("tips")
+    }
+
+    /// Whether `path` (absolute) resolves to a stored tip file `tips/<id>/tip.ron`: checked
+    /// lexically and after resolving links, as [`Workspace::is_record_file`].
+    pub fn is_tip_file(&self, path: &Path) -> bool {
+        let tips = self.tips();
+        let lexical = normalize(path);
+        let shape = lexical
+            .strip_prefix(&tips)
+            .ok()
+            .map(|r| r.components().count() == 2 && r.ends_with(crate::tips::TIP_FILE));
+        if shape != Some(true) {
+            return false;
+        }
+        match lexical.canonicalize() {
+            Ok(real) => real.starts_with(&tips) && real.is_file(),
+            Err(_) => false,
+        }
     }
 
     /// `records/<id>/` for a valid id, `None` otherwise.
@@ -216,6 +239,19 @@ mod tests {
         assert!(!ws.is_record_file(&ws.runs().join("r1/../../secret.txt")));
         assert!(!ws.is_record_file(&ws.records().join("abc/../../secret.txt")));
         assert!(!ws.is_record_file(&ws.records().join("abc")));
+        // tips: only tips/<id>/tip.ron
+        std::fs::create_dir_all(ws.tips().join("t1")).unwrap();
+        std::fs::write(
+            ws.tips().join("t1/tip.ron"),
+            "(area: Iso(coefficients: [24.5]))",
+        )
+        .unwrap();
+        std::fs::write(ws.tips().join("t1/other.ron"), "x").unwrap();
+        assert!(ws.is_tip_file(&ws.runs().join("r1/../../tips/t1/tip.ron")));
+        assert!(!ws.is_tip_file(&ws.tips().join("t1/other.ron")));
+        assert!(!ws.is_tip_file(&ws.tips().join("t1/../../records/abc/x.txt")));
+        assert!(!ws.is_tip_file(&ws.records().join("abc/x.txt")));
+        assert!(!ws.is_tip_file(&ws.tips().join("t2/tip.ron")));
         assert!(!ws.is_record_file(Path::new("/etc/passwd")));
     }
 }

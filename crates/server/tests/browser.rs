@@ -376,9 +376,18 @@ fn a_short_fit_in_headless_chromium() {
     );
     d.js("window.scrollTo(0, 0); return 0;");
     d.screenshot(&out.join("result.png"));
+    // how late each iteration's event reached the page (an upper bound: see app.js)
+    let lags = d.js("return window.progressLags || [];");
+    let worst_lag = lags
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(Value::as_f64)
+        .fold(f64::NAN, f64::max);
     eprintln!(
         "browser: page interactive after {interactive:.2} s; first iteration shown {progress_seen:.1} s \
-         after Run; screenshots in {}",
+         after Run; iteration to page at most {worst_lag:.3} s over {} events; screenshots in {}",
+        lags.as_array().unwrap().len(),
         out.display()
     );
 }
@@ -625,12 +634,101 @@ fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
         "document.querySelector('#param-table tr[data-param=\"E\"]')",
         30.0,
     );
-    let links =
-        d.js("return [...document.querySelectorAll('#downloads a')].map(a => a.textContent);");
-    assert!(
-        links.to_string().contains("test-2/"),
-        "a page per test: {links}"
+    // a page per test (the downloads list is filled after the table: waited for)
+    d.until(
+        "the second test's page among the downloads",
+        "[...document.querySelectorAll('#downloads a')].some(a => a.textContent.includes('test-2/'))",
+        30.0,
     );
     d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
     d.screenshot(&out.join("joint.png"));
+}
+
+#[test]
+fn a_calibrated_tip_a_multi_start_and_a_cancelled_map_in_headless_chromium() {
+    let Some((d, s, out, profile)) = open_page() else {
+        return;
+    };
+    let record = repo()
+        .join("examples/data/anton-paar-unht-berkovich/anonNI.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &record.display().to_string());
+    d.until(
+        "the record template",
+        "document.querySelector('#config').value.includes('../../records/')",
+        60.0,
+    );
+    // a calibrated tip (an ideal Berkovich area function) through the tip input: stored in
+    // the workspace, the configuration's punch replaced
+    let tip = profile.path().join("TIP.ron");
+    std::fs::write(&tip, "(area: Iso(coefficients: [24.5]))").unwrap();
+    d.send_keys("#tip-input", &tip.display().to_string());
+    d.until(
+        "the calibrated punch in the configuration",
+        "document.querySelector('#config').value.includes('punch: Calibrated(file: \"../../tips/')",
+        30.0,
+    );
+    assert!(
+        d.js("return document.querySelector('#tip-note').textContent;")
+            .as_str()
+            .unwrap()
+            .contains("stored")
+    );
+    assert_eq!(
+        get(s.addr, "/api/tips").json()["tips"]
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+    // a multi-start of 3 starts, 2 iterations each, with that tip
+    d.send_keys(
+        "#sets",
+        "data.preprocessing.resample.n=20\ndata.substeps=1\nidentify.params.E.lower=1000\nidentify.params.E.upper=100000\nidentify.params.eta.lower=1000\nidentify.params.eta.upper=10000000",
+    );
+    d.click("#no-refine");
+    d.send_keys("#max-iter", "2");
+    d.send_keys("#starts", "3");
+    d.click("#run");
+    d.until(
+        "the end of the multi-start",
+        "['done','failed','cancelled'].includes(document.querySelector('#run-status').textContent)",
+        600.0,
+    );
+    assert_eq!(
+        d.js("return document.querySelector('#run-status').textContent;"),
+        json!("done"),
+        "{}",
+        d.js("return document.querySelector('#run-error').textContent;")
+    );
+    d.until(
+        "the minima table",
+        "document.querySelectorAll('#minima-table tr').length >= 2",
+        30.0,
+    );
+    let first = d.js("return document.querySelector('#minima-table tr:nth-child(2) td:nth-child(1)').textContent;");
+    assert_eq!(first, json!("1 (the fit)"));
+    // each minimum's parameters: E is a number
+    let e = d.js("const r = document.querySelector('#minima-table tr:nth-child(2)'); return r.children[6].textContent;");
+    assert!(e.as_str().unwrap().parse::<f64>().unwrap() > 0.0, "{e}");
+    d.js("document.querySelector('#multistart').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("multistart.png"));
+    // a cost map of 41 x 41 points cancelled from the page
+    choose(&d, "#command", "map");
+    d.js("document.querySelector('#max-iter').value = ''; document.querySelector('#starts').value = ''; document.querySelector('#map-grid').value = '41'; return 0;");
+    choose(&d, "#map-through", "law");
+    d.click("#run");
+    d.until(
+        "the map running",
+        "document.querySelector('#run-status').textContent === 'running' && !document.querySelector('#cancel').disabled",
+        120.0,
+    );
+    d.click("#cancel");
+    d.until(
+        "the map cancelled",
+        "document.querySelector('#run-status').textContent === 'cancelled'",
+        120.0,
+    );
+    d.screenshot(&out.join("cancelled.png"));
 }

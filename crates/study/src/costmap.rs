@@ -200,12 +200,30 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
     let (y, fy) = (&axes[1].0, axes[1].1);
     let n = opts.grid;
     let problem = &s.problem;
+    let cancel = &opts.identify.cancel;
+    let interrupted = || {
+        Error::msg(
+            ErrorKind::Solver,
+            format!(
+                "interrupted: the map of `{}` was stopped before its grid was complete (nothing \
+                 written)",
+                s.name
+            ),
+        )
+    };
+    if cancel.is_raised() {
+        return Err(interrupted());
+    }
     let wall = Instant::now();
     let cost: Vec<f64> = (0..n * n)
         .into_par_iter()
         .map_init(
             || Evaluator::new(problem).ok(),
             |ev, p| {
+                if cancel.is_raised() {
+                    // a stop request: the points not yet started are skipped
+                    return f64::NAN;
+                }
                 let mut c = centre.clone();
                 c[fx.index] = x[p % n];
                 c[fy.index] = y[p / n];
@@ -217,6 +235,9 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
         )
         .collect();
     let seconds = wall.elapsed().as_secs_f64();
+    if cancel.is_raised() {
+        return Err(interrupted());
+    }
     let centre_cost = Evaluator::new(problem)
         .and_then(|mut e| e.cost(&centre))
         .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;

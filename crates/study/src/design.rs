@@ -31,7 +31,7 @@ use std::time::Instant;
 
 use anyhow::anyhow;
 use indentify_identify::identifiability::{Column, Forces};
-use indentify_identify::{Evaluator, Identifiability, NoiseModel, Parameterization};
+use indentify_identify::{Cancel, Evaluator, Identifiability, NoiseModel, Parameterization};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -144,6 +144,16 @@ pub struct Design {
 /// [`ErrorKind::Solver`] when a candidate's forward or sensitivity solve fails;
 /// [`ErrorKind::Io`] for an unwritable folder.
 pub fn run(opts: &DesignOptions) -> Result<Design> {
+    run_cancellable(opts, &Cancel::default())
+}
+
+/// [`run`] that stops when `cancel` is raised: candidates not yet started are skipped (the
+/// ones in progress finish their forward and sensitivity solves) and the design ends with
+/// an error saying it was interrupted; nothing is written.
+///
+/// # Errors
+/// Those of [`run`]; [`ErrorKind::Solver`] (`interrupted: ...`) after a stop request.
+pub fn run_cancellable(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     match opts.jobs {
         Some(0) => Err(Error::msg(
             ErrorKind::Config,
@@ -153,12 +163,12 @@ pub fn run(opts: &DesignOptions) -> Result<Design> {
             .num_threads(n)
             .build()
             .map_err(|e| Error::new(ErrorKind::Io, anyhow!("cannot start threads: {e}")))?
-            .install(|| run_here(opts)),
-        None => run_here(opts),
+            .install(|| run_here(opts, cancel)),
+        None => run_here(opts, cancel),
     }
 }
 
-fn run_here(opts: &DesignOptions) -> Result<Design> {
+fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     let wall = Instant::now();
     let mut id_opts = IdentifyOptions::new(opts.config.clone());
     id_opts.sets = opts.sets.clone();
@@ -210,7 +220,19 @@ fn run_here(opts: &DesignOptions) -> Result<Design> {
         .candidates
         .par_iter()
         .zip(configs.par_iter())
-        .map(|(cand, cfg)| evaluate(cand, cfg, &id_opts, &name, law, &nominal, &param, noise))
+        .map(|(cand, cfg)| {
+            if cancel.is_raised() {
+                return Err(Error::msg(
+                    ErrorKind::Solver,
+                    format!(
+                        "interrupted: the design of `{name}` was stopped before candidate `{}` \
+                         (nothing written)",
+                        cand.name
+                    ),
+                ));
+            }
+            evaluate(cand, cfg, &id_opts, &name, law, &nominal, &param, noise)
+        })
         .collect::<Vec<Result<CandidateResult>>>()
         .into_iter()
         .collect::<Result<_>>()?;

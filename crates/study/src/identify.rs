@@ -740,6 +740,10 @@ fn profiles(
     let wall = Instant::now();
     let profiles = crate::explore::profiles(&s.problem, &s.id_cfg, result, settings)
         .map_err(|e| e.context(format!("the profiles of `{}` failed", s.name)))?;
+    if opts.cancel.is_raised() {
+        tracing::warn!("warning: interrupted during the profiles: no profiles");
+        return Ok(None);
+    }
     tracing::info!(
         "  profiles: {} {}re-fits in {:.1} s",
         profiles.iter().map(|p| p.points.len() - 1).sum::<usize>(),

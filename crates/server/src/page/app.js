@@ -256,6 +256,12 @@ async function submit() {
   if (maxIter > 0 && body.command === 'identify') body.max_iter = maxIter;
   if ($('#no-refine').checked && body.command === 'identify') body.no_refine = true;
   if ($('#profiles').checked && body.command === 'identify') body.profiles = true;
+  const starts = parseInt($('#starts').value, 10);
+  if (starts > 0 && body.command === 'identify') {
+    body.starts = starts;
+    const seed = parseInt($('#seed').value, 10);
+    if (seed >= 0) body.seed = seed;
+  }
   const joint = jointPicks();
   if (joint && ['identify', 'map'].includes(body.command)) { body.record = state.record.id; body.tests = joint; }
   if (body.command === 'map') {
@@ -297,6 +303,12 @@ function openRun(id) {
   es.addEventListener('status', (ev) => {
     const m = JSON.parse(ev.data);
     renderProgress(m);
+    // how late an iteration reaches the page: an upper bound, as the run's clock starts
+    // after `started` (same machine, same wall clock); read by the browser test
+    const p = m.progress || {};
+    if (m.status === 'running' && typeof p.cost === 'number' && m.started) {
+      (window.progressLags = window.progressLags || []).push(Date.now() / 1000 - (m.started + p.elapsed));
+    }
     if (['done', 'failed', 'cancelled'].includes(m.status)) {
       es.close();
       if (state.source === es) state.source = null;
@@ -317,7 +329,7 @@ function renderProgress(m) {
   badge.textContent = m.status;
   badge.className = `badge ${m.status}`;
   const p = m.progress || {};
-  $('#cancel').disabled = !(m.status === 'queued' || (m.status === 'running' && ['identify', 'batch'].includes(m.command)));
+  $('#cancel').disabled = !(m.status === 'queued' || m.status === 'running');
   let frac = 0;
   let text = `${m.command}: ${p.stage || m.status}`;
   if (m.command === 'batch' && p.max_iterations) {
@@ -348,7 +360,7 @@ function renderProgress(m) {
 
 function clearResult() {
   for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads',
-    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots']) $(s).replaceChildren();
+    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots', '#multistart']) $(s).replaceChildren();
   $('#result-summary').textContent = '';
 }
 
@@ -366,6 +378,7 @@ async function loadResult(id) {
   if (run.command === 'map' && res) renderCostMap(res);
   if (run.command === 'batch') { drawBatch(run); renderBatchSummary(run); }
   if (run.command === 'identify' && res && res.profiles) renderProfiles(res.profiles);
+  if (run.command === 'identify' && res && res.multistart) renderMultistart(res.multistart);
   if (has('fit.csv')) {
     const fit = parseCsv(await api(`/api/runs/${id}/files/fit.csv`));
     plot($('#fit-plot'), [
@@ -501,6 +514,32 @@ function renderCostMap(res) {
   $('#result-summary').textContent = `Cost map of ${res.names.join(' × ')} (${nx} × ${ny} points) through ${res.through}: J at the centre ${sig(res.J_centre, 4)} N², lowest grid point ${res.names[0]} = ${sig(res.grid_min[0], 4)}, ${res.names[1]} = ${sig(res.grid_min[1], 4)} (J = ${sig(res.grid_min[2], 4)} N²)` + (res.failed ? `; ${res.failed} points failed to solve (grey)` : '') + '; colour: log J, J = 0 the lowest';
 }
 
+// a multi-start: the distinct minima (lowest J first: the first is the reported fit) with
+// their parameters, and every start's run
+function renderMultistart(ms) {
+  const box = $('#multistart');
+  box.append(el('h3', { text: `Multi-start: ${ms.n} starts (${ms.sampling}, seed ${ms.seed}), ${ms.minima.length} distinct minim${ms.minima.length === 1 ? 'um' : 'a'} (clustered within ${sig(ms.tol, 2)} in the scaled variables), ${sig(ms.seconds, 3)} s` }));
+  const t = el('table', { id: 'minima-table', class: 'grid' });
+  t.append(el('tr', {}, ...['minimum', 'J (N²)', 'J / J_best', 'starts', 'converged', 'at a bound', ...ms.names.map((n, k) => `${n} (${ms.units[k]})`)].map((c) => el('th', { text: c }))));
+  ms.minima.forEach((m, i) => t.append(el('tr', { 'data-minimum': String(i + 1) },
+    el('td', { text: i === 0 ? '1 (the fit)' : String(i + 1) }), el('td', { class: 'num', text: sig(m.J, 5) }),
+    el('td', { class: 'num', text: sig(m.cost_ratio, 4) }), el('td', { class: 'num', text: String(m.starts.length) }),
+    el('td', { class: 'num', text: `${m.converged} of ${m.starts.length}` }), el('td', { text: m.at_bound.join(', ') }),
+    ...m.values.map((v) => el('td', { class: 'num', text: sig(v, 6) })))));
+  box.append(t);
+  const d = el('details', {}, el('summary', { text: 'every start' }));
+  const r = el('table', { class: 'grid' });
+  r.append(el('tr', {}, ...['start', 'J (N²)', 'iterations', 'stop', 'minimum', ...ms.names.map((n) => `${n} start`)].map((c) => el('th', { text: c }))));
+  for (const x of ms.runs) {
+    r.append(el('tr', {}, el('td', { text: String(x.index) }), el('td', { class: 'num', text: sig(x.J, 5) }),
+      el('td', { class: 'num', text: String(x.iterations) }), el('td', { text: x.stop_reason }),
+      el('td', { class: 'num', text: x.minimum === null || x.minimum === undefined ? '' : String(x.minimum + 1) }),
+      ...x.start.map((v) => el('td', { class: 'num', text: sig(v, 4) }))));
+  }
+  d.append(r);
+  box.append(d);
+}
+
 function renderProfiles(profiles) {
   const box = $('#profile-plots');
   for (const p of profiles) {
@@ -588,6 +627,33 @@ async function openIndent(run, id) {
   }
 }
 
+// a calibrated tip (TIP.ron): stored by the server, then the configuration's `punch` value
+// (balanced parentheses, one line or several) replaced by Calibrated(file: "../../tips/ID/tip.ron")
+async function uploadTip(file) {
+  const note = $('#tip-note');
+  if (!file) return;
+  try {
+    const t = await api(`/api/tips?name=${encodeURIComponent(file.name)}`, { method: 'POST', body: await file.arrayBuffer() });
+    const cfg = $('#config');
+    cfg.value = replacePunch(cfg.value, t.punch);
+    note.textContent = `tip ${t.name} stored (${t.id}): punch: ${t.punch}` + (t.frame_compliance ? `, frame compliance ${sig(t.frame_compliance * 1e3, 4)} nm/mN` : '');
+    note.className = 'muted';
+  } catch (e) { note.textContent = e.message; note.className = 'error'; }
+}
+
+function replacePunch(text, punch) {
+  const m = /(^|\n)(\s*)punch\s*:\s*/.exec(text);
+  if (!m) return text;
+  let i = m.index + m[0].length, depth = 0;
+  for (; i < text.length; i++) {
+    const c = text[i];
+    if (c === '(' || c === '[') depth++;
+    else if (c === ')' || c === ']') { if (depth === 0) break; depth--; }
+    else if ((c === ',' || c === '\n') && depth === 0) break;
+  }
+  return text.slice(0, m.index + m[0].length) + punch + text.slice(i);
+}
+
 async function cancelRun() {
   if (!state.run) return;
   try {
@@ -663,6 +729,7 @@ async function start() {
   drop.addEventListener('dragleave', () => drop.classList.remove('over'));
   drop.addEventListener('drop', (ev) => { ev.preventDefault(); drop.classList.remove('over'); upload(ev.dataTransfer.files); });
   $('#file-input').addEventListener('change', (ev) => upload(ev.target.files));
+  $('#tip-input').addEventListener('change', (ev) => uploadTip(ev.target.files[0]));
   $('#record-select').addEventListener('change', (ev) => showRecord(ev.target.value));
   $('#law').addEventListener('change', () => { renderLaw(); loadTemplate(); });
   $('#command').addEventListener('change', () => { renderOptions(); if ($('#command').value === 'design' || state.lastCommand === 'design') loadTemplate(); state.lastCommand = $('#command').value; });
