@@ -166,7 +166,7 @@ pub struct Identifiability {
     /// NaN for the other models.
     pub noise_level: f64,
     /// For each free parameter, a 2-sigma interval `(low, high)` (parameter units) that
-    /// accounts for the undetermined parameters ([`undetermined_intervals`]): with every
+    /// accounts for the undetermined parameters ([`Identifiability::intervals_text`] says it in words): with every
     /// parameter determined it is the value ± 2 std. dev. (in the scaled variable); with
     /// one undetermined, the kept parameters' intervals widen by the distance their best
     /// values travel while the undetermined one ranges over its own interval, and the
@@ -547,15 +547,8 @@ impl Identifiability {
             .zip(&values)
             .map(|(s, v)| s / v.abs())
             .collect();
-        let intervals = undetermined_intervals(
-            &full,
-            columns,
-            &values,
-            &kept,
-            &std_dev,
-            var_scale,
-            row_var.as_deref(),
-        );
+        let rv = row_var.as_deref();
+        let intervals = intervals_of(&full, columns, &values, &kept, &std_dev, var_scale, rv);
         let undetermined: Vec<&'static str> = undetermined.iter().map(|&k| names[k]).collect();
         Identifiability {
             intervals,
@@ -790,7 +783,7 @@ fn bound_offsets(col: &Column, c: f64) -> (f64, f64) {
 ///
 /// A kept parameter coupled to an undetermined one without finite range gets an infinite
 /// side: the data then do not bound it.
-fn undetermined_intervals(
+fn intervals_of(
     full: &DMatrix<f64>,
     columns: &[Column],
     values: &[f64],
