@@ -313,7 +313,14 @@ fn fit(
             .collect(),
         method: Some(method),
         max_iterations: Some(o.max_iterations),
-        noise: (noise.is_some() && o.relative).then_some(NoiseSetting::RelativeEstimated),
+        // stated either way: without it, synthesized noise makes the default Relative(a/sqrt 3)
+        noise: noise.map(|_| {
+            if o.relative {
+                NoiseSetting::RelativeEstimated
+            } else {
+                NoiseSetting::Residual
+            }
+        }),
         bfgs_start: o.bfgs_start,
         ..Overrides::default()
     };

@@ -62,7 +62,7 @@ const SAMPLES: &[Sample] = &[
             "identify",
             "examples/real/anon-maxwell.ron",
             "--out",
-            "out/anon-maxwell",
+            "out/tutorial-maxwell",
         ],
         stderr: false,
     },

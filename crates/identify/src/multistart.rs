@@ -112,6 +112,9 @@ pub struct Minimum {
     pub converged: usize,
     /// Free parameters at a bound at the best point.
     pub at_bound: Vec<&'static str>,
+    /// Free parameters the data do not determine at the best point (its identifiability
+    /// summary): they were not compared when runs were grouped into this minimum.
+    pub undetermined: Vec<&'static str>,
 }
 
 /// The end points of a multi-start grouped into minima.
@@ -127,7 +130,11 @@ pub struct Clusters {
 
 /// Groups the runs' end points: runs are taken by increasing final cost (ties by start
 /// index); each joins the first minimum whose best point lies within `tol` of its end point
-/// in every scaled variable, or founds a new one. Failed runs are listed apart.
+/// in every scaled variable of a *determined* parameter, or founds a new one. A parameter
+/// the data do not determine (undetermined in the identifiability summary of the run or of
+/// the minimum's best run) takes any value along its valley at the same cost, so it is not
+/// compared: one basin is counted once however far its undetermined parameter wandered.
+/// Failed runs are listed apart.
 pub fn cluster(
     param: &Parameterization,
     runs: &[Result<IdentifyResult, IdentifyError>],
@@ -145,14 +152,23 @@ pub fn cluster(
         }
     }
     order.sort_by(|a, b| a.1.cost.total_cmp(&b.1.cost).then(a.0.cmp(&b.0)));
+    let undetermined_of = |r: &IdentifyResult| -> Vec<&'static str> {
+        r.identifiability
+            .as_ref()
+            .map_or_else(Vec::new, |i| i.undetermined.clone())
+    };
     let mut minima: Vec<(Vec<f64>, Minimum)> = Vec::new();
     for (i, r) in order {
         let y = scaled(&r.c);
         let converged = usize::from(r.stop_reason.is_converged());
-        let home = minima.iter_mut().find(|(yb, _)| {
-            yb.iter()
-                .zip(&y)
-                .all(|(a, b)| (a - b).abs() <= tol || a == b)
+        let undetermined = undetermined_of(r);
+        let home = minima.iter_mut().find(|(yb, m)| {
+            yb.iter().zip(&y).zip(&param.free).all(|((a, b), f)| {
+                (a - b).abs() <= tol
+                    || a == b
+                    || undetermined.contains(&f.name)
+                    || m.undetermined.contains(&f.name)
+            })
         });
         match home {
             Some((_, m)) => {
@@ -175,6 +191,7 @@ pub fn cluster(
                         starts: vec![i],
                         converged,
                         at_bound,
+                        undetermined,
                     },
                 ));
             }
@@ -197,6 +214,8 @@ pub fn cluster(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::identifiability::Identifiability;
+    use crate::optimize::{ParamOutcome, StopReason};
     use crate::params::{ParamSpec, Scaling};
 
     fn param() -> Parameterization {
@@ -253,5 +272,83 @@ mod tests {
         .unwrap();
         let e = latin_hypercube(&open, 3, 1).unwrap_err().to_string();
         assert!(e.contains("`E`") && e.contains("finite"), "{e}");
+    }
+
+    /// An end point of a run of `param()` (E, eta free) at `(e, eta)` with cost `cost`,
+    /// whose identifiability summary comes from a synthetic Jacobian in which eta acts
+    /// (`eta_acts`) or has no effect (then eta is undetermined).
+    fn end_point(e: f64, eta: f64, cost: f64, eta_acts: bool) -> IdentifyResult {
+        let c = vec![e, 0.3, eta];
+        let jac: Vec<Vec<f64>> = (0..10)
+            .map(|i| {
+                let t = i as f64;
+                vec![1.0 + t, 0.0, if eta_acts { 1.0 - 0.1 * t * t } else { 0.0 }]
+            })
+            .collect();
+        let p = param();
+        let columns: Vec<crate::identifiability::Column> = p
+            .free
+            .iter()
+            .map(|f| crate::identifiability::Column::of(f, c[f.index]))
+            .collect();
+        let id = Identifiability::from_columns(&jac, &[1.0; 10], cost, &c, &columns);
+        assert_eq!(id.undetermined.is_empty(), eta_acts, "{:?}", id.reasons);
+        let outcome = |name, k: usize| ParamOutcome {
+            name,
+            unit: "",
+            free: k != 1,
+            start: c[k],
+            value: c[k],
+            lower: 0.0,
+            upper: f64::INFINITY,
+            at_lower: false,
+            at_upper: false,
+        };
+        IdentifyResult {
+            law: "maxwell",
+            method: crate::optimize::Method::Bfgs,
+            params: vec![outcome("E", 0), outcome("nu", 1), outcome("eta", 2)],
+            c,
+            initial_cost: 1.0,
+            cost,
+            reference_cost: 1.0,
+            iterations: 1,
+            forward_solves: 1,
+            adjoint_solves: 1,
+            sensitivity_solves: 0,
+            cache_hits: 0,
+            distinct_points: 1,
+            stop_reason: StopReason::GradientNorm,
+            seconds: 0.0,
+            history: Vec::new(),
+            initial_forces: Vec::new(),
+            forces: Vec::new(),
+            identifiability: Some(id),
+        }
+    }
+
+    /// Three runs end at the same E with eta far apart: when eta is undetermined they are
+    /// one minimum (one basin counted once), when it is determined three; a fourth run at
+    /// another E is another minimum either way.
+    #[test]
+    fn minima_are_told_apart_by_the_determined_parameters_only() {
+        let p = param();
+        for acts in [false, true] {
+            let runs: Vec<Result<IdentifyResult, IdentifyError>> = vec![
+                Ok(end_point(2e4, 3e4, 1e-3, acts)),
+                Ok(end_point(2e4 * 1.001, 3e5, 1e-3, acts)),
+                Ok(end_point(2e4, 3e6, 1.1e-3, acts)),
+                Ok(end_point(5e4, 3e4, 2e-3, acts)),
+            ];
+            let c = cluster(&p, &runs, DEFAULT_CLUSTER_TOL);
+            let starts: Vec<Vec<usize>> = c.minima.iter().map(|m| m.starts.clone()).collect();
+            if acts {
+                assert_eq!(starts, [vec![0], vec![1], vec![2], vec![3]]);
+                assert!(c.minima.iter().all(|m| m.undetermined.is_empty()));
+            } else {
+                assert_eq!(starts, [vec![0, 1, 2], vec![3]]);
+                assert_eq!(c.minima[0].undetermined, ["eta"]);
+            }
+        }
     }
 }

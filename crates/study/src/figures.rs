@@ -184,7 +184,11 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         advice: if i.undetermined.is_empty() {
             String::new()
         } else {
-            indentify_identify::StopReason::UNDETERMINED_ADVICE.to_string()
+            let advice = indentify_identify::StopReason::UNDETERMINED_ADVICE;
+            match i.intervals_text() {
+                Some(t) => format!("{advice}; {t}"),
+                None => advice.to_string(),
+            }
         },
     });
     let preprocessing = inputs.measured.map_or_else(Vec::new, |m| {

@@ -304,6 +304,16 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     ensure_differentiable(law, &start, "cannot identify from this start")
         .kind(ErrorKind::Config)?;
     check_noise(opts.noise)?;
+    // the deviations assume the noise the user asked for: synthesized multiplicative noise
+    // F (1 + a xi), xi uniform in [-1, 1], has the standard deviation a / sqrt(3) |F|
+    // (docs/cli.md, "Noise models"); a model stated by the caller is kept
+    if let Some((a, _)) = opts.noise
+        && a > 0.0
+        && opts.overrides.noise.is_none()
+        && id_cfg.noise == indentify_identify::NoiseModel::Residual
+    {
+        id_cfg.noise = indentify_identify::NoiseModel::Relative(a / 3f64.sqrt());
+    }
     if opts.noise.is_some() && cfg.data.is_some() {
         return Err(Error::msg(
             ErrorKind::Config,
@@ -1565,6 +1575,9 @@ struct IdentifiabilityJson {
     /// weighted residual, `sigma2`).
     #[serde(skip_serializing_if = "Option::is_none")]
     noise: Option<String>,
+    /// 2-sigma intervals `[low, high]` that account for the undetermined parameters
+    /// (`value ± 2 std. dev.` in the scaled variable when none is).
+    intervals: Named<[f64; 2]>,
 }
 
 impl From<&Identifiability> for IdentifiabilityJson {
@@ -1591,6 +1604,12 @@ impl From<&Identifiability> for IdentifiabilityJson {
             unidentifiable: i.undetermined.clone(),
             noise: (i.noise != indentify_identify::NoiseModel::Residual)
                 .then(|| i.noise.describe(i.noise_level)),
+            intervals: Named::new(
+                i.names
+                    .iter()
+                    .copied()
+                    .zip(i.intervals.iter().map(|&(a, b)| [a, b])),
+            ),
         }
     }
 }

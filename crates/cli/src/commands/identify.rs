@@ -515,6 +515,9 @@ fn identifiability_lines(i: &Identifiability) -> String {
             list.join("; "),
             indentify_study::StopReason::UNDETERMINED_ADVICE
         ));
+        if let Some(t) = i.intervals_text() {
+            text.push_str(&format!("  intervals: {t}\n"));
+        }
     }
     text
 }
