@@ -30,6 +30,7 @@ pub mod design;
 pub mod discretization;
 pub mod error;
 pub mod explore;
+pub mod first_guess;
 pub mod figures;
 pub mod format;
 pub mod fuzzing;
