@@ -6,7 +6,9 @@
 //! (`Surface::project`) and by the scan of every piece (`Surface::project_scan`, what the
 //! search replaced). `cargo bench -p indentify-contact --bench calibrated`.
 
-use criterion::{Criterion, black_box, criterion_group, criterion_main};
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
 use indentify_contact::normal::Surface;
 use indentify_contact::punch::AreaProfile;
 use indentify_contact::{
