@@ -35,12 +35,20 @@ fn bench_projection(c: &mut Criterion) {
     let points: Vec<[f64; 2]> = (0..200)
         .map(|i| {
             let r = 0.5 * f64::from(i) / 200.0;
-            [r, r / 70.3f64.to_radians().tan() + 1e-4 * f64::from(i % 7) - 3e-4]
+            [
+                r,
+                r / 70.3f64.to_radians().tan() + 1e-4 * f64::from(i % 7) - 3e-4,
+            ]
         })
         .collect();
     let mut group = c.benchmark_group("calibrated_projection");
     group.bench_function("pruned", |b| {
-        b.iter(|| points.iter().map(|&x| s.project(black_box(x)).gap).sum::<f64>())
+        b.iter(|| {
+            points
+                .iter()
+                .map(|&x| s.project(black_box(x)).gap)
+                .sum::<f64>()
+        })
     });
     group.bench_function("scan", |b| {
         b.iter(|| {
@@ -73,7 +81,11 @@ fn bench_forward(c: &mut Criterion) {
         let mut solver = DirectSolver::new(model).expect("solver");
         let opts = SolverOptions::default();
         let t = solver.run(law, &params, &schedule, &opts).expect("run");
-        eprintln!("{name}: {} steps, {} iterations", t.steps.len(), t.total_iterations());
+        eprintln!(
+            "{name}: {} steps, {} iterations",
+            t.steps.len(),
+            t.total_iterations()
+        );
         group.bench_function(name, |b| {
             b.iter(|| solver.run(law, &params, &schedule, &opts).expect("run"))
         });

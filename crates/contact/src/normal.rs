@@ -363,9 +363,9 @@ impl Surface {
                 let blend = [radius * th.sin(), radius * (1.0 - th.cos())];
                 Surface {
                     starts: Vec::new(),
-                lo: Vec::new(),
-                hi: Vec::new(),
-                blocks: Vec::new(),
+                    lo: Vec::new(),
+                    hi: Vec::new(),
+                    blocks: Vec::new(),
                     pieces: vec![
                         Piece::Arc {
                             c: [0.0, radius],
@@ -474,9 +474,9 @@ impl Surface {
         Surface {
             pieces,
             starts: Vec::new(),
-                lo: Vec::new(),
-                hi: Vec::new(),
-                blocks: Vec::new(),
+            lo: Vec::new(),
+            hi: Vec::new(),
+            blocks: Vec::new(),
             closed_end: false,
             last_len: len[n - 2] - tau[n - 2],
         }
@@ -544,7 +544,7 @@ impl Surface {
 
     /// The closest point of piece `i` to `x` and its squared distance.
     fn candidate(&self, i: usize, x: [f64; 2], last: usize) -> Candidate {
-    let (p, theta, kappa, clamped_end, s) = match self.pieces[i] {
+        let (p, theta, kappa, clamped_end, s) = match self.pieces[i] {
             Piece::Line { a, t, len } => {
                 let mut tau = (x[0] - a[0]) * t[0] + (x[1] - a[1]) * t[1];
                 // the first piece starts on the axis: extended beyond it (only an
@@ -718,11 +718,17 @@ mod tests {
         use crate::punch::AreaProfile;
         let calibrated = Punch::calibrated(
             "TIP.ron",
-            AreaProfile::new(vec![(24.1, 2.0), (1.2e-4, 1.0), (3.0e-7, 0.5)], f64::INFINITY)
-                .unwrap(),
+            AreaProfile::new(
+                vec![(24.1, 2.0), (1.2e-4, 1.0), (3.0e-7, 0.5)],
+                f64::INFINITY,
+            )
+            .unwrap(),
         );
         let sphere_area = AreaProfile::new(
-            vec![(2.0 * std::f64::consts::PI * 0.01, 1.0), (-std::f64::consts::PI, 2.0)],
+            vec![
+                (2.0 * std::f64::consts::PI * 0.01, 1.0),
+                (-std::f64::consts::PI, 2.0),
+            ],
             0.01,
         )
         .unwrap();

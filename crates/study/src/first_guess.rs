@@ -249,7 +249,9 @@ pub fn apply(law: &mut LawSpec, g: &FirstGuess) {
     for (name, v) in &g.values {
         match (&mut *law, name.as_str()) {
             (
-                LawSpec::Elastic { e, .. } | LawSpec::Maxwell { e, .. } | LawSpec::NortonHoff { e, .. },
+                LawSpec::Elastic { e, .. }
+                | LawSpec::Maxwell { e, .. }
+                | LawSpec::NortonHoff { e, .. },
                 "E",
             ) => *e = *v,
             (LawSpec::Maxwell { eta, .. }, "eta") => *eta = *v,
@@ -401,7 +403,11 @@ mod tests {
                 s_y: sigma
             }
         );
-        assert!(g.notes.iter().any(|n| n.contains("no hold")), "{:?}", g.notes);
+        assert!(
+            g.notes.iter().any(|n| n.contains("no hold")),
+            "{:?}",
+            g.notes
+        );
     }
 
     /// A record with no unloading names the test and the reason.

@@ -8,8 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
 use indentify_study::templates::{
-    DataTemplate, data_path_for, data_template_with_guess, parse_tip, template,
-    tip_from_metadata,
+    DataTemplate, data_path_for, data_template_with_guess, parse_tip, template, tip_from_metadata,
 };
 
 /// Arguments of `indentify init`.
