@@ -53,7 +53,7 @@ fn init_data_starts_from_the_oliver_pharr_analysis() {
         assert!((e / e_op - 1.0).abs() < 1e-6, "{law}: E {e} vs O&P {e_op}");
         // the hold of this creep test gives the viscous start
         let viscous = if law == "maxwell" { "eta" } else { "K" };
-        assert!(text.contains(&format!("  {viscous} = ")), "{text}");
+        assert!(text.contains(&format!(" {viscous} = ")), "{text}");
         let mut no = args.to_vec();
         no.push("--no-guess");
         let o = indentify(&no);
