@@ -107,7 +107,13 @@ pub fn analyse_record(r: &Record, tip: &Tip, nu: f64) -> Result<OpSummary> {
     let format = r.meta.format;
     let zero = crate::analyze::zero_point_default(format);
     let prep = crate::analyze::preprocessing(tip.frame_compliance, zero);
-    let name = r.meta.test_name.clone().unwrap_or_else(|| r.name.clone());
+    // the test's name, or the record's file name (not its path: a configuration names
+    // the record relative to its own folder)
+    let name = r.meta.test_name.clone().unwrap_or_else(|| {
+        Path::new(&r.name)
+            .file_name()
+            .map_or_else(|| r.name.clone(), |f| f.to_string_lossy().into_owned())
+    });
     let fail = |why: String| Error::msg(ErrorKind::Data, format!("test `{name}`: {why}"));
     let (x, _) = indentify_records::apply(r, &prep).map_err(|e| fail(e.to_string()))?;
     let o = Options {
