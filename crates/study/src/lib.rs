@@ -31,6 +31,7 @@ pub mod discretization;
 pub mod error;
 pub mod explore;
 pub mod figures;
+pub mod first_guess;
 pub mod format;
 pub mod fuzzing;
 pub mod gradient;

@@ -193,7 +193,20 @@ pub fn tip_from_metadata(meta: &indentify_records::Meta) -> Option<indentify_con
 /// adjoint is defined; a relative decrease of 1e-4, since a real record's misfit does not
 /// go to zero).
 pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
+    data_template_with_guess(reference, d, None)
+}
+
+/// [`data_template`] with the law's start values from the record's Oliver-Pharr analysis
+/// (`crate::first_guess`), its numbers and derivations in the header.
+pub fn data_template_with_guess(
+    reference: Reference,
+    d: &DataTemplate,
+    guess: Option<&crate::first_guess::FirstGuess>,
+) -> String {
     let mut cfg = reference.config();
+    if let Some(g) = guess {
+        crate::first_guess::apply(&mut cfg.law, g);
+    }
     cfg.specimen = Specimen::Auto {
         elements_in_contact: AutoOptions::default().elements_in_contact,
         size_factor: AutoOptions::default().size_factor,
@@ -252,6 +265,13 @@ pub fn data_template(reference: Reference, d: &DataTemplate) -> String {
         ));
     }
     header.push(format!("Punch: {}.", d.punch_source));
+    if let Some(g) = guess {
+        header.push(format!(
+            "Start values from the record's {} (docs/analysis.md, First guesses):",
+            crate::first_guess::describe(&g.op)
+        ));
+        header.extend(g.notes.iter().map(|n| format!("  {n}.")));
+    }
     header.push(format!(
         "indentify configuration written by `indentify init {law} --data {file}`: check the \
          punch, the law's start values (the vendor's E_IT is a fair start for E) and nu, check \

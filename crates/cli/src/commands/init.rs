@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
 use indentify_study::templates::{
-    DataTemplate, data_path_for, data_template, law_template, parse_tip, template,
+    DataTemplate, data_path_for, data_template_with_guess, law_template, parse_tip, template,
     tip_from_metadata,
 };
 
@@ -36,6 +36,12 @@ pub struct Args {
     /// file's, else Berkovich).
     #[arg(long, value_name = "TIP", requires = "data")]
     pub tip: Option<String>,
+
+    /// Keep the template's start values instead of those of the record's Oliver-Pharr
+    /// analysis (E from E_IT, sY from H/3, viscous parameters from the hold's creep;
+    /// docs/analysis.md).
+    #[arg(long, requires = "data")]
+    pub no_guess: bool,
 
     /// Write the configuration to this file (atomically) instead of standard output.
     #[arg(long, value_name = "FILE")]
@@ -103,6 +109,11 @@ pub fn run(args: &Args) -> Result<()> {
     let text = match &args.data {
         Some(file) => {
             let mut d = inspect(file, args)?;
+            let guess = if args.no_guess {
+                None
+            } else {
+                first_guess(file, &d, reference)
+            };
             if let Some(out) = &args.out {
                 d.file = data_path_for(Path::new(file), out).with_context(|| {
                     format!(
@@ -111,7 +122,7 @@ pub fn run(args: &Args) -> Result<()> {
                     )
                 })?;
             }
-            data_template(reference, &d)
+            data_template_with_guess(reference, &d, guess.as_ref())
         }
         None => match args.law.registry_kind() {
             Some(kind) => law_template(&kind)?,
@@ -128,6 +139,42 @@ pub fn run(args: &Args) -> Result<()> {
             .lock()
             .write_all(text.as_bytes())
             .context("cannot write the template to standard output"),
+    }
+}
+
+/// The law's start values from the record's Oliver-Pharr analysis; `None` (with a
+/// warning: the template's values stay) when the tip has no analysis area function or the
+/// test cannot be analysed.
+fn first_guess(
+    file: &str,
+    d: &DataTemplate,
+    reference: indentify_study::config::Reference,
+) -> Option<indentify_study::first_guess::FirstGuess> {
+    use indentify_study::first_guess as fg;
+    let Some(tip) = fg::tip_for_punch(&d.punch) else {
+        tracing::warn!(
+            "no first guess: the punch {} has no analysis area function (the template's start \
+             values stay)",
+            d.punch.describe()
+        );
+        return None;
+    };
+    let law = reference.config().law;
+    // the nu the data template fixes
+    let nu = 0.3;
+    match fg::analyse_file(Path::new(file), d.test, &tip, nu) {
+        Ok(op) => {
+            let g = fg::guess(&law, &op);
+            tracing::info!("{}", fg::describe(&op));
+            Some(g)
+        }
+        Err(e) => {
+            tracing::warn!(
+                "no first guess from the Oliver-Pharr analysis ({e}): the template's start \
+                 values stay"
+            );
+            None
+        }
     }
 }
 
