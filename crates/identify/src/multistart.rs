@@ -316,6 +316,7 @@ mod tests {
             forward_solves: 1,
             adjoint_solves: 1,
             sensitivity_solves: 0,
+            rejected_trials: 0,
             cache_hits: 0,
             distinct_points: 1,
             stop_reason: StopReason::GradientNorm,
