@@ -17,7 +17,7 @@
 
 use indentify_contact::{ForceCotangent, StepFields, StepRecord, StepTangent, Trajectory};
 use indentify_fe::{Deformation, QP_PER_ELEMENT};
-use indentify_laws::material::{Step, dense_solve};
+use indentify_laws::material::{Step, dense_solve_many};
 use indentify_laws::{LogStrain, Mat4, Material, Vec4};
 
 use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
@@ -40,13 +40,12 @@ struct MatSweep {
     /// The step's strain increment at every point (small strain `B (u_1 - u_0)`, finite
     /// strain the Hencky strains' difference).
     deps: Vec<Vec4>,
-    /// Point scratch: `y0, y1` (m each), `A`, `D` (m^2), `E` (4m), `P` (m np), two
-    /// m-vectors and an m^2 work matrix.
+    /// Point scratch: `y0, y1` (m each), `A`, `A^T`, `D` (m^2), `E` (4m), `P` (m np)
+    /// and an m-vector.
     y0: Vec<f64>,
     y1: Vec<f64>,
     a: Vec<f64>,
     at: Vec<f64>,
-    work: Vec<f64>,
     d: Vec<f64>,
     ej: Vec<f64>,
     p: Vec<f64>,
@@ -57,6 +56,9 @@ struct MatSweep {
     linear: bool,
     /// `A^-T` (`m x m`, row-major) of a linear material's step.
     ainvt: Vec<f64>,
+    /// The right-hand sides `[Pi^T | z]` (`m x 5`, row-major) of a point's one
+    /// elimination with `A^T`, and its solution `[G | A^-T z]`.
+    rhs5: Vec<f64>,
     /// `G = A^-T Pi^T` (`m x 4`) of a linear material's step.
     glin: Vec<f64>,
     /// The tangent `-G^T E` of a linear material's step.
@@ -80,13 +82,13 @@ impl MatSweep {
             y1: vec![0.0; m],
             a: vec![0.0; m * m],
             at: vec![0.0; m * m],
-            work: vec![0.0; m * m],
             d: vec![0.0; m * m],
             ej: vec![0.0; m * 4],
             p: vec![0.0; m * np],
             x: vec![0.0; m],
             linear: mat.is_linear(),
             ainvt: vec![0.0; m * m],
+            rhs5: vec![0.0; m * 5],
             glin: vec![0.0; m * 4],
             ct: Mat4::ZERO,
         }
@@ -112,15 +114,12 @@ impl MatSweep {
                 self.at[k * m + r] = self.a[r * m + k];
             }
         }
+        self.ainvt.fill(0.0);
         for j in 0..m {
-            self.x.fill(0.0);
-            self.x[j] = 1.0;
-            if !self.solve_transposed() {
-                return false;
-            }
-            for k in 0..m {
-                self.ainvt[k * m + j] = self.x[k];
-            }
+            self.ainvt[j * m + j] = 1.0;
+        }
+        if !dense_solve_many(&mut self.at, m, &mut self.ainvt, m) {
+            return false;
         }
         for k in 0..m {
             for j in 0..4 {
@@ -144,12 +143,6 @@ impl MatSweep {
         self.y0[4..].copy_from_slice(&f0.alpha[q * n..(q + 1) * n]);
         self.y1[..4].copy_from_slice(&f1.sigma[q].0);
         self.y1[4..].copy_from_slice(&f1.alpha[q * n..(q + 1) * n]);
-    }
-
-    /// `x = A^-T b` from the transposed `A` in `self.at` (`b` in `self.x` on entry).
-    fn solve_transposed(&mut self) -> bool {
-        self.work.copy_from_slice(&self.at);
-        dense_solve(&mut self.work, self.m, &mut self.x)
     }
 }
 
@@ -300,24 +293,21 @@ impl Adjoint<'_> {
                 mat.jac_previous(c, &step, &mut dblk[q * m * m..(q + 1) * m * m]);
                 mat.jac_strain(c, &step, &mut eblk[q * m * 4..(q + 1) * m * 4]);
                 mat.jac_params(c, &step, &mut pblk[q * m * np..(q + 1) * m * np]);
+                // A^-1 in one elimination with m right-hand sides
                 let inv = &mut ainv[q * m * m..(q + 1) * m * m];
+                inv.fill(0.0);
                 for j in 0..m {
-                    sw.work.copy_from_slice(&sw.a);
-                    sw.x.fill(0.0);
-                    sw.x[j] = 1.0;
-                    if !dense_solve(&mut sw.work, m, &mut sw.x) {
-                        return Err(AdjointError::Step {
-                            step: i,
-                            t: rec.t,
-                            reason: format!(
-                                "{}: singular local Jacobian A at Gauss point {q}",
-                                mat.name()
-                            ),
-                        });
-                    }
-                    for r in 0..m {
-                        inv[r * m + j] = sw.x[r];
-                    }
+                    inv[j * m + j] = 1.0;
+                }
+                if !dense_solve_many(&mut sw.a, m, inv, m) {
+                    return Err(AdjointError::Step {
+                        step: i,
+                        t: rec.t,
+                        reason: format!(
+                            "{}: singular local Jacobian A at Gauss point {q}",
+                            mat.name()
+                        ),
+                    });
                 }
                 let e = &eblk[q * m * 4..(q + 1) * m * 4];
                 let mut ct = Mat4::ZERO;
@@ -514,15 +504,21 @@ impl Adjoint<'_> {
                     sw.at[k * m + r] = sw.a[r * m + k];
                 }
             }
-            for j in 0..4 {
-                sw.x.fill(0.0);
-                sw.x[j] = 1.0;
-                if !sw.solve_transposed() {
-                    return Err(fail(q, "tangent"));
+            // one elimination with A^T for [Pi^T | z]: G and A^-T z
+            sw.rhs5.fill(0.0);
+            for k in 0..m {
+                if k < 4 {
+                    sw.rhs5[k * 5 + k] = 1.0;
                 }
-                for k in 0..m {
-                    sw.g[(q * m + k) * 4 + j] = sw.x[k];
-                }
+                sw.rhs5[k * 5 + 4] = sw.z[q * m + k];
+            }
+            if !dense_solve_many(&mut sw.at, m, &mut sw.rhs5, 5) {
+                return Err(fail(q, "tangent and adjoint"));
+            }
+            for k in 0..m {
+                sw.g[(q * m + k) * 4..(q * m + k + 1) * 4]
+                    .copy_from_slice(&sw.rhs5[k * 5..k * 5 + 4]);
+                sw.x[k] = sw.rhs5[k * 5 + 4];
             }
             let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
             let mut ct = Mat4::ZERO;
@@ -534,10 +530,6 @@ impl Adjoint<'_> {
                 }
             }
             self.tangents[q] = ct;
-            sw.x.copy_from_slice(&sw.z[q * m..(q + 1) * m]);
-            if !sw.solve_transposed() {
-                return Err(fail(q, "adjoint"));
-            }
             sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
             if shifted && !finite {
                 let bea = self.strain[q];

@@ -15,7 +15,7 @@
 
 use indentify_fe::dofs::NO_EQ;
 use indentify_fe::{FeError, QP_PER_ELEMENT};
-use indentify_laws::{Material, Vec4};
+use indentify_laws::{Material, Regime, Vec4};
 
 use crate::body::{Body, Internal, StepLaw};
 use crate::constraint::{self, Constraint, ContactSet, Iterate, StatusFlip, Tolerances};
@@ -400,9 +400,14 @@ impl<'m> Newton<'m> {
         extra.apply(state, &mut it.u);
         it.seen.push(it.set.clone());
         self.residuals.clear();
+        let mut last: Option<(f64, u32)> = None;
         loop {
             // every pass evaluates the current iterate once, then checks or solves
-            let r = self.evaluate(spec, &law, &mut it, timing)?;
+            let mut r = self.evaluate(spec, &law, &mut it, timing)?;
+            if let Some((rel0, changes0)) = last {
+                r = self.backtrack(spec, &law, &mut it, timing, r, (rel0, changes0))?;
+            }
+            last = Some((r.rel, it.changes));
             if it.iterations > 0 {
                 let view = iterate(&self.body.f_int, spec, &it);
                 let targets_met = self.constraint.targets_met(&it.set, &view);
@@ -424,6 +429,66 @@ impl<'m> Newton<'m> {
             it.iterations += 1;
             self.solve(spec, &law, &mut it, r, timing)?;
         }
+    }
+
+    /// Backtracking for a material whose residual switches branches (a point of the
+    /// iterate in [`Regime::Elastic`] or [`Regime::Plastic`]) under depth control: when a
+    /// Newton update raised the residual (`r.rel` above `prev.0` with the contact set of
+    /// `prev.1` unchanged), the free equations' part of the update (in `self.rhs`) is
+    /// halved, up to four times, while that lowers it. A rate-independent law's points
+    /// switch between the elastic and plastic branches of their residual, where the
+    /// consistent tangent jumps: a full step across the switch can overshoot into a
+    /// cycle the iteration never leaves (R2's mesh and history: 60 iterations at a
+    /// relative residual of 1, then a step cut). Smooth materials, the laws' paths
+    /// (`as_law`) and load control are left as they are (their bits unchanged). Returns
+    /// the residual of the iterate kept.
+    ///
+    /// # Errors
+    /// A failed local update of a shortened iterate, as [`Newton::evaluate`].
+    fn backtrack(
+        &mut self,
+        spec: &StepSpec<'_>,
+        law: &StepLaw<'_>,
+        it: &mut Iteration,
+        timing: &mut Timing,
+        r: Residual,
+        prev: (f64, u32),
+    ) -> Result<Residual, StepFailure> {
+        let switching = it.internal.regime.iter().any(|g| *g != Regime::Smooth);
+        if !switching
+            || law.law.is_some()
+            || spec.load.is_some()
+            || it.changes != prev.1
+            || r.rel <= prev.0
+        {
+            return Ok(r);
+        }
+        let model = self.model;
+        let mut best = r;
+        let mut f = 1.0;
+        for _ in 0..4 {
+            f *= 0.5;
+            for (d, &e) in model.dofs.eq.iter().enumerate() {
+                if e != NO_EQ && !self.constrained[e as usize] {
+                    it.u[d] -= f * self.rhs[e as usize];
+                }
+            }
+            let r1 = self.evaluate(spec, law, it, timing)?;
+            if r1.rel >= best.rel {
+                // undo this halving: the longer step was better
+                for (d, &e) in model.dofs.eq.iter().enumerate() {
+                    if e != NO_EQ && !self.constrained[e as usize] {
+                        it.u[d] += f * self.rhs[e as usize];
+                    }
+                }
+                return self.evaluate(spec, law, it, timing);
+            }
+            best = r1;
+            if best.rel <= prev.0 {
+                break;
+            }
+        }
+        Ok(best)
     }
 
     /// Evaluates the iterate (stresses, internal force, the constraint's gaps) and its

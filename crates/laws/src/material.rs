@@ -353,6 +353,14 @@ pub fn newton_update(
 /// elimination with partial pivoting; `a` is overwritten. `false` when a pivot is below
 /// `1e-14` of the largest entry or not finite. No allocation.
 pub fn dense_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
+    dense_solve_many(a, m, b, 1)
+}
+
+/// [`dense_solve`] for `nrhs` right-hand sides at once: `b` is `m x nrhs`, row-major, and
+/// becomes `X` with `a X = b`. One elimination serves every column (each column gets the
+/// same operations, so the same bits, as [`dense_solve`] of that column alone). No
+/// allocation.
+pub fn dense_solve_many(a: &mut [f64], m: usize, b: &mut [f64], nrhs: usize) -> bool {
     let big = a[..m * m].iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let tiny = 1e-14 * big;
     for col in 0..m {
@@ -370,7 +378,9 @@ pub fn dense_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
             for k in 0..m {
                 a.swap(col * m + k, piv * m + k);
             }
-            b.swap(col, piv);
+            for k in 0..nrhs {
+                b.swap(col * nrhs + k, piv * nrhs + k);
+            }
         }
         for row in col + 1..m {
             let f = a[row * m + col] / a[col * m + col];
@@ -378,16 +388,20 @@ pub fn dense_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
                 for k in col..m {
                     a[row * m + k] -= f * a[col * m + k];
                 }
-                b[row] -= f * b[col];
+                for k in 0..nrhs {
+                    b[row * nrhs + k] -= f * b[col * nrhs + k];
+                }
             }
         }
     }
     for row in (0..m).rev() {
-        let mut s = b[row];
-        for k in row + 1..m {
-            s -= a[row * m + k] * b[k];
+        for r in 0..nrhs {
+            let mut s = b[row * nrhs + r];
+            for k in row + 1..m {
+                s -= a[row * m + k] * b[k * nrhs + r];
+            }
+            b[row * nrhs + r] = s / a[row * m + row];
         }
-        b[row] = s / a[row * m + row];
     }
     true
 }
@@ -531,6 +545,23 @@ mod tests {
                     dt,
                 };
                 crate::testing::check_material(&mat, &pt, 1e-6).unwrap();
+            }
+        }
+    }
+
+    #[test]
+    fn dense_solve_many_equals_one_column_at_a_time() {
+        let a0 = [4.0, 1.0, -2.0, 3.0, -5.0, 1.0, 0.5, 2.0, 6.0];
+        let b0 = [1.0, 0.0, 2.0, -1.0, 3.0, 0.25];
+        let (mut a, mut b) = (a0, b0);
+        assert!(dense_solve_many(&mut a, 3, &mut b, 2));
+        for k in 0..2 {
+            let (mut a1, mut b1) = (a0, [b0[k], b0[2 + k], b0[4 + k]]);
+            assert!(dense_solve(&mut a1, 3, &mut b1));
+            for r in 0..3 {
+                assert_eq!(b[r * 2 + k].to_bits(), b1[r].to_bits());
+                let ax: f64 = (0..3).map(|j| a0[r * 3 + j] * b[j * 2 + k]).sum();
+                assert!((ax - b0[r * 2 + k]).abs() < 1e-14);
             }
         }
     }
