@@ -33,6 +33,7 @@
 
 pub mod check;
 mod finite;
+mod load;
 
 use indentify_contact::{
     DirectSolver, ForceCotangent, Model, RecordedContact, Schedule, SolverOptions, StepFields,
