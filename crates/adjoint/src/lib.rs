@@ -35,6 +35,8 @@ pub mod check;
 mod finite;
 mod load;
 
+pub use load::LoadSensitivities;
+
 use indentify_contact::{
     DirectSolver, ForceCotangent, Model, RecordedContact, Schedule, SolverOptions, StepFields,
     StepRecord, StepTangent, Trajectory,
@@ -544,6 +546,7 @@ impl<'m> Adjoint<'m> {
                 r_field: &r_field,
                 np,
                 rec,
+                border: None,
             };
             let one =
                 |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
@@ -590,6 +593,8 @@ struct ParamWork {
     du_prev: Vec<f64>,
     /// The prescribed values of the solve (equations; zero between solves).
     xbar: Vec<f64>,
+    /// Load control: the step's depth variation `dU_i/dc_k` (mm per unit parameter).
+    du_depth: f64,
     solve: indentify_fe::SolveScratch,
 }
 
@@ -610,6 +615,7 @@ impl ParamWork {
                 Vec::new()
             },
             xbar: vec![0.0; model.dofs.n_eq],
+            du_depth: 0.0,
             solve: contact.solve_scratch(),
         }
     }
@@ -628,6 +634,9 @@ struct ParamStep<'a> {
     /// Number of parameters.
     np: usize,
     rec: &'a StepRecord,
+    /// Load control: the step's depth column and what sets its depth variation
+    /// (`load.rs`).
+    border: Option<load::Border<'a>>,
 }
 
 impl ParamStep<'_> {
@@ -649,6 +658,7 @@ impl ParamStep<'_> {
         model.dofs.restrict(&w.full, &mut w.eq);
         self.contact
             .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+        let shift = self.border.as_ref().map(|b| b.shift(self, k, yk, w));
         expand_into(model, &w.eq, &mut w.full);
         if !w.du_prev.is_empty() {
             w.du_prev.copy_from_slice(&w.full);
@@ -670,6 +680,9 @@ impl ParamStep<'_> {
             &mut w.du,
         );
         *dfk = -force_dofs(model, self.rec).map(|d| w.full[d]).sum::<f64>();
+        if let Some(du) = shift {
+            w.du_depth = du;
+        }
     }
 }
 

@@ -185,3 +185,196 @@ impl Adjoint<'_> {
         Ok(rho)
     }
 }
+
+/// Load control in a step's forward sensitivities: the step's depth column and Schur
+/// complement, and what sets each parameter's depth variation `dU_i/dc_k`: under load
+/// control `(dP_i - dF_i^U) / s` (`dF_i^U` the force variation at the depth held, `dP_i`
+/// the prescribed force's, nonzero where the segment starts from a depth-controlled
+/// step's force), under depth control `dU_i` itself (nonzero where the segment starts
+/// from a load-controlled step's depth).
+pub(crate) struct Border<'a> {
+    pub col: &'a [f64],
+    pub s: f64,
+    pub load: bool,
+    /// `dP_i/dc_k` (load) or `dU_i/dc_k` (depth), one per parameter.
+    pub given: &'a [f64],
+}
+
+impl Border<'_> {
+    /// Adds `dU_i/dc_k du_U` to the displacement variation `w.eq` (on entry: at the
+    /// depth held) and returns `dU_i/dc_k`.
+    pub(crate) fn shift(
+        &self,
+        step: &crate::ParamStep<'_>,
+        k: usize,
+        _yk: &[Vec4],
+        w: &mut crate::ParamWork,
+    ) -> f64 {
+        let du = if self.load {
+            let model = step.model;
+            crate::expand_into(model, &w.eq, &mut w.full);
+            crate::strains_into(model, step.finite, &w.full, &mut w.strain);
+            for qp in 0..w.field_b.len() {
+                let bv = Vec4(w.strain[qp]);
+                w.field_b[qp] = step.tangents[qp].mul_vec(&(bv + w.q[qp]));
+            }
+            crate::delta_force_into(
+                model,
+                step.finite,
+                step.tangents,
+                &w.q,
+                &mut w.field_b,
+                &mut w.full,
+                &mut w.du,
+            );
+            let df: f64 = -crate::force_dofs(model, step.rec)
+                .map(|d| w.full[d])
+                .sum::<f64>();
+            (self.given[k] - df) / self.s
+        } else {
+            self.given[k]
+        };
+        for (e, c) in w.eq.iter_mut().zip(self.col) {
+            *e += du * c;
+        }
+        du
+    }
+}
+
+/// Forward sensitivities of a load-controlled run: `dU_i/dc` and `dF_i/dc` per step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadSensitivities {
+    /// `dU_i/dc_k` (mm per unit parameter): one row per trajectory step (0 where the
+    /// depth is prescribed and does not depend on the parameters).
+    pub dh_dc: Vec<Vec<f64>>,
+    /// `dF_i/dc_k` (N per unit parameter; 0 where the force is prescribed and fixed).
+    pub df_dc: Vec<Vec<f64>>,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+impl Adjoint<'_> {
+    /// Forward sensitivities of a run of
+    /// [`indentify_contact::DirectSolver::run_history`] (`traj` recorded with fields):
+    /// the forward's bordered system differentiated, one depth column per step shared by
+    /// the parameters.
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient_load`].
+    pub fn sensitivities_load(
+        &mut self,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+        history: &LoadHistory,
+    ) -> Result<LoadSensitivities, AdjointError> {
+        let model = self.model;
+        let start = std::time::Instant::now();
+        let n = traj.steps.len();
+        check_inputs(law, c, traj, n)?;
+        self.contact.begin();
+        let s_mat = law.compliance(c);
+        let np = c.len();
+        let nq = model.disc.n_qp();
+        let n_eq = model.dofs.n_eq;
+        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let mut df = vec![vec![0.0; np]; n];
+        let mut dh = vec![vec![0.0; np]; n];
+        let mut r_field = vec![Vec4::ZERO; nq * np];
+        let mut work: Vec<crate::ParamWork> = (0..np)
+            .map(|_| crate::ParamWork::new(model, &self.contact))
+            .collect();
+        let mut col = Column {
+            col: vec![0.0; n_eq],
+            kv: vec![0.0; n_eq],
+        };
+        // the state a segment starts from: its force's and depth's variations
+        let mut start_f = vec![0.0; np];
+        let mut start_u = vec![0.0; np];
+        let mut given = vec![0.0; np];
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let f1 = &traj.fields[i + 1];
+            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
+            crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
+            let j = segment_index(history, rec.t);
+            let load = load_controlled(history, rec.t);
+            if i > 0 && segment_index(history, traj.steps[i - 1].t) != j {
+                start_f.clone_from(&df[i - 1]);
+                start_u.clone_from(&dh[i - 1]);
+            }
+            let t_s = if j == 0 { 0.0 } else { history.ends[j - 1].0 };
+            let theta = ((rec.t - t_s) / (history.ends[j].0 - t_s)).min(1.0);
+            let mixed = j > 0 && matches!(history.ends[j - 1].1, Target::Force(_)) != load;
+            for (g, (f, u)) in given.iter_mut().zip(start_f.iter().zip(&start_u)) {
+                *g = match (mixed, load) {
+                    (false, _) => 0.0,
+                    (true, true) => (1.0 - theta) * f,
+                    (true, false) => (1.0 - theta) * u,
+                };
+            }
+            let bordered = load || mixed;
+            let s = if bordered {
+                if self.contact.force_cotangent() == ForceCotangent::Shifted {
+                    return Err(AdjointError::Step {
+                        step: i,
+                        t: rec.t,
+                        reason: "load control: the exact sensitivities with Coulomb \
+                                 friction are not available (its sticking ties read the \
+                                 punch depth)"
+                            .into(),
+                    });
+                }
+                self.contact.depth_column(rec, &mut col.col, &mut col.kv)
+            } else {
+                0.0
+            };
+            if load && !(s.is_finite() && s > 0.0) {
+                return Err(AdjointError::Step {
+                    step: i,
+                    t: rec.t,
+                    reason: format!(
+                        "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the \
+                         recorded step is not positive"
+                    ),
+                });
+            }
+            let step = crate::ParamStep {
+                model,
+                tangents: &self.tangents,
+                contact: &self.contact,
+                finite: self.finite.as_ref(),
+                s: &s_mat,
+                r_field: &r_field,
+                np,
+                rec,
+                border: bordered.then_some(Border {
+                    col: &col.col,
+                    s,
+                    load,
+                    given: &given,
+                }),
+            };
+            for (k, ((yk, dfk), w)) in y
+                .iter_mut()
+                .zip(df[i].iter_mut())
+                .zip(work.iter_mut())
+                .enumerate()
+            {
+                w.du_depth = 0.0;
+                step.solve(k, yk, dfk, w);
+                dh[i][k] = w.du_depth;
+            }
+        }
+        Ok(LoadSensitivities {
+            dh_dc: dh,
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}

@@ -200,3 +200,56 @@ fn coulomb_friction_is_refused_with_the_reason() {
         .to_string();
     assert!(err.contains("Coulomb friction"), "{err}");
 }
+
+/// The forward sensitivities of the bordered system give the same gradient as its
+/// adjoint (`J^T (h - h_exp)`), and their depth rows agree with central differences of
+/// the depths.
+#[test]
+fn sensitivities_agree_with_the_adjoint_and_differences() {
+    let m = small_model(cone(), ContactKind::Vertical);
+    for h in [
+        lhu(40.0, 6),
+        LoadHistory::from_segments(&[
+            depth(1.0, 0.02, 4),
+            force(1.0, 40.0, 6),
+            force(1.0, 40.0, 6),
+            depth(1.0, 0.02, 5),
+        ])
+        .unwrap(),
+    ] {
+        let (law, c) = (&Maxwell, [21000.0, 0.3, 25000.0]);
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let traj = solver.run_history(law, &c, &h, &opts(true)).unwrap();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let sens = adj.sensitivities_load(law, &c, &traj, &h).unwrap();
+        let n = traj.steps.len();
+        // an arbitrary depth cost: dJ/dU_i = i
+        let rho: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let g = adj
+            .gradient_load(law, &c, &traj, &h, &rho, &vec![0.0; n])
+            .unwrap();
+        for k in 0..c.len() {
+            let jt: f64 = sens.dh_dc.iter().zip(&rho).map(|(r, w)| r[k] * w).sum();
+            let r = relative_difference(jt, g.dj_dc[k]);
+            assert!(
+                r < 1e-8,
+                "param {k}: J^T rho {jt} adjoint {} ({r:.2e})",
+                g.dj_dc[k]
+            );
+        }
+        // the last schedule step's depth vs central differences
+        let last = |p: &[f64]| -> Result<f64, String> {
+            Ok(depths(&mut solver, law, p, &h)?.last().unwrap().1)
+        };
+        let mut last = last;
+        for k in 0..c.len() {
+            let fd = central_difference(&mut last, &c, k, 1e-5).unwrap();
+            let r = relative_difference(sens.dh_dc[n - 1][k], fd);
+            assert!(
+                r < 1e-5,
+                "param {k}: {} vs {fd} ({r:.2e})",
+                sens.dh_dc[n - 1][k]
+            );
+        }
+    }
+}
