@@ -34,6 +34,7 @@ pub mod figures;
 pub mod format;
 pub mod fuzzing;
 pub mod gradient;
+mod gradient_load;
 pub mod history;
 pub mod identify;
 pub mod output;

@@ -1,8 +1,8 @@
 //! Load control in configurations: `history` segments with `force` (N), `simulate`
-//! writing t, h, F, a for a mixed history; `identify` and `gradient-check` refusing
-//! load-controlled histories and `data.drive: Force` with a message naming the field
-//! (their gradient needs the adjoint of the bordered system, docs/theory.md §13); bad
-//! segments naming theirs.
+//! writing t, h, F, a for a mixed history; `gradient` on the depth cost against central
+//! differences (the adjoint of the bordered system, docs/theory.md §13); `identify`
+//! refusing load-controlled histories with a message naming the field; bad segments
+//! naming theirs.
 
 use indentify_study::gradient::{self, GradientOptions};
 use indentify_study::simulate::{self, SimulateOptions};
@@ -48,28 +48,58 @@ fn simulate_writes_a_mixed_load_controlled_history() {
     assert!(rows.iter().all(|r| r.a >= 0.0));
 }
 
-/// `gradient-check` (and `identify`, through the same preparation) refuses load control,
-/// naming the field.
+/// `identify` refuses load control, naming the field.
 #[test]
-fn load_control_is_refused_by_the_gradient_naming_the_field() {
+fn load_control_is_refused_by_identify_naming_the_field() {
+    use indentify_study::identify::{self, IdentifyOptions};
     let segments =
         "(duration: 0.2, depth: 0.02, steps: 2), (duration: 1.0, force: 100.0, steps: 3)";
-    let e = gradient::run(&GradientOptions::new(source(segments), None)).unwrap_err();
+    let e = identify::run(&IdentifyOptions::new(source(segments)), &mut ()).unwrap_err();
     let m = format!("{e:#}");
     assert!(
-        m.contains("history.segments[1].force") && m.contains("`simulate` only"),
+        m.contains("history.segments[1].force") && m.contains("not wired yet"),
         "{m}"
     );
-    let data = ConfigSource::Text {
-        text: format!("({MODEL} data: (file: \"missing.csv\", drive: Force))"),
-        name: "load-control-data".into(),
+}
+
+/// `gradient` under load control: the depth is the observable; `J` and `dJ/dc` of data
+/// simulated at other parameters (`simulate` writes t, h, F, a), the gradient against
+/// central differences of the command's own `J`.
+#[test]
+fn gradient_of_the_depth_cost_matches_central_differences() {
+    let segments = "(duration: 1.0, force: 100.0, steps: 6), \
+                    (duration: 1.0, force: 100.0, steps: 6)";
+    let dir = std::env::temp_dir().join(format!("indentify-load-grad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("curve.csv");
+    let mut sim = SimulateOptions::new(source(segments));
+    sim.out = Some(csv.clone());
+    simulate::run(&sim).unwrap();
+    let at = |e: f64, eta: f64| -> (f64, Vec<f64>) {
+        let mut o = GradientOptions::new(source(segments), Some(csv.clone()));
+        o.sets = vec![format!("law.E={e}"), format!("law.eta={eta}")];
+        let out = gradient::run(&o).unwrap();
+        (out.j, out.gradient)
     };
-    let e = gradient::run(&GradientOptions::new(data, None)).unwrap_err();
-    let m = format!("{e:#}");
-    assert!(
-        m.contains("data.drive: Force") && m.contains("adjoint"),
-        "{m}"
-    );
+    let (e, eta) = (21000.0, 27000.0);
+    let (j, g) = at(e, eta);
+    assert!(j > 0.0);
+    let (de, deta) = (e * 1e-5, eta * 1e-5);
+    let fd_e = (at(e + de, eta).0 - at(e - de, eta).0) / (2.0 * de);
+    let fd_eta = (at(e, eta + deta).0 - at(e, eta - deta).0) / (2.0 * deta);
+    for (k, fd) in [(0, fd_e), (2, fd_eta)] {
+        let r = (g[k] - fd).abs() / fd.abs();
+        assert!(r < 1e-5, "param {k}: adjoint {} fd {fd} ({r:.2e})", g[k]);
+    }
+    // a curve without a depth column is refused, naming it
+    std::fs::write(dir.join("f.csv"), "t,F\n0,0\n2,100\n").unwrap();
+    let e = gradient::run(&GradientOptions::new(
+        source(segments),
+        Some(dir.join("f.csv")),
+    ))
+    .unwrap_err();
+    assert!(format!("{e:#}").contains("no depth column"), "{e:#}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// A segment with both or neither of depth and force, or a negative force: the field.
