@@ -121,3 +121,25 @@ fn bad_load_segments_are_refused_naming_the_field() {
         assert!(m.contains(want), "{seg}: {m}");
     }
 }
+
+/// `simulate --noise` under load control perturbs the observable (the depth) and leaves
+/// the prescribed force as prescribed.
+#[test]
+fn simulate_noise_goes_on_the_depth_under_load_control() {
+    let segments = "(duration: 1.0, force: 100.0, steps: 5), \
+                    (duration: 1.0, force: 100.0, steps: 5)";
+    let clean = simulate::run(&SimulateOptions::new(source(segments))).unwrap();
+    let mut o = SimulateOptions::new(source(segments));
+    o.noise = Some((0.05, 3));
+    let noisy = simulate::run(&o).unwrap();
+    let mut moved = 0;
+    for (a, b) in clean.rows.iter().zip(&noisy.rows) {
+        assert_eq!(a.f.to_bits(), b.f.to_bits(), "the force is prescribed");
+        if a.h != 0.0 {
+            let rel = (b.h / a.h - 1.0).abs();
+            assert!(rel < 0.05 * 6.0, "{rel}");
+            moved += usize::from(rel > 0.0);
+        }
+    }
+    assert!(moved >= 8, "{moved}");
+}
