@@ -40,7 +40,7 @@ fn run(mesh: Mesh, punch: Punch, law: &dyn Law, c: &[f64], h: &[HistorySegment])
     let mut solver = DirectSolver::new(&model).expect("symbolic analysis");
     let history = LoadHistory::from_segments(h).expect("valid history");
     solver
-        .run_history(law, c, &history, &options())
+        .run_history(&indentify_laws::LawMaterial(law), c, &history, &options())
         .expect("load-controlled run converges")
 }
 

@@ -119,7 +119,9 @@ impl Runs {
             ..SolverOptions::default()
         };
         let mut run = |law: &dyn Law, c: &[f64]| {
-            let traj = solver.run(law, c, &schedule, &opts).expect("run converges");
+            let traj = solver
+                .run(&indentify_laws::LawMaterial(law), c, &schedule, &opts)
+                .expect("run converges");
             // the references use the schedule's steps: no step may have been cut
             assert!(
                 traj.steps.iter().all(|s| s.on_schedule),

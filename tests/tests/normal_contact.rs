@@ -65,7 +65,12 @@ fn force(mesh: Mesh, punch: &Punch, kind: ContactKind, h: f64) -> f64 {
     let model = Model::with_contact(mesh, punch.clone(), kind).expect("model");
     let mut solver = DirectSolver::new(&model).expect("analysis");
     solver
-        .run(&Elastic, &[E, NU], &one_step(h), &options())
+        .run(
+            &indentify_laws::LawMaterial(&Elastic),
+            &[E, NU],
+            &one_step(h),
+            &options(),
+        )
         .expect("elastic run")
         .steps[0]
         .force
@@ -201,7 +206,9 @@ fn reference_run(law: &dyn Law, c: &[f64], kind: ContactKind) -> Trajectory {
         record_fields: false,
         ..SolverOptions::default()
     };
-    solver.run(law, c, &sched, &opts).unwrap()
+    solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &opts)
+        .unwrap()
 }
 
 /// Turning the gap direction from vertical to normal shall change R0's force by +3% to

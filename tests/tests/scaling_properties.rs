@@ -92,7 +92,7 @@ fn trapezoid_scaled(s: f64, steps: usize) -> Schedule {
 fn run(model: &Model, law: &dyn Law, c: &[f64], schedule: &Schedule) -> Trajectory {
     DirectSolver::new(model)
         .expect("symbolic analysis")
-        .run(law, c, schedule, &options())
+        .run(&indentify_laws::LawMaterial(law), c, schedule, &options())
         .expect("run converges")
 }
 
@@ -130,11 +130,15 @@ fn runs_repeat_bit_for_bit() {
         (&NortonHoff, &NORTON_HOFF[..]),
     ] {
         let mut solver = DirectSolver::new(&model).expect("symbolic analysis");
-        let first = solver.run(law, c, &schedule, &opts).expect("run");
-        let again = solver.run(law, c, &schedule, &opts).expect("run");
+        let first = solver
+            .run(&indentify_laws::LawMaterial(law), c, &schedule, &opts)
+            .expect("run");
+        let again = solver
+            .run(&indentify_laws::LawMaterial(law), c, &schedule, &opts)
+            .expect("run");
         let fresh = DirectSolver::new(&model)
             .expect("symbolic analysis")
-            .run(law, c, &schedule, &opts)
+            .run(&indentify_laws::LawMaterial(law), c, &schedule, &opts)
             .expect("run");
         for other in [&again, &fresh] {
             assert_eq!(first.forces(), other.forces(), "{}", law.name());

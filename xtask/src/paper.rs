@@ -288,7 +288,13 @@ pub struct Data {
 
 fn simulate(model: &Model, law: &dyn Law, c: &[f64], schedule: &Schedule) -> Result<Vec<f64>> {
     let mut s = DirectSolver::new(model)?;
-    Ok(s.run(law, c, schedule, &SolverOptions::default())?.forces())
+    Ok(s.run(
+        &indentify_laws::LawMaterial(law),
+        c,
+        schedule,
+        &SolverOptions::default(),
+    )?
+    .forces())
 }
 
 impl Data {

@@ -43,12 +43,19 @@ fn bench_adjoint(c: &mut Criterion) {
     for (name, law, params, model) in cases {
         let mut solver = DirectSolver::new(model).expect("solver");
         let traj = solver
-            .run(law, &params, &schedule, &SolverOptions::default())
+            .run(
+                &indentify_laws::LawMaterial(law),
+                &params,
+                &schedule,
+                &SolverOptions::default(),
+            )
             .expect("run");
         // a cost with rho_i = F_i (data = 0): every step contributes
         let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
         let mut adj = Adjoint::new(model).expect("adjoint");
-        let g = adj.gradient(law, &params, &traj, &rho).expect("gradient");
+        let g = adj
+            .gradient(&indentify_laws::LawMaterial(law), &params, &traj, &rho)
+            .expect("gradient");
         eprintln!(
             "{name}: forward {:.1} ms, adjoint {:.1} ms (ratio {:.2}), adjoint factorizations {}, trajectory {:.1} MB",
             1e3 * traj.timing.total,
@@ -58,15 +65,20 @@ fn bench_adjoint(c: &mut Criterion) {
             traj.recorded_bytes() as f64 / 1e6
         );
         group.bench_function(format!("{name}_gradient"), |b| {
-            b.iter(|| adj.gradient(law, &params, &traj, &rho).expect("gradient"))
+            b.iter(|| {
+                adj.gradient(&indentify_laws::LawMaterial(law), &params, &traj, &rho)
+                    .expect("gradient")
+            })
         });
         // the forward sensitivities of every parameter (what Levenberg-Marquardt asks for)
         // inside a pool, as an identification runs it (its parameters in parallel)
         let pool = rayon::ThreadPoolBuilder::new().build().expect("pool");
         group.bench_function(format!("{name}_sensitivities"), |b| {
             b.iter(|| {
-                pool.install(|| adj.sensitivities(law, &params, &traj))
-                    .expect("sensitivities")
+                pool.install(|| {
+                    adj.sensitivities(&indentify_laws::LawMaterial(law), &params, &traj)
+                })
+                .expect("sensitivities")
             })
         });
     }

@@ -48,7 +48,12 @@ fn main() {
     };
     let mut solver = DirectSolver::new(&model).expect("solver");
     let by_depth = solver
-        .run(law, &params, &schedule, &plain)
+        .run(
+            &indentify_laws::LawMaterial(law),
+            &params,
+            &schedule,
+            &plain,
+        )
         .expect("depth run");
     let history =
         LoadHistory::from_force_record(&schedule.t, &by_depth.forces()).expect("force history");
@@ -57,7 +62,7 @@ fn main() {
     for _ in 0..repeat {
         let t0 = Instant::now();
         let traj = solver
-            .run_history(law, &params, &history, &opts)
+            .run_history(&indentify_laws::LawMaterial(law), &params, &history, &opts)
             .expect("load run");
         best_f = best_f.min(t0.elapsed().as_secs_f64());
         let n = traj.steps.len();

@@ -16,10 +16,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30))?;
     let c = [20000.0, 0.3, 30000.0];
-    let traj =
-        DirectSolver::new(&model)?.run(&Maxwell, &c, &schedule, &SolverOptions::default())?;
+    let traj = DirectSolver::new(&model)?.run(
+        &indentify_laws::LawMaterial(&Maxwell),
+        &c,
+        &schedule,
+        &SolverOptions::default(),
+    )?;
     let rho: Vec<f64> = traj.steps.iter().map(|s| s.force - 100.0).collect(); // dJ/dF_i
-    let grad = Adjoint::new(&model)?.gradient(&Maxwell, &c, &traj, &rho)?;
+    let grad =
+        Adjoint::new(&model)?.gradient(&indentify_laws::LawMaterial(&Maxwell), &c, &traj, &rho)?;
     let fmax = traj.steps.iter().map(|s| s.force).fold(0.0, f64::max);
     println!(
         "F_max = {fmax:.3} N over {} steps ({:.1} ms)",

@@ -34,6 +34,7 @@
 pub mod check;
 mod finite;
 mod load;
+mod material;
 
 pub use load::LoadSensitivities;
 
@@ -42,7 +43,7 @@ use indentify_contact::{
     StepRecord, StepTangent, Trajectory,
 };
 use indentify_fe::dofs::NO_EQ;
-use indentify_laws::{Law, LawError, Mat4, Vec4};
+use indentify_laws::{Law, LawError, Mat4, Material, Vec4};
 
 /// Errors of the adjoint and sensitivity computations.
 #[derive(Debug, thiserror::Error)]
@@ -262,11 +263,14 @@ impl<'m> Adjoint<'m> {
     /// [`AdjointError::NotDifferentiable`] (e.g. Norton-Hoff with m <= 1), or a step failure.
     pub fn gradient(
         &mut self,
-        law: &dyn Law,
+        mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
         dj_df: &[f64],
     ) -> Result<Gradient, AdjointError> {
+        let Some(law) = mat.as_law() else {
+            return self.gradient_material(mat, c, traj, dj_df);
+        };
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
         check_inputs(law, c, traj, dj_df.len())?;
@@ -304,15 +308,18 @@ impl<'m> Adjoint<'m> {
     /// this adjoint's.
     pub fn gradient_replayed(
         &mut self,
-        law: &dyn Law,
+        mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
         dj_df: &[f64],
         replay: Replay<'_, '_>,
     ) -> Result<Gradient, AdjointError> {
         if traj.fields.len() == traj.steps.len() + 1 {
-            return self.gradient(law, c, traj, dj_df);
+            return self.gradient(mat, c, traj, dj_df);
         }
+        let Some(law) = mat.as_law() else {
+            return self.gradient_replayed_material(mat, c, traj, dj_df, replay);
+        };
         let Replay {
             solver,
             schedule,
@@ -352,7 +359,7 @@ impl<'m> Adjoint<'m> {
                 None => (last, n),
             };
             let seg = solver
-                .replay(law, c, schedule, opts, cp, j_end)
+                .replay(mat, c, schedule, opts, cp, j_end)
                 .map_err(|e| AdjointError::Replay(e.to_string()))?;
             if seg.steps.len() != steps_end - cp.steps_done {
                 return Err(AdjointError::Replay(format!(
@@ -506,10 +513,13 @@ impl<'m> Adjoint<'m> {
     /// As [`Adjoint::gradient`].
     pub fn sensitivities(
         &mut self,
-        law: &dyn Law,
+        mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
+        let Some(law) = mat.as_law() else {
+            return self.sensitivities_material(mat, c, traj);
+        };
         let model = self.model;
         let start = std::time::Instant::now();
         let n = traj.steps.len();

@@ -34,13 +34,17 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 8)).unwrap();
     let full_opts = SolverOptions::default();
     let mut solver = DirectSolver::new(&model).unwrap();
-    let full = solver.run(law, c, &sched, &full_opts).unwrap();
+    let full = solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &full_opts)
+        .unwrap();
     let cp_opts = SolverOptions {
         record_fields: false,
         checkpoint_every: every,
         ..Default::default()
     };
-    let light = solver.run(law, c, &sched, &cp_opts).unwrap();
+    let light = solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &cp_opts)
+        .unwrap();
     // the same forward run: a checkpoint restarts the inexact solves' preconditioner with
     // a fresh factorization (so that replays repeat the checkpointed run bit for bit),
     // which moves the converged iterates by round-off only
@@ -67,10 +71,12 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
         })
         .collect();
     let mut adj = Adjoint::new(&model).unwrap();
-    let g_full = adj.gradient(law, c, &full, &rho).unwrap();
+    let g_full = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &full, &rho)
+        .unwrap();
     let g_cp = adj
         .gradient_replayed(
-            law,
+            &indentify_laws::LawMaterial(law),
             c,
             &light,
             &rho,
@@ -94,13 +100,19 @@ fn check(law: &dyn Law, c: &[f64], every: usize) {
         assert!(relative_difference(*a, *b) < 1e-12, "{a} vs {b}");
     } // the adjoint's assembly restarts from a full sum at every sweep: the same gradient,
     // and the same sensitivities, bit for bit after other computations
-    let again = adj.gradient(law, c, &full, &rho).unwrap();
+    let again = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &full, &rho)
+        .unwrap();
     assert_eq!(
         again.dj_dc, g_full.dj_dc,
         "gradient repeats after a replayed sweep"
     );
-    let s1 = adj.sensitivities(law, c, &full).unwrap();
-    let s2 = adj.sensitivities(law, c, &full).unwrap();
+    let s1 = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &full)
+        .unwrap();
+    let s2 = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &full)
+        .unwrap();
     assert_eq!(s1.df_dc, s2.df_dc, "sensitivities repeat");
 }
 

@@ -42,10 +42,13 @@ fn check_gradient(law: &dyn Law, truth: &[f64], c: &[f64], steps: usize) {
     };
     let mut solver = DirectSolver::new(&model).unwrap();
     // data and cost live on the schedule's times; sub-steps of cut steps have rho = 0
-    let data: Vec<f64> = solver.run(law, truth, &sched, &opts).unwrap().forces();
+    let data: Vec<f64> = solver
+        .run(&indentify_laws::LawMaterial(law), truth, &sched, &opts)
+        .unwrap()
+        .forces();
     let mut cost = |p: &[f64]| -> Result<f64, String> {
         let t = solver
-            .run(law, p, &sched, &opts)
+            .run(&indentify_laws::LawMaterial(law), p, &sched, &opts)
             .map_err(|e| e.to_string())?;
         Ok(0.5
             * t.forces()
@@ -58,7 +61,9 @@ fn check_gradient(law: &dyn Law, truth: &[f64], c: &[f64], steps: usize) {
         .map(|k| central_difference(&mut cost, c, k, 1e-5).unwrap())
         .collect();
     let mut solver = DirectSolver::new(&model).unwrap();
-    let traj = solver.run(law, c, &sched, &opts).unwrap();
+    let traj = solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &opts)
+        .unwrap();
     let rho: Vec<f64> = traj
         .steps
         .iter()
@@ -71,8 +76,12 @@ fn check_gradient(law: &dyn Law, truth: &[f64], c: &[f64], steps: usize) {
         })
         .collect();
     let mut adj = Adjoint::new(&model).unwrap();
-    let g = adj.gradient(law, c, &traj, &rho).unwrap();
-    let sens = adj.sensitivities(law, c, &traj).unwrap();
+    let g = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &traj, &rho)
+        .unwrap();
+    let sens = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &traj)
+        .unwrap();
     let jt = sens.transpose_mul(&rho);
     for k in 0..c.len() {
         let name = law.params()[k].name;

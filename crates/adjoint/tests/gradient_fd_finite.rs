@@ -123,11 +123,11 @@ fn stress_scaling_identity_under_finite_strain() {
         for (law, c, stress_like) in &cases {
             let traj = DirectSolver::new(&model)
                 .unwrap()
-                .run(*law, c, &sched, &opts)
+                .run(&indentify_laws::LawMaterial(*law), c, &sched, &opts)
                 .unwrap();
             let sens = Adjoint::new(&model)
                 .unwrap()
-                .sensitivities(*law, c, &traj)
+                .sensitivities(&indentify_laws::LawMaterial(*law), c, &traj)
                 .unwrap();
             let fmax = traj.steps.iter().map(|s| s.force.abs()).fold(0.0, f64::max);
             let mut worst: f64 = 0.0;

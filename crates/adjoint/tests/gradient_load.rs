@@ -13,7 +13,7 @@ use indentify_adjoint::check::{central_difference, relative_difference};
 use indentify_contact::{
     ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions,
 };
-use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
+use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
 
 fn opts(record: bool) -> SolverOptions {
     SolverOptions {
@@ -59,7 +59,7 @@ fn depths(
     h: &LoadHistory,
 ) -> Result<Vec<(f64, f64)>, String> {
     let traj = solver
-        .run_history(law, c, h, &opts(false))
+        .run_history(&LawMaterial(law), c, h, &opts(false))
         .map_err(|e| e.to_string())?;
     Ok(traj.schedule_steps().map(|s| (s.t, s.depth)).collect())
 }
@@ -69,7 +69,9 @@ fn depths(
 fn check(model: &Model, law: &dyn Law, c: &[f64], truth: &[f64], h: &LoadHistory) -> f64 {
     let mut solver = DirectSolver::new(model).unwrap();
     let data = depths(&mut solver, law, truth, h).unwrap();
-    let traj = solver.run_history(law, c, h, &opts(true)).unwrap();
+    let traj = solver
+        .run_history(&LawMaterial(law), c, h, &opts(true))
+        .unwrap();
     // dJ/dh_i on the schedule's steps, 0 on sub-steps
     let mut j = 0;
     let mut dj_dh = vec![0.0; traj.steps.len()];
@@ -191,7 +193,9 @@ fn coulomb_friction_is_refused_with_the_reason() {
     let h = lhu(40.0, 4);
     let mut solver = DirectSolver::new(&m).unwrap();
     let c = [20000.0, 0.3, 30000.0];
-    let traj = solver.run_history(&Maxwell, &c, &h, &opts(true)).unwrap();
+    let traj = solver
+        .run_history(&LawMaterial(&Maxwell), &c, &h, &opts(true))
+        .unwrap();
     let n = traj.steps.len();
     let err = Adjoint::new(&m)
         .unwrap()
@@ -219,7 +223,9 @@ fn sensitivities_agree_with_the_adjoint_and_differences() {
     ] {
         let (law, c) = (&Maxwell, [21000.0, 0.3, 25000.0]);
         let mut solver = DirectSolver::new(&m).unwrap();
-        let traj = solver.run_history(law, &c, &h, &opts(true)).unwrap();
+        let traj = solver
+            .run_history(&LawMaterial(law), &c, &h, &opts(true))
+            .unwrap();
         let mut adj = Adjoint::new(&m).unwrap();
         let sens = adj.sensitivities_load(law, &c, &traj, &h).unwrap();
         let n = traj.steps.len();

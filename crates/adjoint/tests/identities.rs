@@ -43,11 +43,11 @@ fn stress_scaling(law: &dyn Law, c: &[f64], stress_like: &[usize]) {
     };
     let traj = DirectSolver::new(&model)
         .unwrap()
-        .run(law, c, &sched, &opts)
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &opts)
         .unwrap();
     let sens = Adjoint::new(&model)
         .unwrap()
-        .sensitivities(law, c, &traj)
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &traj)
         .unwrap();
     let fmax = traj.steps.iter().map(|s| s.force.abs()).fold(0.0, f64::max);
     let mut worst: f64 = 0.0;
@@ -91,11 +91,18 @@ fn finite_difference_v_for_norton_hoff() {
     let law = &NortonHoff;
     let mut solver = DirectSolver::new(&model).unwrap();
     let data = solver
-        .run(law, &[1e5, 0.3, 1500.0, 5.0, 500.0], &sched, &opts)
+        .run(
+            &indentify_laws::LawMaterial(law),
+            &[1e5, 0.3, 1500.0, 5.0, 500.0],
+            &sched,
+            &opts,
+        )
         .unwrap()
         .forces();
     let c = [1.2e5, 0.31, 1300.0, 4.0, 420.0];
-    let traj = solver.run(law, &c, &sched, &opts).unwrap();
+    let traj = solver
+        .run(&indentify_laws::LawMaterial(law), &c, &sched, &opts)
+        .unwrap();
     let rho: Vec<f64> = traj
         .steps
         .iter()
@@ -109,11 +116,11 @@ fn finite_difference_v_for_norton_hoff() {
         .collect();
     let g = Adjoint::new(&model)
         .unwrap()
-        .gradient(law, &c, &traj, &rho)
+        .gradient(&indentify_laws::LawMaterial(law), &c, &traj, &rho)
         .unwrap();
     let mut cost = |p: &[f64]| -> Result<f64, String> {
         let t = solver
-            .run(law, p, &sched, &opts)
+            .run(&indentify_laws::LawMaterial(law), p, &sched, &opts)
             .map_err(|e| e.to_string())?;
         Ok(0.5
             * t.forces()

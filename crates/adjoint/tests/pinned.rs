@@ -40,10 +40,14 @@ fn hashes(model: &Model, law: &dyn Law, c: &[f64]) -> [u64; 4] {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 0.5, 0.5, 0.5, 6)).unwrap();
     let opts = SolverOptions::default();
     let mut solver = DirectSolver::new(model).unwrap();
-    let traj = solver.run(law, c, &schedule, &opts).unwrap();
+    let traj = solver
+        .run(&indentify_laws::LawMaterial(law), c, &schedule, &opts)
+        .unwrap();
     let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
     let mut adj = Adjoint::new(model).unwrap();
-    let g = adj.gradient(law, c, &traj, &rho).unwrap();
+    let g = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &traj, &rho)
+        .unwrap();
     let ck_opts = SolverOptions {
         record_fields: false,
         checkpoint_every: 4,
@@ -51,7 +55,9 @@ fn hashes(model: &Model, law: &dyn Law, c: &[f64]) -> [u64; 4] {
     };
     let g_ck =
         common::checkpointed_gradient(&mut adj, &mut solver, law, c, &schedule, &ck_opts, &rho);
-    let s = adj.sensitivities(law, c, &traj).unwrap();
+    let s = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &traj)
+        .unwrap();
     [
         fnv(traj.steps.iter().map(|s| s.force)),
         fnv(g.dj_dc.iter().copied()),

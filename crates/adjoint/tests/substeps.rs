@@ -59,8 +59,12 @@ fn substeps_solve_the_schedule_with_the_points_inserted() {
         let s = schedule();
         let (fine, at) = inserted(&s);
         let mut solver = DirectSolver::new(&m).unwrap();
-        let traj = solver.run(&law, &c, &s, &opts()).unwrap();
-        let reference = solver.run(&law, &c, &fine, &opts()).unwrap();
+        let traj = solver
+            .run(&indentify_laws::LawMaterial(&law), &c, &s, &opts())
+            .unwrap();
+        let reference = solver
+            .run(&indentify_laws::LawMaterial(&law), &c, &fine, &opts())
+            .unwrap();
         // one recorded step per sub-step (and per cut, the same in both runs)
         assert!(traj.steps.len() >= s.n_solver_steps());
         assert_eq!(traj.steps.len(), reference.steps.len());
@@ -82,7 +86,10 @@ fn substeps_solve_the_schedule_with_the_points_inserted() {
             substeps: Vec::new(),
             ..s.clone()
         };
-        let f_plain = solver.run(&law, &c, &plain, &opts()).unwrap().forces();
+        let f_plain = solver
+            .run(&indentify_laws::LawMaterial(&law), &c, &plain, &opts())
+            .unwrap()
+            .forces();
         let moved = f
             .iter()
             .zip(&f_plain)

@@ -27,19 +27,28 @@ fn run(model: &Model, law: &dyn Law, c: &[f64]) -> Trajectory {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 0.5, 0.5, 0.5, 6)).unwrap();
     DirectSolver::new(model)
         .unwrap()
-        .run(law, c, &schedule, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(law),
+            c,
+            &schedule,
+            &SolverOptions::default(),
+        )
         .unwrap()
 }
 
 /// The bits of the gradient (for `rho = F`) and of every sensitivity.
 fn gradient_bits(a: &mut Adjoint, law: &dyn Law, c: &[f64], t: &Trajectory) -> Vec<u64> {
     let rho: Vec<f64> = t.steps.iter().map(|s| s.force).collect();
-    let g = a.gradient(law, c, t, &rho).unwrap();
+    let g = a
+        .gradient(&indentify_laws::LawMaterial(law), c, t, &rho)
+        .unwrap();
     g.dj_dc.iter().map(|v| v.to_bits()).collect()
 }
 
 fn sensitivity_bits(a: &mut Adjoint, law: &dyn Law, c: &[f64], t: &Trajectory) -> Vec<u64> {
-    let s = a.sensitivities(law, c, t).unwrap();
+    let s = a
+        .sensitivities(&indentify_laws::LawMaterial(law), c, t)
+        .unwrap();
     s.df_dc.iter().flatten().map(|v| v.to_bits()).collect()
 }
 

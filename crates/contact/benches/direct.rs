@@ -63,7 +63,9 @@ fn bench_forward(c: &mut Criterion) {
         let mut solver = DirectSolver::new(model).expect("solver");
         let opts = SolverOptions::default();
         // one run to report the split, then the timed runs
-        let t = solver.run(law, &params, &schedule, &opts).expect("run");
+        let t = solver
+            .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
+            .expect("run");
         eprintln!(
             "{name}: {} steps, {} iterations, {}",
             t.steps.len(),
@@ -71,7 +73,11 @@ fn bench_forward(c: &mut Criterion) {
             t.timing
         );
         group.bench_function(name, |b| {
-            b.iter(|| solver.run(law, &params, &schedule, &opts).expect("run"))
+            b.iter(|| {
+                solver
+                    .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
+                    .expect("run")
+            })
         });
     }
     group.finish();

@@ -60,7 +60,7 @@ fn main() {
     let mut solver = DirectSolver::new(&model).expect("solver");
     let opts = SolverOptions::default();
     let t = solver
-        .run(law, &params, &sched, &opts)
+        .run(&indentify_laws::LawMaterial(law), &params, &sched, &opts)
         .expect("forward run");
     let repeat: usize = std::env::args()
         .nth(2)
@@ -70,7 +70,7 @@ fn main() {
     if repeat > 1 {
         for _ in 1..repeat {
             let again = solver
-                .run(law, &params, &sched, &opts)
+                .run(&indentify_laws::LawMaterial(law), &params, &sched, &opts)
                 .expect("forward run");
             if again.timing.total < t.timing.total {
                 t = again;

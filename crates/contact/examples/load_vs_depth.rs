@@ -42,7 +42,7 @@ fn main() {
     };
     let mut solver = DirectSolver::new(&model).expect("solver");
     let by_depth = solver
-        .run(law, &params, &schedule, &opts)
+        .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
         .expect("depth run");
     let history =
         LoadHistory::from_force_record(&schedule.t, &by_depth.forces()).expect("force history");
@@ -52,12 +52,12 @@ fn main() {
     for _ in 0..repeat {
         let t0 = Instant::now();
         let d = solver
-            .run(law, &params, &schedule, &opts)
+            .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
             .expect("depth run");
         best_d = best_d.min(t0.elapsed().as_secs_f64());
         let t0 = Instant::now();
         let f = solver
-            .run_history(law, &params, &history, &opts)
+            .run_history(&indentify_laws::LawMaterial(law), &params, &history, &opts)
             .expect("load run");
         best_f = best_f.min(t0.elapsed().as_secs_f64());
         it_d = d.total_iterations();

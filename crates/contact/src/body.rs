@@ -11,9 +11,13 @@
 //! 4x4 product, [`Law::elastic_domain`]) and re-assemble the elements whose tangents
 //! changed. Finite strain (`kinematics.rs`): the laws on the Hencky strain, the element
 //! tangents formed only for passes that solve.
+//!
+//! A [`Material`] with internal variables (no [`Material::as_law`]) is updated point by
+//! point from `y_0 = [sigma_0, alpha_0]` (small strain); its internal variables live in
+//! one flat vector beside the stresses ([`Internal`]).
 
 use indentify_fe::QP_PER_ELEMENT;
-use indentify_laws::{Law, Mat4, Vec4};
+use indentify_laws::{Law, Mat4, Material, Regime, Vec4};
 use rayon::prelude::*;
 
 use crate::kinematics::{self, ELEMENT_CHUNK, FiniteIn, FiniteOut, Kinematics};
@@ -25,8 +29,10 @@ use crate::system::ConstrainedSystem;
 /// initial state, its length, and the affine form of the law's update when it has one
 /// (small strain only).
 pub(crate) struct StepLaw<'a> {
-    /// The law.
-    pub law: &'a dyn Law,
+    /// The material.
+    pub mat: &'a dyn Material,
+    /// The stress-only law it adapts, if any (today's paths and bits).
+    pub law: Option<&'a dyn Law>,
     /// Its parameters.
     pub c: &'a [f64],
     /// The converged state the step starts from.
@@ -42,6 +48,45 @@ pub(crate) struct StepLaw<'a> {
 type PassChunk<'a> = (
     usize,
     ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut [Mat4]),
+);
+
+/// The internal variables of every Gauss point of a state or an iterate: `alpha` flat,
+/// point-major (`alpha[q * n .. (q + 1) * n]` at Gauss point `q`, `n` the material's
+/// `n_internal`), and the branch of the residual each point's last update took. Both are
+/// empty for a stress-only law.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Internal {
+    /// Internal variables, point-major.
+    pub(crate) alpha: Vec<f64>,
+    /// Branch of the local residual at each Gauss point.
+    pub(crate) regime: Vec<Regime>,
+}
+
+impl Internal {
+    /// The initial internal state of `nq` points of `mat` (zero internal variables, the
+    /// smooth branch), empty for a stress-only law.
+    pub(crate) fn initial(mat: &dyn Material, nq: usize) -> Internal {
+        if mat.as_law().is_some() {
+            return Internal::default();
+        }
+        Internal {
+            alpha: vec![0.0; nq * mat.n_internal()],
+            regime: vec![Regime::default(); nq],
+        }
+    }
+}
+
+/// One chunk of the small-strain pass of a material with internal variables: its index,
+/// its elements' forces, stresses, tangents, internal variables and branches.
+type MaterialChunk<'a> = (
+    usize,
+    (
+        (
+            ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut [Mat4]),
+            &'a mut [f64],
+        ),
+        &'a mut [Regime],
+    ),
 );
 
 /// The buffers of the body's Gauss-point passes (allocated once per solver).
@@ -87,13 +132,13 @@ impl Body {
     pub(crate) fn begin_step(
         &mut self,
         model: &Model,
-        law: &dyn Law,
+        law: Option<&dyn Law>,
         c: &[f64],
         state: &State,
         dt: f64,
     ) -> Result<Option<(Mat4, Mat4)>, StepFailure> {
         if model.kinematics != Kinematics::Finite {
-            return Ok(law.affine_update(c, dt));
+            return Ok(law.and_then(|l| l.affine_update(c, dt)));
         }
         let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
         self.finite_e0.resize(nq, Vec4::ZERO);
@@ -122,14 +167,18 @@ impl Body {
         step: &StepLaw<'_>,
         u: &[f64],
         sigma_out: &mut [Vec4],
+        internal_out: &mut Internal,
     ) -> Result<(), StepFailure> {
-        let (law, c, state, dt) = (step.law, step.c, step.state, step.dt);
-        let affine = step.affine.as_ref();
+        let (c, state, dt) = (step.c, step.state, step.dt);
         let disc = &model.disc;
         if model.kinematics == Kinematics::Finite {
-            let domain = law.elastic_domain(c, dt);
+            let domain = step.law.and_then(|law| law.elastic_domain(c, dt));
             let input = FiniteIn {
-                law,
+                law: step.law,
+                material: step
+                    .law
+                    .is_none()
+                    .then_some((step.mat, state.internal.alpha.as_slice())),
                 c,
                 dt,
                 t0: &state.sigma,
@@ -141,10 +190,16 @@ impl Body {
                 f_int: &mut self.f_int,
                 tangents: &mut self.tangents,
                 points: &mut self.finite_points,
+                alpha: &mut internal_out.alpha,
+                regime: &mut internal_out.regime,
             };
             return kinematics::evaluate(disc, &input, u, out)
                 .map_err(|f| finite_failure(f, state.depth));
         }
+        let Some(law) = step.law else {
+            return self.evaluate_material(model, step, u, sigma_out, internal_out);
+        };
+        let affine = step.affine.as_ref();
         // (only affine laws use it: a nonlinear law's iterate is never compared)
         let at_start = affine.is_some() && u == state.u.as_slice();
         if at_start && affine.is_some_and(|(a, _)| *a == Mat4::IDENTITY) {
@@ -237,6 +292,121 @@ impl Body {
         Ok(())
     }
 
+    /// [`Body::evaluate`] for a material with internal variables (small strain): at every
+    /// Gauss point the update from `y_0 = [sigma_0, alpha_0]` of the step's state under
+    /// the point's strain increment writes `sigma_1`, `alpha_1`, the consistent tangent
+    /// and the branch taken; the same fixed chunks of elements as the law's pass, the
+    /// element forces summed in element order (the same bits for any thread count). The
+    /// state vectors `y_0, y_1` are one scratch per chunk (on the stack up to 32 entries
+    /// each): nothing is allocated per Gauss point.
+    ///
+    /// # Errors
+    /// The first failed local update, or an update whose state is not finite
+    /// ([`StepFailure::Local`], naming the Gauss point).
+    fn evaluate_material(
+        &mut self,
+        model: &Model,
+        step: &StepLaw<'_>,
+        u: &[f64],
+        sigma_out: &mut [Vec4],
+        internal_out: &mut Internal,
+    ) -> Result<(), StepFailure> {
+        let (mat, c, state, dt) = (step.mat, step.c, step.state, step.dt);
+        let disc = &model.disc;
+        let n = mat.n_internal();
+        let m = 4 + n;
+        let ne = disc.elements.len();
+        let nq = QP_PER_ELEMENT * ne;
+        self.element_forces.resize(ne, [0.0; 16]);
+        let chunk_qp = QP_PER_ELEMENT * ELEMENT_CHUNK;
+        let n_chunks = ne.div_ceil(ELEMENT_CHUNK);
+        let alpha0 = &state.internal.alpha;
+        let Internal { alpha, regime } = internal_out;
+        let mut alpha_chunks: Vec<&mut [f64]> = if n > 0 {
+            alpha[..nq * n].chunks_mut(chunk_qp * n).collect()
+        } else {
+            (0..n_chunks).map(|_| &mut [][..]).collect()
+        };
+        let tangents = &mut self.tangents[..nq];
+        let work = |(chunk, ((((fes, sig), tan), al), reg)): MaterialChunk<'_>| {
+            let mut stack = [0.0f64; 64];
+            let mut heap = Vec::new();
+            let buf: &mut [f64] = if 2 * m <= stack.len() {
+                &mut stack[..2 * m]
+            } else {
+                heap.resize(2 * m, 0.0);
+                &mut heap
+            };
+            let (y0, y1) = buf.split_at_mut(m);
+            for (i, fe) in fes.iter_mut().enumerate() {
+                let e = chunk * ELEMENT_CHUNK + i;
+                let dofs = disc.element_dofs(e);
+                let due: [f64; 16] = std::array::from_fn(|k| u[dofs[k]] - state.u[dofs[k]]);
+                *fe = [0.0; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let l = QP_PER_ELEMENT * i + g;
+                    let qp = &disc.qp[q];
+                    let deps = Vec4(qp.strain(&due));
+                    y0[..4].copy_from_slice(&state.sigma[q].0);
+                    y0[4..].copy_from_slice(&alpha0[q * n..(q + 1) * n]);
+                    let failure = |reason: String, factor: f64| StepFailure::Local {
+                        qp: q,
+                        reason,
+                        factor,
+                    };
+                    match mat.update(c, y0, &deps, dt, y1) {
+                        Ok(up) => {
+                            if y1.iter().any(|v| !v.is_finite()) {
+                                return Some(failure(
+                                    format!("{}: non-finite state after the update", mat.name()),
+                                    0.5,
+                                ));
+                            }
+                            let s1 = Vec4([y1[0], y1[1], y1[2], y1[3]]);
+                            qp.add_bt(&s1.0, qp.w, fe);
+                            sig[l] = s1;
+                            tan[l] = up.tangent;
+                            al[l * n..(l + 1) * n].copy_from_slice(&y1[4..]);
+                            reg[l] = up.regime;
+                        }
+                        Err(f) => return Some(failure(f.reason, f.suggested_dt_factor)),
+                    }
+                }
+            }
+            None
+        };
+        let failure = if rayon::current_num_threads() > 1 {
+            self.element_forces
+                .par_chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].par_chunks_mut(chunk_qp))
+                .zip(tangents.par_chunks_mut(chunk_qp))
+                .zip(alpha_chunks.par_iter_mut().map(|a| &mut **a))
+                .zip(regime[..nq].par_chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map_first(work)
+        } else {
+            self.element_forces
+                .chunks_mut(ELEMENT_CHUNK)
+                .zip(sigma_out[..nq].chunks_mut(chunk_qp))
+                .zip(tangents.chunks_mut(chunk_qp))
+                .zip(alpha_chunks.iter_mut().map(|a| &mut **a))
+                .zip(regime[..nq].chunks_mut(chunk_qp))
+                .enumerate()
+                .find_map(work)
+        };
+        if let Some(f) = failure {
+            return Err(f);
+        }
+        self.f_int.fill(0.0);
+        for (e, fe) in self.element_forces.iter().enumerate() {
+            for (d, v) in disc.element_dofs(e).iter().zip(fe) {
+                self.f_int[*d] += v;
+            }
+        }
+        Ok(())
+    }
+
     /// Sets the tangent of the last evaluation (at the stresses `sigma` it gave) in
     /// `system` for a Newton solve: an affine law's one tangent (reused while the
     /// parameters and the step length are), the element tangents under finite strain
@@ -272,7 +442,7 @@ impl Body {
                 seconds
             }
             None => {
-                let reuse = step.law.is_linear().then_some((c, dt));
+                let reuse = step.mat.is_linear().then_some((c, dt));
                 system.set_tangent(model, &self.tangents, reuse);
                 0.0
             }

@@ -20,7 +20,7 @@
 //! residual equal to Newton's own (Dembo, Eisenstat & Steihaug 1982), so that Newton stays
 //! quadratic with a fraction of the factorizations.
 
-use indentify_laws::{Law, Vec4};
+use indentify_laws::{Material, Regime, Vec4};
 
 use crate::ContactError;
 use crate::drive::{DepthDrive, Drive, ForceDrive};
@@ -114,6 +114,13 @@ pub struct StepFields {
     pub u: Vec<f64>,
     /// Converged stress at every Gauss point (MPa, Mandel).
     pub sigma: Vec<Vec4>,
+    /// Internal variables of a material that has them, point-major
+    /// (`alpha[q * n .. (q + 1) * n]` at Gauss point `q`, `n` =
+    /// [`Material::n_internal`]); empty for a stress-only law.
+    pub alpha: Vec<f64>,
+    /// The branch of the local residual each Gauss point's update took (held by the
+    /// adjoint, docs/theory.md §12); empty for a stress-only law.
+    pub regime: Vec<Regime>,
 }
 
 impl std::fmt::Debug for StepFields {
@@ -162,7 +169,7 @@ impl Trajectory {
         let f: usize = self
             .fields
             .iter()
-            .map(|f| 8 * f.u.len() + 32 * f.sigma.len())
+            .map(|f| 8 * f.u.len() + 32 * f.sigma.len() + 8 * f.alpha.len() + f.regime.len())
             .sum();
         let s: usize = self
             .steps
@@ -287,7 +294,8 @@ impl<'m> DirectSolver<'m> {
         &self.newton.residuals
     }
 
-    /// Runs the whole schedule for parameters `c` of `law`.
+    /// Runs the whole schedule for parameters `c` of the material `mat` (a stress-only
+    /// [`indentify_laws::Law`] as [`indentify_laws::LawMaterial`]: today's paths and bits).
     ///
     /// # Errors
     /// [`ContactError::Parameters`] for inadmissible parameters;
@@ -295,18 +303,18 @@ impl<'m> DirectSolver<'m> {
     /// the trajectory up to the last converged step.
     pub fn run(
         &mut self,
-        law: &dyn Law,
+        law: &dyn Material,
         c: &[f64],
         schedule: &Schedule,
         opts: &SolverOptions,
     ) -> Result<Trajectory, ContactError> {
-        law.check_params(c)?;
+        check_material(self.model, law, c)?;
         let model = self.model;
         let mut traj = Trajectory {
             params: c.to_vec(),
             ..Default::default()
         };
-        let state = State::initial(model, schedule.t[0], schedule.depth[0]);
+        let state = State::initial(model, law, schedule.t[0], schedule.depth[0]);
         let run = Run {
             law,
             c,
@@ -337,7 +345,7 @@ impl<'m> DirectSolver<'m> {
     /// depth.
     pub fn run_history(
         &mut self,
-        law: &dyn Law,
+        law: &dyn Material,
         c: &[f64],
         history: &LoadHistory,
         opts: &SolverOptions,
@@ -345,13 +353,13 @@ impl<'m> DirectSolver<'m> {
         if !history.is_load_controlled() {
             return self.run(law, c, &history.schedule, opts);
         }
-        law.check_params(c)?;
+        check_material(self.model, law, c)?;
         let schedule = &history.schedule;
         let mut traj = Trajectory {
             params: c.to_vec(),
             ..Default::default()
         };
-        let state = State::initial(self.model, schedule.t[0], 0.0);
+        let state = State::initial(self.model, law, schedule.t[0], 0.0);
         let run = Run {
             law,
             c,
@@ -380,7 +388,7 @@ impl<'m> DirectSolver<'m> {
     /// checkpoint or beyond the schedule.
     pub fn replay(
         &mut self,
-        law: &dyn Law,
+        law: &dyn Material,
         c: &[f64],
         schedule: &Schedule,
         opts: &SolverOptions,
@@ -443,6 +451,8 @@ impl<'m> DirectSolver<'m> {
             traj.fields.push(StepFields {
                 u: state.u.clone(),
                 sigma: state.sigma.clone(),
+                alpha: state.internal.alpha.clone(),
+                regime: state.internal.regime.clone(),
             });
         }
         let factorizations0 = self.newton.system.factorizations();
@@ -472,7 +482,7 @@ impl<'m> DirectSolver<'m> {
             while let Some(&(t1, level)) = targets.last() {
                 let (depth, load) = run.drive.step(t1, &state);
                 let spec = StepSpec {
-                    law: run.law,
+                    mat: run.law,
                     c: run.c,
                     opts,
                     state: &state,
@@ -499,6 +509,8 @@ impl<'m> DirectSolver<'m> {
                             traj.fields.push(StepFields {
                                 u: state.u.clone(),
                                 sigma: state.sigma.clone(),
+                                alpha: state.internal.alpha.clone(),
+                                regime: state.internal.regime.clone(),
                             });
                         }
                         traj.steps.push(rec);
@@ -550,7 +562,7 @@ impl<'m> DirectSolver<'m> {
 /// A run's fixed inputs: the law and its parameters, the schedule's times and the drive
 /// that sets the punch depth at each, the options.
 struct Run<'a> {
-    law: &'a dyn Law,
+    law: &'a dyn Material,
     c: &'a [f64],
     schedule: &'a Schedule,
     drive: &'a dyn Drive,
@@ -566,6 +578,15 @@ struct Stretch {
     j1: usize,
     record: bool,
     every: usize,
+}
+
+/// The checks of a run's material: its parameters.
+///
+/// # Errors
+/// [`ContactError::Parameters`] for inadmissible parameters.
+fn check_material(_model: &Model, mat: &dyn Material, c: &[f64]) -> Result<(), ContactError> {
+    mat.check_params(c)?;
+    Ok(())
 }
 
 /// Nodal pressures of a step: `lambda_k / int N_k 2 pi r dr` at the active candidates (MPa),
@@ -587,7 +608,7 @@ pub fn nodal_pressures(model: &Model, rec: &StepRecord) -> Vec<(f64, f64)> {
 mod tests {
     use crate::newton::extrapolation_weights;
     use crate::{ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
-    use indentify_laws::Elastic;
+    use indentify_laws::{Elastic, LawMaterial};
     use indentify_mesh::CylinderMesher;
 
     /// Newton iterations and residuals of the last step of an elastic ramp to 0.05 mm
@@ -617,7 +638,7 @@ mod tests {
         };
         crate::model::test_hooks::NO_CURVATURE.with(|c| c.set(no_curvature));
         let mut solver = DirectSolver::new(&model).unwrap();
-        let run = solver.run(&Elastic, &[20000.0, 0.3], &sched, &opts);
+        let run = solver.run(&LawMaterial(&Elastic), &[20000.0, 0.3], &sched, &opts);
         crate::model::test_hooks::NO_CURVATURE.with(|c| c.set(false));
         run.unwrap();
         solver.last_residuals().iter().map(|r| r.0).collect()

@@ -10,7 +10,7 @@
 //! `tau = R T R^T`, so `T` has the principal values of `J sigma`.
 
 use indentify_fe::{Deformation, Discretization, QP_PER_ELEMENT};
-use indentify_laws::{ElasticDomain, Law, LogStrain, Mat4, Vec4};
+use indentify_laws::{ElasticDomain, Law, LogStrain, Mat4, Material, Regime, Vec4};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -91,8 +91,11 @@ pub(crate) const ELEMENT_CHUNK: usize = 8;
 /// elastic domain when it has one.
 #[derive(Clone, Copy)]
 pub(crate) struct FiniteIn<'a> {
-    /// The law.
-    pub law: &'a dyn Law,
+    /// The stress-only law, or `None` for a material with internal variables.
+    pub law: Option<&'a dyn Law>,
+    /// The material with internal variables (when `law` is `None`) and the internal
+    /// variables of the initial state (point-major).
+    pub material: Option<(&'a dyn Material, &'a [f64])>,
     /// Its parameters.
     pub c: &'a [f64],
     /// Step length (s).
@@ -117,6 +120,10 @@ pub(crate) struct FiniteOut<'a> {
     /// The deformation and its Hencky strain (with `P` and the second derivatives) at every
     /// Gauss point, kept for [`element_tangents`] at the same displacement.
     pub points: &'a mut [Point],
+    /// A material's internal variables and regimes (empty for a stress-only law).
+    pub alpha: &'a mut [f64],
+    /// See `alpha`.
+    pub regime: &'a mut [Regime],
 }
 
 /// A Gauss point's deformation and Hencky strain, as [`evaluate`] formed them.
@@ -187,6 +194,7 @@ pub(crate) fn evaluate(
 ) -> Result<(), FiniteFailure> {
     let FiniteIn {
         law,
+        material,
         c,
         dt,
         t0,
@@ -195,6 +203,24 @@ pub(crate) fn evaluate(
     } = *input;
     let ne = disc.elements.len();
     let nq = QP_PER_ELEMENT * ne;
+    let n_int = material.map_or(0, |(mat, _)| mat.n_internal());
+    let m = 4 + n_int;
+    let chunks = ne.div_ceil(ELEMENT_CHUNK);
+    let (alpha_out, regime_out) = (out.alpha, out.regime);
+    let mut alpha_chunks: Vec<&mut [f64]> = if n_int > 0 {
+        alpha_out[..nq * n_int]
+            .chunks_mut(QP_PER_ELEMENT * ELEMENT_CHUNK * n_int)
+            .collect()
+    } else {
+        (0..chunks).map(|_| &mut [][..]).collect()
+    };
+    let mut regime_chunks: Vec<&mut [Regime]> = if material.is_some() {
+        regime_out[..nq]
+            .chunks_mut(QP_PER_ELEMENT * ELEMENT_CHUNK)
+            .collect()
+    } else {
+        (0..chunks).map(|_| &mut [][..]).collect()
+    };
     // element forces in parallel over fixed chunks of elements, each element's arithmetic
     // the serial one; then assembled serially in element order: bit for bit the same for
     // any number of threads
@@ -205,8 +231,12 @@ pub(crate) fn evaluate(
         .zip(out.sigma[..nq].par_chunks_mut(chunk_qp))
         .zip(out.tangents[..nq].par_chunks_mut(chunk_qp))
         .zip(out.points[..nq].par_chunks_mut(chunk_qp))
+        .zip(alpha_chunks.par_iter_mut().map(|a| &mut **a))
+        .zip(regime_chunks.par_iter_mut().map(|r| &mut **r))
         .enumerate()
-        .filter_map(|(chunk, (((fes, sigma), tangents), points))| {
+        .filter_map(|(chunk, (((((fes, sigma), tangents), points), al), reg))| {
+            // the states y0, y1 of a material's update (one scratch per chunk)
+            let mut buf = vec![0.0; if material.is_some() { 2 * m } else { 0 }];
             for (i, fe) in fes.iter_mut().enumerate() {
                 let e = chunk * ELEMENT_CHUNK + i;
                 let ue = disc.gather(e, u);
@@ -224,16 +254,47 @@ pub(crate) fn evaluate(
                         .and_then(|d| d.update(&t0[q], &de).map(|t| (t, d.stiffness)))
                     {
                         Some(x) => x,
-                        None => match law.update(c, &t0[q], &de, dt) {
-                            Ok(up) => (up.sigma, up.tangent),
-                            Err(f) => {
-                                return Some(FiniteFailure::Local {
-                                    qp: q,
-                                    reason: f.reason,
-                                    factor: f.suggested_dt_factor,
-                                });
+                        None => {
+                            let up = match (law, material) {
+                                (Some(law), _) => law
+                                    .update(c, &t0[q], &de, dt)
+                                    .map(|up| (up.sigma, up.tangent)),
+                                (None, Some((mat, alpha0))) => {
+                                    let (y0, y1) = buf.split_at_mut(m);
+                                    y0[..4].copy_from_slice(&t0[q].0);
+                                    y0[4..].copy_from_slice(&alpha0[q * n_int..(q + 1) * n_int]);
+                                    mat.update(c, y0, &de, dt, y1).and_then(|up| {
+                                        if y1.iter().any(|v| !v.is_finite()) {
+                                            return Err(indentify_laws::LocalFailure {
+                                                reason: format!(
+                                                    "{}: non-finite state after the update",
+                                                    mat.name()
+                                                ),
+                                                suggested_dt_factor: 0.5,
+                                            });
+                                        }
+                                        al[local * n_int..(local + 1) * n_int]
+                                            .copy_from_slice(&y1[4..]);
+                                        reg[local] = up.regime;
+                                        Ok((Vec4([y1[0], y1[1], y1[2], y1[3]]), up.tangent))
+                                    })
+                                }
+                                (None, None) => Err(indentify_laws::LocalFailure {
+                                    reason: "neither a law nor a material".into(),
+                                    suggested_dt_factor: 0.5,
+                                }),
+                            };
+                            match up {
+                                Ok(x) => x,
+                                Err(f) => {
+                                    return Some(FiniteFailure::Local {
+                                        qp: q,
+                                        reason: f.reason,
+                                        factor: f.suggested_dt_factor,
+                                    });
+                                }
                             }
-                        },
+                        }
                     };
                     let s = ls.pk2(&t);
                     Deformation::add_bt(&def.b_l(qp), &s, qp.w, fe);
@@ -355,9 +416,12 @@ mod tests {
                         f_int: &mut f,
                         tangents: &mut a,
                         points: &mut points,
+                        alpha: &mut [],
+                        regime: &mut [],
                     };
                     let input = FiniteIn {
-                        law: *law,
+                        law: Some(*law),
+                        material: None,
                         c,
                         dt: 0.1,
                         t0: &t0,

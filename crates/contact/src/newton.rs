@@ -15,9 +15,9 @@
 
 use indentify_fe::dofs::NO_EQ;
 use indentify_fe::{FeError, QP_PER_ELEMENT};
-use indentify_laws::{Law, Vec4};
+use indentify_laws::{Material, Vec4};
 
-use crate::body::{Body, StepLaw};
+use crate::body::{Body, Internal, StepLaw};
 use crate::constraint::{self, Constraint, ContactSet, Iterate, StatusFlip, Tolerances};
 use crate::direct::{SolverOptions, StepRecord, Timing};
 use crate::drive::Load;
@@ -94,6 +94,8 @@ pub(crate) struct State {
     pub(crate) f_scale: f64,
     pub(crate) u: Vec<f64>,
     pub(crate) sigma: Vec<Vec4>,
+    /// Internal variables of every Gauss point (empty for a stress-only law).
+    pub(crate) internal: Internal,
     /// Internal force `sum_g w_g B^T sigma_g` of the converged state, all dofs (N).
     pub(crate) f_int: Vec<f64>,
     /// The contact set (and stick/slip statuses) of the state.
@@ -124,13 +126,14 @@ pub(crate) struct Increment {
 
 impl State {
     /// The undeformed state at time `t0` and depth `depth0`, nothing in contact.
-    pub(crate) fn initial(model: &Model, t0: f64, depth0: f64) -> State {
+    pub(crate) fn initial(model: &Model, mat: &dyn Material, t0: f64, depth0: f64) -> State {
         let nc = model.candidates.len();
         State {
             t: t0,
             f_scale: 0.0,
             u: vec![0.0; model.disc.n_dofs()],
             sigma: vec![Vec4::ZERO; model.disc.n_qp()],
+            internal: Internal::initial(mat, model.disc.n_qp()),
             f_int: vec![0.0; model.disc.n_dofs()],
             set: ContactSet::initial(model),
             // steps of zero length: only the latest increment is ever read (times 0)
@@ -163,6 +166,8 @@ impl State {
         16 * self.u.len()
             + 8 * self.past.iter().map(|p| p.du.len()).sum::<usize>()
             + 32 * self.sigma.len()
+            + 8 * self.internal.alpha.len()
+            + self.internal.regime.len()
             + 17 * self.set.active.len()
             + 9 * self.xi.len()
     }
@@ -172,7 +177,7 @@ impl State {
 /// starts from, its end time, the punch depth Newton starts from and, under load
 /// control, the prescribed force (both from the drive, `drive.rs`).
 pub(crate) struct StepSpec<'a> {
-    pub law: &'a dyn Law,
+    pub mat: &'a dyn Material,
     pub c: &'a [f64],
     pub opts: &'a SolverOptions,
     pub state: &'a State,
@@ -259,6 +264,7 @@ struct Iteration {
     /// under load control.
     depth: f64,
     sigma: Vec<Vec4>,
+    internal: Internal,
     set: ContactSet,
     /// The contact sets tried so far (cycling detection).
     seen: Vec<ContactSet>,
@@ -347,6 +353,7 @@ impl<'m> Newton<'m> {
             u: state.u.clone(),
             depth: spec.depth,
             sigma: state.sigma.clone(),
+            internal: state.internal.clone(),
             set: state.set.clone(),
             seen: Vec::new(),
             changes: 0,
@@ -366,11 +373,13 @@ impl<'m> Newton<'m> {
             self.constraint
                 .predict(&mut it.set, &it.u, &last.du, ratio, it.depth);
         }
+        let as_law = spec.mat.as_law();
         let affine = self
             .body
-            .begin_step(self.model, spec.law, spec.c, state, dt)?;
+            .begin_step(self.model, as_law, spec.c, state, dt)?;
         let law = StepLaw {
-            law: spec.law,
+            mat: spec.mat,
+            law: as_law,
             c: spec.c,
             state,
             dt,
@@ -431,7 +440,7 @@ impl<'m> Newton<'m> {
         let model = self.model;
         let tl = std::time::Instant::now();
         self.body
-            .evaluate(model, law, &it.u, &mut it.sigma)
+            .evaluate(model, law, &it.u, &mut it.sigma, &mut it.internal)
             .map_err(|f| match f {
                 StepFailure::Inverted { qp, det, .. } => StepFailure::Inverted {
                     qp,
@@ -608,6 +617,7 @@ impl<'m> Newton<'m> {
             f_scale,
             u: it.u,
             sigma: it.sigma,
+            internal: it.internal,
             f_int: self.body.f_int.clone(),
             set: it.set,
             past: [

@@ -95,7 +95,9 @@ fn newton_converges_quadratically_with_friction_under_finite_strain() {
             residual_tol: 1e-13,
             ..Default::default()
         };
-        let traj = solver.run(law, &c, &ramp(0.1, 10), &opts).unwrap();
+        let traj = solver
+            .run(&indentify_laws::LawMaterial(law), &c, &ramp(0.1, 10), &opts)
+            .unwrap();
         let r = solver.last_residuals();
         println!("{}: residuals of the last step {r:?}", law.name());
         let last = traj.steps.last().unwrap();
@@ -134,7 +136,12 @@ fn peak(kind: ContactKind, kin: Kinematics) -> f64 {
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 8)).unwrap();
     let traj = DirectSolver::new(&m)
         .unwrap()
-        .run(&NortonHoff, &NH, &sched, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(&NortonHoff),
+            &NH,
+            &sched,
+            &SolverOptions::default(),
+        )
         .unwrap();
     let mu = kind.friction();
     if mu > 1e-3 && kin == Kinematics::Finite {
@@ -182,7 +189,12 @@ fn the_small_depth_limit_with_friction_is_small_strain() {
         let m = model(Punch::Sphere { radius: 0.5 }, friction(0.2), kin);
         DirectSolver::new(&m)
             .unwrap()
-            .run(&NortonHoff, &NH, &ramp(1e-5, 4), &SolverOptions::default())
+            .run(
+                &indentify_laws::LawMaterial(&NortonHoff),
+                &NH,
+                &ramp(1e-5, 4),
+                &SolverOptions::default(),
+            )
             .unwrap()
             .forces()
     };

@@ -50,7 +50,7 @@ fn elastic_compression_matches_the_hencky_closed_form() {
     let traj = DirectSolver::new(&model)
         .unwrap()
         .run(
-            &Elastic,
+            &indentify_laws::LawMaterial(&Elastic),
             &[e, nu],
             &ramp(1.0, 0.4, 20),
             &SolverOptions::default(),
@@ -116,7 +116,7 @@ fn norton_hoff_compression_matches_the_log_strain_ode() {
             let traj = DirectSolver::new(&model)
                 .unwrap()
                 .run(
-                    &NortonHoff,
+                    &indentify_laws::LawMaterial(&NortonHoff),
                     &c,
                     &ramp(duration, depth, steps),
                     &SolverOptions::default(),
@@ -174,7 +174,7 @@ fn newton_is_quadratic_under_finite_strain() {
     };
     solver
         .run(
-            &NortonHoff,
+            &indentify_laws::LawMaterial(&NortonHoff),
             &[1e5, 0.3, 1500.0, 5.0, 0.0],
             &ramp(1.0, 0.1, 10),
             &opts,
@@ -203,7 +203,12 @@ fn the_small_depth_limit_is_small_strain() {
         let model = cone_model(kin);
         let traj = DirectSolver::new(&model)
             .unwrap()
-            .run(&NortonHoff, &c, &sched, &SolverOptions::default())
+            .run(
+                &indentify_laws::LawMaterial(&NortonHoff),
+                &c,
+                &sched,
+                &SolverOptions::default(),
+            )
             .unwrap();
         traj.forces()
     };
@@ -217,7 +222,12 @@ fn the_small_depth_limit_is_small_strain() {
         let model = cone_model(kin);
         DirectSolver::new(&model)
             .unwrap()
-            .run(&NortonHoff, &c, &sched, &SolverOptions::default())
+            .run(
+                &indentify_laws::LawMaterial(&NortonHoff),
+                &c,
+                &sched,
+                &SolverOptions::default(),
+            )
             .unwrap()
             .forces()
     };
@@ -288,7 +298,12 @@ fn an_inverted_element_is_reported() {
     };
     let err = DirectSolver::new(&model)
         .unwrap()
-        .run(&Elastic, &[1000.0, 0.3], &ramp(1.0, 1.2, 4), &opts)
+        .run(
+            &indentify_laws::LawMaterial(&Elastic),
+            &[1000.0, 0.3],
+            &ramp(1.0, 1.2, 4),
+            &opts,
+        )
         .unwrap_err();
     let text = err.to_string();
     println!("{text}");
@@ -333,7 +348,12 @@ fn the_finite_forward_is_the_same_for_any_number_of_threads() {
             pool.install(|| {
                 DirectSolver::new(&model)
                     .unwrap()
-                    .run(&NortonHoff, &c, &sched, &SolverOptions::default())
+                    .run(
+                        &indentify_laws::LawMaterial(&NortonHoff),
+                        &c,
+                        &sched,
+                        &SolverOptions::default(),
+                    )
                     .unwrap()
             })
         };
@@ -411,8 +431,12 @@ fn the_release_at_depth_zero_does_not_depend_on_round_off() {
         assert_eq!(model.gap_length(), width);
         let mut solver = DirectSolver::new(&model).unwrap();
         for c in [[17000.0, 0.27], [20000.0, 0.3]] {
-            let plain = solver.run(&Elastic, &c, &sched, &opts).unwrap();
-            let ck = solver.run(&Elastic, &c, &sched, &ck_opts).unwrap();
+            let plain = solver
+                .run(&indentify_laws::LawMaterial(&Elastic), &c, &sched, &opts)
+                .unwrap();
+            let ck = solver
+                .run(&indentify_laws::LawMaterial(&Elastic), &c, &sched, &ck_opts)
+                .unwrap();
             for t in [&plain, &ck] {
                 let n: Vec<usize> = t.steps.iter().map(|s| s.active.len()).collect();
                 assert_eq!(t.steps.len(), 18, "{c:?}: {n:?}");

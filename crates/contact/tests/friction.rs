@@ -69,7 +69,14 @@ fn newton_converges_quadratically_with_friction() {
             residual_tol: 1e-13,
             ..Default::default()
         };
-        let traj = solver.run(law, &c, &ramp(0.05, 10), &opts).unwrap();
+        let traj = solver
+            .run(
+                &indentify_laws::LawMaterial(law),
+                &c,
+                &ramp(0.05, 10),
+                &opts,
+            )
+            .unwrap();
         let r = solver.last_residuals();
         println!("{}: residuals of the last step {r:?}", law.name());
         let last = traj.steps.last().unwrap();
@@ -113,7 +120,12 @@ fn peaks(punch: &Punch, law: &dyn Law, c: &[f64], mus: &[f64]) -> Vec<f64> {
             let m = model(punch.clone(), kind);
             let mut solver = DirectSolver::new(&m).unwrap();
             let traj = solver
-                .run(law, c, &sched, &SolverOptions::default())
+                .run(
+                    &indentify_laws::LawMaterial(law),
+                    c,
+                    &sched,
+                    &SolverOptions::default(),
+                )
                 .unwrap();
             println!(
                 "mu {mu}: {} steps (sub-steps included), {} iterations, {} set changes",
@@ -249,7 +261,12 @@ fn r2_cost_with_friction() {
             let mut solver = DirectSolver::new(m).unwrap();
             let t0 = std::time::Instant::now();
             let t = solver
-                .run(&law, &c, &schedule, &SolverOptions::default())
+                .run(
+                    &indentify_laws::LawMaterial(&law),
+                    &c,
+                    &schedule,
+                    &SolverOptions::default(),
+                )
                 .unwrap();
             let s = t0.elapsed().as_secs_f64();
             best[j] = best[j].min(s);

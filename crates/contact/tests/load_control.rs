@@ -64,7 +64,14 @@ fn opts() -> SolverOptions {
 /// both and the largest depth difference relative to the largest depth.
 fn round_trip(model: &Model, law: &dyn Law, c: &[f64]) -> (Trajectory, Trajectory, f64) {
     let mut solver = DirectSolver::new(model).unwrap();
-    let by_depth = solver.run(law, c, &depth_schedule(), &opts()).unwrap();
+    let by_depth = solver
+        .run(
+            &indentify_laws::LawMaterial(law),
+            c,
+            &depth_schedule(),
+            &opts(),
+        )
+        .unwrap();
     // the load drives while the force is positive (a viscous unloading may lose
     // contact), at the times of every step the depth-controlled run took (its cut steps'
     // too: the two runs then solve the same discrete problem)
@@ -77,7 +84,9 @@ fn round_trip(model: &Model, law: &dyn Law, c: &[f64]) -> (Trajectory, Trajector
         .chain(by_depth.steps[..n].iter().map(|s| s.force))
         .collect();
     let history = LoadHistory::from_force_record(&t, &f).unwrap();
-    let by_force = solver.run_history(law, c, &history, &opts()).unwrap();
+    let by_force = solver
+        .run_history(&indentify_laws::LawMaterial(law), c, &history, &opts())
+        .unwrap();
     let a = &by_depth.steps[..n];
     let b: Vec<_> = by_force.schedule_steps().collect();
     assert_eq!(a.len(), b.len());
@@ -167,7 +176,9 @@ fn mixed_history_switches_drives() {
     let m = model(cone(), ContactKind::Vertical, Kinematics::Small);
     let mut solver = DirectSolver::new(&m).unwrap();
     let plain = Schedule::from_segments(&[seg(1.0, 0.03, 5)]).unwrap();
-    let f1 = solver.run(&Elastic, &R0, &plain, &opts()).unwrap();
+    let f1 = solver
+        .run(&indentify_laws::LawMaterial(&Elastic), &R0, &plain, &opts())
+        .unwrap();
     let f1 = f1.steps.last().unwrap().force;
     let h = |duration, depth, force, steps| HistorySegment {
         duration,
@@ -183,7 +194,12 @@ fn mixed_history_switches_drives() {
     ])
     .unwrap();
     let t = solver
-        .run_history(&Maxwell, &R1, &history, &opts())
+        .run_history(
+            &indentify_laws::LawMaterial(&Maxwell),
+            &R1,
+            &history,
+            &opts(),
+        )
         .unwrap();
     let s: Vec<_> = t.schedule_steps().collect();
     assert_eq!(s.len(), 17);
@@ -214,8 +230,12 @@ fn mixed_history_switches_drives() {
     // depth segments only: the same bits as `run`
     let only = LoadHistory::from_segments(&[h(1.0, Some(0.03), None, 5)]).unwrap();
     assert!(!only.is_load_controlled());
-    let a = solver.run_history(&Elastic, &R0, &only, &opts()).unwrap();
-    let b = solver.run(&Elastic, &R0, &plain, &opts()).unwrap();
+    let a = solver
+        .run_history(&indentify_laws::LawMaterial(&Elastic), &R0, &only, &opts())
+        .unwrap();
+    let b = solver
+        .run(&indentify_laws::LawMaterial(&Elastic), &R0, &plain, &opts())
+        .unwrap();
     assert_eq!(a.steps, b.steps);
 }
 
@@ -238,7 +258,12 @@ fn load_control_starts_out_of_contact() {
         .unwrap();
         let mut solver = DirectSolver::new(&m).unwrap();
         let t = solver
-            .run_history(&Elastic, &R0, &history, &opts())
+            .run_history(
+                &indentify_laws::LawMaterial(&Elastic),
+                &R0,
+                &history,
+                &opts(),
+            )
             .unwrap();
         let f: Vec<f64> = t.schedule_steps().map(|s| s.force).collect();
         for (i, &fi) in f.iter().enumerate() {
@@ -270,7 +295,7 @@ fn a_force_the_contact_cannot_carry_is_refused() {
         ..opts()
     };
     let e = solver
-        .run_history(&Elastic, &R0, &history, &opts)
+        .run_history(&indentify_laws::LawMaterial(&Elastic), &R0, &history, &opts)
         .unwrap_err()
         .to_string();
     assert!(

@@ -78,7 +78,14 @@ fn newton_converges_quadratically_on_a_sphere() {
             residual_tol: 1e-13,
             ..Default::default()
         };
-        let traj = solver.run(law, &c, &ramp(0.05, 10), &opts).unwrap();
+        let traj = solver
+            .run(
+                &indentify_laws::LawMaterial(law),
+                &c,
+                &ramp(0.05, 10),
+                &opts,
+            )
+            .unwrap();
         let r = solver.last_residuals();
         println!("{}: residuals of the last step {r:?}", law.name());
         assert!(traj.steps.last().unwrap().active.len() >= 4);
@@ -140,7 +147,12 @@ fn every_profile_runs_with_normal_contact() {
             let m = model(punch.clone(), kind);
             let mut solver = DirectSolver::new(&m).unwrap();
             let traj = solver
-                .run(&Elastic, &c, &sched, &SolverOptions::default())
+                .run(
+                    &indentify_laws::LawMaterial(&Elastic),
+                    &c,
+                    &sched,
+                    &SolverOptions::default(),
+                )
                 .unwrap_or_else(|e| panic!("{punch:?} {kind:?}: {e}"));
             fmax[j] = traj.forces().iter().fold(0.0f64, |a, &b| a.max(b));
             if kind == ContactKind::Normal {
@@ -187,7 +199,7 @@ fn flat_punch_with_normal_contact() {
         let mut solver = DirectSolver::new(&m).unwrap();
         let traj = solver
             .run(
-                &Elastic,
+                &indentify_laws::LawMaterial(&Elastic),
                 &[20000.0, 0.3],
                 &ramp(0.002, 4),
                 &SolverOptions::default(),
@@ -214,7 +226,7 @@ fn tabulated_profile_too_short_is_a_clear_error() {
     let mut solver = DirectSolver::new(&m).unwrap();
     let err = solver
         .run(
-            &Elastic,
+            &indentify_laws::LawMaterial(&Elastic),
             &[20000.0, 0.3],
             &ramp(0.05, 5),
             &SolverOptions::default(),
@@ -294,7 +306,12 @@ fn norton_hoff_runs_on_every_profile() {
             };
             let mut solver = DirectSolver::new(&m).unwrap();
             let traj = solver
-                .run(&NortonHoff, &c, &sched, &SolverOptions::default())
+                .run(
+                    &indentify_laws::LawMaterial(&NortonHoff),
+                    &c,
+                    &sched,
+                    &SolverOptions::default(),
+                )
                 .unwrap_or_else(|e| panic!("{punch:?} {kind:?}: {e}"));
             if kind == ContactKind::Normal {
                 check_complementarity(&m, &traj);
@@ -343,11 +360,15 @@ fn normal_contact_runs_repeat_bit_for_bit() {
             ..SolverOptions::default()
         };
         let mut solver = DirectSolver::new(&m).unwrap();
-        let first = solver.run(law, &c, &sched, &opts).unwrap();
-        let again = solver.run(law, &c, &sched, &opts).unwrap();
+        let first = solver
+            .run(&indentify_laws::LawMaterial(law), &c, &sched, &opts)
+            .unwrap();
+        let again = solver
+            .run(&indentify_laws::LawMaterial(law), &c, &sched, &opts)
+            .unwrap();
         let fresh = DirectSolver::new(&m)
             .unwrap()
-            .run(law, &c, &sched, &opts)
+            .run(&indentify_laws::LawMaterial(law), &c, &sched, &opts)
             .unwrap();
         for other in [&again, &fresh] {
             assert_eq!(first.steps, other.steps, "{}", law.name());
@@ -356,12 +377,26 @@ fn normal_contact_runs_repeat_bit_for_bit() {
         // the stretch between two checkpoints, as the adjoint replays it
         let (cp, next) = (&first.checkpoints[1], &first.checkpoints[2]);
         let seg = solver
-            .replay(law, &c, &sched, &opts, cp, next.schedule_index)
+            .replay(
+                &indentify_laws::LawMaterial(law),
+                &c,
+                &sched,
+                &opts,
+                cp,
+                next.schedule_index,
+            )
             .unwrap();
         let steps = &first.steps[cp.steps_done..next.steps_done];
         assert_eq!(seg.steps[..], steps[..], "{}", law.name());
         let again = solver
-            .replay(law, &c, &sched, &opts, cp, next.schedule_index)
+            .replay(
+                &indentify_laws::LawMaterial(law),
+                &c,
+                &sched,
+                &opts,
+                cp,
+                next.schedule_index,
+            )
             .unwrap();
         assert_eq!(seg.fields, again.fields, "{}", law.name());
     }

@@ -15,7 +15,12 @@ fn hash(model: &Model, law: &dyn Law, c: &[f64]) -> u64 {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).unwrap();
     let mut solver = DirectSolver::new(model).unwrap();
     let t = solver
-        .run(law, c, &schedule, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(law),
+            c,
+            &schedule,
+            &SolverOptions::default(),
+        )
         .unwrap();
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |x: f64| {

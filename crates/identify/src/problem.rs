@@ -449,7 +449,12 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    match w.solver.run(p.law, c, &t.schedule, &t.solver_options) {
+    match w.solver.run(
+        &indentify_laws::LawMaterial(p.law),
+        c,
+        &t.schedule,
+        &t.solver_options,
+    ) {
         Ok(traj) => {
             te.forces = Some(traj.forces());
             te.traj = Some(traj);
@@ -477,7 +482,7 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
-            p.law,
+            &indentify_laws::LawMaterial(p.law),
             c,
             traj,
             &rho,
@@ -488,7 +493,8 @@ fn gradient_task(
             },
         )
     } else {
-        w.adjoint.gradient(p.law, c, traj, &rho)
+        w.adjoint
+            .gradient(&indentify_laws::LawMaterial(p.law), c, traj, &rho)
     }
     .map_err(|source| IdentifyError::Adjoint {
         params: c.to_vec(),
@@ -523,20 +529,20 @@ fn jacobian_task(
         };
         full = w
             .solver
-            .run(p.law, c, &t.schedule, &opts)
+            .run(&indentify_laws::LawMaterial(p.law), c, &t.schedule, &opts)
             .map_err(|source| IdentifyError::Forward {
                 params: c.to_vec(),
                 source,
             })?;
         &full
     };
-    let sens =
-        w.adjoint
-            .sensitivities(p.law, c, traj)
-            .map_err(|source| IdentifyError::Adjoint {
-                params: c.to_vec(),
-                source,
-            })?;
+    let sens = w
+        .adjoint
+        .sensitivities(&indentify_laws::LawMaterial(p.law), c, traj)
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
     let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
     for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
         if s.on_schedule {

@@ -73,7 +73,12 @@ fn record(s: &Schedule) -> ForceRecord {
     let m = model();
     let f = DirectSolver::new(&m)
         .unwrap()
-        .run(&Maxwell, &TRUTH, s, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(&Maxwell),
+            &TRUTH,
+            s,
+            &SolverOptions::default(),
+        )
         .unwrap()
         .forces();
     ForceRecord::new(s.t.clone(), f).unwrap()

@@ -56,7 +56,12 @@ fn exact_record() -> ForceRecord {
     let s = schedule();
     let f = DirectSolver::new(&m)
         .unwrap()
-        .run(&Maxwell, &TRUTH, &s, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(&Maxwell),
+            &TRUTH,
+            &s,
+            &SolverOptions::default(),
+        )
         .unwrap()
         .forces();
     ForceRecord::new(s.t.clone(), f).unwrap()

@@ -47,7 +47,12 @@ fn problem(truth: &[f64], noise: f64) -> Problem {
     let s = schedule();
     let f = DirectSolver::new(&model())
         .unwrap()
-        .run(&Maxwell, truth, &s, &SolverOptions::default())
+        .run(
+            &indentify_laws::LawMaterial(&Maxwell),
+            truth,
+            &s,
+            &SolverOptions::default(),
+        )
         .unwrap()
         .forces();
     let f = if noise > 0.0 {

@@ -140,7 +140,7 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// The stress-only [`Law`] this material adapts ([`LawMaterial`]), `None` for a law with
     /// internal variables: a solver keeps the `Law` fast paths (`affine_update`,
     /// `elastic_domain`, the adjoint of docs/theory.md §3) and their bits for these.
-    fn as_law(&self) -> Option<&'static dyn Law> {
+    fn as_law(&self) -> Option<&dyn Law> {
         None
     }
 
@@ -215,13 +215,13 @@ pub fn check_param_ranges(
 /// `E = -I`, `P = dr/dc` ([`Law::residual_param_derivative`]); the update is the law's,
 /// so the stress and tangent are the same bits.
 #[derive(Clone, Copy, Debug)]
-pub struct LawMaterial(pub &'static dyn Law);
+pub struct LawMaterial<'a>(pub &'a dyn Law);
 
-impl Material for LawMaterial {
+impl Material for LawMaterial<'_> {
     fn name(&self) -> &'static str {
         self.0.name()
     }
-    fn as_law(&self) -> Option<&'static dyn Law> {
+    fn as_law(&self) -> Option<&dyn Law> {
         Some(self.0)
     }
     fn params(&self) -> &[ParamInfo] {

@@ -512,11 +512,11 @@ fn at_point(
         let rho = test.dj_df(&traj);
         let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
         let grad = adjoint
-            .gradient(law, point, &traj, &rho)
+            .gradient(&indentify_laws::LawMaterial(law), point, &traj, &rho)
             .context("the adjoint sweep failed")
             .kind(ErrorKind::Solver)?;
         let sens = adjoint
-            .sensitivities(law, point, &traj)
+            .sensitivities(&indentify_laws::LawMaterial(law), point, &traj)
             .context("the forward sensitivities failed")
             .kind(ErrorKind::Solver)?;
         let held = (model.contact.friction() > 0.0).then(|| statuses(&traj));

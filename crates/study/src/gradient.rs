@@ -185,7 +185,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
     let grad: Gradient = if opts.checkpoint.is_some() {
         adjoint.gradient_replayed(
-            law,
+            &indentify_laws::LawMaterial(law),
             &params,
             &traj,
             &rho,
@@ -196,7 +196,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             },
         )
     } else {
-        adjoint.gradient(law, &params, &traj, &rho)
+        adjoint.gradient(&indentify_laws::LawMaterial(law), &params, &traj, &rho)
     }
     .with_context(|| format!("the adjoint sweep of `{name}` failed"))
     .kind(ErrorKind::Solver)?;

@@ -88,7 +88,12 @@ pub(crate) fn run(
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let start = Instant::now();
     let traj = solver
-        .run_history(law, &params, &history, &solver_opts)
+        .run_history(
+            &indentify_laws::LawMaterial(law),
+            &params,
+            &history,
+            &solver_opts,
+        )
         .map_err(|e| {
             Error::new(
                 ErrorKind::Solver,

@@ -161,8 +161,13 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
     let run = match &load {
-        Some(h) => solver.run_history(law, &params, h, &solver_opts),
-        None => solver.run(law, &params, &schedule, &solver_opts),
+        Some(h) => solver.run_history(&indentify_laws::LawMaterial(law), &params, h, &solver_opts),
+        None => solver.run(
+            &indentify_laws::LawMaterial(law),
+            &params,
+            &schedule,
+            &solver_opts,
+        ),
     };
     let (trajectory, failure) = match run {
         Ok(t) => (t, None),
@@ -299,7 +304,7 @@ fn write_matrix(
         ..Default::default()
     };
     solver
-        .run(law, params, &prefix, &opts)
+        .run(&indentify_laws::LawMaterial(law), params, &prefix, &opts)
         .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
     let (k, constrained) = solver.system().matrix(model);
     let path = dir.join(format!("K_step_{step}.mtx"));

@@ -40,7 +40,7 @@ pub fn forward(
     config: &str,
 ) -> Result<Trajectory> {
     solver
-        .run(law, params, schedule, opts)
+        .run(&indentify_laws::LawMaterial(law), params, schedule, opts)
         .map_err(|e| match e {
             ContactError::StepFailed {
                 step,

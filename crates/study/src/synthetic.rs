@@ -130,7 +130,12 @@ pub fn make_map(dir: &Path, o: &MapOptions) -> Result<MapFiles> {
     for (p, (e, eta)) in [('A', PHASE_A), ('B', PHASE_B)] {
         let params = [e, 0.3, eta];
         let traj = solver
-            .run(law, &params, &prepared.schedule, &opts)
+            .run(
+                &indentify_laws::LawMaterial(law),
+                &params,
+                &prepared.schedule,
+                &opts,
+            )
             .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
         curves.insert(p, output::curve(&prepared.schedule, &traj));
     }

@@ -167,7 +167,12 @@ pub fn run_elastic(mesh: Mesh, punch: Punch, schedule: &Schedule) -> Trajectory 
     let model = Model::new(mesh, punch).expect("valid model");
     let mut solver = DirectSolver::new(&model).expect("symbolic analysis");
     solver
-        .run(&Elastic, &[E, NU], schedule, &options())
+        .run(
+            &indentify_laws::LawMaterial(&Elastic),
+            &[E, NU],
+            schedule,
+            &options(),
+        )
         .expect("elastic run converges")
 }
 

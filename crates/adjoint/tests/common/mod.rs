@@ -25,9 +25,11 @@ pub fn checkpointed_gradient(
     ck_opts: &SolverOptions,
     rho: &[f64],
 ) -> Gradient {
-    let ck = solver.run(law, c, sched, ck_opts).unwrap();
+    let ck = solver
+        .run(&indentify_laws::LawMaterial(law), c, sched, ck_opts)
+        .unwrap();
     adj.gradient_replayed(
-        law,
+        &indentify_laws::LawMaterial(law),
         c,
         &ck,
         rho,
@@ -111,10 +113,13 @@ pub fn whole_history_check_on(
         ..Default::default()
     };
     let mut solver = DirectSolver::new(model).unwrap();
-    let data: Vec<f64> = solver.run(law, truth, &sched, &opts).unwrap().forces();
+    let data: Vec<f64> = solver
+        .run(&indentify_laws::LawMaterial(law), truth, &sched, &opts)
+        .unwrap()
+        .forces();
     let mut cost = |p: &[f64]| -> Result<f64, String> {
         let t = solver
-            .run(law, p, &sched, &opts)
+            .run(&indentify_laws::LawMaterial(law), p, &sched, &opts)
             .map_err(|e| e.to_string())?;
         Ok(0.5
             * t.forces()
@@ -127,7 +132,9 @@ pub fn whole_history_check_on(
         .map(|k| central_difference(&mut cost, c, k, 1e-5).unwrap())
         .collect();
     let mut solver = DirectSolver::new(model).unwrap();
-    let traj = solver.run(law, c, &sched, &opts).unwrap();
+    let traj = solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &opts)
+        .unwrap();
     // the contact zone grows, holds and is lost
     let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
     let most = *sizes.iter().max().unwrap();
@@ -144,8 +151,12 @@ pub fn whole_history_check_on(
         })
         .collect();
     let mut adj = Adjoint::new(model).unwrap();
-    let g = adj.gradient(law, c, &traj, &rho).unwrap();
-    let sens = adj.sensitivities(law, c, &traj).unwrap();
+    let g = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &traj, &rho)
+        .unwrap();
+    let sens = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &traj)
+        .unwrap();
     let jt = sens.transpose_mul(&rho);
     // the same gradient from a checkpointed run replayed segment by segment
     let ck_opts = SolverOptions {
@@ -264,8 +275,13 @@ pub fn friction_history_check(
         ..Default::default()
     };
     let mut solver = DirectSolver::new(model).unwrap();
-    let data: Vec<f64> = solver.run(law, truth, &sched, &opts).unwrap().forces();
-    let traj = solver.run(law, c, &sched, &opts).unwrap();
+    let data: Vec<f64> = solver
+        .run(&indentify_laws::LawMaterial(law), truth, &sched, &opts)
+        .unwrap()
+        .forces();
+    let traj = solver
+        .run(&indentify_laws::LawMaterial(law), c, &sched, &opts)
+        .unwrap();
     let base = statuses(&traj);
     // the contact zone grows, holds and is lost; sticking and slipping node-steps
     let sizes: Vec<usize> = traj.steps.iter().map(|s| s.active.len()).collect();
@@ -304,7 +320,9 @@ pub fn friction_history_check(
             let mut run = |x: f64| {
                 let mut p = c.to_vec();
                 p[k] = x;
-                solver.run(law, &p, &sched, &opts).unwrap()
+                solver
+                    .run(&indentify_laws::LawMaterial(law), &p, &sched, &opts)
+                    .unwrap()
             };
             let (tp, tm) = (run(c[k] + h), run(c[k] - h));
             if statuses(&tp) == base && statuses(&tm) == base {
@@ -340,8 +358,12 @@ pub fn friction_history_check(
         })
         .collect();
     let mut adj = Adjoint::new(model).unwrap();
-    let g = adj.gradient(law, c, &traj, &rho).unwrap();
-    let sens = adj.sensitivities(law, c, &traj).unwrap();
+    let g = adj
+        .gradient(&indentify_laws::LawMaterial(law), c, &traj, &rho)
+        .unwrap();
+    let sens = adj
+        .sensitivities(&indentify_laws::LawMaterial(law), c, &traj)
+        .unwrap();
     let jt = sens.transpose_mul(&rho);
     // the same gradient from a checkpointed run replayed segment by segment
     let ck_opts = SolverOptions {

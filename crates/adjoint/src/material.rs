@@ -1,0 +1,698 @@
+//! The adjoint sweep of a material with internal variables, written once against its
+//! Jacobian blocks (docs/theory.md §12), the regime of every Gauss point held as
+//! recorded. Per Gauss point and step, with `y = [sigma, alpha]` (`m` numbers), the
+//! blocks `A = dR/dy_i`, `D = dR/dy_{i-1}`, `E = dR/d deps`, `P = dR/dc` of the recorded
+//! step and the carries `z = D_{i+1}^T mu_{i+1}`, `e = E_{i+1}^T mu_{i+1}`:
+//!
+//! 1. `K_i^T V_i = B* (e + E_i^T A_i^-T z)` (the contact's constraints as for every law);
+//! 2. `mu_i = -A_i^-T (z + Pi^T B V_i)`;
+//! 3. `dJ/dc -= sum_g w <mu_i, P_i>`; `z <- D_i^T mu_i`, `e <- E_i^T mu_i`.
+//!
+//! The tangent of the step's system is `C_i = -Pi A_i^-1 E_i` from the same blocks.
+//! Every model: small and finite strain (`B` becomes the step's `G_i`, the stiffness the
+//! forward's consistent tangent with its geometric part, `finite.rs`), vertical,
+//! frictionless normal and Coulomb contact (whose `dJ/dF` enters as the shift
+//! `V' = V + rho e_A`: under small strain `rho B e_A` joins `z`'s stress rows in the
+//! source, under finite strain the source gains `K (-rho e_A)` as the laws' sweep does).
+
+use indentify_contact::{ForceCotangent, StepFields, StepRecord, StepTangent, Trajectory};
+use indentify_fe::{Deformation, QP_PER_ELEMENT};
+use indentify_laws::material::{Step, dense_solve};
+use indentify_laws::{LogStrain, Mat4, Material, Vec4};
+
+use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
+
+/// The accumulators and per-point work of one sweep (allocated once per sweep).
+struct MatSweep {
+    m: usize,
+    np: usize,
+    /// `z = D_{i+1}^T mu_{i+1}` per point (`m` each).
+    z: Vec<f64>,
+    /// `e = E_{i+1}^T mu_{i+1}` per point.
+    e: Vec<Vec4>,
+    /// `G = A_i^-T Pi^T` per point (`m x 4`, row-major).
+    g: Vec<f64>,
+    /// `A_i^-T z` per point (`m` each).
+    az: Vec<f64>,
+    grad: Vec<f64>,
+    /// `mu_{i+1} = 0` everywhere (nothing swept yet).
+    zero: bool,
+    /// The step's strain increment at every point (small strain `B (u_1 - u_0)`, finite
+    /// strain the Hencky strains' difference).
+    deps: Vec<Vec4>,
+    /// Point scratch: `y0, y1` (m each), `A`, `D` (m^2), `E` (4m), `P` (m np), two
+    /// m-vectors and an m^2 work matrix.
+    y0: Vec<f64>,
+    y1: Vec<f64>,
+    a: Vec<f64>,
+    at: Vec<f64>,
+    work: Vec<f64>,
+    d: Vec<f64>,
+    ej: Vec<f64>,
+    p: Vec<f64>,
+    x: Vec<f64>,
+    /// The material's blocks depend on `(c, dt)` only ([`Material::is_linear`]): `A^-T`,
+    /// `G`, `D`, `E` and the tangent are formed once per step (in `ainvt`, `glin`, `d`,
+    /// `ej`, `ct`) and every point reuses them.
+    linear: bool,
+    /// `A^-T` (`m x m`, row-major) of a linear material's step.
+    ainvt: Vec<f64>,
+    /// `G = A^-T Pi^T` (`m x 4`) of a linear material's step.
+    glin: Vec<f64>,
+    /// The tangent `-G^T E` of a linear material's step.
+    ct: Mat4,
+}
+
+impl MatSweep {
+    fn new(mat: &dyn Material, np: usize, nq: usize) -> MatSweep {
+        let m = mat.state_len();
+        MatSweep {
+            m,
+            np,
+            z: vec![0.0; nq * m],
+            e: vec![Vec4::ZERO; nq],
+            g: vec![0.0; nq * m * 4],
+            az: vec![0.0; nq * m],
+            grad: vec![0.0; np],
+            zero: true,
+            deps: vec![Vec4::ZERO; nq],
+            y0: vec![0.0; m],
+            y1: vec![0.0; m],
+            a: vec![0.0; m * m],
+            at: vec![0.0; m * m],
+            work: vec![0.0; m * m],
+            d: vec![0.0; m * m],
+            ej: vec![0.0; m * 4],
+            p: vec![0.0; m * np],
+            x: vec![0.0; m],
+            linear: mat.is_linear(),
+            ainvt: vec![0.0; m * m],
+            glin: vec![0.0; m * 4],
+            ct: Mat4::ZERO,
+        }
+    }
+
+    /// A linear material's step blocks from the state of point `q` (any point: they do not
+    /// depend on it): `A^-T`, `G = A^-T Pi^T`, `D`, `E` and the tangent `-G^T E`.
+    /// `false` when `A` is singular.
+    fn linear_blocks(&mut self, mat: &dyn Material, c: &[f64], deps: &Vec4, dt: f64) -> bool {
+        let m = self.m;
+        let step = Step {
+            y0: &self.y0,
+            y1: &self.y1,
+            deps,
+            dt,
+            regime: indentify_laws::material::Regime::Smooth,
+        };
+        mat.jac_state(c, &step, &mut self.a);
+        mat.jac_previous(c, &step, &mut self.d);
+        mat.jac_strain(c, &step, &mut self.ej);
+        for r in 0..m {
+            for k in 0..m {
+                self.at[k * m + r] = self.a[r * m + k];
+            }
+        }
+        for j in 0..m {
+            self.x.fill(0.0);
+            self.x[j] = 1.0;
+            if !self.solve_transposed() {
+                return false;
+            }
+            for k in 0..m {
+                self.ainvt[k * m + j] = self.x[k];
+            }
+        }
+        for k in 0..m {
+            for j in 0..4 {
+                self.glin[k * 4 + j] = self.ainvt[k * m + j];
+            }
+        }
+        for a in 0..4 {
+            for b in 0..4 {
+                self.ct.0[a][b] = -(0..m)
+                    .map(|k| self.glin[k * 4 + a] * self.ej[k * 4 + b])
+                    .sum::<f64>();
+            }
+        }
+        true
+    }
+
+    /// Loads `y0, y1` of point `q` from the recorded fields.
+    fn load(&mut self, f0: &StepFields, f1: &StepFields, q: usize) {
+        let n = self.m - 4;
+        self.y0[..4].copy_from_slice(&f0.sigma[q].0);
+        self.y0[4..].copy_from_slice(&f0.alpha[q * n..(q + 1) * n]);
+        self.y1[..4].copy_from_slice(&f1.sigma[q].0);
+        self.y1[4..].copy_from_slice(&f1.alpha[q * n..(q + 1) * n]);
+    }
+
+    /// `x = A^-T b` from the transposed `A` in `self.at` (`b` in `self.x` on entry).
+    fn solve_transposed(&mut self) -> bool {
+        self.work.copy_from_slice(&self.at);
+        dense_solve(&mut self.work, self.m, &mut self.x)
+    }
+}
+
+impl Adjoint<'_> {
+    /// [`Adjoint::gradient`] for a material without [`Material::as_law`].
+    pub(crate) fn gradient_material(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
+    ) -> Result<Gradient, AdjointError> {
+        let start = std::time::Instant::now();
+        let f0 = self.contact.factorizations();
+        self.check_material(mat, c, traj, dj_df.len(), true)?;
+        self.contact.begin();
+        let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+        for i in (0..traj.steps.len()).rev() {
+            let fields = (&traj.fields[i], &traj.fields[i + 1]);
+            self.material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i])?;
+        }
+        Ok(Gradient {
+            dj_dc: sw.grad,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
+    }
+
+    /// [`Adjoint::gradient_replayed`] for a material without [`Material::as_law`]: each
+    /// stretch between checkpoints replayed, swept backward and dropped.
+    pub(crate) fn gradient_replayed_material(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        dj_df: &[f64],
+        replay: Replay<'_, '_>,
+    ) -> Result<Gradient, AdjointError> {
+        let Replay {
+            solver,
+            schedule,
+            opts,
+        } = replay;
+        if !std::ptr::eq(solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
+        }
+        let start = std::time::Instant::now();
+        let f0 = self.contact.factorizations();
+        let n = traj.steps.len();
+        self.check_material(mat, c, traj, dj_df.len(), false)?;
+        if traj.checkpoints.first().is_none_or(|cp| cp.steps_done != 0) {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: n,
+            });
+        }
+        self.contact.begin();
+        let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+        let last = schedule.t.len() - 1;
+        for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+            let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+                Some(next) => (next.schedule_index, next.steps_done),
+                None => (last, n),
+            };
+            let seg = solver
+                .replay(mat, c, schedule, opts, cp, j_end)
+                .map_err(|e| AdjointError::Replay(e.to_string()))?;
+            if seg.steps.len() != steps_end - cp.steps_done {
+                return Err(AdjointError::Replay(format!(
+                    "segment from schedule index {} replayed {} steps, the run had {}",
+                    cp.schedule_index,
+                    seg.steps.len(),
+                    steps_end - cp.steps_done
+                )));
+            }
+            for i in (0..seg.steps.len()).rev() {
+                let g = cp.steps_done + i;
+                let fields = (&seg.fields[i], &seg.fields[i + 1]);
+                self.material_step(mat, c, &mut sw, g, &seg.steps[i], fields, dj_df[g])?;
+            }
+        }
+        Ok(Gradient {
+            dj_dc: sw.grad,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
+    }
+
+    /// [`Adjoint::sensitivities`] for a material without [`Material::as_law`]: per step
+    /// and Gauss point the blocks of the recorded step (`A^-1` formed once), then per
+    /// parameter `k`, with the carries `dy_{i-1}` and `B du_{i-1}` (docs/theory.md §12):
+    /// `q = -D dy_{i-1} + E B du_{i-1} - P e_k`, `K du = -B* Pi A^-1 q` (the contact's
+    /// prescribed values as for every law), `dsigma = C B du + Pi A^-1 q`,
+    /// `dy_i = A^-1 (q - E B du)`, `dF_i = -e_A . B* dsigma`.
+    pub(crate) fn sensitivities_material(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+    ) -> Result<Sensitivities, AdjointError> {
+        let start = std::time::Instant::now();
+        let model = self.model;
+        let n = traj.steps.len();
+        self.check_material(mat, c, traj, n, true)?;
+        self.contact.begin();
+        let (m, np, nq) = (mat.state_len(), c.len(), model.disc.n_qp());
+        let mut sw = MatSweep::new(mat, np, nq);
+        // per point of the step: A^-1, D, E, P
+        let mut ainv = vec![0.0; nq * m * m];
+        let mut dblk = vec![0.0; nq * m * m];
+        let mut eblk = vec![0.0; nq * m * 4];
+        let mut pblk = vec![0.0; nq * m * np];
+        // per parameter: dy (m per point) and B du (4 per point) of the previous step
+        let mut dy = vec![vec![0.0; nq * m]; np];
+        let mut bdu = vec![vec![[0.0; 4]; nq]; np];
+        let mut qv = vec![0.0; nq * m];
+        let mut h = vec![Vec4::ZERO; nq];
+        let mut df = vec![vec![0.0; np]; n];
+        // (one work space per parameter: friction ties each one's solve to its own
+        // previous displacement variation)
+        let mut works: Vec<crate::ParamWork> = (0..np)
+            .map(|_| crate::ParamWork::new(model, &self.contact))
+            .collect();
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
+            let fail = |reason: String| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason,
+            };
+            self.step_strains(f0, f1, &mut sw.deps).map_err(fail)?;
+            for q in 0..nq {
+                sw.load(f0, f1, q);
+                let deps = sw.deps[q];
+                let step = Step {
+                    y0: &sw.y0,
+                    y1: &sw.y1,
+                    deps: &deps,
+                    dt: rec.dt,
+                    regime: f1.regime[q],
+                };
+                mat.jac_state(c, &step, &mut sw.a);
+                mat.jac_previous(c, &step, &mut dblk[q * m * m..(q + 1) * m * m]);
+                mat.jac_strain(c, &step, &mut eblk[q * m * 4..(q + 1) * m * 4]);
+                mat.jac_params(c, &step, &mut pblk[q * m * np..(q + 1) * m * np]);
+                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
+                for j in 0..m {
+                    sw.work.copy_from_slice(&sw.a);
+                    sw.x.fill(0.0);
+                    sw.x[j] = 1.0;
+                    if !dense_solve(&mut sw.work, m, &mut sw.x) {
+                        return Err(AdjointError::Step {
+                            step: i,
+                            t: rec.t,
+                            reason: format!(
+                                "{}: singular local Jacobian A at Gauss point {q}",
+                                mat.name()
+                            ),
+                        });
+                    }
+                    for r in 0..m {
+                        inv[r * m + j] = sw.x[r];
+                    }
+                }
+                let e = &eblk[q * m * 4..(q + 1) * m * 4];
+                let mut ct = Mat4::ZERO;
+                for a in 0..4 {
+                    for b in 0..4 {
+                        ct.0[a][b] = -(0..m).map(|k| inv[a * m + k] * e[k * 4 + b]).sum::<f64>();
+                    }
+                }
+                self.tangents[q] = ct;
+            }
+            self.prepare_material_step(rec, f1, None).map_err(fail)?;
+            let finite = self.finite.as_ref();
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            for k in 0..np {
+                let (dyk, bduk) = (&mut dy[k], &mut bdu[k]);
+                for q in 0..nq {
+                    let (d, e) = (&dblk[q * m * m..], &eblk[q * m * 4..]);
+                    let p = &pblk[q * m * np..];
+                    for r in 0..m {
+                        let mut v = -p[r * np + k];
+                        for j in 0..m {
+                            v -= d[r * m + j] * dyk[q * m + j];
+                        }
+                        for j in 0..4 {
+                            v += e[r * 4 + j] * bduk[q][j];
+                        }
+                        qv[q * m + r] = v;
+                    }
+                    let inv = &ainv[q * m * m..];
+                    let hq = Vec4(std::array::from_fn(|a| {
+                        (0..m).map(|j| inv[a * m + j] * qv[q * m + j]).sum::<f64>()
+                    }));
+                    h[q] = hq;
+                    self.field_b[q] = hq * -1.0;
+                }
+                let w = &mut works[k];
+                crate::force_into(model, finite, &self.field_b, &mut w.full);
+                model.dofs.restrict(&w.full, &mut w.eq);
+                self.contact
+                    .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+                crate::expand_into(model, &w.eq, &mut w.full);
+                if !w.du_prev.is_empty() {
+                    w.du_prev.copy_from_slice(&w.full);
+                }
+                crate::strains_into(model, finite, &w.full, &mut w.strain);
+                for q in 0..nq {
+                    let b = Vec4(w.strain[q]);
+                    self.field_b[q] = self.tangents[q].mul_vec(&b) + h[q];
+                    let (inv, e) = (&ainv[q * m * m..], &eblk[q * m * 4..]);
+                    for r in 0..m {
+                        sw.x[r] = qv[q * m + r] - (0..4).map(|j| e[r * 4 + j] * b[j]).sum::<f64>();
+                    }
+                    for r in 0..m {
+                        dyk[q * m + r] = (0..m).map(|j| inv[r * m + j] * sw.x[j]).sum();
+                    }
+                    bduk[q] = b.0;
+                }
+                match finite {
+                    None => model.disc.internal_force(&self.field_b, &mut w.full),
+                    // K du + sum w0 G^T Pi A^-1 q (geometric part included)
+                    Some(fs) => fs.delta_force(model, &h, &mut w.full, &mut w.du),
+                }
+                df[i][k] = -crate::force_dofs(model, rec)
+                    .map(|d| w.full[d])
+                    .sum::<f64>();
+            }
+        }
+        Ok(Sensitivities {
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The inputs' checks: recorded fields (unless replayed), lengths, parameters, and
+    /// a model this sweep takes (small strain, no friction).
+    fn check_material(
+        &self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        n_rho: usize,
+        need_fields: bool,
+    ) -> Result<(), AdjointError> {
+        let n = traj.steps.len();
+        if need_fields && traj.fields.len() != n + 1 {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: n,
+            });
+        }
+        if n_rho != n {
+            return Err(AdjointError::Length {
+                expected: n,
+                got: n_rho,
+            });
+        }
+        mat.check_params(c)?;
+        mat.check_differentiable(c)?;
+        Ok(())
+    }
+
+    /// One step of the reversed-time sweep (steps 1-3 of the module's recursion).
+    #[allow(clippy::too_many_arguments)]
+    fn material_step(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        sw: &mut MatSweep,
+        i: usize,
+        rec: &StepRecord,
+        (f0, f1): (&StepFields, &StepFields),
+        rho: f64,
+    ) -> Result<(), AdjointError> {
+        if sw.zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending() {
+            return Ok(());
+        }
+        sw.zero = false;
+        let model = self.model;
+        let (m, np) = (sw.m, sw.np);
+        let nq = model.disc.n_qp();
+        let fail = |q: usize, what: &str| AdjointError::Step {
+            step: i,
+            t: rec.t,
+            reason: format!(
+                "{}: singular local Jacobian A at Gauss point {q} ({what})",
+                mat.name()
+            ),
+        };
+        self.step_strains(f0, f1, &mut sw.deps)
+            .map_err(|reason| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason,
+            })?;
+        let finite = self.finite.is_some();
+        // Coulomb friction: dJ/dF enters as the shift `V' = V + rho e_A` (lib.rs), whose
+        // part `rho B e_A` joins `z`'s stress rows in the source
+        let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
+        if shifted && !finite {
+            self.full.fill(0.0);
+            for d in crate::force_dofs(model, rec) {
+                self.full[d] = 1.0;
+            }
+            self.strains_of_full();
+        }
+        // a linear material: its blocks once for the step
+        let linear = sw.linear;
+        if linear {
+            sw.load(f0, f1, 0);
+            let deps = sw.deps[0];
+            if !sw.linear_blocks(mat, c, &deps, rec.dt) {
+                return Err(fail(0, "tangent"));
+            }
+            self.tangents.fill(sw.ct);
+        }
+        // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
+        for q in 0..nq {
+            if linear {
+                let z = &sw.z[q * m..(q + 1) * m];
+                for k in 0..m {
+                    let row = &sw.ainvt[k * m..(k + 1) * m];
+                    sw.x[k] = row.iter().zip(z).map(|(a, b)| a * b).sum();
+                }
+                sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+                if shifted && !finite {
+                    let bea = self.strain[q];
+                    for k in 0..m {
+                        sw.x[k] += rho * (0..4).map(|j| sw.glin[k * 4 + j] * bea[j]).sum::<f64>();
+                    }
+                }
+                let mut src = sw.e[q];
+                for b in 0..4 {
+                    src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                }
+                self.field_b[q] = src;
+                continue;
+            }
+            sw.load(f0, f1, q);
+            let deps = sw.deps[q];
+            let step = Step {
+                y0: &sw.y0,
+                y1: &sw.y1,
+                deps: &deps,
+                dt: rec.dt,
+                regime: f1.regime[q],
+            };
+            mat.jac_state(c, &step, &mut sw.a);
+            mat.jac_strain(c, &step, &mut sw.ej);
+            for r in 0..m {
+                for k in 0..m {
+                    sw.at[k * m + r] = sw.a[r * m + k];
+                }
+            }
+            for j in 0..4 {
+                sw.x.fill(0.0);
+                sw.x[j] = 1.0;
+                if !sw.solve_transposed() {
+                    return Err(fail(q, "tangent"));
+                }
+                for k in 0..m {
+                    sw.g[(q * m + k) * 4 + j] = sw.x[k];
+                }
+            }
+            let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+            let mut ct = Mat4::ZERO;
+            for a in 0..4 {
+                for b in 0..4 {
+                    ct.0[a][b] = -(0..m)
+                        .map(|k| gq[k * 4 + a] * sw.ej[k * 4 + b])
+                        .sum::<f64>();
+                }
+            }
+            self.tangents[q] = ct;
+            sw.x.copy_from_slice(&sw.z[q * m..(q + 1) * m]);
+            if !sw.solve_transposed() {
+                return Err(fail(q, "adjoint"));
+            }
+            sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+            if shifted && !finite {
+                let bea = self.strain[q];
+                let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
+                for k in 0..m {
+                    sw.x[k] += rho * (0..4).map(|j| gq[k * 4 + j] * bea[j]).sum::<f64>();
+                }
+            }
+            let mut src = sw.e[q];
+            for b in 0..4 {
+                src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+            }
+            self.field_b[q] = src;
+        }
+        let reason = |r: String| AdjointError::Step {
+            step: i,
+            t: rec.t,
+            reason: r,
+        };
+        let uniform = (linear && !finite).then_some(c);
+        self.prepare_material_step(rec, f1, uniform)
+            .map_err(reason)?;
+        // K^T V = B* source, V = rho on the active dofs
+        self.force_of_field_b();
+        if let (true, Some(fs)) = (shifted, &self.finite) {
+            // (finite strain: the shift's part of the source is K (-rho e_A))
+            self.e_a.clear();
+            self.e_a.resize(self.full.len(), 0.0);
+            for d in crate::force_dofs(model, rec) {
+                self.e_a[d] = -rho;
+            }
+            fs.add_k_times(model, &self.e_a, &mut self.full);
+        }
+        self.restrict();
+        let mut eq = std::mem::take(&mut self.eq);
+        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        self.eq = eq;
+        self.expand();
+        if shifted {
+            for d in crate::force_dofs(model, rec) {
+                self.full[d] += rho;
+            }
+        }
+        self.strains_of_full();
+        // mu = -(A^-T z + G B V); gradient; carries for the step before
+        for q in 0..nq {
+            sw.load(f0, f1, q);
+            let bv = self.strain[q];
+            let deps = sw.deps[q];
+            let gq = if linear {
+                &sw.glin[..]
+            } else {
+                &sw.g[q * m * 4..(q + 1) * m * 4]
+            };
+            for k in 0..m {
+                sw.x[k] = -(sw.az[q * m + k] + (0..4).map(|j| gq[k * 4 + j] * bv[j]).sum::<f64>());
+            }
+            let step = Step {
+                y0: &sw.y0,
+                y1: &sw.y1,
+                deps: &deps,
+                dt: rec.dt,
+                regime: f1.regime[q],
+            };
+            let w = model.disc.qp[q].w;
+            mat.jac_params(c, &step, &mut sw.p);
+            for (k, g) in sw.grad.iter_mut().enumerate() {
+                *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
+            }
+            if !linear {
+                mat.jac_previous(c, &step, &mut sw.d);
+                mat.jac_strain(c, &step, &mut sw.ej);
+            }
+            for k in 0..m {
+                sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
+            }
+            for b in 0..4 {
+                sw.e[q].0[b] = (0..m).map(|r| sw.ej[r * 4 + b] * sw.x[r]).sum();
+            }
+        }
+        Ok(())
+    }
+
+    /// The step's strain increment at every Gauss point into `out`: `B (u_1 - u_0)`
+    /// under small strain, `E(u_1) - E(u_0)` (Hencky strains, with the forward's own
+    /// routines) under finite strain.
+    ///
+    /// # Errors
+    /// A message naming the Gauss point where a recorded state is inverted.
+    fn step_strains(
+        &self,
+        f0: &StepFields,
+        f1: &StepFields,
+        out: &mut [Vec4],
+    ) -> Result<(), String> {
+        let disc = &self.model.disc;
+        for e in 0..disc.elements.len() {
+            let dofs = disc.element_dofs(e);
+            let (u0, u1) = (disc.gather(e, &f0.u), disc.gather(e, &f1.u));
+            for g in 0..QP_PER_ELEMENT {
+                let q = QP_PER_ELEMENT * e + g;
+                let qp = &disc.qp[q];
+                out[q] = if self.finite.is_some() {
+                    let hencky = |ue: &[f64; 16]| {
+                        let def = Deformation::new(qp, ue);
+                        (def.det() > 0.0)
+                            .then(|| LogStrain::from_difference(&def.c_minus_one()))
+                            .flatten()
+                            .map(|ls| ls.e)
+                            .ok_or_else(|| format!("inverted recorded state at Gauss point {q}"))
+                    };
+                    hencky(&u1)? - hencky(&u0)?
+                } else {
+                    let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
+                    Vec4(qp.strain(&due))
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the step's system from the tangents in `self.tangents`: under finite strain
+    /// the element tangents at `u_1` (material and geometric parts); with friction the
+    /// frames' reactions from the recorded stresses.
+    ///
+    /// # Errors
+    /// A message from the finite-strain operators or the contact.
+    /// `uniform`: the parameters of a linear material under small strain, whose one
+    /// tangent (in `self.tangents[0]`) keys the reuse of the factorization as a linear
+    /// law's does.
+    fn prepare_material_step(
+        &mut self,
+        rec: &StepRecord,
+        f1: &StepFields,
+        uniform: Option<&[f64]>,
+    ) -> Result<(), String> {
+        let model = self.model;
+        if let Some(fs) = self.finite.as_mut() {
+            fs.prepare(model, &f1.u, &f1.sigma, &self.tangents)?;
+        }
+        let f_int = if self.contact.needs_internal_force() {
+            crate::force_into(model, self.finite.as_ref(), &f1.sigma, &mut self.full);
+            Some(self.full.as_slice())
+        } else {
+            None
+        };
+        let tangent = match (&self.finite, uniform) {
+            (Some(fs), _) => StepTangent::Elements(&fs.ke),
+            (None, Some(params)) => StepTangent::Uniform {
+                tangent: &self.tangents[0],
+                params,
+                dt: rec.dt,
+            },
+            (None, None) => StepTangent::Points(&self.tangents),
+        };
+        self.contact.prepare(rec, &f1.u, f_int, tangent)
+    }
+}
