@@ -1,8 +1,8 @@
 //! Load control in configurations: `history` segments with `force` (N), `simulate`
 //! writing t, h, F, a for a mixed history; `gradient` on the depth cost against central
 //! differences (the adjoint of the bordered system, docs/theory.md §13); `identify`
-//! refusing load-controlled histories with a message naming the field; bad segments
-//! naming theirs.
+//! refusing load-controlled histories with a message naming the field; `gradient-check`
+//! passing on the depth cost; bad segments naming theirs.
 
 use indentify_study::gradient::{self, GradientOptions};
 use indentify_study::simulate::{self, SimulateOptions};
@@ -100,6 +100,31 @@ fn gradient_of_the_depth_cost_matches_central_differences() {
     .unwrap_err();
     assert!(format!("{e:#}").contains("no depth column"), "{e:#}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `gradient-check` under load control (depth observable, data synthesized at the
+/// configuration's values, checked at the perturbed point): the bordered adjoint against
+/// central differences of the check's own depth cost and against `J^T rho` of the
+/// bordered sensitivities, every parameter passing at the command's tolerances (1e-6,
+/// relative step 1e-5); a mixed depth-load-depth history included.
+#[test]
+fn gradient_check_passes_under_load_control() {
+    use indentify_study::check::{self, CheckOptions};
+    for segments in [
+        "(duration: 1.0, force: 100.0, steps: 6), (duration: 1.0, force: 100.0, steps: 6)",
+        "(duration: 0.2, depth: 0.02, steps: 2), (duration: 1.0, force: 100.0, steps: 5), \
+         (duration: 1.0, force: 100.0, steps: 5), (duration: 0.5, depth: 0.01, steps: 3)",
+    ] {
+        let r = check::run(&CheckOptions::new(source(segments))).unwrap();
+        assert!(r.j > 0.0);
+        for c in &r.checks {
+            println!(
+                "{}: adjoint {:.10e} fd {:.10e} ({:.1e}) sens ({:.1e})",
+                c.name, c.adjoint, c.fd, c.rel_diff_fd, c.rel_diff_sensitivity
+            );
+            assert!(c.passed, "{}: {:?}", c.name, c.rel_diff_fd);
+        }
+    }
 }
 
 /// A segment with both or neither of depth and force, or a negative force: the field.
