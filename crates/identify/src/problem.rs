@@ -223,7 +223,8 @@ pub struct Problem {
     pub law: &'static dyn Law,
     /// The tests, in order (at least one).
     pub tests: Vec<Test>,
-    /// `F_i^exp` of every test, laid end to end (N).
+    /// The observed values of every test, laid end to end: `F_i^exp` (N), or `h_exp,i`
+    /// (mm) for a load-controlled test ([`Test::load`]).
     pub target: Vec<f64>,
     /// The weights `w_i` (test weights included), laid end to end.
     pub weights: Vec<f64>,
@@ -885,7 +886,8 @@ impl<'p> Evaluator<'p> {
     }
 
     /// Forces `F_i(c)` at the schedule times (index 0 = initial state), every test's laid
-    /// end to end in test order ([`Problem::rows_of`]).
+    /// end to end in test order ([`Problem::rows_of`]); a load-controlled test's rows are
+    /// its depths `h_i(c)` (mm), its observable ([`Test::observables`]).
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
@@ -959,7 +961,8 @@ impl<'p> Evaluator<'p> {
 
     /// The Jacobian `dF_i/dc_k` at the schedule times (row 0 of each test, its initial
     /// state, is 0), all law parameters, by forward sensitivities; the tests' rows laid end
-    /// to end in test order ([`Problem::rows_of`]).
+    /// to end in test order ([`Problem::rows_of`]); a load-controlled test's rows are
+    /// `dh_i/dc_k` (the bordered sensitivities, docs/theory.md §13).
     ///
     /// # Errors
     /// As [`Evaluator::cost_and_gradient`].
