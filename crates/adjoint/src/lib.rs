@@ -33,7 +33,10 @@
 
 pub mod check;
 mod finite;
+mod load;
 mod material;
+
+pub use load::LoadSensitivities;
 
 use indentify_contact::{
     DirectSolver, ForceCotangent, Model, RecordedContact, Schedule, SolverOptions, StepFields,
@@ -553,6 +556,7 @@ impl<'m> Adjoint<'m> {
                 r_field: &r_field,
                 np,
                 rec,
+                border: None,
             };
             let one =
                 |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
@@ -599,6 +603,8 @@ struct ParamWork {
     du_prev: Vec<f64>,
     /// The prescribed values of the solve (equations; zero between solves).
     xbar: Vec<f64>,
+    /// Load control: the step's depth variation `dU_i/dc_k` (mm per unit parameter).
+    du_depth: f64,
     solve: indentify_fe::SolveScratch,
 }
 
@@ -619,6 +625,7 @@ impl ParamWork {
                 Vec::new()
             },
             xbar: vec![0.0; model.dofs.n_eq],
+            du_depth: 0.0,
             solve: contact.solve_scratch(),
         }
     }
@@ -637,6 +644,9 @@ struct ParamStep<'a> {
     /// Number of parameters.
     np: usize,
     rec: &'a StepRecord,
+    /// Load control: the step's depth column and what sets its depth variation
+    /// (`load.rs`).
+    border: Option<load::Border<'a>>,
 }
 
 impl ParamStep<'_> {
@@ -658,6 +668,7 @@ impl ParamStep<'_> {
         model.dofs.restrict(&w.full, &mut w.eq);
         self.contact
             .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+        let shift = self.border.as_ref().map(|b| b.shift(self, k, yk, w));
         expand_into(model, &w.eq, &mut w.full);
         if !w.du_prev.is_empty() {
             w.du_prev.copy_from_slice(&w.full);
@@ -679,6 +690,9 @@ impl ParamStep<'_> {
             &mut w.du,
         );
         *dfk = -force_dofs(model, self.rec).map(|d| w.full[d]).sum::<f64>();
+        if let Some(du) = shift {
+            w.du_depth = du;
+        }
     }
 }
 

@@ -10,7 +10,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use indentify_adjoint::{Adjoint, Replay};
-use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
+use indentify_contact::{
+    ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Trajectory,
+};
 use indentify_laws::Law;
 
 use crate::IdentifyError;
@@ -38,6 +40,12 @@ pub struct Test {
     pub weights: Vec<f64>,
     /// The test's weight `w_k > 0` in the joint cost (1 for a single test).
     pub weight: f64,
+    /// Load control ([`Test::new_load`]): the history prescribing the force (its
+    /// `schedule` is [`Test::schedule`]); the observable is then the punch depth, and
+    /// `target` holds the measured depths `h_exp` (mm), the cost
+    /// `J_k = 1/2 sum w_i (h_i - h_exp,i)^2` (docs/theory.md §13). `None`: depth control,
+    /// the observable is the force.
+    pub load: Option<LoadHistory>,
 }
 
 impl Test {
@@ -103,7 +111,53 @@ impl Test {
             target,
             weights,
             weight,
+            load: None,
         })
+    }
+
+    /// Builds a load-controlled test: `history` prescribes the force (and the depth on its
+    /// depth-controlled segments), `depths` is the measured depth record (s, mm; read
+    /// through [`ForceRecord`], whose values are then depths), interpolated onto the
+    /// history's times; the observable is the depth. Weights as in [`Test::new`]. The
+    /// solver records every step's fields (the bordered adjoint reads them; load-controlled
+    /// runs save no checkpoints).
+    ///
+    /// # Errors
+    /// As [`Test::new`].
+    pub fn new_load(
+        model: Model,
+        history: LoadHistory,
+        depths: &ForceRecord,
+        weights: Option<Vec<f64>>,
+        solver_options: SolverOptions,
+        weight: f64,
+    ) -> Result<Test, IdentifyError> {
+        let opts = SolverOptions {
+            checkpoint_every: 0,
+            ..solver_options
+        };
+        let mut t = Test::new(
+            model,
+            history.schedule.clone(),
+            depths,
+            weights,
+            opts,
+            weight,
+        )?;
+        t.load = Some(history);
+        Ok(t)
+    }
+
+    /// The observables of a trajectory at the schedule times (index 0 = the initial state,
+    /// 0): the forces under depth control, the depths under load control.
+    pub fn observables(&self, traj: &Trajectory) -> Vec<f64> {
+        if self.load.is_some() {
+            std::iter::once(0.0)
+                .chain(traj.schedule_steps().map(|s| s.depth))
+                .collect()
+        } else {
+            traj.forces()
+        }
     }
 
     /// The default weight of a test in a joint fit, `1 / (n F_max^2)` with `n` the number
@@ -133,14 +187,18 @@ impl Test {
     }
 
     /// `dJ/dF` per trajectory step: `w_j (F_i - F_j^exp)` for a step ending on schedule
-    /// time j, 0 for the sub-steps of a cut step (the cost does not see them).
+    /// time j, 0 for the sub-steps of a cut step (the cost does not see them). Under load
+    /// control ([`Test::load`]) the derivative with respect to the observable, the depth:
+    /// `w_j (h_i - h_j^exp)`.
     pub fn dj_df(&self, traj: &Trajectory) -> Vec<f64> {
+        let load = self.load.is_some();
         traj.steps
             .iter()
             .map(|s| {
                 if s.on_schedule {
                     let j = s.schedule_index;
-                    self.weights[j] * (s.force - self.target[j])
+                    let y = if load { s.depth } else { s.force };
+                    self.weights[j] * (y - self.target[j])
                 } else {
                     0.0
                 }
@@ -165,7 +223,8 @@ pub struct Problem {
     pub law: &'static dyn Law,
     /// The tests, in order (at least one).
     pub tests: Vec<Test>,
-    /// `F_i^exp` of every test, laid end to end (N).
+    /// The observed values of every test, laid end to end: `F_i^exp` (N), or `h_exp,i`
+    /// (mm) for a load-controlled test ([`Test::load`]).
     pub target: Vec<f64>,
     /// The weights `w_i` (test weights included), laid end to end.
     pub weights: Vec<f64>,
@@ -449,14 +508,14 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    match w.solver.run(
-        &indentify_laws::LawMaterial(p.law),
-        c,
-        &t.schedule,
-        &t.solver_options,
-    ) {
+    let mat = indentify_laws::LawMaterial(p.law);
+    let run = match &t.load {
+        Some(h) => w.solver.run_history(&mat, c, h, &t.solver_options),
+        None => w.solver.run(&mat, c, &t.schedule, &t.solver_options),
+    };
+    match run {
         Ok(traj) => {
-            te.forces = Some(traj.forces());
+            te.forces = Some(t.observables(&traj));
             te.traj = Some(traj);
             true
         }
@@ -480,7 +539,10 @@ fn gradient_task(
         return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
     let rho = t.dj_df(traj);
-    let g = if t.solver_options.checkpoint_every > 0 {
+    let g = if let Some(h) = &t.load {
+        let zero = vec![0.0; rho.len()];
+        w.adjoint.gradient_load(p.law, c, traj, h, &rho, &zero)
+    } else if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
             &indentify_laws::LawMaterial(p.law),
             c,
@@ -518,6 +580,22 @@ fn jacobian_task(
     };
     // the forward sensitivities need every step's fields: a checkpointed trajectory is
     // recorded again in full for them (the memory of one unbounded run)
+    if let Some(h) = &t.load {
+        let sens = w
+            .adjoint
+            .sensitivities_load(p.law, c, traj, h)
+            .map_err(|source| IdentifyError::Adjoint {
+                params: c.to_vec(),
+                source,
+            })?;
+        let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
+        for (s, row) in traj.steps.iter().zip(&sens.dh_dc) {
+            if s.on_schedule {
+                jac[s.schedule_index].clone_from(row);
+            }
+        }
+        return Ok(jac);
+    }
     let full;
     let traj = if traj.fields.len() == traj.steps.len() + 1 {
         traj
@@ -808,7 +886,8 @@ impl<'p> Evaluator<'p> {
     }
 
     /// Forces `F_i(c)` at the schedule times (index 0 = initial state), every test's laid
-    /// end to end in test order ([`Problem::rows_of`]).
+    /// end to end in test order ([`Problem::rows_of`]); a load-controlled test's rows are
+    /// its depths `h_i(c)` (mm), its observable ([`Test::observables`]).
     ///
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
@@ -882,7 +961,8 @@ impl<'p> Evaluator<'p> {
 
     /// The Jacobian `dF_i/dc_k` at the schedule times (row 0 of each test, its initial
     /// state, is 0), all law parameters, by forward sensitivities; the tests' rows laid end
-    /// to end in test order ([`Problem::rows_of`]).
+    /// to end in test order ([`Problem::rows_of`]); a load-controlled test's rows are
+    /// `dh_i/dc_k` (the bordered sensitivities, docs/theory.md §13).
     ///
     /// # Errors
     /// As [`Evaluator::cost_and_gradient`].

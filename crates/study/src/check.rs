@@ -25,7 +25,7 @@ use crate::config::Config;
 use crate::data;
 use crate::error::{Classify, ErrorKind, Result};
 use crate::format::{Named, assignments};
-use crate::identify::prepare;
+use crate::identify::prepare_driven;
 use crate::solve::{ensure_differentiable, forward, param_names};
 use crate::source::ConfigSource;
 
@@ -326,7 +326,9 @@ fn set_up(
             ),
             None => (cfg.clone(), name.to_string(), format!("`{name}`")),
         };
-        let prepared = prepare(&sub, &run_name)?;
+        // under load control (force segments, `data.drive: Force`) the depth is the
+        // observable: the data's `h`, or the truth's depths
+        let (prepared, load) = prepare_driven(&sub, &run_name)?;
         let (schedule, model) = (prepared.schedule, prepared.model);
         let record = match &args.data {
             Some(path) => {
@@ -334,13 +336,41 @@ fn set_up(
                 let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
                 curve.check_covers(t0, t1, name).kind(ErrorKind::Data)?;
                 data_name = curve.name.clone();
-                curve.record().kind(ErrorKind::Data)?
+                match (&load, &curve.h) {
+                    (None, _) => curve.record().kind(ErrorKind::Data)?,
+                    (Some(_), Some(h)) => ForceRecord::new(curve.t.clone(), h.clone())
+                        .with_context(|| format!("invalid depths in `{}`", curve.name))
+                        .kind(ErrorKind::Data)?,
+                    (Some(_), None) => {
+                        return Err(crate::Error::msg(
+                            ErrorKind::Data,
+                            format!(
+                                "the data `{}` have no depth column `h`: under load control \
+                                 the depth is the observable of {what}",
+                                curve.name
+                            ),
+                        ));
+                    }
+                }
             }
             None => {
                 let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
-                let traj = forward(&mut solver, law, truth, &schedule, &fd_opts, &run_name)
-                    .kind(ErrorKind::Solver)?;
-                ForceRecord::new(schedule.t.clone(), traj.forces())
+                let traj = run_test(
+                    &mut solver,
+                    law,
+                    truth,
+                    &schedule,
+                    load.as_ref(),
+                    &fd_opts,
+                    &run_name,
+                )
+                .with_context(|| format!("cannot simulate `{run_name}`"))
+                .kind(ErrorKind::Solver)?;
+                let observed = match load {
+                    Some(_) => depths(&traj),
+                    None => traj.forces(),
+                };
+                ForceRecord::new(schedule.t.clone(), observed)
                     .context("cannot use the simulated curve as data")
                     .kind(ErrorKind::Data)?
             }
@@ -356,10 +386,16 @@ fn set_up(
                 .with_context(compare)
                 .kind(ErrorKind::Data)?,
         };
-        let test =
-            indentify_identify::Test::new(model, schedule, &record, None, opts.clone(), weight)
-                .with_context(compare)
-                .kind(ErrorKind::Data)?;
+        let test = match load {
+            Some(h) => {
+                indentify_identify::Test::new_load(model, h, &record, None, opts.clone(), weight)
+            }
+            None => {
+                indentify_identify::Test::new(model, schedule, &record, None, opts.clone(), weight)
+            }
+        }
+        .with_context(compare)
+        .kind(ErrorKind::Data)?;
         tests.push(test);
         run_names.push(run_name);
     }
@@ -506,21 +542,48 @@ fn at_point(
     let start = Instant::now();
     let runs = each_test(problem, solvers, |k, test, solver| {
         let model = &test.model;
-        let traj =
-            forward(solver, law, point, &test.schedule, opts, &names[k]).kind(ErrorKind::Solver)?;
+        let traj = run_test(
+            solver,
+            law,
+            point,
+            &test.schedule,
+            test.load.as_ref(),
+            opts,
+            &names[k],
+        )
+        .with_context(|| format!("cannot simulate `{}`", names[k]))
+        .kind(ErrorKind::Solver)?;
         let forward_done = start.elapsed().as_secs_f64();
         let rho = test.dj_df(&traj);
         let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
-        let grad = adjoint
-            .gradient(&indentify_laws::LawMaterial(law), point, &traj, &rho)
-            .context("the adjoint sweep failed")
-            .kind(ErrorKind::Solver)?;
-        let sens = adjoint
-            .sensitivities(&indentify_laws::LawMaterial(law), point, &traj)
-            .context("the forward sensitivities failed")
-            .kind(ErrorKind::Solver)?;
+        let (grad, sens) = match &test.load {
+            // load control: rho is dJ/dh, the rows dh/dc (docs/theory.md §13)
+            Some(h) => {
+                let zero = vec![0.0; rho.len()];
+                let grad = adjoint
+                    .gradient_load(law, point, &traj, h, &rho, &zero)
+                    .context("the adjoint sweep failed")
+                    .kind(ErrorKind::Solver)?;
+                let s = adjoint
+                    .sensitivities_load(law, point, &traj, h)
+                    .context("the forward sensitivities failed")
+                    .kind(ErrorKind::Solver)?;
+                (grad, (s.dh_dc, s.seconds))
+            }
+            None => {
+                let grad = adjoint
+                    .gradient(&indentify_laws::LawMaterial(law), point, &traj, &rho)
+                    .context("the adjoint sweep failed")
+                    .kind(ErrorKind::Solver)?;
+                let s = adjoint
+                    .sensitivities(&indentify_laws::LawMaterial(law), point, &traj)
+                    .context("the forward sensitivities failed")
+                    .kind(ErrorKind::Solver)?;
+                (grad, (s.df_dc, s.seconds))
+            }
+        };
         let held = (model.contact.friction() > 0.0).then(|| statuses(&traj));
-        Ok((traj.forces(), rho, grad, sens, held, forward_done))
+        Ok((test.observables(&traj), rho, grad, sens, held, forward_done))
     })?;
     let mut forces = Vec::with_capacity(problem.target.len());
     let mut gradient: Option<Vec<f64>> = None;
@@ -540,7 +603,7 @@ fn at_point(
             None => gradient = Some(grad.dj_dc),
             Some(g) => g.iter_mut().zip(&grad.dj_dc).for_each(|(a, b)| *a += b),
         }
-        for (row, r) in sens.df_dc.iter().zip(&rho) {
+        for (row, r) in sens.0.iter().zip(&rho) {
             for (gk, d) in jt_rho.iter_mut().zip(row) {
                 *gk += r * d;
             }
@@ -548,7 +611,7 @@ fn at_point(
         at.statuses.push(held);
         at.forward_seconds = at.forward_seconds.max(forward_done);
         at.adjoint_seconds += grad.seconds;
-        at.sensitivity_seconds += sens.seconds;
+        at.sensitivity_seconds += sens.1;
     }
     at.j = problem.cost_of(&forces);
     at.gradient = gradient.unwrap_or_default();
@@ -578,10 +641,19 @@ fn compare(
     let mut cost = |c: &[f64]| -> Result<f64> {
         solves += problem.tests.len();
         let runs = each_test(problem, solvers, |k, test, solver| {
-            let t = forward(solver, law, c, &test.schedule, &fd_opts, &names[k])
-                .kind(ErrorKind::Solver)?;
+            let t = run_test(
+                solver,
+                law,
+                c,
+                &test.schedule,
+                test.load.as_ref(),
+                &fd_opts,
+                &names[k],
+            )
+            .with_context(|| format!("cannot simulate `{}`", names[k]))
+            .kind(ErrorKind::Solver)?;
             let kept = at.statuses[k].as_ref().is_none_or(|b| *b == statuses(&t));
-            Ok((t.forces(), kept))
+            Ok((test.observables(&t), kept))
         })?;
         let mut forces = Vec::with_capacity(problem.target.len());
         for (f, kept) in runs {
@@ -630,6 +702,29 @@ fn compare(
         });
     }
     Ok((checks, solves))
+}
+
+/// A test's forward run: by its depth schedule, or under load control by its history.
+fn run_test(
+    solver: &mut DirectSolver<'_>,
+    law: &'static dyn Law,
+    c: &[f64],
+    schedule: &indentify_contact::Schedule,
+    load: Option<&indentify_contact::LoadHistory>,
+    opts: &SolverOptions,
+    name: &str,
+) -> anyhow::Result<indentify_contact::Trajectory> {
+    match load {
+        Some(h) => Ok(solver.run_history(&indentify_laws::LawMaterial(law), c, h, opts)?),
+        None => forward(solver, law, c, schedule, opts, name),
+    }
+}
+
+/// The depths at the schedule times (index 0: the initial state, 0).
+fn depths(traj: &indentify_contact::Trajectory) -> Vec<f64> {
+    std::iter::once(0.0)
+        .chain(traj.schedule_steps().map(|s| s.depth))
+        .collect()
 }
 
 /// `v` rounded to 12 significant digits.

@@ -573,9 +573,10 @@ impl Drive {
 }
 
 /// Why a load-controlled configuration is refused by every command but `simulate`.
-const LOAD_CONTROL_ONLY_SIMULATE: &str = "load control is supported by `simulate` only: \
-    fitting or checking gradients on a load-controlled history needs the adjoint of the \
-    bordered system, which is not written yet; use `simulate`, or drive by depth";
+const LOAD_CONTROL_ONLY_SIMULATE: &str = "load control is supported by `simulate`, \
+    `gradient` and `gradient-check` only: fitting a load-controlled history (depth residuals \
+    in `identify`: its data, reports and figures) is not wired yet; use `simulate`, \
+    `gradient` or `gradient-check`, or drive by depth";
 
 /// Numerical options of the direct solver; every field is optional and defaults to
 /// [`SolverOptions::default`]. Whether fields are recorded is decided by the command.

@@ -116,26 +116,38 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {
         d.file = absolute(path);
     }
-    let prepared = prepare(&cfg, &name)?;
-    let curve = match (&prepared.measured, &opts.data) {
-        // the measured record: its preprocessed force at its own times (the schedule's)
-        (Some(m), _) => Curve {
-            name: m.path.display().to_string(),
-            t: m.record.t.clone(),
-            h: Some(m.record.h.clone()),
-            f: m.record.f.clone(),
-        },
-        (None, Some(path)) => crate::data::read_curve(path).kind(ErrorKind::Data)?,
-        (None, None) => {
-            return Err(Error::msg(
-                ErrorKind::Data,
-                format!(
-                    "no data for `{name}`: give --data CURVE.csv, or a `data` section in the \
-                     configuration"
-                ),
-            ));
-        }
+    let load_controlled = match &cfg.data {
+        Some(d) => d.drive == crate::config::Drive::Force,
+        None => cfg.load_history().is_ok_and(|h| h.is_load_controlled()),
     };
+    if load_controlled {
+        // the force drives, the depth is the observable (docs/theory.md §13)
+        let (prepared, history) = cfg.prepare_driven(&name).map_err(|e| {
+            let kind = if e.downcast_ref::<crate::config::DataFailure>().is_some() {
+                ErrorKind::Data
+            } else {
+                ErrorKind::Config
+            };
+            Error::new(kind, e)
+        })?;
+        let Some(history) = history else {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!("`{name}` prescribes no force"),
+            ));
+        };
+        let curve = curve_of(&prepared, opts, &name)?;
+        return crate::gradient_load::run(
+            opts,
+            &cfg,
+            &name,
+            (law, params),
+            (prepared, history),
+            curve,
+        );
+    }
+    let prepared = prepare(&cfg, &name)?;
+    let curve = curve_of(&prepared, opts, &name)?;
     let schedule = prepared.schedule;
     let (t0, t1) = (schedule.t[0], schedule.t[schedule.t.len() - 1]);
     curve.check_covers(t0, t1, &name).kind(ErrorKind::Data)?;
@@ -222,4 +234,33 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         data_rows: curve.t.len(),
         data_span: curve.span(),
     })
+}
+
+/// The data of `gradient`: the measured record (its preprocessed curve at its own times),
+/// or the curve file of `--data`.
+fn curve_of(
+    prepared: &crate::config::Prepared,
+    opts: &GradientOptions,
+    name: &str,
+) -> Result<Curve> {
+    let curve = match (&prepared.measured, &opts.data) {
+        // the measured record: its preprocessed force at its own times (the schedule's)
+        (Some(m), _) => Curve {
+            name: m.path.display().to_string(),
+            t: m.record.t.clone(),
+            h: Some(m.record.h.clone()),
+            f: m.record.f.clone(),
+        },
+        (None, Some(path)) => crate::data::read_curve(path).kind(ErrorKind::Data)?,
+        (None, None) => {
+            return Err(Error::msg(
+                ErrorKind::Data,
+                format!(
+                    "no data for `{name}`: give --data CURVE.csv, or a `data` section in the \
+                     configuration"
+                ),
+            ));
+        }
+    };
+    Ok(curve)
 }

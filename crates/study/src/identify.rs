@@ -1125,6 +1125,25 @@ pub fn prepare(cfg: &Config, name: &str) -> Result<Prepared> {
     })
 }
 
+/// [`Config::prepare_driven`] with its errors classified as [`prepare`]'s: the prepared
+/// model and, under load control, the history prescribing the force.
+///
+/// # Errors
+/// As [`Config::prepare_driven`].
+pub fn prepare_driven(
+    cfg: &Config,
+    name: &str,
+) -> Result<(Prepared, Option<indentify_contact::LoadHistory>)> {
+    cfg.prepare_driven(name).map_err(|e| {
+        let kind = if e.downcast_ref::<crate::config::DataFailure>().is_some() {
+            ErrorKind::Data
+        } else {
+            ErrorKind::Config
+        };
+        Error::new(kind, e)
+    })
+}
+
 /// The data: the measured record, a curve file, or the configuration's own curve (with
 /// `noise`: amplitude, seed).
 fn load_data(

@@ -35,6 +35,7 @@ pub mod first_guess;
 pub mod format;
 pub mod fuzzing;
 pub mod gradient;
+mod gradient_load;
 pub mod history;
 pub mod identify;
 pub mod output;

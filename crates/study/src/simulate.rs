@@ -21,7 +21,8 @@ pub struct SimulateOptions {
     pub config: ConfigSource,
     /// `dotted.path=value` overrides.
     pub sets: Vec<String>,
-    /// Multiplicative noise `F (1 + a xi)` with amplitude and seed.
+    /// Multiplicative noise `F (1 + a xi)` with amplitude and seed (on the depth,
+    /// `h (1 + a xi)`, under load control: the observable).
     pub noise: Option<(f64, u64)>,
     /// Write the curve here (atomically); `None` keeps it in the outcome only.
     pub out: Option<PathBuf>,
@@ -195,9 +196,18 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         let seed = opts.test.map_or(seed, |k| {
             crate::identify::test_seed(seed, k.saturating_sub(1))
         });
-        let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
-        for (r, f) in rows.iter_mut().zip(multiplicative_noise(&forces, a, seed)) {
-            r.f = f;
+        // the noise goes on the observable: the force under depth control, the depth
+        // under load control (the prescribed force stays as prescribed)
+        if load.is_some() {
+            let depths: Vec<f64> = rows.iter().map(|r| r.h).collect();
+            for (r, h) in rows.iter_mut().zip(multiplicative_noise(&depths, a, seed)) {
+                r.h = h;
+            }
+        } else {
+            let forces: Vec<f64> = rows.iter().map(|r| r.f).collect();
+            for (r, f) in rows.iter_mut().zip(multiplicative_noise(&forces, a, seed)) {
+                r.f = f;
+            }
         }
     }
     if let Some(p) = &opts.out {

@@ -90,6 +90,8 @@ pub struct RecordedContact<'m> {
     stick: Vec<f64>,
     /// The prepared step's sensitivity ties.
     ties: Vec<Tie>,
+    /// Load control: scratch of the depth column's solve (equations).
+    w: Vec<f64>,
 }
 
 impl<'m> RecordedContact<'m> {
@@ -107,6 +109,7 @@ impl<'m> RecordedContact<'m> {
             v_p: vec![0.0; model.dofs.n_eq],
             stick: Vec::new(),
             ties: Vec::new(),
+            w: vec![0.0; model.dofs.n_eq],
         })
     }
 
@@ -197,11 +200,39 @@ impl<'m> RecordedContact<'m> {
             frames: &self.frames,
         };
         self.constraint.adjoint_rhs(&step, rho, g, &mut self.v_p);
-        // a drive with the depth as an unknown borders this solve (docs/solver.md)
+        // a drive with the depth as an unknown sets `rho` from the step's depth column
+        // before this solve (`depth_column`; docs/theory.md §13)
         self.system
             .solve_transposed(self.model, g, &self.v_p, &mut self.stick);
         self.v_p.fill(0.0);
         self.constraint.adjoint_carry(&step, &self.stick);
+    }
+
+    /// Load control's depth column of the prepared step `rec` (docs/theory.md §13): the
+    /// variation `du_U = w - v` (equations) of the step's displacement per unit depth
+    /// increment with everything before the step held, the forward's own bordered column
+    /// (`v`: 1 on the active candidates' vertical equations, `K w = K v` with the
+    /// constrained equations held at zero), into `col`; `kv` (equations) is scratch and
+    /// holds `K v` on exit. Returns the Schur complement `s = dF/dU = -(K v) . du_U`
+    /// (N/mm), the step's contact stiffness.
+    pub fn depth_column(&mut self, rec: &StepRecord, col: &mut [f64], kv: &mut [f64]) -> f64 {
+        let model = self.model;
+        // `v` in `col`
+        col.fill(0.0);
+        for &k in &rec.active {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
+                col[e] = 1.0;
+            }
+        }
+        kv.fill(0.0);
+        model.pattern.sym_mul_add(self.system.k_values(), col, kv);
+        self.w.copy_from_slice(kv);
+        // `v_p` is zero between solves: the constrained equations held at zero
+        self.system.solve_dirichlet(model, &mut self.w, &self.v_p);
+        for (c, w) in col.iter_mut().zip(&self.w) {
+            *c = w - *c;
+        }
+        -kv.iter().zip(col.iter()).map(|(a, b)| a * b).sum::<f64>()
     }
 
     /// Forms the prescribed values of the prepared step `rec` (displacement `u`) that
