@@ -11,11 +11,44 @@ use std::time::Instant;
 
 use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{ContactError, DirectSolver, Model, Schedule, SolverOptions, Trajectory};
-use indentify_laws::Law;
+use indentify_laws::{Law, LawMaterial, Material};
 
 use crate::IdentifyError;
 use crate::data::ForceRecord;
 use crate::tasks::{self, Follow, Todo};
+
+/// What a [`Problem`] takes as its law: a material shared by the tests' solvers. A
+/// stress-only [`Law`] becomes a [`LawMaterial`] (the solver dispatches it to the `Law`
+/// fast paths through [`Material::as_law`], so its bits are today's); a registry material
+/// (`Box<dyn Material>`, `Arc<dyn Material>`) is taken as is.
+pub trait IntoMaterial {
+    /// The shared material.
+    fn into_material(self) -> Arc<dyn Material>;
+}
+
+impl IntoMaterial for &'static dyn Law {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::new(LawMaterial(self))
+    }
+}
+
+impl<L: Law> IntoMaterial for &'static L {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::new(LawMaterial(self))
+    }
+}
+
+impl IntoMaterial for Arc<dyn Material> {
+    fn into_material(self) -> Arc<dyn Material> {
+        self
+    }
+}
+
+impl IntoMaterial for Box<dyn Material> {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::from(self)
+    }
+}
 
 /// One test of an identification: the direct problem (model, depth schedule, solver
 /// options) and the data it is compared with, weighted.
@@ -161,8 +194,9 @@ impl Test {
 /// one-curve problem.
 #[derive(Debug)]
 pub struct Problem {
-    /// The constitutive law whose parameters are identified.
-    pub law: &'static dyn Law,
+    /// The material whose parameters are identified (a stress-only law as
+    /// [`LawMaterial`], or a law with internal variables from the registry).
+    pub law: Arc<dyn Material>,
     /// The tests, in order (at least one).
     pub tests: Vec<Test>,
     /// `F_i^exp` of every test, laid end to end (N).
@@ -184,7 +218,7 @@ impl Problem {
     /// weight, or all weights zero.
     pub fn new(
         model: Model,
-        law: &'static dyn Law,
+        law: impl IntoMaterial,
         schedule: Schedule,
         record: &ForceRecord,
         weights: Option<Vec<f64>>,
@@ -198,7 +232,8 @@ impl Problem {
     ///
     /// # Errors
     /// [`IdentifyError::InvalidSpec`] (field `tests`) for an empty list.
-    pub fn joint(law: &'static dyn Law, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
+    pub fn joint(law: impl IntoMaterial, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
+        let law = law.into_material();
         if tests.is_empty() {
             return Err(IdentifyError::InvalidSpec {
                 name: "tests".into(),
@@ -449,12 +484,7 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    match w.solver.run(
-        &indentify_laws::LawMaterial(p.law),
-        c,
-        &t.schedule,
-        &t.solver_options,
-    ) {
+    match w.solver.run(&*p.law, c, &t.schedule, &t.solver_options) {
         Ok(traj) => {
             te.forces = Some(traj.forces());
             te.traj = Some(traj);
@@ -482,7 +512,7 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
-            &indentify_laws::LawMaterial(p.law),
+            &*p.law,
             c,
             traj,
             &rho,
@@ -493,8 +523,7 @@ fn gradient_task(
             },
         )
     } else {
-        w.adjoint
-            .gradient(&indentify_laws::LawMaterial(p.law), c, traj, &rho)
+        w.adjoint.gradient(&*p.law, c, traj, &rho)
     }
     .map_err(|source| IdentifyError::Adjoint {
         params: c.to_vec(),
@@ -529,7 +558,7 @@ fn jacobian_task(
         };
         full = w
             .solver
-            .run(&indentify_laws::LawMaterial(p.law), c, &t.schedule, &opts)
+            .run(&*p.law, c, &t.schedule, &opts)
             .map_err(|source| IdentifyError::Forward {
                 params: c.to_vec(),
                 source,
@@ -538,7 +567,7 @@ fn jacobian_task(
     };
     let sens = w
         .adjoint
-        .sensitivities(&indentify_laws::LawMaterial(p.law), c, traj)
+        .sensitivities(&*p.law, c, traj)
         .map_err(|source| IdentifyError::Adjoint {
             params: c.to_vec(),
             source,

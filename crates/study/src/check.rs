@@ -17,9 +17,10 @@ use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference, scan};
 use indentify_contact::{DirectSolver, SolverOptions};
 use indentify_identify::{ForceRecord, Problem};
-use indentify_laws::Law;
+use indentify_laws::Material;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Arc;
 
 use crate::config::Config;
 use crate::data;
@@ -211,6 +212,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    let law = &law;
     // tight forward solves for the differences (and the synthesized data)
     cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
     let opts = cfg.solver.options(true);
@@ -252,7 +254,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             )
         })
         .collect();
-    let names = param_names(law);
+    let names = param_names(&**law);
     Ok(CheckReport {
         law: law.name(),
         config: name,
@@ -303,7 +305,7 @@ fn set_up(
     args: &CheckOptions,
     cfg: &Config,
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     truth: &[f64],
 ) -> Result<SetUp> {
     let opts = cfg.solver.options(true);
@@ -311,7 +313,7 @@ fn set_up(
         record_fields: false,
         ..opts.clone()
     };
-    let names = param_names(law);
+    let names = param_names(&**law);
     let mut tests = Vec::with_capacity(cfg.n_tests());
     let mut run_names = Vec::with_capacity(cfg.n_tests());
     let mut data_name = String::new();
@@ -338,7 +340,7 @@ fn set_up(
             }
             None => {
                 let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
-                let traj = forward(&mut solver, law, truth, &schedule, &fd_opts, &run_name)
+                let traj = forward(&mut solver, &**law, truth, &schedule, &fd_opts, &run_name)
                     .kind(ErrorKind::Solver)?;
                 ForceRecord::new(schedule.t.clone(), traj.forces())
                     .context("cannot use the simulated curve as data")
@@ -376,8 +378,8 @@ fn set_up(
             );
         }
     }
-    let problem =
-        Problem::joint(law, tests).map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
+    let problem = Problem::joint(law.clone(), tests)
+        .map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
     Ok(SetUp {
         problem,
         run_names,
@@ -391,11 +393,11 @@ fn set_up(
 /// difference stencil leaves a parameter's range.
 fn check_point(
     args: &CheckOptions,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     truth: &[f64],
     synthesized: bool,
 ) -> Result<Vec<f64>> {
-    let names = param_names(law);
+    let names = param_names(&**law);
     let point: Vec<f64> = if synthesized {
         names
             .iter()
@@ -422,7 +424,7 @@ fn check_point(
             })
             .kind(ErrorKind::Config)?;
     }
-    ensure_differentiable(law, &point, "no gradient check").kind(ErrorKind::Config)?;
+    ensure_differentiable(&**law, &point, "no gradient check").kind(ErrorKind::Config)?;
     for (k, info) in law.params().iter().enumerate() {
         let h = if point[k] == 0.0 {
             args.rel_step
@@ -502,21 +504,21 @@ fn at_point(
     opts: &SolverOptions,
     names: &[String],
 ) -> Result<AtPoint> {
-    let law = problem.law;
+    let law = &problem.law;
     let start = Instant::now();
     let runs = each_test(problem, solvers, |k, test, solver| {
         let model = &test.model;
-        let traj =
-            forward(solver, law, point, &test.schedule, opts, &names[k]).kind(ErrorKind::Solver)?;
+        let traj = forward(solver, &**law, point, &test.schedule, opts, &names[k])
+            .kind(ErrorKind::Solver)?;
         let forward_done = start.elapsed().as_secs_f64();
         let rho = test.dj_df(&traj);
         let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
         let grad = adjoint
-            .gradient(&indentify_laws::LawMaterial(law), point, &traj, &rho)
+            .gradient(&**law, point, &traj, &rho)
             .context("the adjoint sweep failed")
             .kind(ErrorKind::Solver)?;
         let sens = adjoint
-            .sensitivities(&indentify_laws::LawMaterial(law), point, &traj)
+            .sensitivities(&**law, point, &traj)
             .context("the forward sensitivities failed")
             .kind(ErrorKind::Solver)?;
         let held = (model.contact.friction() > 0.0).then(|| statuses(&traj));
@@ -567,7 +569,7 @@ fn compare(
     opts: &SolverOptions,
     names: &[String],
 ) -> Result<(Vec<ParamCheck>, usize)> {
-    let law = problem.law;
+    let law = &problem.law;
     let fd_opts = SolverOptions {
         record_fields: false,
         ..opts.clone()
@@ -578,7 +580,7 @@ fn compare(
     let mut cost = |c: &[f64]| -> Result<f64> {
         solves += problem.tests.len();
         let runs = each_test(problem, solvers, |k, test, solver| {
-            let t = forward(solver, law, c, &test.schedule, &fd_opts, &names[k])
+            let t = forward(solver, &**law, c, &test.schedule, &fd_opts, &names[k])
                 .kind(ErrorKind::Solver)?;
             let kept = at.statuses[k].as_ref().is_none_or(|b| *b == statuses(&t));
             Ok((t.forces(), kept))
