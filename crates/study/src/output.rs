@@ -270,6 +270,36 @@ pub fn write_vtu_series(
 mod tests {
     use super::*;
 
+    /// The elastic compliance read from a material's blocks (Plastic, Prony) is the
+    /// stress-only `Elastic` law's own at the same E and nu, to round-off.
+    #[test]
+    fn elastic_compliance_of_internal_variable_laws_is_the_elastic_one() {
+        use crate::config::LawSpec;
+        let elastic = indentify_laws::Elastic;
+        let c = [20000.0, 0.3];
+        let want = indentify_laws::Law::compliance(&elastic, &c);
+        for text in [
+            "Plastic(E: 20000.0, nu: 0.3, sY: 150.0, hardening: Linear(H: 3000.0))",
+            "Plastic(E: 20000.0, nu: 0.3, sY: 150.0, hardening: Voce(Q: 50.0, b: 20.0), \
+             rate: Norton(K: 100.0, m: 3.0))",
+            "Prony(E: 20000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0), (g: 0.2, tau: 10.0)])",
+        ] {
+            let spec: LawSpec = ron::from_str(text).unwrap();
+            let (m, p) = spec.build().unwrap();
+            assert!(m.as_law().is_none() && m.n_internal() > 0, "{text}");
+            let got = elastic_compliance(&*m, &p);
+            for a in 0..4 {
+                for b in 0..4 {
+                    let (g, w) = (got.0[a][b], want.0[a][b]);
+                    assert!(
+                        (g - w).abs() <= 1e-15 * want.0[0][0].abs(),
+                        "{text}: {a},{b}: {g} vs {w}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn negative_zero_is_written_as_zero() {
         assert_eq!(csv_number(-0.0), "0");
