@@ -123,13 +123,12 @@ fn identify_recovers_a_prony_series() {
     );
 }
 
-/// The system shall pass the gradient check (adjoint = finite differences = forward
-/// sensitivities) for a Plastic configuration.
-#[test]
-fn gradient_check_passes_for_plastic() {
-    let r = check::run(&CheckOptions::new(small(PLASTIC, PLASTIC_PARAMS))).unwrap();
-    assert_eq!(r.law, "plastic");
-    assert_eq!(r.checks.len(), 4);
+/// The gradient check of `law`: every parameter's adjoint derivative agrees with finite
+/// differences of the cost and with the forward sensitivities.
+fn gradient_check(law: &str, params: &str, name: &str, n: usize) {
+    let r = check::run(&CheckOptions::new(small(law, params))).unwrap();
+    assert_eq!(r.law, name);
+    assert_eq!(r.checks.len(), n);
     for c in &r.checks {
         eprintln!(
             "{}: adjoint {:e} fd {:e} sensitivity {:e}",
@@ -142,4 +141,16 @@ fn gradient_check_passes_for_plastic() {
             c.name, c.adjoint, c.fd, c.sensitivity
         );
     }
+}
+
+/// The system shall pass the gradient check for a Plastic configuration.
+#[test]
+fn gradient_check_passes_for_plastic() {
+    gradient_check(PLASTIC, PLASTIC_PARAMS, "plastic", 4);
+}
+
+/// The system shall pass the gradient check for a Prony configuration.
+#[test]
+fn gradient_check_passes_for_prony() {
+    gradient_check(PRONY, PRONY_PARAMS, "prony", 4);
 }
