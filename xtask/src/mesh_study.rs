@@ -205,7 +205,7 @@ pub fn run_one(
     let clock = Instant::now();
     let mut solver = DirectSolver::new(&model)?;
     let traj = solver
-        .run(&indentify_laws::LawMaterial(law), &params, schedule, &opts)
+        .run(&*law, &params, schedule, &opts)
         .with_context(|| format!("{label}: the forward run failed"))?;
     let seconds = clock.elapsed().as_secs_f64();
     let f = traj.forces();

@@ -80,14 +80,20 @@ fn bench_forward(c: &mut Criterion) {
     for (name, law, params, model) in cases {
         let mut solver = DirectSolver::new(model).expect("solver");
         let opts = SolverOptions::default();
-        let t = solver.run(law, &params, &schedule, &opts).expect("run");
+        let t = solver
+            .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
+            .expect("run");
         eprintln!(
             "{name}: {} steps, {} iterations",
             t.steps.len(),
             t.total_iterations()
         );
         group.bench_function(name, |b| {
-            b.iter(|| solver.run(law, &params, &schedule, &opts).expect("run"))
+            b.iter(|| {
+                solver
+                    .run(&indentify_laws::LawMaterial(law), &params, &schedule, &opts)
+                    .expect("run")
+            })
         });
     }
     group.finish();

@@ -84,7 +84,7 @@ pub use optimize::{
     MultiStart, ParamOutcome, StopCriteria, StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
-pub use problem::{Evaluator, Prefetch, Problem, Test};
+pub use problem::{Evaluator, IntoMaterial, Prefetch, Problem, Test};
 
 use indentify_adjoint::AdjointError;
 use indentify_contact::ContactError;

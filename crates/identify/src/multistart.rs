@@ -221,7 +221,7 @@ mod tests {
     fn param() -> Parameterization {
         let law = indentify_laws::law_by_name("maxwell").unwrap();
         Parameterization::new(
-            law,
+            &indentify_laws::LawMaterial(law),
             &[
                 ParamSpec::free("E", 4000.0, 1e3, 1e6),
                 ParamSpec::fixed("nu", 0.3),
@@ -262,7 +262,7 @@ mod tests {
         assert!(e.contains("starts") && e.contains("[1, 10000]"), "{e}");
         let law = indentify_laws::law_by_name("maxwell").unwrap();
         let open = Parameterization::new(
-            law,
+            &indentify_laws::LawMaterial(law),
             &[
                 ParamSpec::free("E", 4000.0, 0.0, 1e6),
                 ParamSpec::fixed("nu", 0.3),

@@ -842,7 +842,7 @@ fn run(
     observer: &mut dyn FnMut(&IterationRecord),
 ) -> Result<IdentifyResult, IdentifyError> {
     config.validate()?;
-    let mut param = Parameterization::new(problem.law, &config.params)?;
+    let mut param = Parameterization::new(&*problem.law, &config.params)?;
     let starts = param.base.clone();
     let offset = match resume_from {
         Some(r) => {

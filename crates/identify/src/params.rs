@@ -15,7 +15,7 @@
 //! `dc/dy * dJ/dc` inside the box (and on its faces) and 0 along a coordinate that lies
 //! strictly outside (the composite is flat there).
 
-use indentify_laws::Law;
+use indentify_laws::Material;
 
 use crate::IdentifyError;
 
@@ -173,7 +173,7 @@ impl Parameterization {
     /// outside the law's admissible range, a log scaling with a negative bound, a bounds
     /// scaling without finite bounds, a fixed value that the law does not admit),
     /// [`IdentifyError::NothingFree`].
-    pub fn new(law: &dyn Law, specs: &[ParamSpec]) -> Result<Parameterization, IdentifyError> {
+    pub fn new(law: &dyn Material, specs: &[ParamSpec]) -> Result<Parameterization, IdentifyError> {
         let infos = law.params();
         let names = || infos.iter().map(|i| i.name).collect::<Vec<_>>().join(", ");
         let mut given: Vec<Option<&ParamSpec>> = vec![None; infos.len()];
@@ -404,7 +404,7 @@ impl Parameterization {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use indentify_laws::{Maxwell, NortonHoff};
+    use indentify_laws::{LawMaterial, Maxwell, NortonHoff};
 
     fn maxwell_specs() -> Vec<ParamSpec> {
         vec![
@@ -421,7 +421,7 @@ mod tests {
                 .into_iter()
                 .map(|s| s.with_scaling(scaling))
                 .collect();
-            let p = Parameterization::new(&Maxwell, &specs).unwrap();
+            let p = Parameterization::new(&LawMaterial(&Maxwell), &specs).unwrap();
             let c = vec![20000.0, 0.3, 30000.0];
             let y = p.to_scaled(&c);
             let back = p.to_physical(&y);
@@ -454,7 +454,7 @@ mod tests {
             ParamSpec::free("m", 5.0, 1.1, 20.0),
             ParamSpec::free("sY", 500.0, 1.0, 5000.0),
         ];
-        let p = Parameterization::new(&NortonHoff, &specs).unwrap();
+        let p = Parameterization::new(&LawMaterial(&NortonHoff), &specs).unwrap();
         let y = p.to_scaled(&p.base);
         let y1: Vec<f64> = y.iter().map(|v| v + 0.1).collect();
         let c1 = p.to_physical(&y1);
@@ -466,7 +466,7 @@ mod tests {
 
     #[test]
     fn projection_clamps_to_the_box_and_zeroes_outside_gradients() {
-        let p = Parameterization::new(&Maxwell, &maxwell_specs()).unwrap();
+        let p = Parameterization::new(&LawMaterial(&Maxwell), &maxwell_specs()).unwrap();
         let y = vec![(2e6f64).ln(), (5e4f64).ln()];
         let c = p.to_physical(&y);
         assert_eq!(c[0], 1e6);
@@ -480,25 +480,25 @@ mod tests {
     fn bad_specs_are_rejected_with_clear_errors() {
         let mut s = maxwell_specs();
         s[0].value = Some(500.0);
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(matches!(e, IdentifyError::StartOutsideBounds { .. }), "{e}");
         assert!(e.to_string().contains("outside its bounds"), "{e}");
 
         let mut s = maxwell_specs();
         s[0].lower = Some(5e6);
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(matches!(e, IdentifyError::BoundsExclude { .. }), "{e}");
         assert!(e.to_string().contains("exclude each other"), "{e}");
 
         let mut s = maxwell_specs();
         s[1].value = None;
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(matches!(e, IdentifyError::FixedWithoutValue { .. }), "{e}");
         assert_eq!(e.to_string(), "parameter `nu` is fixed but has no value");
 
         let mut s = maxwell_specs();
         s.pop();
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(
             matches!(e, IdentifyError::MissingParameter { name: "eta", .. }),
             "{e}"
@@ -506,7 +506,7 @@ mod tests {
 
         let mut s = maxwell_specs();
         s[2].name = "viscosity".into();
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(e.to_string().contains("E, nu, eta"), "{e}");
 
         let s = vec![
@@ -514,12 +514,12 @@ mod tests {
             ParamSpec::fixed("nu", 0.3),
             ParamSpec::fixed("eta", 1.0),
         ];
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(matches!(e, IdentifyError::NothingFree), "{e}");
 
         let mut s = maxwell_specs();
         s[0] = ParamSpec::free("E", 4000.0, 1000.0, f64::INFINITY).with_scaling(Scaling::Bounds);
-        let e = Parameterization::new(&Maxwell, &s).unwrap_err();
+        let e = Parameterization::new(&LawMaterial(&Maxwell), &s).unwrap_err();
         assert!(e.to_string().contains("finite bounds"), "{e}");
     }
 }

@@ -13,11 +13,44 @@ use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{
     ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Trajectory,
 };
-use indentify_laws::Law;
+use indentify_laws::{Law, LawMaterial, Material};
 
 use crate::IdentifyError;
 use crate::data::ForceRecord;
 use crate::tasks::{self, Follow, Todo};
+
+/// What a [`Problem`] takes as its law: a material shared by the tests' solvers. A
+/// stress-only [`Law`] becomes a [`LawMaterial`] (the solver dispatches it to the `Law`
+/// fast paths through [`Material::as_law`], so its bits are today's); a registry material
+/// (`Box<dyn Material>`, `Arc<dyn Material>`) is taken as is.
+pub trait IntoMaterial {
+    /// The shared material.
+    fn into_material(self) -> Arc<dyn Material>;
+}
+
+impl IntoMaterial for &'static dyn Law {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::new(LawMaterial(self))
+    }
+}
+
+impl<L: Law> IntoMaterial for &'static L {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::new(LawMaterial(self))
+    }
+}
+
+impl IntoMaterial for Arc<dyn Material> {
+    fn into_material(self) -> Arc<dyn Material> {
+        self
+    }
+}
+
+impl IntoMaterial for Box<dyn Material> {
+    fn into_material(self) -> Arc<dyn Material> {
+        Arc::from(self)
+    }
+}
 
 /// One test of an identification: the direct problem (model, depth schedule, solver
 /// options) and the data it is compared with, weighted.
@@ -219,8 +252,9 @@ impl Test {
 /// one-curve problem.
 #[derive(Debug)]
 pub struct Problem {
-    /// The constitutive law whose parameters are identified.
-    pub law: &'static dyn Law,
+    /// The material whose parameters are identified (a stress-only law as
+    /// [`LawMaterial`], or a law with internal variables from the registry).
+    pub law: Arc<dyn Material>,
     /// The tests, in order (at least one).
     pub tests: Vec<Test>,
     /// The observed values of every test, laid end to end: `F_i^exp` (N), or `h_exp,i`
@@ -243,7 +277,7 @@ impl Problem {
     /// weight, or all weights zero.
     pub fn new(
         model: Model,
-        law: &'static dyn Law,
+        law: impl IntoMaterial,
         schedule: Schedule,
         record: &ForceRecord,
         weights: Option<Vec<f64>>,
@@ -257,7 +291,19 @@ impl Problem {
     ///
     /// # Errors
     /// [`IdentifyError::InvalidSpec`] (field `tests`) for an empty list.
-    pub fn joint(law: &'static dyn Law, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
+    pub fn joint(law: impl IntoMaterial, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
+        let law = law.into_material();
+        if law.as_law().is_none() && tests.iter().any(|t| t.load.is_some()) {
+            return Err(IdentifyError::InvalidSpec {
+                name: "law".into(),
+                why: format!(
+                    "law `{}` has internal variables, and the load-controlled adjoint takes \
+                     stress-only laws for now (elastic, maxwell, norton-hoff): drive this \
+                     record by depth",
+                    law.name()
+                ),
+            });
+        }
         if tests.is_empty() {
             return Err(IdentifyError::InvalidSpec {
                 name: "tests".into(),
@@ -508,10 +554,9 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    let mat = indentify_laws::LawMaterial(p.law);
     let run = match &t.load {
-        Some(h) => w.solver.run_history(&mat, c, h, &t.solver_options),
-        None => w.solver.run(&mat, c, &t.schedule, &t.solver_options),
+        Some(h) => w.solver.run_history(&*p.law, c, h, &t.solver_options),
+        None => w.solver.run(&*p.law, c, &t.schedule, &t.solver_options),
     };
     match run {
         Ok(traj) => {
@@ -541,10 +586,11 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if let Some(h) = &t.load {
         let zero = vec![0.0; rho.len()];
-        w.adjoint.gradient_load(p.law, c, traj, h, &rho, &zero)
+        w.adjoint
+            .gradient_load(load_law(p)?, c, traj, h, &rho, &zero)
     } else if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
-            &indentify_laws::LawMaterial(p.law),
+            &*p.law,
             c,
             traj,
             &rho,
@@ -555,14 +601,21 @@ fn gradient_task(
             },
         )
     } else {
-        w.adjoint
-            .gradient(&indentify_laws::LawMaterial(p.law), c, traj, &rho)
+        w.adjoint.gradient(&*p.law, c, traj, &rho)
     }
     .map_err(|source| IdentifyError::Adjoint {
         params: c.to_vec(),
         source,
     })?;
     Ok(g.dj_dc)
+}
+
+/// The stress-only law of a problem with load-controlled tests (checked by
+/// [`Problem::joint`]).
+fn load_law(p: &Problem) -> Result<&dyn Law, IdentifyError> {
+    p.law
+        .as_law()
+        .ok_or_else(|| IdentifyError::Optimizer("load control takes stress-only laws".into()))
 }
 
 /// Test `k`'s Jacobian rows (`dF/dc` at its schedule times) at `c` by forward
@@ -583,7 +636,7 @@ fn jacobian_task(
     if let Some(h) = &t.load {
         let sens = w
             .adjoint
-            .sensitivities_load(p.law, c, traj, h)
+            .sensitivities_load(load_law(p)?, c, traj, h)
             .map_err(|source| IdentifyError::Adjoint {
                 params: c.to_vec(),
                 source,
@@ -607,7 +660,7 @@ fn jacobian_task(
         };
         full = w
             .solver
-            .run(&indentify_laws::LawMaterial(p.law), c, &t.schedule, &opts)
+            .run(&*p.law, c, &t.schedule, &opts)
             .map_err(|source| IdentifyError::Forward {
                 params: c.to_vec(),
                 source,
@@ -616,7 +669,7 @@ fn jacobian_task(
     };
     let sens = w
         .adjoint
-        .sensitivities(&indentify_laws::LawMaterial(p.law), c, traj)
+        .sensitivities(&*p.law, c, traj)
         .map_err(|source| IdentifyError::Adjoint {
             params: c.to_vec(),
             source,

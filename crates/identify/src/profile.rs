@@ -153,7 +153,7 @@ pub fn profile_side(
     points: usize,
     stop_rise: f64,
 ) -> Result<(Vec<ProfilePoint>, SideEnd), IdentifyError> {
-    let param = Parameterization::new(problem.law, &config.params)?;
+    let param = Parameterization::new(&*problem.law, &config.params)?;
     let f = param
         .free
         .get(k)

@@ -17,9 +17,10 @@ use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference, scan};
 use indentify_contact::{DirectSolver, SolverOptions};
 use indentify_identify::{ForceRecord, Problem};
-use indentify_laws::Law;
+use indentify_laws::Material;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Arc;
 
 use crate::config::Config;
 use crate::data;
@@ -211,6 +212,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    let law = &law;
     // tight forward solves for the differences (and the synthesized data)
     cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
     let opts = cfg.solver.options(true);
@@ -252,7 +254,7 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
             )
         })
         .collect();
-    let names = param_names(law);
+    let names = param_names(&**law);
     Ok(CheckReport {
         law: law.name(),
         config: name,
@@ -303,7 +305,7 @@ fn set_up(
     args: &CheckOptions,
     cfg: &Config,
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     truth: &[f64],
 ) -> Result<SetUp> {
     let opts = cfg.solver.options(true);
@@ -311,7 +313,7 @@ fn set_up(
         record_fields: false,
         ..opts.clone()
     };
-    let names = param_names(law);
+    let names = param_names(&**law);
     let mut tests = Vec::with_capacity(cfg.n_tests());
     let mut run_names = Vec::with_capacity(cfg.n_tests());
     let mut data_name = String::new();
@@ -357,7 +359,7 @@ fn set_up(
                 let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
                 let traj = run_test(
                     &mut solver,
-                    law,
+                    &**law,
                     truth,
                     &schedule,
                     load.as_ref(),
@@ -412,8 +414,8 @@ fn set_up(
             );
         }
     }
-    let problem =
-        Problem::joint(law, tests).map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
+    let problem = Problem::joint(law.clone(), tests)
+        .map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
     Ok(SetUp {
         problem,
         run_names,
@@ -427,11 +429,11 @@ fn set_up(
 /// difference stencil leaves a parameter's range.
 fn check_point(
     args: &CheckOptions,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     truth: &[f64],
     synthesized: bool,
 ) -> Result<Vec<f64>> {
-    let names = param_names(law);
+    let names = param_names(&**law);
     let point: Vec<f64> = if synthesized {
         names
             .iter()
@@ -458,7 +460,7 @@ fn check_point(
             })
             .kind(ErrorKind::Config)?;
     }
-    ensure_differentiable(law, &point, "no gradient check").kind(ErrorKind::Config)?;
+    ensure_differentiable(&**law, &point, "no gradient check").kind(ErrorKind::Config)?;
     for (k, info) in law.params().iter().enumerate() {
         let h = if point[k] == 0.0 {
             args.rel_step
@@ -538,13 +540,13 @@ fn at_point(
     opts: &SolverOptions,
     names: &[String],
 ) -> Result<AtPoint> {
-    let law = problem.law;
+    let law = &problem.law;
     let start = Instant::now();
     let runs = each_test(problem, solvers, |k, test, solver| {
         let model = &test.model;
         let traj = run_test(
             solver,
-            law,
+            &**law,
             point,
             &test.schedule,
             test.load.as_ref(),
@@ -561,22 +563,22 @@ fn at_point(
             Some(h) => {
                 let zero = vec![0.0; rho.len()];
                 let grad = adjoint
-                    .gradient_load(law, point, &traj, h, &rho, &zero)
+                    .gradient_load(stress_only(&**law)?, point, &traj, h, &rho, &zero)
                     .context("the adjoint sweep failed")
                     .kind(ErrorKind::Solver)?;
                 let s = adjoint
-                    .sensitivities_load(law, point, &traj, h)
+                    .sensitivities_load(stress_only(&**law)?, point, &traj, h)
                     .context("the forward sensitivities failed")
                     .kind(ErrorKind::Solver)?;
                 (grad, (s.dh_dc, s.seconds))
             }
             None => {
                 let grad = adjoint
-                    .gradient(&indentify_laws::LawMaterial(law), point, &traj, &rho)
+                    .gradient(&**law, point, &traj, &rho)
                     .context("the adjoint sweep failed")
                     .kind(ErrorKind::Solver)?;
                 let s = adjoint
-                    .sensitivities(&indentify_laws::LawMaterial(law), point, &traj)
+                    .sensitivities(&**law, point, &traj)
                     .context("the forward sensitivities failed")
                     .kind(ErrorKind::Solver)?;
                 (grad, (s.df_dc, s.seconds))
@@ -630,7 +632,7 @@ fn compare(
     opts: &SolverOptions,
     names: &[String],
 ) -> Result<(Vec<ParamCheck>, usize)> {
-    let law = problem.law;
+    let law = &problem.law;
     let fd_opts = SolverOptions {
         record_fields: false,
         ..opts.clone()
@@ -643,7 +645,7 @@ fn compare(
         let runs = each_test(problem, solvers, |k, test, solver| {
             let t = run_test(
                 solver,
-                law,
+                &**law,
                 c,
                 &test.schedule,
                 test.load.as_ref(),
@@ -707,7 +709,7 @@ fn compare(
 /// A test's forward run: by its depth schedule, or under load control by its history.
 fn run_test(
     solver: &mut DirectSolver<'_>,
-    law: &'static dyn Law,
+    law: &dyn Material,
     c: &[f64],
     schedule: &indentify_contact::Schedule,
     load: Option<&indentify_contact::LoadHistory>,
@@ -715,9 +717,23 @@ fn run_test(
     name: &str,
 ) -> anyhow::Result<indentify_contact::Trajectory> {
     match load {
-        Some(h) => Ok(solver.run_history(&indentify_laws::LawMaterial(law), c, h, opts)?),
+        Some(h) => Ok(solver.run_history(law, c, h, opts)?),
         None => forward(solver, law, c, schedule, opts, name),
     }
+}
+
+/// The stress-only law a load-controlled adjoint takes (laws with internal variables are
+/// driven by depth for now).
+fn stress_only(law: &dyn Material) -> crate::Result<&dyn indentify_laws::Law> {
+    law.as_law()
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "law `{}` has internal variables: the load-controlled adjoint takes \
+                 stress-only laws for now (elastic, maxwell, norton-hoff); drive by depth",
+                law.name()
+            )
+        })
+        .kind(ErrorKind::Config)
 }
 
 /// The depths at the schedule times (index 0: the initial state, 0).

@@ -30,7 +30,7 @@ pub use identify::{
     BfgsStartName, IdentifySection, MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName,
     fixed_item, name_value,
 };
-pub use law::{BuiltLaw, LawSpec, law_forms, solver_law, spec_text};
+pub use law::{BuiltLaw, LawSpec, law_forms, spec_text};
 
 /// A whole simulation: what `indentify simulate` reads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -150,7 +150,7 @@ fn run_here(opts: &MapOptions) -> Result<CostMap> {
     let through = opts.through;
     // a joint configuration's slice is through its joint cost sum_k w_k J_k
     let s = setup(resolved, &opts.identify)?;
-    let param = Parameterization::new(s.law, &s.id_cfg.params)
+    let param = Parameterization::new(&*s.law, &s.id_cfg.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
     let centre = centre(&s, &param, through)?;
     let k_of = |n: &str| param.free.iter().position(|f| f.name == n);

@@ -192,7 +192,7 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     if let Some(out) = &opts.out {
         crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
     }
-    let param = Parameterization::new(resolved.law, &resolved.id_cfg.params)
+    let param = Parameterization::new(&*resolved.law, &resolved.id_cfg.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
     let nominal = resolved.law_values.clone();
     // every candidate's configuration, checked before any solve
@@ -214,7 +214,7 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
             Ok(cfg)
         })
         .collect::<Result<_>>()?;
-    let law = resolved.law;
+    let law = &resolved.law;
     let names: Vec<&'static str> = param.free.iter().map(|f| f.name).collect();
     let candidates: Vec<CandidateResult> = section
         .candidates
@@ -273,7 +273,7 @@ fn evaluate(
     cfg: &Config,
     id_opts: &IdentifyOptions,
     name: &str,
-    law: &'static dyn indentify_laws::Law,
+    law: &std::sync::Arc<dyn indentify_laws::Material>,
     nominal: &[f64],
     param: &Parameterization,
     noise: NoiseModel,

@@ -248,7 +248,7 @@ pub fn refine_schedule(
 fn refine_test(
     t: &TestInputs<'_>,
     test: &indentify_identify::Test,
-    law: &dyn indentify_laws::Law,
+    law: &dyn indentify_laws::Material,
     c: &[f64],
     f_fit: &[f64],
     rows: std::ops::Range<usize>,
@@ -355,7 +355,7 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
 
     // the refined runs, in test order whatever the threads
     let joint = tests.len() > 1;
-    let law = problem.law;
+    let law = &problem.law;
     let runs: Vec<Result<(Vec<f64>, TestDiscretization)>> = problem.install(|| {
         tests
             .par_iter()
@@ -369,7 +369,7 @@ pub fn compute(inputs: &Inputs<'_>) -> Result<Discretization> {
                     name.to_string()
                 };
                 let f = f_fit.get(rows.clone()).unwrap_or_default();
-                refine_test(t, test, law, c, f, rows, &label).with_context(|| {
+                refine_test(t, test, &**law, c, f, rows, &label).with_context(|| {
                     if joint {
                         format!("in test {} ({})", k + 1, t.name)
                     } else {

@@ -146,7 +146,7 @@ pub fn multistart(
     opts: &StartsOptions,
 ) -> Result<(MultiStartOutcome, IdentifyResult)> {
     let wall = std::time::Instant::now();
-    let param = Parameterization::new(problem.law, &config.params)
+    let param = Parameterization::new(&*problem.law, &config.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
     opts.check()?;
     let starts = ms::latin_hypercube(&param, opts.n, opts.seed)
@@ -367,7 +367,7 @@ pub fn profiles(
             ),
         ));
     }
-    let param = Parameterization::new(problem.law, &config.params)
+    let param = Parameterization::new(&*problem.law, &config.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
     // s^2 = 2 J* / (n - p), the threshold chi2_1(0.95) s^2 / 2
     let threshold = CHI2_1_95 * id.sigma2 / 2.0;

@@ -111,7 +111,8 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
         .one_test(opts.test, "gradient", &name)
         .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
-    ensure_differentiable(law, &params, &format!("no gradient for `{name}`"))
+    let law = &law;
+    ensure_differentiable(&**law, &params, &format!("no gradient for `{name}`"))
         .kind(ErrorKind::Config)?;
     if let (Some(d), Some(path)) = (&mut cfg.data, &opts.data) {
         d.file = absolute(path);
@@ -137,11 +138,22 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             ));
         };
         let curve = curve_of(&prepared, opts, &name)?;
+        let Some(stress_law) = law.as_law() else {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                format!(
+                    "law `{}` has internal variables: the load-controlled adjoint of `{name}` \
+                     takes stress-only laws for now (elastic, maxwell, norton-hoff); drive by \
+                     depth",
+                    law.name()
+                ),
+            ));
+        };
         return crate::gradient_load::run(
             opts,
             &cfg,
             &name,
-            (law, params),
+            (stress_law, params.clone()),
             (prepared, history),
             curve,
         );
@@ -158,7 +170,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     }
     let problem = Problem::new(
         prepared.model,
-        law,
+        law.clone(),
         schedule,
         &curve.record().kind(ErrorKind::Data)?,
         None,
@@ -172,7 +184,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let start = Instant::now();
     let traj = forward(
         &mut solver,
-        law,
+        &**law,
         &params,
         problem.schedule(),
         &solver_opts,
@@ -185,7 +197,7 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
     let grad: Gradient = if opts.checkpoint.is_some() {
         adjoint.gradient_replayed(
-            &indentify_laws::LawMaterial(law),
+            &**law,
             &params,
             &traj,
             &rho,
@@ -196,11 +208,11 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             },
         )
     } else {
-        adjoint.gradient(&indentify_laws::LawMaterial(law), &params, &traj, &rho)
+        adjoint.gradient(&**law, &params, &traj, &rho)
     }
     .with_context(|| format!("the adjoint sweep of `{name}` failed"))
     .kind(ErrorKind::Solver)?;
-    let names = param_names(law);
+    let names = param_names(&**law);
     if let Some(k) = grad.dj_dc.iter().position(|g| !g.is_finite()) {
         return Err(Error::msg(
             ErrorKind::Solver,

@@ -54,7 +54,7 @@ pub(crate) fn run(
     opts: &GradientOptions,
     cfg: &Config,
     name: &str,
-    (law, params): (&'static dyn Law, Vec<f64>),
+    (law, params): (&dyn Law, Vec<f64>),
     (prepared, history): (Prepared, LoadHistory),
     curve: Curve,
 ) -> Result<GradientOutcome> {
@@ -121,7 +121,7 @@ pub(crate) fn run(
                 anyhow::anyhow!(e).context(format!("the adjoint sweep of `{name}` failed")),
             )
         })?;
-    let names = param_names(law);
+    let names = param_names(&indentify_laws::LawMaterial(law));
     if let Some(k) = grad.dj_dc.iter().position(|g| !g.is_finite()) {
         return Err(Error::msg(
             ErrorKind::Solver,

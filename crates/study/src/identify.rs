@@ -18,8 +18,9 @@ use indentify_identify::{
     Cancel, ForceRecord, Identifiability, IdentifyConfig, IdentifyResult, IterationRecord, Problem,
     multiplicative_noise, resume,
 };
-use indentify_laws::Law;
+use indentify_laws::Material;
 use serde::Serialize;
+use std::sync::Arc;
 
 use crate::config::{Config, IdentifySection, Measured, Overrides, Prepared};
 use crate::discretization::{self as disc, Discretization};
@@ -274,7 +275,7 @@ pub struct Resolved {
     /// The configuration, `--set` overrides applied.
     pub cfg: Config,
     /// The law.
-    pub law: &'static dyn Law,
+    pub law: Arc<dyn Material>,
     /// The `law` section's values (law order).
     pub law_values: Vec<f64>,
     /// The parameter names (law order).
@@ -291,7 +292,8 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     let name = opts.config.name();
     let cfg = opts.config.load(&opts.sets)?;
     let (law, law_values) = cfg.law.build().kind(ErrorKind::Config)?;
-    let names = param_names(law);
+    let law = &law;
+    let names = param_names(&**law);
     let mut id_cfg = IdentifySection::resolve(cfg.identify.as_ref(), &cfg.law, &opts.overrides)
         .with_context(|| format!("invalid identification settings for `{name}`"))
         .kind(ErrorKind::Config)?;
@@ -301,7 +303,7 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
         .iter()
         .map(|p| p.value.unwrap_or(0.0))
         .collect();
-    ensure_differentiable(law, &start, "cannot identify from this start")
+    ensure_differentiable(&**law, &start, "cannot identify from this start")
         .kind(ErrorKind::Config)?;
     check_noise(opts.noise)?;
     // the deviations assume the noise the user asked for: synthesized multiplicative noise
@@ -326,7 +328,7 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     Ok(Resolved {
         name,
         cfg,
-        law,
+        law: law.clone(),
         law_values,
         names,
         id_cfg,
@@ -369,7 +371,7 @@ pub struct Setup {
     /// The configuration.
     pub cfg: Config,
     /// The law.
-    pub law: &'static dyn Law,
+    pub law: Arc<dyn Material>,
     /// The `law` section's values.
     pub law_values: Vec<f64>,
     /// Parameter names.
@@ -447,7 +449,7 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
             d.file = absolute(path);
         }
     }
-    let (problem, tests, warnings) = set_up_tests(&cfg, &name, law, &law_values, opts)?;
+    let (problem, tests, warnings) = set_up_tests(&cfg, &name, &law, &law_values, opts)?;
     Ok(Setup {
         name,
         cfg,
@@ -470,7 +472,7 @@ pub fn setup(resolved: Resolved, opts: &IdentifyOptions) -> Result<Setup> {
 pub(crate) fn set_up_tests(
     cfg: &Config,
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     law_values: &[f64],
     opts: &IdentifyOptions,
 ) -> Result<(Problem, Vec<TestSetup>, Vec<String>)> {
@@ -484,8 +486,8 @@ pub(crate) fn set_up_tests(
         infos.push(info);
         warnings.extend(w);
     }
-    let mut problem =
-        Problem::joint(law, tests).map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    let mut problem = Problem::joint(law.clone(), tests)
+        .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
     // a one-test problem runs on the current pool (a batch indent's worker may lend its
     // idle neighbours to the sensitivities)
     if let (Some(j), Some(_)) = (opts.jobs, &cfg.tests) {
@@ -502,7 +504,7 @@ fn set_up_test(
     cfg: &Config,
     k: usize,
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     law_values: &[f64],
     opts: &IdentifyOptions,
 ) -> Result<(indentify_identify::Test, TestSetup, Vec<String>)> {
@@ -652,7 +654,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         } else {
             s.tests[0].data.clone()
         },
-        ..run_info(&s.name, s.law, &s.names, &s.id_cfg, opts)
+        ..run_info(&s.name, &s.law, &s.names, &s.id_cfg, opts)
     });
     let (result, multistart) = fit(
         &s,
@@ -823,7 +825,7 @@ fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
         let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
             Ok(forward(
                 &mut solver,
-                s.law,
+                &*s.law,
                 c,
                 &test.schedule,
                 &quiet,
@@ -1047,7 +1049,7 @@ fn open_history(
 /// are the caller's).
 fn run_info(
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     names: &[&'static str],
     id_cfg: &IdentifyConfig,
     opts: &IdentifyOptions,
@@ -1151,7 +1153,7 @@ fn load_data(
     curve: Option<&Path>,
     noise: Option<(f64, u64)>,
     name: &str,
-    law: &'static dyn Law,
+    law: &Arc<dyn Material>,
     law_values: &[f64],
     solver_opts: &SolverOptions,
 ) -> Result<Data> {
@@ -1177,10 +1179,10 @@ fn load_data(
         (None, None) => {
             let model = &prepared.model;
             let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
-            let traj = forward(&mut solver, law, law_values, schedule, solver_opts, name)
+            let traj = forward(&mut solver, &**law, law_values, schedule, solver_opts, name)
                 .kind(ErrorKind::Solver)?;
             let mut forces = traj.forces();
-            let names = param_names(law);
+            let names = param_names(&**law);
             let mut describe = format!(
                 "synthesized: the curve of `{name}` at {}",
                 assignments(&names, law_values)

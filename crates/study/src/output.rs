@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use indentify_contact::{Model, Schedule, Trajectory, nodal_pressures};
 use indentify_fe::QP_PER_ELEMENT;
 use indentify_laws::mandel::SQRT2;
-use indentify_laws::{Law, Vec4};
+use indentify_laws::{Mat4, Material, Regime, Step, Vec4};
 use indentify_mesh::vtu::{Field, mesh_to_vtu, points_to_vtu};
 
 /// One row of the curve: time (s), depth (mm), force (N, full circle), contact radius (mm).
@@ -96,11 +96,44 @@ fn physical(m: &Vec4) -> [f64; 4] {
     [m.0[0], m.0[1], m.0[2], m.0[3] / SQRT2]
 }
 
-fn qp_fields(model: &Model, law: &dyn Law, params: &[f64], u: &[f64], sigma: &[Vec4]) -> QpFields {
+/// The elastic compliance `S` of `law` at `params`: a stress-only law's own; for a law with
+/// internal variables, minus the stress block of `D = dR/dy_0`, which is `-S` for every law
+/// whose stress rows read `S (sigma_1 - sigma_0) + ... - deps` (the `Material` convention).
+fn elastic_compliance(law: &dyn Material, params: &[f64]) -> Mat4 {
+    if let Some(l) = law.as_law() {
+        return l.compliance(params);
+    }
+    let m = law.state_len();
+    let y = vec![0.0; m];
+    let step = Step {
+        y0: &y,
+        y1: &y,
+        deps: &Vec4([0.0; 4]),
+        dt: 0.0,
+        regime: Regime::Elastic,
+    };
+    let mut d = vec![0.0; m * m];
+    law.jac_previous(params, &step, &mut d);
+    let mut s = Mat4([[0.0; 4]; 4]);
+    for (a, row) in s.0.iter_mut().enumerate() {
+        for (b, v) in row.iter_mut().enumerate() {
+            *v = -d[a * m + b];
+        }
+    }
+    s
+}
+
+fn qp_fields(
+    model: &Model,
+    law: &dyn Material,
+    params: &[f64],
+    u: &[f64],
+    sigma: &[Vec4],
+) -> QpFields {
     let nq = model.disc.n_qp();
     let mut eps = vec![[0.0; 4]; nq];
     model.disc.strains(u, &mut eps);
-    let s = law.compliance(params);
+    let s = elastic_compliance(law, params);
     let mut f = QpFields {
         stress: Vec::with_capacity(4 * nq),
         von_mises: Vec::with_capacity(nq),
@@ -151,7 +184,7 @@ fn cell_average(model: &Model, values: &[f64], ncomp: usize) -> Vec<f64> {
 pub fn write_vtu_series(
     dir: &Path,
     model: &Model,
-    law: &dyn Law,
+    law: &dyn Material,
     params: &[f64],
     traj: &Trajectory,
 ) -> Result<usize> {
@@ -236,6 +269,36 @@ pub fn write_vtu_series(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The elastic compliance read from a material's blocks (Plastic, Prony) is the
+    /// stress-only `Elastic` law's own at the same E and nu, to round-off.
+    #[test]
+    fn elastic_compliance_of_internal_variable_laws_is_the_elastic_one() {
+        use crate::config::LawSpec;
+        let elastic = indentify_laws::Elastic;
+        let c = [20000.0, 0.3];
+        let want = indentify_laws::Law::compliance(&elastic, &c);
+        for text in [
+            "Plastic(E: 20000.0, nu: 0.3, sY: 150.0, hardening: Linear(H: 3000.0))",
+            "Plastic(E: 20000.0, nu: 0.3, sY: 150.0, hardening: Voce(Q: 50.0, b: 20.0), \
+             rate: Norton(K: 100.0, m: 3.0))",
+            "Prony(E: 20000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0), (g: 0.2, tau: 10.0)])",
+        ] {
+            let spec: LawSpec = ron::from_str(text).unwrap();
+            let (m, p) = spec.build().unwrap();
+            assert!(m.as_law().is_none() && m.n_internal() > 0, "{text}");
+            let got = elastic_compliance(&*m, &p);
+            for a in 0..4 {
+                for b in 0..4 {
+                    let (g, w) = (got.0[a][b], want.0[a][b]);
+                    assert!(
+                        (g - w).abs() <= 1e-15 * want.0[0][0].abs(),
+                        "{text}: {a},{b}: {g} vs {w}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn negative_zero_is_written_as_zero() {

@@ -107,6 +107,7 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         .one_test(opts.test, "simulate", &name)
         .kind(ErrorKind::Config)?;
     let (law, params) = cfg.law.build().kind(ErrorKind::Config)?;
+    let law = &law;
     let (prepared, load) = prepare_driven(&cfg, &name)?;
     let (mesher, model, schedule) = (prepared.mesher, prepared.model, prepared.schedule);
     let solver_opts = cfg.solver.options(opts.vtu.is_some());
@@ -161,13 +162,8 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
     let run = match &load {
-        Some(h) => solver.run_history(&indentify_laws::LawMaterial(law), &params, h, &solver_opts),
-        None => solver.run(
-            &indentify_laws::LawMaterial(law),
-            &params,
-            &schedule,
-            &solver_opts,
-        ),
+        Some(h) => solver.run_history(&**law, &params, h, &solver_opts),
+        None => solver.run(&**law, &params, &schedule, &solver_opts),
     };
     let (trajectory, failure) = match run {
         Ok(t) => (t, None),
@@ -215,12 +211,15 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
     }
     let vtu_states = match &opts.vtu {
         Some(dir) => Some(
-            output::write_vtu_series(dir, &model, law, &params, &trajectory).kind(ErrorKind::Io)?,
+            output::write_vtu_series(dir, &model, &**law, &params, &trajectory)
+                .kind(ErrorKind::Io)?,
         ),
         None => None,
     };
     let matrix = match &opts.matrix_market {
-        Some((dir, step)) => Some(write_matrix(dir, *step, &model, law, &params, &schedule)?),
+        Some((dir, step)) => Some(write_matrix(
+            dir, *step, &model, &**law, &params, &schedule,
+        )?),
         None => None,
     };
     Ok(SimulateOutcome {
@@ -293,7 +292,7 @@ fn write_matrix(
     dir: &std::path::Path,
     step: usize,
     model: &indentify_contact::Model,
-    law: &'static dyn indentify_laws::Law,
+    law: &dyn indentify_laws::Material,
     params: &[f64],
     schedule: &indentify_contact::Schedule,
 ) -> Result<(PathBuf, usize, usize)> {
@@ -304,7 +303,7 @@ fn write_matrix(
         ..Default::default()
     };
     solver
-        .run(&indentify_laws::LawMaterial(law), params, &prefix, &opts)
+        .run(law, params, &prefix, &opts)
         .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
     let (k, constrained) = solver.system().matrix(model);
     let path = dir.join(format!("K_step_{step}.mtx"));

@@ -3,14 +3,14 @@
 
 use anyhow::{Result, anyhow};
 use indentify_contact::{ContactError, DirectSolver, Schedule, SolverOptions, Trajectory};
-use indentify_laws::{Law, LawError};
+use indentify_laws::{LawError, Material};
 
 /// Fails unless the law is differentiable at `params` (Norton-Hoff needs `m > 1`), with a
 /// message naming the `law.` field: a gradient there would be meaningless, never NaN.
 ///
 /// # Errors
 /// The law's [`LawError::NotDifferentiable`] as `law.m = 1 ...: why`.
-pub fn ensure_differentiable(law: &dyn Law, params: &[f64], what: &str) -> Result<()> {
+pub fn ensure_differentiable(law: &dyn Material, params: &[f64], what: &str) -> Result<()> {
     match law.check_differentiable(params) {
         Ok(()) => Ok(()),
         Err(LawError::NotDifferentiable {
@@ -33,14 +33,14 @@ pub fn ensure_differentiable(law: &dyn Law, params: &[f64], what: &str) -> Resul
 /// The solver's error, with context.
 pub fn forward(
     solver: &mut DirectSolver,
-    law: &dyn Law,
+    law: &dyn Material,
     params: &[f64],
     schedule: &Schedule,
     opts: &SolverOptions,
     config: &str,
 ) -> Result<Trajectory> {
     solver
-        .run(&indentify_laws::LawMaterial(law), params, schedule, opts)
+        .run(law, params, schedule, opts)
         .map_err(|e| match e {
             ContactError::StepFailed {
                 step,
@@ -62,6 +62,6 @@ pub fn forward(
 }
 
 /// The law's parameter names, in its order.
-pub fn param_names(law: &dyn Law) -> Vec<&'static str> {
+pub fn param_names(law: &dyn Material) -> Vec<&'static str> {
     law.params().iter().map(|i| i.name).collect()
 }

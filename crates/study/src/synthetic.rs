@@ -124,18 +124,14 @@ pub fn make_map(dir: &Path, o: &MapOptions) -> Result<MapFiles> {
     let cfg = base_config(o.coarse);
     let prepared = prepare(&cfg, "synthetic map")?;
     let (law, _) = cfg.law.build().kind(ErrorKind::Config)?;
+    let law = &law;
     let mut solver = DirectSolver::new(&prepared.model).kind(ErrorKind::Solver)?;
     let opts = cfg.solver.options(false);
     let mut curves = std::collections::HashMap::new();
     for (p, (e, eta)) in [('A', PHASE_A), ('B', PHASE_B)] {
         let params = [e, 0.3, eta];
         let traj = solver
-            .run(
-                &indentify_laws::LawMaterial(law),
-                &params,
-                &prepared.schedule,
-                &opts,
-            )
+            .run(&**law, &params, &prepared.schedule, &opts)
             .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))?;
         curves.insert(p, output::curve(&prepared.schedule, &traj));
     }

@@ -113,7 +113,7 @@ pub fn law_template(kind: &str) -> anyhow::Result<String> {
             format!("R1's specimen, cone and history with {summary}."),
             format!(
                 "indentify configuration written by `indentify init {kind}`; check it with \
-                 `indentify check FILE.ron` (solving it needs the solver's internal-variable path)."
+                 `indentify check FILE.ron`; simulate and identify it like any other law."
             ),
         ],
     ))

@@ -117,7 +117,7 @@ fn check_shift_against_refined_identification(n: usize, steps: usize, tol: f64) 
     let mut solver = DirectSolver::new(&prepared.model).unwrap();
     let traj = forward(
         &mut solver,
-        law,
+        &*law,
         &truth,
         &prepared.schedule,
         &cfg.solver.options(false),

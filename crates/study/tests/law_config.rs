@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use indentify_study::config::{self, IdentifySection, LawSpec, Overrides, solver_law};
+use indentify_study::config::{self, IdentifySection, LawSpec, Overrides};
 
 fn examples() -> Vec<std::path::PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
@@ -221,33 +221,6 @@ fn bad_law_specifications_name_field_range_and_position() {
 
 fn cases_plastic() -> &'static str {
     "Plastic(E: 7e4, nu: 0.3, sY: 300.0, hardening: Power(n: 0.2))"
-}
-
-/// The system shall refuse, from the one function that hands laws to today's solver, a
-/// material with internal variables, saying so; the stress-only laws pass through.
-#[test]
-fn solver_law_refuses_internal_variables_plainly() {
-    let cfg = load(cases_plastic(), &[]).unwrap();
-    let e = format!(
-        "{:#}",
-        solver_law(&cfg.law.material().unwrap()).unwrap_err()
-    );
-    assert!(
-        e.contains("law `plastic` needs the solver's internal-variable path"),
-        "{e}"
-    );
-    let cfg = load(
-        "Prony(E: 3000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0)])",
-        &[],
-    )
-    .unwrap();
-    let e = format!("{:#}", cfg.law.build().unwrap_err());
-    assert!(e.contains("law `prony` needs"), "{e}");
-    let cfg = load("Maxwell(E: 1.0, nu: 0.3, eta: 2.0)", &[]).unwrap();
-    assert_eq!(
-        solver_law(&cfg.law.material().unwrap()).unwrap().0.name(),
-        "maxwell"
-    );
 }
 
 /// The system shall take `free`, `fixed` and starts by the registry's parameter names,

@@ -19,7 +19,7 @@ use indentify_identify::{
 use indentify_laws::Material;
 use serde::{Deserialize, Serialize};
 
-use super::{LawSpec, solver_law};
+use super::LawSpec;
 
 /// The `identify: (...)` section.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -497,17 +497,6 @@ impl IdentifySection {
         law: &LawSpec,
         overrides: &Overrides,
     ) -> Result<IdentifyConfig> {
-        IdentifySection::resolve_with(section, law, overrides, true)
-    }
-
-    /// [`IdentifySection::resolve`]; without `need_solver`, a material today's solver cannot
-    /// take (internal variables, see [`solver_law`]) is checked by name and range only.
-    fn resolve_with(
-        section: Option<&IdentifySection>,
-        law: &LawSpec,
-        overrides: &Overrides,
-        need_solver: bool,
-    ) -> Result<IdentifyConfig> {
         let built = law.material()?;
         let mat = built.material.as_ref();
         let values = &built.params;
@@ -550,14 +539,7 @@ impl IdentifySection {
                 },
             })
             .collect();
-        let lib_law = match solver_law(&built) {
-            Ok((l, _)) => Some(l),
-            Err(e) if need_solver => return Err(e),
-            Err(_) => None,
-        };
-        if let Some(lib_law) = lib_law {
-            IdentifySection::check_specs(lib_law, &specs)?;
-        }
+        IdentifySection::check_specs(mat, &specs)?;
         let mut stop = s.stop.criteria();
         if let Some(n) = overrides.max_iterations {
             stop.max_iterations = n;
@@ -582,7 +564,7 @@ impl IdentifySection {
 
     /// The identification library's check of the parameter specifications (starts within
     /// bounds, bounds within the law's range, something free), naming the parameter.
-    fn check_specs(lib_law: &dyn indentify_laws::Law, specs: &[ParamSpec]) -> Result<()> {
+    fn check_specs(lib_law: &dyn Material, specs: &[ParamSpec]) -> Result<()> {
         Parameterization::new(lib_law, specs).map_err(|e| {
             let field = match &e {
                 indentify_identify::IdentifyError::NothingFree => "identify.params".to_string(),
@@ -659,7 +641,7 @@ impl IdentifySection {
     /// # Errors
     /// As [`IdentifySection::resolve`] without overrides.
     pub fn validate(&self, law: &LawSpec) -> Result<()> {
-        IdentifySection::resolve_with(Some(self), law, &Overrides::default(), false)
+        IdentifySection::resolve(Some(self), law, &Overrides::default())
             .map(|_| ())
             .context("invalid `identify` section")
     }

@@ -6,12 +6,13 @@
 //! `K`, `m`, `g1`, `tau1`, ...). Adding a law to the registry adds it here with no edit.
 
 use std::fmt;
+use std::sync::Arc;
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, anyhow};
 use indentify_laws::registry::{
     self, FieldKind, FieldSchema, LawEntry, REGISTRY, SpecValue, VARIANTS, VariantSchema,
 };
-use indentify_laws::{Law, LawError, Material, ParamInfo};
+use indentify_laws::{LawError, Material, ParamInfo};
 use serde::de::{self, DeserializeSeed, EnumAccess, MapAccess, SeqAccess, VariantAccess, Visitor};
 use serde::ser::{SerializeSeq, SerializeStruct, SerializeStructVariant, SerializeTuple};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -128,12 +129,24 @@ impl LawSpec {
             .unwrap_or_default()
     }
 
-    /// The stress-only law today's solver takes and its parameters: see [`solver_law`].
+    /// The material the solver, the adjoint and `identify::Problem` take, shared, and its
+    /// parameters. Every law goes through here: a stress-only law is the registry's
+    /// `LawMaterial` (the solver dispatches it to the `Law` fast paths through
+    /// `Material::as_law`, so its bits are unchanged), a law with internal variables
+    /// (`Plastic`, `Prony`) its own material.
     ///
     /// # Errors
-    /// As [`solver_law`].
-    pub fn build(&self) -> Result<(&'static dyn Law, Vec<f64>)> {
-        solver_law(&self.material()?)
+    /// As [`LawSpec::material`].
+    pub fn build(&self) -> Result<(Arc<dyn Material>, Vec<f64>)> {
+        let b = self.material()?;
+        Ok((Arc::from(b.material), b.params))
+    }
+
+    /// Sets the parameter `name` (a number anywhere in the fields, e.g. `E`, `sY`, `K`) to
+    /// `value`; `false` when the law has no such number field. The caller checks the law
+    /// again ([`LawSpec::material`]) before using it.
+    pub fn set_number(&mut self, name: &str, value: f64) -> bool {
+        set_number_in(&mut self.fields, name, value)
     }
 
     /// The dotted path below `law` of the parameter `name` (`n` -> `hardening.n`, `K` ->
@@ -154,27 +167,6 @@ impl LawSpec {
             }
         }
         None
-    }
-}
-
-/// The stress-only [`Law`] today's contact solver takes, for a material built from the
-/// registry. This is the one place where study meets the solver's law interface: a
-/// material with internal variables (`Plastic`, `Prony`) is refused here until the solver
-/// takes `&dyn Material`.
-///
-/// # Errors
-/// A material with internal variables: "law `plastic` needs the solver's internal-variable
-/// path".
-pub fn solver_law(built: &BuiltLaw) -> Result<(&'static dyn Law, Vec<f64>)> {
-    match built.material.as_law() {
-        Some(law) => Ok((law, built.params.clone())),
-        None => bail!(
-            "law `{}` needs the solver's internal-variable path (its state carries {} internal \
-             variables per Gauss point, which this build's solver does not store yet); the \
-             configuration itself is valid",
-            built.material.name(),
-            built.material.n_internal()
-        ),
     }
 }
 
@@ -209,6 +201,24 @@ fn law_error_text(e: &LawError, law: Option<&dyn Material>) -> String {
 }
 
 /// The dotted path of the number field `name` in `fields` (nested variants searched).
+fn set_number_in(fields: &mut [(String, SpecValue)], name: &str, value: f64) -> bool {
+    for (n, v) in fields.iter_mut() {
+        match v {
+            SpecValue::Number(x) if n == name => {
+                *x = value;
+                return true;
+            }
+            SpecValue::Variant { name: vn, fields } if !vn.is_empty() => {
+                if set_number_in(fields, name, value) {
+                    return true;
+                }
+            }
+            _ => {}
+        }
+    }
+    false
+}
+
 fn find_number(fields: &[(String, SpecValue)], name: &str, prefix: &str) -> Option<String> {
     for (n, v) in fields {
         match v {
