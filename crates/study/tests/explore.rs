@@ -85,6 +85,10 @@ fn multistart_is_thread_independent_and_finds_the_truth() {
 fn profile_intervals_match_gauss_newton_on_a_nearly_linear_problem() {
     let mut o = opts();
     o.noise = Some((0.02, 5));
+    // the profile's threshold uses the residual scale s^2 = 2 J* / (n - p): compare it with
+    // the Gauss-Newton deviations of that same model (`--noise` alone now makes the
+    // deviations assume the stated multiplicative noise)
+    o.overrides.noise = Some(indentify_study::config::NoiseSetting::Residual);
     o.profiles = Some(ProfileSettings {
         points_per_side: 5,
         ..ProfileSettings::default()
