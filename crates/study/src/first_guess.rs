@@ -332,6 +332,15 @@ mod tests {
         }
     }
 
+    /// The value of the parameter `name` of `law`.
+    fn p(law: &LawSpec, name: &str) -> f64 {
+        law.named_params()
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|q| q.1)
+            .unwrap()
+    }
+
     /// Sneddon's elastic cone with a diamond tip: the guess of E is the sample's modulus
     /// (the closed form through the tip's compliance), to the analysis's accuracy.
     #[test]
@@ -346,13 +355,6 @@ mod tests {
         let mut law = crate::config::Reference::R0Elastic.config().law;
         let g = guess(&law, &s);
         apply(&mut law, &g);
-        let p = |law: &LawSpec, name: &str| {
-            law.named_params()
-                .iter()
-                .find(|(n, _)| *n == name)
-                .map(|q| q.1)
-                .unwrap()
-        };
         assert_eq!(p(&law, "E"), s.e);
         assert_eq!(p(&law, "nu"), 0.3, "nu is not guessed");
     }
@@ -362,13 +364,6 @@ mod tests {
     /// `sigma_r` and its rate sensitivity `K eps'^(1/m) / (m sigma_r)` the hold's SRS.
     #[test]
     fn viscous_guesses_reproduce_the_hold() {
-        let p = |law: &LawSpec, name: &str| {
-            law.named_params()
-                .iter()
-                .find(|(n, _)| *n == name)
-                .map(|q| q.1)
-                .unwrap()
-        };
         let (h, rate, srs) = (3000.0, 2e-3, 0.04);
         let sigma = h / CONSTRAINT_FACTOR;
         let mut mx = LawSpec::numbers("Maxwell", &[("E", 1.0), ("nu", 0.3), ("eta", 1.0)]).unwrap();
