@@ -129,7 +129,7 @@ fn bad_inputs_are_rejected_naming_the_field() {
             "mistyped field",
             "nu: 0.3,",
             "nuu: 0.3,",
-            &["law.nuu", ":46:"],
+            &["law.nuu", ":47:"],
         ),
         ("missing field", "nu: 0.3,", "", &["law.nu", "required"]),
         (

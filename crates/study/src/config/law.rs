@@ -332,7 +332,7 @@ impl<'de> Visitor<'de> for FieldsVisitor {
             .find(|f| !f.optional && !out.iter().any(|(n, _)| n == f.name))
         {
             return Err(de::Error::custom(format!(
-                "law.{}{}: missing (fields: {})",
+                "law.{}{}: missing: a required field (the fields are {})",
                 self.path,
                 f.name,
                 accepted(self.schema)
