@@ -203,17 +203,18 @@ fn law_error_text(e: &LawError, law: Option<&dyn Material>) -> String {
 /// The dotted path of the number field `name` in `fields` (nested variants searched).
 fn set_number_in(fields: &mut [(String, SpecValue)], name: &str, value: f64) -> bool {
     for (n, v) in fields.iter_mut() {
-        match v {
+        let found = match v {
             SpecValue::Number(x) if n == name => {
                 *x = value;
-                return true;
+                true
             }
             SpecValue::Variant { name: vn, fields } if !vn.is_empty() => {
-                if set_number_in(fields, name, value) {
-                    return true;
-                }
+                set_number_in(fields, name, value)
             }
-            _ => {}
+            _ => false,
+        };
+        if found {
+            return true;
         }
     }
     false
