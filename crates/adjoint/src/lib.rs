@@ -352,36 +352,16 @@ impl<'m> Adjoint<'m> {
         }
         let mut sweep = Sweep::new(law, c);
         self.field_a.fill(Vec4::ZERO);
-        let last = schedule.t.len() - 1;
-        for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
-            let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
-                Some(next) => (next.schedule_index, next.steps_done),
-                None => (last, n),
+        replayed_steps_rev(solver, mat, c, schedule, opts, traj, |g, rec, s0, s1| {
+            let step = Recorded {
+                i: g,
+                rec,
+                f0: s0,
+                f1: s1,
+                rho: dj_df[g],
             };
-            let seg = solver
-                .replay(mat, c, schedule, opts, cp, j_end)
-                .map_err(|e| AdjointError::Replay(e.to_string()))?;
-            if seg.steps.len() != steps_end - cp.steps_done {
-                return Err(AdjointError::Replay(format!(
-                    "segment from schedule index {} replayed {} steps, the run had {}",
-                    cp.schedule_index,
-                    seg.steps.len(),
-                    steps_end - cp.steps_done
-                )));
-            }
-            for i in (0..seg.steps.len()).rev() {
-                let (rec, s0, s1) = (&seg.steps[i], &seg.fields[i], &seg.fields[i + 1]);
-                let g = cp.steps_done + i;
-                let step = Recorded {
-                    i: g,
-                    rec,
-                    f0: s0,
-                    f1: s1,
-                    rho: dj_df[g],
-                };
-                self.sweep_step(law, c, &mut sweep, &step)?;
-            }
-        }
+            self.sweep_step(law, c, &mut sweep, &step)
+        })?;
         Ok(Gradient {
             dj_dc: sweep.finish(law, c),
             seconds: start.elapsed().as_secs_f64(),
@@ -841,5 +821,47 @@ fn check_inputs(
     }
     law.check_params(c)?;
     law.check_differentiable(c)?;
+    Ok(())
+}
+
+/// Replays a checkpointed run segment by segment, the last first, and visits its steps in
+/// reverse order: `visit(g, step, fields before, fields after)` with `g` the step's index
+/// in the whole run. A segment that replays another number of steps than the run had is
+/// an error.
+fn replayed_steps_rev(
+    solver: &mut DirectSolver<'_>,
+    mat: &dyn Material,
+    c: &[f64],
+    schedule: &Schedule,
+    opts: &SolverOptions,
+    traj: &Trajectory,
+    mut visit: impl FnMut(usize, &StepRecord, &StepFields, &StepFields) -> Result<(), AdjointError>,
+) -> Result<(), AdjointError> {
+    let (last, n) = (schedule.t.len() - 1, traj.steps.len());
+    for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+        let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+            Some(next) => (next.schedule_index, next.steps_done),
+            None => (last, n),
+        };
+        let seg = solver
+            .replay(mat, c, schedule, opts, cp, j_end)
+            .map_err(|e| AdjointError::Replay(e.to_string()))?;
+        if seg.steps.len() != steps_end - cp.steps_done {
+            return Err(AdjointError::Replay(format!(
+                "segment from schedule index {} replayed {} steps, the run had {}",
+                cp.schedule_index,
+                seg.steps.len(),
+                steps_end - cp.steps_done
+            )));
+        }
+        for i in (0..seg.steps.len()).rev() {
+            visit(
+                cp.steps_done + i,
+                &seg.steps[i],
+                &seg.fields[i],
+                &seg.fields[i + 1],
+            )?;
+        }
+    }
     Ok(())
 }

@@ -205,29 +205,9 @@ impl Adjoint<'_> {
         }
         self.contact.begin();
         let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
-        let last = schedule.t.len() - 1;
-        for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
-            let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
-                Some(next) => (next.schedule_index, next.steps_done),
-                None => (last, n),
-            };
-            let seg = solver
-                .replay(mat, c, schedule, opts, cp, j_end)
-                .map_err(|e| AdjointError::Replay(e.to_string()))?;
-            if seg.steps.len() != steps_end - cp.steps_done {
-                return Err(AdjointError::Replay(format!(
-                    "segment from schedule index {} replayed {} steps, the run had {}",
-                    cp.schedule_index,
-                    seg.steps.len(),
-                    steps_end - cp.steps_done
-                )));
-            }
-            for i in (0..seg.steps.len()).rev() {
-                let g = cp.steps_done + i;
-                let fields = (&seg.fields[i], &seg.fields[i + 1]);
-                self.material_step(mat, c, &mut sw, g, &seg.steps[i], fields, dj_df[g])?;
-            }
-        }
+        crate::replayed_steps_rev(solver, mat, c, schedule, opts, traj, |g, rec, s0, s1| {
+            self.material_step(mat, c, &mut sw, g, rec, (s0, s1), dj_df[g])
+        })?;
         Ok(Gradient {
             dj_dc: sw.grad,
             seconds: start.elapsed().as_secs_f64(),

@@ -484,7 +484,7 @@ impl Surface {
 
     /// The closest point of the surface to `x = (r, h)` (`h` the height above the tip):
     /// the first piece (in chain order) of least squared distance, exactly as a scan of
-    /// every piece finds it, but a piece (or a block of [`BLOCK`] pieces) whose radial
+    /// every piece finds it, but a piece (or a block of `BLOCK` (16) pieces) whose radial
     /// extent is farther from `x` than the best candidate so far is not evaluated (a
     /// calibrated tip's table has about a thousand pieces); the search starts at the piece
     /// whose radial extent reaches `x`.
