@@ -402,13 +402,19 @@ fn a_running_batch_can_be_cancelled_and_keeps_what_finished() {
         v["message"].as_str().unwrap().contains("indents finished"),
         "{v}"
     );
-    // an indent that finished has its files; the interrupted ones are still pending
+    // an indent that finished has its files, one never started has none; one the cancel
+    // interrupted may have stopped before or after writing its status (a race the batch
+    // reports as `interrupted` either way)
     for i in v["progress"]["indents"].as_array().unwrap() {
         let path = format!(
             "/api/runs/{id}/files/indents/{}/status.json",
             i["id"].as_str().unwrap()
         );
         let has = get(s.addr, &path).status == 200;
-        assert_eq!(has, i["state"] != "pending", "{i}");
+        match i["state"].as_str().unwrap() {
+            "pending" => assert!(!has, "{i}"),
+            "interrupted" => {}
+            _ => assert!(has, "{i}"),
+        }
     }
 }
