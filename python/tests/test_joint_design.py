@@ -131,7 +131,14 @@ def test_noise_model_changes_the_deviations_not_the_parameters():
     assert rel.std["E"] != pytest.approx(base.std["E"], rel=1e-6)
     abs2 = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Absolute": 2e-3}, **noisy)
     assert abs2.std["eta"] == pytest.approx(2 * absn.std["eta"], rel=1e-9)
-    assert indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model="Residual", **noisy).std == base.std
+    # with `noise` and no stated model, the deviations assume the noise asked for: uniform
+    # multiplicative noise of level a has the standard deviation a / sqrt(3) of F
+    stated = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model={"Relative": 0.02 / 3**0.5}, **noisy)
+    for k in ("E", "eta"):
+        assert stated.std[k] == pytest.approx(base.std[k], rel=1e-12)
+    resid = indentify.identify(SINGLE_TO_THE_MINIMUM, noise_model="Residual", **noisy)
+    assert resid.params == base.params
+    assert resid.std["E"] != pytest.approx(base.std["E"], rel=1e-6)
 
 
 @pytest.mark.parametrize(
