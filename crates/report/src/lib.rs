@@ -93,8 +93,8 @@ pub use fit::FitQuality;
 pub use map::{MapData, MapFigure};
 pub use model::{
     BoundHit, Convergence, Correlation, Curves, DiscretizationSummary, FigureLink,
-    IdentifiabilitySummary, IterationRecord, NameValue, Parameter, PreprocessingStep, Report,
-    Source, Undetermined,
+    IdentifiabilitySummary, IterationRecord, NameValue, Observable, Parameter, PreprocessingStep,
+    Report, Source, Undetermined,
 };
 pub use plot::{Figure, FigureSize};
 pub use units::{DisplayUnit, fmt_axis_tick, fmt_log_tick, fmt_sig, fmt_tick};

@@ -3,7 +3,9 @@
 use std::fmt::Write;
 
 use crate::adequacy::{Adequacy, Verdict};
-use crate::model::{BoundHit, DiscretizationSummary, IdentifiabilitySummary, Parameter, Report};
+use crate::model::{
+    BoundHit, DiscretizationSummary, IdentifiabilitySummary, Observable, Parameter, Report,
+};
 use crate::units::{DisplayUnit, fmt_sig};
 
 /// Writing to a `String` cannot fail; this drops the `fmt::Result`.
@@ -48,7 +50,7 @@ impl Report {
         }
         self.fit_section(&mut out);
         if let Some(a) = &self.adequacy {
-            adequacy_section(&mut out, a);
+            adequacy_section(&mut out, a, self.curves.observable);
         }
         self.convergence_section(&mut out);
         self.preprocessing_section(&mut out);
@@ -64,15 +66,16 @@ impl Report {
         let (refined, rms_rel, max_abs, shift, seconds) =
             (&d.refined, d.rms_rel, d.max_abs, &d.shift, d.seconds);
         let mut out = String::new();
-        let fu = &self.curves.force_unit;
+        let fu = self.curves.observed_unit();
+        let (o, y) = (self.curves.observable.name(), self.curves.observable.symbol());
         line!(out, "## Discretization error");
         line!(out);
         line!(
             out,
-            "The forward problem re-run at the optimum on {}: the force changes by RMS {}% \
-             of F_max (largest {} {}), {} s. The shift is what the refined discretization \
+            "The forward problem re-run at the optimum on {}: the {o} changes by RMS {}% \
+             of {y}_max (largest {} {}), {} s. The shift is what the refined discretization \
              would identify from the same data minus the fit, to first order: \
-             `delta_c = -(S^T W S)^-1 S^T W delta_F`.",
+             `delta_c = -(S^T W S)^-1 S^T W delta_{y}`.",
             escape(refined),
             fmt_sig(100.0 * rms_rel),
             fmt_sig(fu.show(max_abs)),
@@ -141,16 +144,24 @@ impl Report {
                 .copied()
                 .filter(|x| x.is_finite())
                 .fold(0.0, f64::max);
+        let (h, f) = c.depth_force(&c.f_data);
         line!(
             out,
             "| curve | {} points, {} s, h_max {} {}, F_max {} {} |",
             c.t.len(),
             fmt_sig(t_end),
-            fmt_sig(c.depth_unit.show(max_abs(&c.h))),
+            fmt_sig(c.depth_unit.show(max_abs(h))),
             escape(&c.depth_unit.label),
-            fmt_sig(c.force_unit.show(max_abs(&c.f_data))),
+            fmt_sig(c.force_unit.show(max_abs(f))),
             escape(&c.force_unit.label)
         );
+        if c.observable == Observable::Depth {
+            line!(
+                out,
+                "| observable | the depth (load control: the force is prescribed, the fit's \
+                 cost is on the depth residuals, J = 1/2 sum w (h - h_data)^2) |"
+            );
+        }
         line!(out);
     }
 
@@ -234,19 +245,20 @@ impl Report {
 
     fn fit_section(&self, out: &mut String) {
         let f = &self.fit;
-        let fu = &self.curves.force_unit;
+        let fu = self.curves.observed_unit();
+        let (o, y) = (self.curves.observable.name(), self.curves.observable.symbol());
         line!(out, "## Fit quality");
         line!(out);
         line!(out, "| measure | value |");
         line!(out, "|---|--:|");
-        line!(out, "| R² of the force | {:.6} |", f.r2);
+        line!(out, "| R² of the {o} | {:.6} |", f.r2);
         line!(
             out,
-            "| RMS force residual | {} {} |",
+            "| RMS {o} residual | {} {} |",
             fmt_sig(fu.show(f.rms)),
             escape(&fu.label)
         );
-        line!(out, "| RMS / F_max | {} % |", fmt_sig(100.0 * f.rms_rel));
+        line!(out, "| RMS / {y}_max | {} % |", fmt_sig(100.0 * f.rms_rel));
         line!(
             out,
             "| max abs residual | {} {} |",
@@ -450,10 +462,15 @@ fn systematic(a: &Adequacy) -> bool {
 
 /// The section `## Model adequacy`: the residuals against the record's own noise and their
 /// structure, with the verdict (statistics and thresholds in `docs/adequacy.md`).
-fn adequacy_section(out: &mut String, a: &Adequacy) {
+fn adequacy_section(out: &mut String, a: &Adequacy, observable: Observable) {
+    // the statistics are in the observable's internal unit
+    let unit = match observable {
+        Observable::Force => "N",
+        Observable::Depth => "mm",
+    };
     let est = |e: &Option<crate::adequacy::NoiseEstimate>| match e {
         Some(e) => format!(
-            "{} N ({}, lag-1 of its differences {:.2})",
+            "{} {unit} ({}, lag-1 of its differences {:.2})",
             fmt_sig(e.sigma),
             if e.resolved {
                 "resolved"
@@ -477,7 +494,7 @@ fn adequacy_section(out: &mut String, a: &Adequacy) {
     line!(out, "|---|--:|--:|");
     line!(
         out,
-        "| record noise σ_rec (third differences) | {} N{} | |",
+        "| record noise σ_rec (third differences) | {} {unit}{} | |",
         fmt_sig(a.sigma_record),
         if a.noise_resolved {
             ""
@@ -487,7 +504,8 @@ fn adequacy_section(out: &mut String, a: &Adequacy) {
     );
     line!(
         out,
-        "| noise of the measured force | {} | |",
+        "| noise of the measured {} | {} | |",
+        observable.name(),
         est(&a.sigma_data)
     );
     line!(

@@ -220,22 +220,66 @@ impl PreprocessingStep {
     }
 }
 
+/// What a fit compares with the data: the force (the punch driven by depth, the default)
+/// or the depth (load control: the force prescribed, docs/theory.md §13).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Observable {
+    /// The force is fitted (N); the depth is prescribed.
+    #[default]
+    Force,
+    /// The depth is fitted (mm); the force is prescribed.
+    Depth,
+}
+
+impl Observable {
+    /// "force" or "depth".
+    pub fn name(self) -> &'static str {
+        match self {
+            Observable::Force => "force",
+            Observable::Depth => "depth",
+        }
+    }
+
+    /// The symbol: "F" or "h".
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Observable::Force => "F",
+            Observable::Depth => "h",
+        }
+    }
+
+    /// Whether this is the default, [`Observable::Force`] (serde skips it).
+    pub fn is_force(&self) -> bool {
+        *self == Observable::Force
+    }
+}
+
 /// Measured and simulated curves on the same time grid (internal units: s, mm, N).
+///
+/// The series `f_data`, `f_start` and `f_final` are the *observable's* ([`Curves::observable`]),
+/// `h` the prescribed input's: under [`Observable::Force`] (depth control) `h` is the
+/// prescribed depth (mm) and the `f_*` series are forces (N); under [`Observable::Depth`]
+/// (load control) `h` is the force (N) at the result (the prescribed force on the
+/// load-controlled steps) and the `f_*` series are depths (mm). [`Curves::depth_force`]
+/// gives the (depth, force) pairs of a series whichever is observed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Curves {
+    /// What is fitted: the force (default, not serialized) or the depth.
+    #[serde(default, skip_serializing_if = "Observable::is_force")]
+    pub observable: Observable,
     /// How depths are shown (see [`DisplayUnit::auto_depth`]).
     pub depth_unit: DisplayUnit,
     /// How forces are shown (see [`DisplayUnit::auto_force`]).
     pub force_unit: DisplayUnit,
     /// Time, s.
     pub t: Vec<f64>,
-    /// Prescribed / measured depth, mm.
+    /// The prescribed series: the depth (mm), or under [`Observable::Depth`] the force (N).
     pub h: Vec<f64>,
-    /// Measured force, N.
+    /// The measured observable: force (N), or depth (mm) under [`Observable::Depth`].
     pub f_data: Vec<f64>,
-    /// Simulated force with the start parameters, N (`None` if not computed).
+    /// The simulated observable with the start parameters (`None` if not computed).
     pub f_start: Option<Vec<f64>>,
-    /// Simulated force with the identified parameters, N.
+    /// The simulated observable with the identified parameters.
     pub f_final: Vec<f64>,
 }
 
@@ -255,6 +299,7 @@ impl Curves {
                 .fold(0.0_f64, |m, x| m.max(x.abs()))
         };
         Self {
+            observable: Observable::Force,
             depth_unit: DisplayUnit::auto_depth(max_abs(&h)),
             force_unit: DisplayUnit::auto_force(max_abs(&f_data)),
             t,
@@ -262,6 +307,59 @@ impl Curves {
             f_data,
             f_start,
             f_final,
+        }
+    }
+
+    /// Load-controlled curves ([`Observable::Depth`]): `force` the force at the result (N),
+    /// `h_data`, `h_start`, `h_final` the measured and simulated depths (mm); units chosen
+    /// from the force and the measured depth.
+    pub fn depth_observed(
+        t: Vec<f64>,
+        force: Vec<f64>,
+        h_data: Vec<f64>,
+        h_start: Option<Vec<f64>>,
+        h_final: Vec<f64>,
+    ) -> Self {
+        let max_abs = |v: &[f64]| {
+            v.iter()
+                .filter(|x| x.is_finite())
+                .fold(0.0_f64, |m, x| m.max(x.abs()))
+        };
+        Self {
+            observable: Observable::Depth,
+            depth_unit: DisplayUnit::auto_depth(max_abs(&h_data)),
+            force_unit: DisplayUnit::auto_force(max_abs(&force)),
+            t,
+            h: force,
+            f_data: h_data,
+            f_start: h_start,
+            f_final: h_final,
+        }
+    }
+
+    /// The display unit of the observable (the force's or the depth's).
+    pub fn observed_unit(&self) -> &DisplayUnit {
+        match self.observable {
+            Observable::Force => &self.force_unit,
+            Observable::Depth => &self.depth_unit,
+        }
+    }
+
+    /// The display unit of the prescribed series `h`.
+    pub fn prescribed_unit(&self) -> &DisplayUnit {
+        match self.observable {
+            Observable::Force => &self.depth_unit,
+            Observable::Depth => &self.force_unit,
+        }
+    }
+
+    /// The (depth, force) series of one observable series (`f_data`, `f_start` or
+    /// `f_final`) beside `h`: `(h, series)` when the force is observed, `(series, h)` when
+    /// the depth is.
+    pub fn depth_force<'a>(&'a self, series: &'a [f64]) -> (&'a [f64], &'a [f64]) {
+        match self.observable {
+            Observable::Force => (&self.h, series),
+            Observable::Depth => (series, &self.h),
         }
     }
 

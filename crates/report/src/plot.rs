@@ -13,7 +13,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
 
 use crate::error::ReportError;
-use crate::model::{FigureLink, Report};
+use crate::model::{FigureLink, Observable, Report};
 use crate::units::{fmt_axis_tick, fmt_log_tick};
 
 /// One of the report's figures.
@@ -44,6 +44,29 @@ impl Figure {
     /// A Markdown link to this figure stored at `path` (relative to the Markdown file).
     pub fn link(self, path: impl Into<String>) -> FigureLink {
         FigureLink::new(self.caption(), path)
+    }
+
+    /// The file stem of this figure for a fit of `observable`: under load control
+    /// ([`Observable::Depth`]) the time figure shows the depth ("depth_time").
+    pub fn file_stem_for(self, observable: Observable) -> &'static str {
+        match (self, observable) {
+            (Figure::ForceTime, Observable::Depth) => "depth_time",
+            _ => self.file_stem(),
+        }
+    }
+
+    /// The caption of this figure for a fit of `observable` ("depth vs time" under load
+    /// control).
+    pub fn caption_for(self, observable: Observable) -> &'static str {
+        match (self, observable) {
+            (Figure::ForceTime, Observable::Depth) => "depth vs time",
+            _ => self.caption(),
+        }
+    }
+
+    /// [`Figure::link`] with the caption of [`Figure::caption_for`].
+    pub fn link_for(self, observable: Observable, path: impl Into<String>) -> FigureLink {
+        FigureLink::new(self.caption_for(observable), path)
     }
 
     /// A caption for the figure ("force vs depth", ...).
@@ -250,19 +273,40 @@ fn draw_force<DB: DrawingBackend>(
     let c = &report.curves;
     c.check_lengths()?;
     let err = |e| draw_err(figure, e);
-    let (x, fx, x_desc) = match figure {
-        Figure::ForceDepth => (
-            &c.h,
+    let force_depth = figure == Figure::ForceDepth;
+    let (fx, x_desc) = if force_depth {
+        (
             c.depth_unit.factor,
             format!("depth h [{}]", c.depth_unit.label),
-        ),
-        _ => (&c.t, 1.0, "time t [s]".to_string()),
+        )
+    } else {
+        (1.0, "time t [s]".to_string())
     };
-    let ff = c.force_unit.factor;
-    let data = finite_pairs("curves.f_data", x, &c.f_data, fx, ff)?;
-    let fin = finite_pairs("curves.f_final", x, &c.f_final, fx, ff)?;
+    // the y axis: the force against the depth; the observable (force or depth) in time
+    let yu = if force_depth {
+        &c.force_unit
+    } else {
+        c.observed_unit()
+    };
+    let ff = yu.factor;
+    let y_desc = if force_depth {
+        format!("force F [{}]", c.force_unit.label)
+    } else {
+        let o = c.observable;
+        format!("{} {} [{}]", o.name(), o.symbol(), yu.label)
+    };
+    let pairs = |what: &'static str, series: &[f64]| {
+        if force_depth {
+            let (x, y) = c.depth_force(series);
+            finite_pairs(what, x, y, fx, ff)
+        } else {
+            finite_pairs(what, &c.t, series, fx, ff)
+        }
+    };
+    let data = pairs("curves.f_data", &c.f_data)?;
+    let fin = pairs("curves.f_final", &c.f_final)?;
     let start = match &c.f_start {
-        Some(s) => Some(finite_pairs("curves.f_start", x, s, fx, ff)?),
+        Some(s) => Some(pairs("curves.f_start", s)?),
         None => None,
     };
     let all = || {
@@ -341,7 +385,7 @@ fn draw_force<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc(x_desc)
-        .y_desc(format!("force F [{}]", c.force_unit.label))
+        .y_desc(y_desc)
         .y_labels(y_label_count(root, fonts.tick))
         .x_label_formatter(&|v| fmt_axis_tick(*v, xm))
         .y_label_formatter(&|v| fmt_axis_tick(*v, ym))
@@ -573,7 +617,7 @@ fn draw_residuals<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("time t [s]")
-        .y_desc(format!("fit - data [{}]", c.force_unit.label))
+        .y_desc(format!("fit - data [{}]", c.observed_unit().label))
         .y_labels(5)
         .x_label_formatter(&|v| fmt_axis_tick(*v, xm))
         .y_label_formatter(&|v| fmt_axis_tick(*v, rmax))
@@ -814,10 +858,11 @@ fn snap_zero(v: f64, span: f64) -> f64 {
 /// `law: caption, test T` (without the test when the source names none).
 fn title(report: &Report, figure: Figure) -> String {
     let test = report.source.test.trim();
+    let o = report.curves.observable;
     if test.is_empty() {
-        format!("{}: {}", report.law, figure.caption())
+        format!("{}: {}", report.law, figure.caption_for(o))
     } else {
-        format!("{}: {}, test {test}", report.law, figure.caption())
+        format!("{}: {}, test {test}", report.law, figure.caption_for(o))
     }
 }
 

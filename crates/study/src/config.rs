@@ -572,11 +572,11 @@ impl Drive {
     }
 }
 
-/// Why a load-controlled configuration is refused by every command but `simulate`.
+/// Why a load-controlled configuration is refused by the commands that drive by depth
+/// only (`batch`, `map`'s synthetic data, the discretization study, ...).
 const LOAD_CONTROL_ONLY_SIMULATE: &str = "load control is supported by `simulate`, \
-    `gradient` and `gradient-check` only: fitting a load-controlled history (depth residuals \
-    in `identify`: its data, reports and figures) is not wired yet; use `simulate`, \
-    `gradient` or `gradient-check`, or drive by depth";
+    `identify`, `check`, `gradient` and `gradient-check`: this command drives by depth \
+    only; drive by depth or use one of those";
 
 /// Numerical options of the direct solver; every field is optional and defaults to
 /// [`SolverOptions::default`]. Whether fields are recorded is decided by the command.

@@ -1,6 +1,7 @@
 //! The identification report of `indentify identify`: `report.md` and `report.json`
 //! (indentify_report's [`Report`]) and its figures as SVG and PNG (force-depth,
-//! force-time, convergence), written into the report directory.
+//! force-time, convergence; depth-time instead of force-time under load control, where
+//! the depth is fitted), written into the report directory.
 
 use std::path::{Path, PathBuf};
 
@@ -8,7 +9,7 @@ use anyhow::{Context, Result};
 use indentify_identify::{IdentifyResult, IterationRecord};
 use indentify_report::{
     BoundHit, Convergence, Correlation, Curves, DisplayUnit, Figure, FigureSize, FitQuality,
-    NameValue, Parameter, PreprocessingStep, Report, Source,
+    NameValue, Observable, Parameter, PreprocessingStep, Report, Source,
 };
 
 use crate::config::Measured;
@@ -23,15 +24,18 @@ pub struct Inputs<'a> {
     pub test: String,
     /// The measured record, if any (metadata and preprocessing).
     pub measured: Option<&'a Measured>,
-    /// Schedule times (s) and depths (mm).
+    /// What is fitted: the force, or the depth under load control (then `h` is the force
+    /// and the `f_*` series are depths).
+    pub observable: Observable,
+    /// Schedule times (s).
     pub t: &'a [f64],
-    /// Depths (mm).
+    /// Depths (mm); under load control the force at the result (N).
     pub h: &'a [f64],
-    /// Data force at the schedule times (N).
+    /// Data at the schedule times: force (N), or depth (mm) under load control.
     pub f_data: &'a [f64],
-    /// Simulated force at the start (N).
+    /// The simulated observable at the start.
     pub f_start: &'a [f64],
-    /// Simulated force at the end (N).
+    /// The simulated observable at the end.
     pub f_final: &'a [f64],
     /// The iteration history (history.csv).
     pub history: &'a [IterationRecord],
@@ -227,13 +231,22 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         },
         fit,
         preprocessing,
-        curves: Curves::with_auto_units(
-            inputs.t.to_vec(),
-            inputs.h.to_vec(),
-            inputs.f_data.to_vec(),
-            Some(inputs.f_start.to_vec()),
-            inputs.f_final.to_vec(),
-        ),
+        curves: match inputs.observable {
+            Observable::Force => Curves::with_auto_units(
+                inputs.t.to_vec(),
+                inputs.h.to_vec(),
+                inputs.f_data.to_vec(),
+                Some(inputs.f_start.to_vec()),
+                inputs.f_final.to_vec(),
+            ),
+            Observable::Depth => Curves::depth_observed(
+                inputs.t.to_vec(),
+                inputs.h.to_vec(),
+                inputs.f_data.to_vec(),
+                Some(inputs.f_start.to_vec()),
+                inputs.f_final.to_vec(),
+            ),
+        },
         history,
         figures: Vec::new(),
         warnings: inputs.warnings.to_vec(),
@@ -253,7 +266,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         if fig == Figure::Convergence && report.history.len() < 2 {
             continue;
         }
-        let stem = fig.file_stem();
+        let stem = fig.file_stem_for(inputs.observable);
         let svg = report
             .figure_svg(fig, FigureSize::default())
             .with_context(|| format!("cannot draw the {stem} figure"))?;
@@ -266,7 +279,7 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
                 .with_context(|| format!("cannot write `{}`", path.display()))?;
             figures.push(path);
         }
-        links.push(fig.link(format!("{stem}.svg")));
+        links.push(fig.link_for(inputs.observable, format!("{stem}.svg")));
     }
     report.figures = links;
     let markdown = dir.join("report.md");

@@ -19,6 +19,7 @@ use indentify_identify::{
     multiplicative_noise, resume,
 };
 use indentify_laws::Material;
+use indentify_report::Observable;
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -147,17 +148,26 @@ pub struct RunInfo {
 }
 
 /// The curves of the fit at the schedule times.
+///
+/// `f_data`, `f_start` and `f_final` are the observable's: forces (N) when the depth drives
+/// the run, depths (mm) under load control ([`Observable::Depth`], docs/theory.md §13),
+/// where `h` is then the force (N) of the run at the result (the prescribed force on the
+/// load-controlled steps).
 #[derive(Clone, Debug, Serialize)]
 pub struct FitCurves {
+    /// What is fitted: the force, or the depth under load control (`"observable":
+    /// "Depth"` in result.json; absent for the force).
+    #[serde(skip_serializing_if = "Observable::is_force")]
+    pub observable: Observable,
     /// Times (s).
     pub t: Vec<f64>,
-    /// Depths (mm).
+    /// Depths (mm); under load control the force at the result (N).
     pub h: Vec<f64>,
-    /// Data force (N).
+    /// Data: force (N), or depth (mm) under load control.
     pub f_data: Vec<f64>,
-    /// Simulated force at the start (N).
+    /// The simulated observable at the start.
     pub f_start: Vec<f64>,
-    /// Simulated force at the result (N).
+    /// The simulated observable at the result.
     pub f_final: Vec<f64>,
 }
 
@@ -534,19 +544,43 @@ fn set_up_test(
             ),
         ));
     }
-    let prepared = prepare(&config, &run_name)?;
+    // under load control (force segments, `data.drive: Force`) the depth is the observable
+    let (prepared, load) = prepare_driven(&config, &run_name)?;
     let mut solver_opts = config.solver.options(false);
     let noise = opts.noise.map(|(a, seed)| (a, test_seed(seed, k)));
-    let data = load_data(
-        &prepared,
-        opts.data.as_deref(),
-        noise,
-        &run_name,
-        law,
-        law_values,
-        &solver_opts,
-    )?;
-    solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
+    let data = match &load {
+        None => load_data(
+            &prepared,
+            opts.data.as_deref(),
+            noise,
+            &run_name,
+            law,
+            law_values,
+            &solver_opts,
+        )?,
+        Some(h) => crate::identify_load::load_depths(
+            &prepared,
+            h,
+            opts.data.as_deref(),
+            noise,
+            &run_name,
+            (law, law_values),
+            &solver_opts,
+        )?,
+    };
+    if load.is_some() && opts.checkpoint.is_some() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "--checkpoint with the load-controlled {what}: a load-controlled run saves no \
+                 checkpoints (its gradient reads every step's fields); drop --checkpoint"
+            ),
+        ));
+    }
+    solver_opts.checkpoint_every = match load {
+        Some(_) => 0,
+        None => checkpoint_interval(opts, &prepared)?,
+    };
     let Prepared {
         schedule,
         model,
@@ -566,14 +600,24 @@ fn set_up_test(
             .with_context(compare)
             .kind(ErrorKind::Data)?,
     };
-    let test = indentify_identify::Test::new(
-        model,
-        schedule,
-        &data.record,
-        None,
-        solver_opts.clone(),
-        weight,
-    )
+    let test = match load {
+        Some(h) => indentify_identify::Test::new_load(
+            model,
+            h,
+            &data.record,
+            None,
+            solver_opts.clone(),
+            weight,
+        ),
+        None => indentify_identify::Test::new(
+            model,
+            schedule,
+            &data.record,
+            None,
+            solver_opts.clone(),
+            weight,
+        ),
+    }
     .with_context(compare)
     .kind(ErrorKind::Data)?;
     let info = TestSetup {
@@ -769,7 +813,11 @@ fn profiles(
 /// test's curves at the start and at the result, and every test's end to end.
 fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyOutcome> {
     let fits = test_fits(s, &result)?;
+    // one observable for the whole fit, or mixed (force and depth tests of a joint fit)
+    let observable = fits.first().map_or(Observable::Force, |f| f.fit.observable);
+    let mixed = fits.iter().any(|f| f.fit.observable != observable);
     let mut all = FitCurves {
+        observable,
         t: Vec::new(),
         h: Vec::new(),
         f_data: Vec::new(),
@@ -788,7 +836,12 @@ fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyO
         config: s.name.clone(),
         law: s.law.name(),
         names: s.names.clone(),
-        quality: indentify_report::FitQuality::compute(&all.f_data, &all.f_final).ok(),
+        // a quality over forces and depths together would mix units: each test has its own
+        quality: if mixed {
+            None
+        } else {
+            indentify_report::FitQuality::compute(&all.f_data, &all.f_final).ok()
+        },
         result,
         truth: s.tests[0].truth.clone(),
         data: s.data_description(),
@@ -822,29 +875,50 @@ fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
             ..info.solver_opts.clone()
         };
         let mut solver = DirectSolver::new(&test.model).kind(ErrorKind::Solver)?;
-        let mut curve_at = |c: &[f64]| -> Result<Vec<f64>> {
-            Ok(forward(
-                &mut solver,
-                &*s.law,
-                c,
-                &test.schedule,
-                &quiet,
-                &info.run_name,
-            )
-            .kind(ErrorKind::Solver)?
-            .forces())
+        // the observables at `c` and the run's forces (the prescribed series under load
+        // control)
+        let mut curve_at = |c: &[f64]| -> Result<(Vec<f64>, Vec<f64>)> {
+            let traj = match &test.load {
+                Some(h) => {
+                    crate::identify_load::run(&mut solver, &*s.law, c, h, &quiet, &info.run_name)?
+                }
+                None => forward(
+                    &mut solver,
+                    &*s.law,
+                    c,
+                    &test.schedule,
+                    &quiet,
+                    &info.run_name,
+                )
+                .kind(ErrorKind::Solver)?,
+            };
+            Ok((test.observables(&traj), traj.forces()))
         };
-        let f_start = curve_at(&start_params)?;
-        let f_final = match result.forces.get(s.problem.rows_of(k)) {
-            Some(f) if result.forces.len() == s.problem.target.len() => f.to_vec(),
-            _ => curve_at(&result.c)?,
-        };
-        let fit = FitCurves {
-            t: test.schedule.t.clone(),
-            h: test.schedule.depth.clone(),
-            f_data: test.target.clone(),
-            f_start,
-            f_final,
+        let (f_start, _) = curve_at(&start_params)?;
+        let fit = match &test.load {
+            Some(_) => {
+                // the force at the result: a run there (the observables too)
+                let (h_final, force) = curve_at(&result.c)?;
+                FitCurves {
+                    observable: Observable::Depth,
+                    t: test.schedule.t.clone(),
+                    h: force,
+                    f_data: test.target.clone(),
+                    f_start,
+                    f_final: h_final,
+                }
+            }
+            None => FitCurves {
+                observable: Observable::Force,
+                t: test.schedule.t.clone(),
+                h: test.schedule.depth.clone(),
+                f_data: test.target.clone(),
+                f_start,
+                f_final: match result.forces.get(s.problem.rows_of(k)) {
+                    Some(f) if result.forces.len() == s.problem.target.len() => f.to_vec(),
+                    _ => curve_at(&result.c)?.0,
+                },
+            },
         };
         fits.push(TestFit {
             name: info.label.clone(),
@@ -892,6 +966,14 @@ fn discretization_check(outcome: &mut IdentifyOutcome, s: &std::sync::Arc<Setup>
     };
     if cancel.is_raised() {
         return skipped(outcome);
+    }
+    if s.problem.tests.iter().any(|t| t.load.is_some()) {
+        // the refined run re-solves the depth schedule; a load-controlled test has none
+        let why = "no discretization check: it re-runs depth-driven tests only, and this fit \
+                   has a load-controlled test (run with --no-refine to skip it on purpose)";
+        tracing::warn!("warning: {why}");
+        outcome.warnings.push(why.to_string());
+        return;
     }
     tracing::info!(
         "  discretization check: the fit re-run on a 2x refined mesh with twice the steps \
@@ -1207,7 +1289,7 @@ fn load_data(
 }
 
 /// `` `FILE` (anton-paar, test 1), 1000 samples, 60 points after preprocessing (...)``.
-fn describe_measured(m: &Measured) -> String {
+pub(crate) fn describe_measured(m: &Measured) -> String {
     format!(
         "{}, {} samples, {} points after preprocessing ({})",
         m.label(),
@@ -1286,7 +1368,18 @@ fn write_report(
 ) -> Result<ReportFiles> {
     let joint = s.is_joint();
     let fit = if joint {
-        let mut text = String::from("test,t,h,F_data,F_start,F_final\n");
+        // the header of the first test's observable (a mixed joint fit: its own)
+        let mut text = match outcome.tests.iter().map(|t| t.fit.observable).collect::<Vec<_>>() {
+            o if o.iter().all(|&o| o == Observable::Depth) => {
+                String::from("test,t,F,h_data,h_start,h_final\n")
+            }
+            o if o.iter().all(|&o| o == Observable::Force) => {
+                String::from("test,t,h,F_data,F_start,F_final\n")
+            }
+            // mixed: per test, the prescribed series and the observable's (the force's
+            // for a depth-driven test, the depth's for a load-controlled one)
+            _ => String::from("test,t,prescribed,data,start,final\n"),
+        };
         for (k, t) in outcome.tests.iter().enumerate() {
             for line in fit_csv(&t.fit).lines().skip(1) {
                 text.push_str(&format!("{},{line}\n", k + 1));
@@ -1458,6 +1551,7 @@ fn write_page(
             file,
             test,
             measured,
+            observable: page.fit.observable,
             t: &page.fit.t,
             h: &page.fit.h,
             f_data: &page.fit.f_data,
@@ -1529,9 +1623,13 @@ fn joint_index(o: &IdentifyOutcome, extra: &str) -> String {
     md
 }
 
-/// `t,h,F_data,F_start,F_final` at the schedule times.
+/// `t,h,F_data,F_start,F_final` at the schedule times; under load control
+/// `t,F,h_data,h_start,h_final` (the force of the run at the result, the depths).
 pub fn fit_csv(fit: &FitCurves) -> String {
-    let mut text = String::from("t,h,F_data,F_start,F_final\n");
+    let mut text = String::from(match fit.observable {
+        Observable::Force => "t,h,F_data,F_start,F_final\n",
+        Observable::Depth => "t,F,h_data,h_start,h_final\n",
+    });
     for i in 0..fit.t.len() {
         let at = |f: &[f64]| f.get(i).copied().unwrap_or(f64::NAN);
         text.push_str(&format!(
@@ -1644,6 +1742,9 @@ struct ResultJson {
     #[serde(skip_serializing_if = "Option::is_none")]
     noise: Option<NoiseJson>,
     method: &'static str,
+    /// What is fitted: absent for the force, `"Depth"` under load control (J then in mm^2).
+    #[serde(skip_serializing_if = "Observable::is_force")]
+    observable: Observable,
     parameters: Vec<ParamJson>,
     #[serde(rename = "J")]
     j: f64,
@@ -1847,6 +1948,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
             .filter(|_| o.truth.is_some())
             .map(|(amplitude, seed)| NoiseJson { amplitude, seed }),
         method: r.method.name(),
+        observable: o.fit.observable,
         parameters,
         j: r.cost,
         j_start: r.initial_cost,

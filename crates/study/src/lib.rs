@@ -38,6 +38,7 @@ pub mod gradient;
 mod gradient_load;
 pub mod history;
 pub mod identify;
+mod identify_load;
 pub mod output;
 pub mod run_folder;
 pub mod simulate;
@@ -58,5 +59,5 @@ pub use indentify_identify::{
 };
 pub use indentify_laws::law_by_name;
 pub use indentify_records as records;
-pub use indentify_report::FitQuality;
+pub use indentify_report::{FitQuality, Observable};
 pub use source::{ConfigSource, DEFAULT_CONFIG, DEFAULT_NAME};

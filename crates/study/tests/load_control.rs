@@ -1,7 +1,7 @@
 //! Load control in configurations: `history` segments with `force` (N), `simulate`
 //! writing t, h, F, a for a mixed history; `gradient` on the depth cost against central
-//! differences (the adjoint of the bordered system, docs/theory.md §13); `identify`
-//! refusing load-controlled histories with a message naming the field; `gradient-check`
+//! differences (the adjoint of the bordered system, docs/theory.md §13); the depth-only
+//! commands refusing load-controlled histories with a message naming the field; `gradient-check`
 //! passing on the depth cost; bad segments naming theirs.
 
 use indentify_study::gradient::{self, GradientOptions};
@@ -48,16 +48,20 @@ fn simulate_writes_a_mixed_load_controlled_history() {
     assert!(rows.iter().all(|r| r.a >= 0.0));
 }
 
-/// `identify` refuses load control, naming the field.
+/// The commands that drive by depth only (through `Config::prepare`) refuse load
+/// control, naming the field and the commands that take it (`identify` takes it:
+/// `identify_load.rs`).
 #[test]
-fn load_control_is_refused_by_identify_naming_the_field() {
-    use indentify_study::identify::{self, IdentifyOptions};
+fn load_control_is_refused_by_depth_only_commands_naming_the_field() {
     let segments =
         "(duration: 0.2, depth: 0.02, steps: 2), (duration: 1.0, force: 100.0, steps: 3)";
-    let e = identify::run(&IdentifyOptions::new(source(segments)), &mut ()).unwrap_err();
+    let cfg = source(segments).load(&[]).unwrap();
+    let e = cfg.prepare("load-control").map(|_| ()).unwrap_err();
     let m = format!("{e:#}");
     assert!(
-        m.contains("history.segments[1].force") && m.contains("not wired yet"),
+        m.contains("history.segments[1].force")
+            && m.contains("drives by depth only")
+            && m.contains("`identify`"),
         "{m}"
     );
 }

@@ -442,9 +442,21 @@ fn parameter_table(o: &IdentifyOutcome) -> String {
 fn fit_lines(o: &IdentifyOutcome) -> String {
     let result = &o.result;
     let mut text = String::new();
+    // under load control the depth is fitted: J on the depth residuals (mm^2)
+    let depth = o.fit.observable == indentify_study::Observable::Depth;
+    let mixed = o.tests.iter().any(|t| t.fit.observable != o.fit.observable);
+    let (what, unit, y) = if depth {
+        ("depth", "mm", "h")
+    } else {
+        ("force", "N", "F")
+    };
+    if depth && !mixed {
+        text.push_str("  load control: the force is prescribed, the depth fitted\n");
+    }
     text.push_str(&format!(
-        "  J = {:.4e} N^2 (start {:.4e}), {} iterations, {} forward and {} adjoint solves, {:.1} s\n",
+        "  J = {:.4e} {}^2 (start {:.4e}), {} iterations, {} forward and {} adjoint solves, {:.1} s\n",
         result.cost,
+        if mixed { "(weighted)" } else { unit },
         result.initial_cost,
         result.iterations,
         result.forward_solves,
@@ -453,8 +465,8 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
     ));
     if let Some(q) = &o.quality {
         text.push_str(&format!(
-            "  fit{}: R^2 = {:.6}, RMS force residual {:.4e} N = {:.3}% of F_max, largest \
-             residual {:.4e} N ({} points)\n",
+            "  fit{}: R^2 = {:.6}, RMS {what} residual {:.4e} {unit} = {:.3}% of {y}_max, \
+             largest residual {:.4e} {unit} ({} points)\n",
             if o.tests.is_empty() {
                 String::new()
             } else {
@@ -473,9 +485,10 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
             .as_ref()
             .map_or("no fit quality".to_string(), |q| {
                 format!(
-                    "R^2 = {:.6}, RMS {:.3}% of F_max ({} points)",
+                    "R^2 = {:.6}, RMS {:.3}% of {}_max ({} points)",
                     q.r2,
                     100.0 * q.rms_rel,
+                    t.fit.observable.symbol(),
                     q.n
                 )
             });
