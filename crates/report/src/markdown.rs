@@ -67,7 +67,10 @@ impl Report {
             (&d.refined, d.rms_rel, d.max_abs, &d.shift, d.seconds);
         let mut out = String::new();
         let fu = self.curves.observed_unit();
-        let (o, y) = (self.curves.observable.name(), self.curves.observable.symbol());
+        let (o, y) = (
+            self.curves.observable.name(),
+            self.curves.observable.symbol(),
+        );
         line!(out, "## Discretization error");
         line!(out);
         line!(
@@ -246,7 +249,10 @@ impl Report {
     fn fit_section(&self, out: &mut String) {
         let f = &self.fit;
         let fu = self.curves.observed_unit();
-        let (o, y) = (self.curves.observable.name(), self.curves.observable.symbol());
+        let (o, y) = (
+            self.curves.observable.name(),
+            self.curves.observable.symbol(),
+        );
         line!(out, "## Fit quality");
         line!(out);
         line!(out, "| measure | value |");

@@ -145,6 +145,9 @@ pub struct RunInfo {
     pub data: String,
     /// The report directory.
     pub out: Option<PathBuf>,
+    /// The unit of `J`: "N^2" (the force fitted), "mm^2" (every test load-controlled, the
+    /// depth fitted) or "weighted" (a joint fit of both).
+    pub cost_unit: &'static str,
 }
 
 /// The curves of the fit at the schedule times.
@@ -698,6 +701,11 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         } else {
             s.tests[0].data.clone()
         },
+        cost_unit: match s.problem.tests.iter().filter(|t| t.load.is_some()).count() {
+            0 => "N^2",
+            n if n == s.problem.tests.len() => "mm^2",
+            _ => "weighted",
+        },
         ..run_info(&s.name, &s.law, &s.names, &s.id_cfg, opts)
     });
     let (result, multistart) = fit(
@@ -1152,6 +1160,7 @@ fn run_info(
         resumed_at: None,
         data: String::new(),
         out: opts.out.clone(),
+        cost_unit: "N^2",
     }
 }
 
@@ -1369,7 +1378,12 @@ fn write_report(
     let joint = s.is_joint();
     let fit = if joint {
         // the header of the first test's observable (a mixed joint fit: its own)
-        let mut text = match outcome.tests.iter().map(|t| t.fit.observable).collect::<Vec<_>>() {
+        let mut text = match outcome
+            .tests
+            .iter()
+            .map(|t| t.fit.observable)
+            .collect::<Vec<_>>()
+        {
             o if o.iter().all(|&o| o == Observable::Depth) => {
                 String::from("test,t,F,h_data,h_start,h_final\n")
             }

@@ -38,14 +38,12 @@ pub(crate) fn run(
     opts: &SolverOptions,
     name: &str,
 ) -> Result<Trajectory> {
-    solver
-        .run_history(law, c, history, opts)
-        .map_err(|e| {
-            Error::new(
-                ErrorKind::Solver,
-                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
-            )
-        })
+    solver.run_history(law, c, history, opts).map_err(|e| {
+        Error::new(
+            ErrorKind::Solver,
+            anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
+        )
+    })
 }
 
 /// The observed depths of a load-controlled test: the measured record's depth (its force

@@ -175,5 +175,8 @@ fn checkpoints_are_refused_under_load_control() {
     o.checkpoint = Some(3);
     let e = identify::run(&o, &mut ()).unwrap_err();
     let m = format!("{e:#}");
-    assert!(m.contains("--checkpoint") && m.contains("load-controlled"), "{m}");
+    assert!(
+        m.contains("--checkpoint") && m.contains("load-controlled"),
+        "{m}"
+    );
 }

@@ -132,12 +132,15 @@ struct Console {
     names: Vec<&'static str>,
     free: Vec<usize>,
     header_done: bool,
+    /// The unit of J (N^2; mm^2 under load control).
+    cost_unit: &'static str,
 }
 
 impl Observer for Console {
     fn started(&mut self, info: &RunInfo) {
         self.names = info.names.clone();
         self.free = (0..info.free.len()).filter(|&k| info.free[k]).collect();
+        self.cost_unit = info.cost_unit;
         let free: Vec<&str> = self.free.iter().map(|&k| info.names[k]).collect();
         tracing::info!(
             "indentify identify {}\n  law {}, identifying {} ({}), method {}{}\n  data: {}\n  \
@@ -172,13 +175,16 @@ impl Observer for Console {
             p.set(
                 r.iteration as u64,
                 format!(
-                    "J {:.4e} N^2, {} forward / {} adjoint solves",
-                    r.cost, r.forward_solves, r.adjoint_solves
+                    "J {:.4e} {}, {} forward / {} adjoint solves",
+                    r.cost, self.cost_unit, r.forward_solves, r.adjoint_solves
                 ),
             );
         }
         if !self.header_done {
-            let mut cols = vec![format!("{:>4}", "iter"), format!("{:<13}", "J (N^2)")];
+            let mut cols = vec![
+                format!("{:>4}", "iter"),
+                format!("{:<13}", format!("J ({})", self.cost_unit)),
+            ];
             cols.push(format!("{:<10}", "|grad|"));
             cols.extend(self.free.iter().map(|&k| format!("{:<14}", self.names[k])));
             cols.push("fwd/adj  s".into());
@@ -269,6 +275,7 @@ pub fn run(args: &Args) -> Result<()> {
         names: Vec::new(),
         free: Vec::new(),
         header_done: false,
+        cost_unit: "N^2",
     };
     let outcome = identify::run(&opts, &mut console);
     drop(console.progress.take());
@@ -454,9 +461,13 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
         text.push_str("  load control: the force is prescribed, the depth fitted\n");
     }
     text.push_str(&format!(
-        "  J = {:.4e} {}^2 (start {:.4e}), {} iterations, {} forward and {} adjoint solves, {:.1} s\n",
+        "  J = {:.4e} {} (start {:.4e}), {} iterations, {} forward and {} adjoint solves, {:.1} s\n",
         result.cost,
-        if mixed { "(weighted)" } else { unit },
+        if mixed {
+            "(weighted: force and depth tests)".to_string()
+        } else {
+            format!("{unit}^2")
+        },
         result.initial_cost,
         result.iterations,
         result.forward_solves,
