@@ -93,21 +93,28 @@ impl NoiseModel {
     /// The model in words, e.g. `multiplicative noise of standard deviation 1.15% of F
     /// (stated)`; `level` is the estimated relative level of `RelativeEstimated`.
     pub fn describe(&self, level: f64) -> String {
+        self.describe_observed(level, "F", "N")
+    }
+
+    /// [`NoiseModel::describe`] for an observable of symbol `symbol` and unit `unit`
+    /// (`"h"`, `"mm"` when the depth is fitted under load control).
+    pub fn describe_observed(&self, level: f64, symbol: &str, unit: &str) -> String {
         match *self {
             NoiseModel::Residual => {
                 "one variance for every weighted residual, 2J/(n-p) (Gauss-Newton)".into()
             }
             NoiseModel::Relative(v) => format!(
-                "multiplicative noise, standard deviation {}% of F (stated; sandwich covariance)",
+                "multiplicative noise, standard deviation {}% of {symbol} (stated; sandwich \
+                 covariance)",
                 short(100.0 * v)
             ),
             NoiseModel::RelativeEstimated => format!(
-                "multiplicative noise, standard deviation {}% of F (estimated from the \
+                "multiplicative noise, standard deviation {}% of {symbol} (estimated from the \
                  residuals; sandwich covariance)",
                 short(100.0 * level)
             ),
             NoiseModel::Absolute(v) => format!(
-                "additive noise, standard deviation {} N (stated; sandwich covariance)",
+                "additive noise, standard deviation {} {unit} (stated; sandwich covariance)",
                 short(v)
             ),
         }

@@ -560,7 +560,8 @@ fn short_value(v: f64) -> String {
     format!("{v:.decimals$}")
 }
 
-/// `R² = 0.9781, RMS residual 4.90% of F_max (60 points); anonNI.TXT, test 1`.
+/// `R² = 0.9781, RMS residual 4.90% of F_max (60 points); anonNI.TXT, test 1` (`h_max`
+/// when the depth is the observable).
 fn fit_note(report: &Report) -> String {
     let f = &report.fit;
     let file = report
@@ -571,9 +572,10 @@ fn fit_note(report: &Report) -> String {
         .unwrap_or(&report.source.file)
         .to_string();
     let mut note = format!(
-        "R\u{b2} = {:.4}, RMS residual {:.2}% of F_max ({} points)",
+        "R\u{b2} = {:.4}, RMS residual {:.2}% of {}_max ({} points)",
         f.r2,
         100.0 * f.rms_rel,
+        report.curves.observable.symbol(),
         f.n
     );
     if !file.is_empty() {

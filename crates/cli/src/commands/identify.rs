@@ -13,7 +13,9 @@ use indentify_study::discretization::Discretization;
 use indentify_study::explore::StartsOptions;
 use indentify_study::format::{sig, table};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome, Observer, RunInfo};
-use indentify_study::{ConfigSource, Identifiability, IterationRecord, ProfileSettings};
+use indentify_study::{
+    ConfigSource, Identifiability, IterationRecord, Observable, ProfileSettings,
+};
 
 use crate::print;
 
@@ -342,7 +344,7 @@ pub fn summary(o: &IdentifyOutcome) -> String {
     let mut text = parameter_table(o);
     text.push_str(&fit_lines(o));
     if let Some(i) = &o.result.identifiability {
-        text.push_str(&identifiability_lines(i));
+        text.push_str(&identifiability_lines(i, o.fit.observable));
     }
     if let Some(d) = &o.discretization {
         text.push_str(&discretization_lines(o, d));
@@ -521,9 +523,9 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
 }
 
 /// The identifiability summary and the undetermined parameters.
-fn identifiability_lines(i: &Identifiability) -> String {
+fn identifiability_lines(i: &Identifiability, observable: Observable) -> String {
     let mut text = String::new();
-    text.push_str(&format!("  {}\n", identifiability_line(i)));
+    text.push_str(&format!("  {}\n", identifiability_line(i, observable)));
     if let Some(w) = i.weakest_direction() {
         text.push_str(&format!("  weakest direction: {w}\n"));
     }
@@ -603,7 +605,7 @@ fn discretization_lines(o: &IdentifyOutcome, d: &Discretization) -> String {
 /// `identifiability: relative std. dev. E 1e-9, eta 2e-9; correlation E-eta -0.87;
 /// singular values 1.2e3, 4.5e1; condition number 1.105e1` (undetermined parameters show
 /// no deviation and no correlation; a condition number beyond 1e16 shows as `singular`).
-fn identifiability_line(i: &Identifiability) -> String {
+fn identifiability_line(i: &Identifiability, observable: Observable) -> String {
     let sd: Vec<String> = i
         .names
         .iter()
@@ -643,7 +645,10 @@ fn identifiability_line(i: &Identifiability) -> String {
     if i.noise != indentify_study::NoiseModel::Residual {
         s.push_str(&format!(
             "; deviations assume {}",
-            i.noise.describe(i.noise_level)
+            match observable {
+                Observable::Depth => i.noise.describe_observed(i.noise_level, "h", "mm"),
+                Observable::Force => i.noise.describe(i.noise_level),
+            }
         ));
     }
     s
