@@ -68,6 +68,17 @@ pub(crate) struct MatSweep {
     glin: Vec<f64>,
     /// The tangent `-G^T E` of a linear material's step.
     ct: Mat4,
+    /// A linear material's sweep carries `mu_{i+1}` itself (in `z`) and folds the later
+    /// step's blocks into the earlier one's, once per step: `D_{i+1}` (`m x m`) and
+    /// `E_{i+1}` (`m x 4`) of the step swept last (zero before the first);
+    /// `Q = A_i^-T D_{i+1}^T` (`m x m`, so `A_i^-T z = Q mu_{i+1}`) and
+    /// `S = E_{i+1}^T + E_i^T Q` (stored `m x 4`: the source `e + E_i^T A_i^-T z` is
+    /// `S^T mu_{i+1}`); `E_i^T G_i` (4 x 4, a shifted source's part).
+    d_next: Vec<f64>,
+    e_next: Vec<f64>,
+    qm: Vec<f64>,
+    sm: Vec<f64>,
+    eg: Mat4,
 }
 
 impl MatSweep {
@@ -96,6 +107,11 @@ impl MatSweep {
             rhs5: vec![0.0; m * 5],
             glin: vec![0.0; m * 4],
             ct: Mat4::ZERO,
+            d_next: vec![0.0; m * m],
+            e_next: vec![0.0; m * 4],
+            qm: vec![0.0; m * m],
+            sm: vec![0.0; m * 4],
+            eg: Mat4::ZERO,
         }
     }
 
@@ -136,6 +152,23 @@ impl MatSweep {
                 self.ct.0[a][b] = -(0..m)
                     .map(|k| self.glin[k * 4 + a] * self.ej[k * 4 + b])
                     .sum::<f64>();
+                self.eg.0[b][a] = -self.ct.0[a][b];
+            }
+        }
+        // the later step's blocks folded in (see `d_next`)
+        for k in 0..m {
+            let row = &self.ainvt[k * m..(k + 1) * m];
+            for r in 0..m {
+                let dr = &self.d_next[r * m..(r + 1) * m];
+                self.qm[k * m + r] = row.iter().zip(dr).map(|(a, b)| a * b).sum();
+            }
+        }
+        for r in 0..m {
+            for b in 0..4 {
+                self.sm[r * 4 + b] = self.e_next[r * 4 + b]
+                    + (0..m)
+                        .map(|k| self.ej[k * 4 + b] * self.qm[k * m + r])
+                        .sum::<f64>();
             }
         }
         true
@@ -512,21 +545,21 @@ impl Adjoint<'_> {
         // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
         for q in 0..nq {
             if linear {
-                let z = &sw.z[q * m..(q + 1) * m];
-                for k in 0..m {
-                    let row = &sw.ainvt[k * m..(k + 1) * m];
-                    sw.x[k] = row.iter().zip(z).map(|(a, b)| a * b).sum();
+                // `z` holds `mu_{i+1}`: `A^-T z = Q mu_{i+1}`, the source `S^T mu_{i+1}`
+                let mu1 = &sw.z[q * m..(q + 1) * m];
+                let az = &mut sw.az[q * m..(q + 1) * m];
+                for (k, a) in az.iter_mut().enumerate() {
+                    let row = &sw.qm[k * m..(k + 1) * m];
+                    *a = row.iter().zip(mu1).map(|(a, b)| a * b).sum();
                 }
-                sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
-                if shifted && !finite {
-                    let bea = self.strain[q];
-                    for k in 0..m {
-                        sw.x[k] += rho * (0..4).map(|j| sw.glin[k * 4 + j] * bea[j]).sum::<f64>();
+                let mut src = Vec4::ZERO;
+                for (r, mu) in mu1.iter().enumerate() {
+                    for b in 0..4 {
+                        src.0[b] += sw.sm[r * 4 + b] * mu;
                     }
                 }
-                let mut src = sw.e[q];
-                for b in 0..4 {
-                    src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                if shifted && !finite {
+                    src += sw.eg.mul_vec(&Vec4(self.strain[q])) * rho;
                 }
                 self.field_b[q] = src;
                 continue;
@@ -646,16 +679,23 @@ impl Adjoint<'_> {
             for (k, g) in sw.grad.iter_mut().enumerate() {
                 *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
             }
-            if !linear {
-                mat.jac_previous(c, &step, &mut sw.d);
-                mat.jac_strain(c, &step, &mut sw.ej);
+            if linear {
+                // the carry is `mu_i` itself (folded into the step before)
+                sw.z[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+                continue;
             }
+            mat.jac_previous(c, &step, &mut sw.d);
+            mat.jac_strain(c, &step, &mut sw.ej);
             for k in 0..m {
                 sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
             }
             for b in 0..4 {
                 sw.e[q].0[b] = (0..m).map(|r| sw.ej[r * 4 + b] * sw.x[r]).sum();
             }
+        }
+        if linear {
+            sw.d_next.copy_from_slice(&sw.d);
+            sw.e_next.copy_from_slice(&sw.ej);
         }
         Ok(rho)
     }
