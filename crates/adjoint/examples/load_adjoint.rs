@@ -69,12 +69,19 @@ fn main() {
         let dj_dh: Vec<f64> = traj.steps.iter().map(|s| s.depth).collect();
         let t0 = Instant::now();
         let g = adjoint
-            .gradient_load(law, &params, &traj, &history, &dj_dh, &vec![0.0; n])
+            .gradient_load(
+                &indentify_laws::LawMaterial(law),
+                &params,
+                &traj,
+                &history,
+                &dj_dh,
+                &vec![0.0; n],
+            )
             .expect("gradient");
         best_g = best_g.min(t0.elapsed().as_secs_f64());
         let t0 = Instant::now();
         let s = adjoint
-            .sensitivities_load(law, &params, &traj, &history)
+            .sensitivities_load(&indentify_laws::LawMaterial(law), &params, &traj, &history)
             .expect("sensitivities");
         best_s = best_s.min(t0.elapsed().as_secs_f64());
         std::hint::black_box((g, s));

@@ -13,9 +13,12 @@
 //! against the step's depth column `du_U,i` ([`RecordedContact::depth_column`]). The
 //! depth-controlled steps of a mixed history keep `rho_i = dJ/dF_i`.
 
-use indentify_contact::{ForceCotangent, LoadHistory, Target, Trajectory};
-use indentify_laws::{Law, Vec4};
+use indentify_contact::{
+    ForceCotangent, LoadHistory, RecordedContact, StepRecord, Target, Trajectory,
+};
+use indentify_laws::{Law, Material, Vec4};
 
+use crate::material::MatSweep;
 use crate::{Adjoint, AdjointError, Gradient, Recorded, Sweep, check_inputs};
 
 /// Whether the step ending at time `t` (s) prescribes the force.
@@ -27,7 +30,10 @@ impl Adjoint<'_> {
     /// The adjoint gradient `dJ/dc` of a run of [`indentify_contact::DirectSolver::run_history`]
     /// (`traj`, recorded with fields) for a cost with `dJ/dU_i = dj_dh[i]` at its
     /// load-controlled steps (the depth is the observable there) and `dJ/dF_i = dj_df[i]`
-    /// at its depth-controlled ones (entries of the other kind are ignored).
+    /// at its depth-controlled ones (entries of the other kind are ignored). A stress-only
+    /// law ([`Material::as_law`]) sweeps as [`Adjoint::gradient`] does for it; a material
+    /// with internal variables through its blocks (`material.rs`, regime held), the
+    /// bordered scalar formed from the same step's system.
     ///
     /// # Errors
     /// As [`Adjoint::gradient`]; [`AdjointError::Step`] when a load-controlled step's
@@ -35,7 +41,7 @@ impl Adjoint<'_> {
     /// (Coulomb friction: its sticking ties read the depth; refused with the reason).
     pub fn gradient_load(
         &mut self,
-        law: &dyn Law,
+        mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
         history: &LoadHistory,
@@ -44,7 +50,11 @@ impl Adjoint<'_> {
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
-        check_inputs(law, c, traj, dj_df.len())?;
+        let law = mat.as_law();
+        match law {
+            Some(law) => check_inputs(law, c, traj, dj_df.len())?,
+            None => self.check_material(mat, c, traj, dj_df.len(), true)?,
+        }
         if dj_dh.len() != traj.steps.len() {
             return Err(AdjointError::Length {
                 expected: traj.steps.len(),
@@ -52,8 +62,54 @@ impl Adjoint<'_> {
             });
         }
         self.contact.begin();
-        let mut sweep = Sweep::new(law, c);
-        self.field_a.fill(Vec4::ZERO);
+        let dj_dc = if let Some(law) = law {
+            let mut sweep = Sweep::new(law, c);
+            self.field_a.fill(Vec4::ZERO);
+            self.load_sweep(
+                traj,
+                history,
+                (dj_dh, dj_df),
+                |adj, step, border| match border {
+                    Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
+                    None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
+                },
+            )?;
+            sweep.finish(law, c)
+        } else {
+            let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+            self.load_sweep(traj, history, (dj_dh, dj_df), |adj, step, border| {
+                let Recorded {
+                    i,
+                    rec,
+                    f0,
+                    f1,
+                    rho,
+                } = *step;
+                adj.material_step(mat, c, &mut sw, i, rec, (f0, f1), rho, border)
+            })?;
+            sw.grad
+        };
+        Ok(Gradient {
+            dj_dc,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
+    }
+
+    /// The reversed-time sweep of a load-controlled run: `step(adjoint, step, border)`
+    /// sweeps one step, with the cotangent `step.rho = dJ/dF_i` given (`border` `None`)
+    /// or set by its depth column (`border`), and returns the cotangent it used.
+    fn load_sweep(
+        &mut self,
+        traj: &Trajectory,
+        history: &LoadHistory,
+        (dj_dh, dj_df): (&[f64], &[f64]),
+        mut step_fn: impl FnMut(
+            &mut Self,
+            &Recorded<'_>,
+            Option<BorderedRho<'_>>,
+        ) -> Result<f64, AdjointError>,
+    ) -> Result<(), AdjointError> {
         let n_eq = self.model.dofs.n_eq;
         let mut col = Column {
             col: vec![0.0; n_eq],
@@ -91,9 +147,12 @@ impl Adjoint<'_> {
             let mixed = j > 0 && matches!(history.ends[j - 1].1, Target::Force(_)) != load;
             let theta = (rec.t - t_s) / (t_end - t_s);
             if load {
-                let rho = self.bordered_step(law, c, &mut sweep, &step, &mut col, |a, s| {
-                    -(dj_dh[i] + a + carried) / s
-                })?;
+                let mut rho_of = |a: f64, s: f64| -(dj_dh[i] + a + carried) / s;
+                let border = BorderedRho {
+                    col: &mut col,
+                    rho_of: &mut rho_of,
+                };
+                let rho = step_fn(self, &step, Some(border))?;
                 if mixed && theta < 1.0 {
                     // P_i = F_s + theta (P - F_s): the start's force takes
                     // -(1 - theta) rho_i (the multiplier of F_i = P_i is -rho_i)
@@ -103,26 +162,78 @@ impl Adjoint<'_> {
                 // U_i = U_s + theta (U_end - U_s): dL/dU_i carried to the start's depth
                 let rho = step.rho;
                 let mut d = 0.0;
-                self.bordered_step(law, c, &mut sweep, &step, &mut col, |a, s| {
+                let mut rho_of = |a: f64, s: f64| {
                     d = dj_dh[i] + a + rho * s;
                     rho
-                })?;
+                };
+                let border = BorderedRho {
+                    col: &mut col,
+                    rho_of: &mut rho_of,
+                };
+                step_fn(self, &step, Some(border))?;
                 pending += (1.0 - theta) * d;
             } else {
-                self.sweep_step(law, c, &mut sweep, &step)?;
+                step_fn(self, &step, None)?;
             }
         }
-        Ok(Gradient {
-            dj_dc: sweep.finish(law, c),
-            seconds: start.elapsed().as_secs_f64(),
-            factorizations: self.contact.factorizations() - f0,
-        })
+        Ok(())
+    }
+}
+
+/// The error of a load-controlled step under Coulomb friction (step `i` ending at `t`).
+pub(crate) fn coulomb_refused(i: usize, t: f64) -> AdjointError {
+    AdjointError::Step {
+        step: i,
+        t,
+        reason: "load control: the exact gradient with Coulomb friction is not available \
+                 (its sticking ties read the punch depth); fit this record with \
+                 `contact: Normal` or in depth control"
+            .into(),
+    }
+}
+
+/// A sweep step's cotangent under load control: the step's depth column (scratch) and
+/// `rho_of(a, s)`, the cotangent from `a = g . du_U` (the right-hand side `g` before the
+/// step's own cotangent) and the Schur complement `s = dF_i/dU_i`.
+pub(crate) struct BorderedRho<'a> {
+    col: &'a mut Column,
+    rho_of: &'a mut dyn FnMut(f64, f64) -> f64,
+}
+
+impl Adjoint<'_> {
+    /// The cotangent of a prepared step `i` whose sweep right-hand side is in `self.eq`
+    /// ([`BorderedRho`]).
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient_load`].
+    pub(crate) fn bordered_rho(
+        &mut self,
+        i: usize,
+        rec: &StepRecord,
+        b: BorderedRho<'_>,
+    ) -> Result<f64, AdjointError> {
+        let s = self
+            .contact
+            .depth_column(rec, &mut b.col.col, &mut b.col.kv);
+        let a: f64 = self.eq.iter().zip(&b.col.col).map(|(g, d)| g * d).sum();
+        let rho = (b.rho_of)(a, s);
+        if !rho.is_finite() {
+            return Err(AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: format!(
+                    "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the \
+                     recorded step is not positive: its depth is not determined by its force"
+                ),
+            });
+        }
+        Ok(rho)
     }
 }
 
 /// The depth column of a step and `K v` (scratch of [`Adjoint::bordered_step`]).
-struct Column {
-    col: Vec<f64>,
+pub(crate) struct Column {
+    pub(crate) col: Vec<f64>,
     kv: Vec<f64>,
 }
 
@@ -135,9 +246,8 @@ fn segment_index(history: &LoadHistory, t: f64) -> usize {
 }
 
 impl Adjoint<'_> {
-    /// One sweep step whose cotangent `rho = dJ/dF_i` depends on the step's depth
-    /// column: `rho_of(a, s)` with `a = g . du_U` (the right-hand side `g` before the
-    /// step's own cotangent) and the Schur complement `s = dF_i/dU_i`. Returns `rho`.
+    /// One sweep step of a stress-only law whose cotangent `rho = dJ/dF_i` depends on
+    /// the step's depth column ([`BorderedRho`]). Returns `rho`.
     ///
     /// # Errors
     /// As [`Adjoint::gradient_load`].
@@ -147,35 +257,16 @@ impl Adjoint<'_> {
         c: &[f64],
         sweep: &mut Sweep,
         step: &Recorded<'_>,
-        col: &mut Column,
-        rho_of: impl FnOnce(f64, f64) -> f64,
+        border: BorderedRho<'_>,
     ) -> Result<f64, AdjointError> {
         let Recorded { i, rec, f0, f1, .. } = *step;
-        let fail = |reason: String| AdjointError::Step {
-            step: i,
-            t: rec.t,
-            reason,
-        };
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
-            return Err(fail(
-                "load control: the exact gradient with Coulomb friction is not available \
-                 (its sticking ties read the punch depth); fit this record with \
-                 `contact: Normal` or in depth control"
-                    .into(),
-            ));
+            return Err(coulomb_refused(i, rec.t));
         }
         self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
         self.adjoint_source(sweep.s, rec, None);
         self.restrict();
-        let s = self.contact.depth_column(rec, &mut col.col, &mut col.kv);
-        let a: f64 = self.eq.iter().zip(&col.col).map(|(g, d)| g * d).sum();
-        let rho = rho_of(a, s);
-        if !rho.is_finite() {
-            return Err(fail(format!(
-                "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the recorded \
-                 step is not positive: its depth is not determined by its force"
-            )));
-        }
+        let rho = self.bordered_rho(i, rec, border)?;
         sweep.mu_zero = false;
         let mut eq = std::mem::take(&mut self.eq);
         self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
@@ -257,26 +348,34 @@ impl Adjoint<'_> {
     /// Forward sensitivities of a run of
     /// [`indentify_contact::DirectSolver::run_history`] (`traj` recorded with fields):
     /// the forward's bordered system differentiated, one depth column per step shared by
-    /// the parameters.
+    /// the parameters; a material with internal variables through its blocks
+    /// (`material.rs`).
     ///
     /// # Errors
     /// As [`Adjoint::gradient_load`].
     pub fn sensitivities_load(
         &mut self,
-        law: &dyn Law,
+        mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
         history: &LoadHistory,
     ) -> Result<LoadSensitivities, AdjointError> {
         let model = self.model;
         let start = std::time::Instant::now();
+        let Some(law) = mat.as_law() else {
+            let (df, dh) = self.material_sensitivities(mat, c, traj, Some(history))?;
+            return Ok(LoadSensitivities {
+                dh_dc: dh,
+                df_dc: df,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        };
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
         self.contact.begin();
         let s_mat = law.compliance(c);
         let np = c.len();
         let nq = model.disc.n_qp();
-        let n_eq = model.dofs.n_eq;
         let mut y = vec![vec![Vec4::ZERO; nq]; np];
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];
@@ -284,14 +383,7 @@ impl Adjoint<'_> {
         let mut work: Vec<crate::ParamWork> = (0..np)
             .map(|_| crate::ParamWork::new(model, &self.contact))
             .collect();
-        let mut col = Column {
-            col: vec![0.0; n_eq],
-            kv: vec![0.0; n_eq],
-        };
-        // the state a segment starts from: its force's and depth's variations
-        let mut start_f = vec![0.0; np];
-        let mut start_u = vec![0.0; np];
-        let mut given = vec![0.0; np];
+        let mut carry = SegmentCarry::new(np, model.dofs.n_eq);
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -302,48 +394,7 @@ impl Adjoint<'_> {
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
-            let j = segment_index(history, rec.t);
-            let load = load_controlled(history, rec.t);
-            if i > 0 && segment_index(history, traj.steps[i - 1].t) != j {
-                start_f.clone_from(&df[i - 1]);
-                start_u.clone_from(&dh[i - 1]);
-            }
-            let t_s = if j == 0 { 0.0 } else { history.ends[j - 1].0 };
-            let theta = ((rec.t - t_s) / (history.ends[j].0 - t_s)).min(1.0);
-            let mixed = j > 0 && matches!(history.ends[j - 1].1, Target::Force(_)) != load;
-            for (g, (f, u)) in given.iter_mut().zip(start_f.iter().zip(&start_u)) {
-                *g = match (mixed, load) {
-                    (false, _) => 0.0,
-                    (true, true) => (1.0 - theta) * f,
-                    (true, false) => (1.0 - theta) * u,
-                };
-            }
-            let bordered = load || mixed;
-            let s = if bordered {
-                if self.contact.force_cotangent() == ForceCotangent::Shifted {
-                    return Err(AdjointError::Step {
-                        step: i,
-                        t: rec.t,
-                        reason: "load control: the exact sensitivities with Coulomb \
-                                 friction are not available (its sticking ties read the \
-                                 punch depth)"
-                            .into(),
-                    });
-                }
-                self.contact.depth_column(rec, &mut col.col, &mut col.kv)
-            } else {
-                0.0
-            };
-            if load && !(s.is_finite() && s > 0.0) {
-                return Err(AdjointError::Step {
-                    step: i,
-                    t: rec.t,
-                    reason: format!(
-                        "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the \
-                         recorded step is not positive"
-                    ),
-                });
-            }
+            let border = carry.step(&mut self.contact, history, traj, i, (&df, &dh))?;
             let step = crate::ParamStep {
                 model,
                 tangents: &self.tangents,
@@ -353,11 +404,11 @@ impl Adjoint<'_> {
                 r_field: &r_field,
                 np,
                 rec,
-                border: bordered.then_some(Border {
-                    col: &col.col,
-                    s,
+                border: border.map(|load| Border {
+                    col: &carry.col.col,
+                    s: carry.s,
                     load,
-                    given: &given,
+                    given: &carry.given,
                 }),
             };
             for (k, ((yk, dfk), w)) in y
@@ -376,5 +427,96 @@ impl Adjoint<'_> {
             df_dc: df,
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// What the forward sensitivities of a load-controlled run carry from step to step: the
+/// variations of the force and depth a segment starts from, each step's prescribed
+/// variations (`given`, [`Border::given`]), its depth column and Schur complement.
+pub(crate) struct SegmentCarry {
+    start_f: Vec<f64>,
+    start_u: Vec<f64>,
+    pub(crate) given: Vec<f64>,
+    pub(crate) col: Column,
+    pub(crate) s: f64,
+}
+
+impl SegmentCarry {
+    pub(crate) fn new(np: usize, n_eq: usize) -> SegmentCarry {
+        SegmentCarry {
+            start_f: vec![0.0; np],
+            start_u: vec![0.0; np],
+            given: vec![0.0; np],
+            col: Column {
+                col: vec![0.0; n_eq],
+                kv: vec![0.0; n_eq],
+            },
+            s: 0.0,
+        }
+    }
+
+    /// Step `i` of `traj` (its system prepared in `contact`), with the variations
+    /// `(df, dh)` of the steps before it: `Some(load)` when the step is bordered (under
+    /// load control, or under depth control starting from a load-controlled step's
+    /// depth), with `given`, `col` and `s` set; `None` for a plain depth-controlled step.
+    ///
+    /// # Errors
+    /// [`AdjointError::Step`] for Coulomb friction on a bordered step, or a
+    /// load-controlled step whose contact stiffness is not positive.
+    pub(crate) fn step(
+        &mut self,
+        contact: &mut RecordedContact<'_>,
+        history: &LoadHistory,
+        traj: &Trajectory,
+        i: usize,
+        (df, dh): (&[Vec<f64>], &[Vec<f64>]),
+    ) -> Result<Option<bool>, AdjointError> {
+        let rec = &traj.steps[i];
+        let j = segment_index(history, rec.t);
+        let load = load_controlled(history, rec.t);
+        if i > 0 && segment_index(history, traj.steps[i - 1].t) != j {
+            self.start_f.clone_from(&df[i - 1]);
+            self.start_u.clone_from(&dh[i - 1]);
+        }
+        let t_s = if j == 0 { 0.0 } else { history.ends[j - 1].0 };
+        let theta = ((rec.t - t_s) / (history.ends[j].0 - t_s)).min(1.0);
+        let mixed = j > 0 && matches!(history.ends[j - 1].1, Target::Force(_)) != load;
+        for (g, (f, u)) in self
+            .given
+            .iter_mut()
+            .zip(self.start_f.iter().zip(&self.start_u))
+        {
+            *g = match (mixed, load) {
+                (false, _) => 0.0,
+                (true, true) => (1.0 - theta) * f,
+                (true, false) => (1.0 - theta) * u,
+            };
+        }
+        if !(load || mixed) {
+            self.s = 0.0;
+            return Ok(None);
+        }
+        if contact.force_cotangent() == ForceCotangent::Shifted {
+            return Err(AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: "load control: the exact sensitivities with Coulomb friction are \
+                         not available (its sticking ties read the punch depth)"
+                    .into(),
+            });
+        }
+        self.s = contact.depth_column(rec, &mut self.col.col, &mut self.col.kv);
+        if load && !(self.s.is_finite() && self.s > 0.0) {
+            return Err(AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: format!(
+                    "load control: the contact stiffness dF/dU = {:.3e} N/mm of the \
+                     recorded step is not positive",
+                    self.s
+                ),
+            });
+        }
+        Ok(Some(load))
     }
 }

@@ -15,15 +15,20 @@
 //! `V' = V + rho e_A`: under small strain `rho B e_A` joins `z`'s stress rows in the
 //! source, under finite strain the source gains `K (-rho e_A)` as the laws' sweep does).
 
-use indentify_contact::{ForceCotangent, StepFields, StepRecord, StepTangent, Trajectory};
+use indentify_contact::{
+    ForceCotangent, LoadHistory, StepFields, StepRecord, StepTangent, Trajectory,
+};
 use indentify_fe::{Deformation, QP_PER_ELEMENT};
 use indentify_laws::material::{Step, dense_solve_many};
 use indentify_laws::{LogStrain, Mat4, Material, Vec4};
 
 use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
 
+/// Per-step rows of per-parameter variations (`[step][parameter]`).
+type Rows = Vec<Vec<f64>>;
+
 /// The accumulators and per-point work of one sweep (allocated once per sweep).
-struct MatSweep {
+pub(crate) struct MatSweep {
     m: usize,
     np: usize,
     /// `z = D_{i+1}^T mu_{i+1}` per point (`m` each).
@@ -34,7 +39,7 @@ struct MatSweep {
     g: Vec<f64>,
     /// `A_i^-T z` per point (`m` each).
     az: Vec<f64>,
-    grad: Vec<f64>,
+    pub(crate) grad: Vec<f64>,
     /// `mu_{i+1} = 0` everywhere (nothing swept yet).
     zero: bool,
     /// The step's strain increment at every point (small strain `B (u_1 - u_0)`, finite
@@ -63,10 +68,21 @@ struct MatSweep {
     glin: Vec<f64>,
     /// The tangent `-G^T E` of a linear material's step.
     ct: Mat4,
+    /// A linear material's sweep carries `mu_{i+1}` itself (in `z`) and folds the later
+    /// step's blocks into the earlier one's, once per step: `D_{i+1}` (`m x m`) and
+    /// `E_{i+1}` (`m x 4`) of the step swept last (zero before the first);
+    /// `Q = A_i^-T D_{i+1}^T` (`m x m`, so `A_i^-T z = Q mu_{i+1}`) and
+    /// `S = E_{i+1}^T + E_i^T Q` (stored `m x 4`: the source `e + E_i^T A_i^-T z` is
+    /// `S^T mu_{i+1}`); `E_i^T G_i` (4 x 4, a shifted source's part).
+    d_next: Vec<f64>,
+    e_next: Vec<f64>,
+    qm: Vec<f64>,
+    sm: Vec<f64>,
+    eg: Mat4,
 }
 
 impl MatSweep {
-    fn new(mat: &dyn Material, np: usize, nq: usize) -> MatSweep {
+    pub(crate) fn new(mat: &dyn Material, np: usize, nq: usize) -> MatSweep {
         let m = mat.state_len();
         MatSweep {
             m,
@@ -91,6 +107,11 @@ impl MatSweep {
             rhs5: vec![0.0; m * 5],
             glin: vec![0.0; m * 4],
             ct: Mat4::ZERO,
+            d_next: vec![0.0; m * m],
+            e_next: vec![0.0; m * 4],
+            qm: vec![0.0; m * m],
+            sm: vec![0.0; m * 4],
+            eg: Mat4::ZERO,
         }
     }
 
@@ -131,6 +152,23 @@ impl MatSweep {
                 self.ct.0[a][b] = -(0..m)
                     .map(|k| self.glin[k * 4 + a] * self.ej[k * 4 + b])
                     .sum::<f64>();
+                self.eg.0[b][a] = -self.ct.0[a][b];
+            }
+        }
+        // the later step's blocks folded in (see `d_next`)
+        for k in 0..m {
+            let row = &self.ainvt[k * m..(k + 1) * m];
+            for r in 0..m {
+                let dr = &self.d_next[r * m..(r + 1) * m];
+                self.qm[k * m + r] = row.iter().zip(dr).map(|(a, b)| a * b).sum();
+            }
+        }
+        for r in 0..m {
+            for b in 0..4 {
+                self.sm[r * 4 + b] = self.e_next[r * 4 + b]
+                    + (0..m)
+                        .map(|k| self.ej[k * 4 + b] * self.qm[k * m + r])
+                        .sum::<f64>();
             }
         }
         true
@@ -162,7 +200,7 @@ impl Adjoint<'_> {
         let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
         for i in (0..traj.steps.len()).rev() {
             let fields = (&traj.fields[i], &traj.fields[i + 1]);
-            self.material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i])?;
+            self.material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i], None)?;
         }
         Ok(Gradient {
             dj_dc: sw.grad,
@@ -206,7 +244,8 @@ impl Adjoint<'_> {
         self.contact.begin();
         let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
         crate::replayed_steps_rev(solver, mat, c, schedule, opts, traj, |g, rec, s0, s1| {
-            self.material_step(mat, c, &mut sw, g, rec, (s0, s1), dj_df[g])
+            self.material_step(mat, c, &mut sw, g, rec, (s0, s1), dj_df[g], None)
+                .map(|_| ())
         })?;
         Ok(Gradient {
             dj_dc: sw.grad,
@@ -228,6 +267,23 @@ impl Adjoint<'_> {
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
         let start = std::time::Instant::now();
+        let (df_dc, _) = self.material_sensitivities(mat, c, traj, None)?;
+        Ok(Sensitivities {
+            df_dc,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The forward sensitivities of [`Adjoint::sensitivities_material`], under load
+    /// control (`history`) with the bordered step of `load.rs`: `dF_i/dc` and
+    /// `dU_i/dc` per step (the latter zero without a history).
+    pub(crate) fn material_sensitivities(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        history: Option<&LoadHistory>,
+    ) -> Result<(Rows, Rows), AdjointError> {
         let model = self.model;
         let n = traj.steps.len();
         self.check_material(mat, c, traj, n, true)?;
@@ -245,6 +301,8 @@ impl Adjoint<'_> {
         let mut qv = vec![0.0; nq * m];
         let mut h = vec![Vec4::ZERO; nq];
         let mut df = vec![vec![0.0; np]; n];
+        let mut dh = vec![vec![0.0; np]; n];
+        let mut carry = crate::load::SegmentCarry::new(np, model.dofs.n_eq);
         // (one work space per parameter: friction ties each one's solve to its own
         // previous displacement variation)
         let mut works: Vec<crate::ParamWork> = (0..np)
@@ -299,6 +357,10 @@ impl Adjoint<'_> {
                 self.tangents[q] = ct;
             }
             self.prepare_material_step(rec, f1, None).map_err(fail)?;
+            let border = match history {
+                Some(h) => carry.step(&mut self.contact, h, traj, i, (&df, &dh))?,
+                None => None,
+            };
             let finite = self.finite.as_ref();
             let prev = i
                 .checked_sub(1)
@@ -331,6 +393,32 @@ impl Adjoint<'_> {
                 model.dofs.restrict(&w.full, &mut w.eq);
                 self.contact
                     .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+                if let Some(load) = border {
+                    // the depth's variation: from the force's at the depth held
+                    // (`dF^U = -e_A . (K du + B* Pi A^-1 q)`) under load control
+                    let du_u = if load {
+                        crate::expand_into(model, &w.eq, &mut w.full);
+                        crate::strains_into(model, finite, &w.full, &mut w.strain);
+                        for q in 0..nq {
+                            let b = Vec4(w.strain[q]);
+                            w.field_b[q] = self.tangents[q].mul_vec(&b) + h[q];
+                        }
+                        match finite {
+                            None => model.disc.internal_force(&w.field_b, &mut w.full),
+                            Some(fs) => fs.delta_force(model, &h, &mut w.full, &mut w.du),
+                        }
+                        let df_held: f64 = -crate::force_dofs(model, rec)
+                            .map(|d| w.full[d])
+                            .sum::<f64>();
+                        (carry.given[k] - df_held) / carry.s
+                    } else {
+                        carry.given[k]
+                    };
+                    for (e, col) in w.eq.iter_mut().zip(&carry.col.col) {
+                        *e += du_u * col;
+                    }
+                    dh[i][k] = du_u;
+                }
                 crate::expand_into(model, &w.eq, &mut w.full);
                 if !w.du_prev.is_empty() {
                     w.du_prev.copy_from_slice(&w.full);
@@ -358,15 +446,12 @@ impl Adjoint<'_> {
                     .sum::<f64>();
             }
         }
-        Ok(Sensitivities {
-            df_dc: df,
-            seconds: start.elapsed().as_secs_f64(),
-        })
+        Ok((df, dh))
     }
 
     /// The inputs' checks: recorded fields (unless replayed), lengths, parameters, and
     /// a model this sweep takes (small strain, no friction).
-    fn check_material(
+    pub(crate) fn check_material(
         &self,
         mat: &dyn Material,
         c: &[f64],
@@ -392,9 +477,11 @@ impl Adjoint<'_> {
         Ok(())
     }
 
-    /// One step of the reversed-time sweep (steps 1-3 of the module's recursion).
+    /// One step of the reversed-time sweep (steps 1-3 of the module's recursion) with
+    /// `dJ/dF_i = rho`, or under load control (`border`) with the `rho` the step's depth
+    /// column sets (`load.rs`). Returns the `rho` used.
     #[allow(clippy::too_many_arguments)]
-    fn material_step(
+    pub(crate) fn material_step(
         &mut self,
         mat: &dyn Material,
         c: &[f64],
@@ -403,9 +490,15 @@ impl Adjoint<'_> {
         rec: &StepRecord,
         (f0, f1): (&StepFields, &StepFields),
         rho: f64,
-    ) -> Result<(), AdjointError> {
-        if sw.zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending() {
-            return Ok(());
+        border: Option<crate::load::BorderedRho<'_>>,
+    ) -> Result<f64, AdjointError> {
+        if border.is_none()
+            && sw.zero
+            && rho == 0.0
+            && rec.active.is_empty()
+            && !self.contact.adjoint_pending()
+        {
+            return Ok(rho);
         }
         sw.zero = false;
         let model = self.model;
@@ -429,6 +522,9 @@ impl Adjoint<'_> {
         // Coulomb friction: dJ/dF enters as the shift `V' = V + rho e_A` (lib.rs), whose
         // part `rho B e_A` joins `z`'s stress rows in the source
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
+        if shifted && border.is_some() {
+            return Err(crate::load::coulomb_refused(i, rec.t));
+        }
         if shifted && !finite {
             self.full.fill(0.0);
             for d in crate::force_dofs(model, rec) {
@@ -449,21 +545,21 @@ impl Adjoint<'_> {
         // per point: G = A^-T Pi^T, C = -G^T E, A^-T z, and the source e + E^T A^-T z
         for q in 0..nq {
             if linear {
-                let z = &sw.z[q * m..(q + 1) * m];
-                for k in 0..m {
-                    let row = &sw.ainvt[k * m..(k + 1) * m];
-                    sw.x[k] = row.iter().zip(z).map(|(a, b)| a * b).sum();
+                // `z` holds `mu_{i+1}`: `A^-T z = Q mu_{i+1}`, the source `S^T mu_{i+1}`
+                let mu1 = &sw.z[q * m..(q + 1) * m];
+                let az = &mut sw.az[q * m..(q + 1) * m];
+                for (k, a) in az.iter_mut().enumerate() {
+                    let row = &sw.qm[k * m..(k + 1) * m];
+                    *a = row.iter().zip(mu1).map(|(a, b)| a * b).sum();
                 }
-                sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
-                if shifted && !finite {
-                    let bea = self.strain[q];
-                    for k in 0..m {
-                        sw.x[k] += rho * (0..4).map(|j| sw.glin[k * 4 + j] * bea[j]).sum::<f64>();
+                let mut src = Vec4::ZERO;
+                for (r, mu) in mu1.iter().enumerate() {
+                    for b in 0..4 {
+                        src.0[b] += sw.sm[r * 4 + b] * mu;
                     }
                 }
-                let mut src = sw.e[q];
-                for b in 0..4 {
-                    src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                if shifted && !finite {
+                    src += sw.eg.mul_vec(&Vec4(self.strain[q])) * rho;
                 }
                 self.field_b[q] = src;
                 continue;
@@ -544,6 +640,10 @@ impl Adjoint<'_> {
             fs.add_k_times(model, &self.e_a, &mut self.full);
         }
         self.restrict();
+        let rho = match border {
+            Some(b) => self.bordered_rho(i, rec, b)?,
+            None => rho,
+        };
         let mut eq = std::mem::take(&mut self.eq);
         self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
         self.eq = eq;
@@ -579,10 +679,13 @@ impl Adjoint<'_> {
             for (k, g) in sw.grad.iter_mut().enumerate() {
                 *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
             }
-            if !linear {
-                mat.jac_previous(c, &step, &mut sw.d);
-                mat.jac_strain(c, &step, &mut sw.ej);
+            if linear {
+                // the carry is `mu_i` itself (folded into the step before)
+                sw.z[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+                continue;
             }
+            mat.jac_previous(c, &step, &mut sw.d);
+            mat.jac_strain(c, &step, &mut sw.ej);
             for k in 0..m {
                 sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
             }
@@ -590,7 +693,11 @@ impl Adjoint<'_> {
                 sw.e[q].0[b] = (0..m).map(|r| sw.ej[r * 4 + b] * sw.x[r]).sum();
             }
         }
-        Ok(())
+        if linear {
+            sw.d_next.copy_from_slice(&sw.d);
+            sw.e_next.copy_from_slice(&sw.ej);
+        }
+        Ok(rho)
     }
 
     /// The step's strain increment at every Gauss point into `out`: `B (u_1 - u_0)`

@@ -85,7 +85,9 @@ fn check(model: &Model, law: &dyn Law, c: &[f64], truth: &[f64], h: &LoadHistory
     assert_eq!(j, data.len());
     let mut adj = Adjoint::new(model).unwrap();
     let zero = vec![0.0; traj.steps.len()];
-    let g = adj.gradient_load(law, c, &traj, h, &dj_dh, &zero).unwrap();
+    let g = adj
+        .gradient_load(&LawMaterial(law), c, &traj, h, &dj_dh, &zero)
+        .unwrap();
     let mut cost = |p: &[f64]| -> Result<f64, String> {
         let d = depths(&mut solver, law, p, h)?;
         Ok(0.5
@@ -199,7 +201,14 @@ fn coulomb_friction_is_refused_with_the_reason() {
     let n = traj.steps.len();
     let err = Adjoint::new(&m)
         .unwrap()
-        .gradient_load(&Maxwell, &c, &traj, &h, &vec![1.0; n], &vec![0.0; n])
+        .gradient_load(
+            &LawMaterial(&Maxwell),
+            &c,
+            &traj,
+            &h,
+            &vec![1.0; n],
+            &vec![0.0; n],
+        )
         .unwrap_err()
         .to_string();
     assert!(err.contains("Coulomb friction"), "{err}");
@@ -227,12 +236,14 @@ fn sensitivities_agree_with_the_adjoint_and_differences() {
             .run_history(&LawMaterial(law), &c, &h, &opts(true))
             .unwrap();
         let mut adj = Adjoint::new(&m).unwrap();
-        let sens = adj.sensitivities_load(law, &c, &traj, &h).unwrap();
+        let sens = adj
+            .sensitivities_load(&LawMaterial(law), &c, &traj, &h)
+            .unwrap();
         let n = traj.steps.len();
         // an arbitrary depth cost: dJ/dU_i = i
         let rho: Vec<f64> = (0..n).map(|i| i as f64).collect();
         let g = adj
-            .gradient_load(law, &c, &traj, &h, &rho, &vec![0.0; n])
+            .gradient_load(&LawMaterial(law), &c, &traj, &h, &rho, &vec![0.0; n])
             .unwrap();
         for k in 0..c.len() {
             let jt: f64 = sens.dh_dc.iter().zip(&rho).map(|(r, w)| r[k] * w).sum();

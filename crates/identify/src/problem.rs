@@ -293,17 +293,6 @@ impl Problem {
     /// [`IdentifyError::InvalidSpec`] (field `tests`) for an empty list.
     pub fn joint(law: impl IntoMaterial, tests: Vec<Test>) -> Result<Problem, IdentifyError> {
         let law = law.into_material();
-        if law.as_law().is_none() && tests.iter().any(|t| t.load.is_some()) {
-            return Err(IdentifyError::InvalidSpec {
-                name: "law".into(),
-                why: format!(
-                    "law `{}` has internal variables, and the load-controlled adjoint takes \
-                     stress-only laws for now (elastic, maxwell, norton-hoff): drive this \
-                     record by depth",
-                    law.name()
-                ),
-            });
-        }
         if tests.is_empty() {
             return Err(IdentifyError::InvalidSpec {
                 name: "tests".into(),
@@ -586,8 +575,7 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if let Some(h) = &t.load {
         let zero = vec![0.0; rho.len()];
-        w.adjoint
-            .gradient_load(load_law(p)?, c, traj, h, &rho, &zero)
+        w.adjoint.gradient_load(&*p.law, c, traj, h, &rho, &zero)
     } else if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
             &*p.law,
@@ -612,12 +600,6 @@ fn gradient_task(
 
 /// The stress-only law of a problem with load-controlled tests (checked by
 /// [`Problem::joint`]).
-fn load_law(p: &Problem) -> Result<&dyn Law, IdentifyError> {
-    p.law
-        .as_law()
-        .ok_or_else(|| IdentifyError::Optimizer("load control takes stress-only laws".into()))
-}
-
 /// Test `k`'s Jacobian rows (`dF/dc` at its schedule times) at `c` by forward
 /// sensitivities from its cached trajectory.
 fn jacobian_task(
@@ -636,7 +618,7 @@ fn jacobian_task(
     if let Some(h) = &t.load {
         let sens = w
             .adjoint
-            .sensitivities_load(load_law(p)?, c, traj, h)
+            .sensitivities_load(&*p.law, c, traj, h)
             .map_err(|source| IdentifyError::Adjoint {
                 params: c.to_vec(),
                 source,

@@ -3,9 +3,7 @@
 //! bulk elastic; the internal variables are the viscous strains of the branches.
 
 use crate::LawError;
-use crate::elastic::{
-    E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative, isotropic_operator,
-};
+use crate::elastic::{E_INFO, NU_INFO, isotropic_compliance, isotropic_operator};
 use crate::law::{LocalFailure, ParamInfo};
 use crate::mandel::{Mat4, Vec4};
 use crate::material::{InternalInfo, Material, MaterialUpdate, Regime, Step, stress_of};
@@ -250,8 +248,17 @@ impl Material for Prony {
         out.fill(0.0);
         let (s0, s1) = (stress_of(step.y0), stress_of(step.y1));
         let dev1 = s1.deviator();
+        // dS/dc_k (s1 - s0) in closed form (no 4 x 4 matrix per point):
+        // S v = ((1 + nu) v - nu tr(v) 1) / E, dS/dE v = -S v / E, dS/dnu v = (v - tr(v) 1) / E
+        let (e, nu) = (c[0], c[1]);
+        let ds = s1 - s0;
+        let tr = ds.trace();
         for k in 0..2 {
-            let col = isotropic_compliance_derivative(c, k).mul_vec(&(s1 - s0));
+            let col = if k == 0 {
+                (ds * (1.0 + nu) - Vec4::ONE * (nu * tr)) * (-1.0 / (e * e))
+            } else {
+                (ds - Vec4::ONE * tr) * (1.0 / e)
+            };
             // d e_1 / dE = -dev / (2G0 E), d e_1 / dnu = dev / E
             let de = if k == 0 {
                 dev1 * (-(1.0 + c[1]) / (c[0] * c[0]))

@@ -563,11 +563,11 @@ fn at_point(
             Some(h) => {
                 let zero = vec![0.0; rho.len()];
                 let grad = adjoint
-                    .gradient_load(stress_only(&**law)?, point, &traj, h, &rho, &zero)
+                    .gradient_load(&**law, point, &traj, h, &rho, &zero)
                     .context("the adjoint sweep failed")
                     .kind(ErrorKind::Solver)?;
                 let s = adjoint
-                    .sensitivities_load(stress_only(&**law)?, point, &traj, h)
+                    .sensitivities_load(&**law, point, &traj, h)
                     .context("the forward sensitivities failed")
                     .kind(ErrorKind::Solver)?;
                 (grad, (s.dh_dc, s.seconds))
@@ -724,18 +724,6 @@ fn run_test(
 
 /// The stress-only law a load-controlled adjoint takes (laws with internal variables are
 /// driven by depth for now).
-fn stress_only(law: &dyn Material) -> crate::Result<&dyn indentify_laws::Law> {
-    law.as_law()
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "law `{}` has internal variables: the load-controlled adjoint takes \
-                 stress-only laws for now (elastic, maxwell, norton-hoff); drive by depth",
-                law.name()
-            )
-        })
-        .kind(ErrorKind::Config)
-}
-
 /// The depths at the schedule times (index 0: the initial state, 0).
 fn depths(traj: &indentify_contact::Trajectory) -> Vec<f64> {
     std::iter::once(0.0)

@@ -138,22 +138,11 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
             ));
         };
         let curve = curve_of(&prepared, opts, &name)?;
-        let Some(stress_law) = law.as_law() else {
-            return Err(Error::msg(
-                ErrorKind::Config,
-                format!(
-                    "law `{}` has internal variables: the load-controlled adjoint of `{name}` \
-                     takes stress-only laws for now (elastic, maxwell, norton-hoff); drive by \
-                     depth",
-                    law.name()
-                ),
-            ));
-        };
         return crate::gradient_load::run(
             opts,
             &cfg,
             &name,
-            (stress_law, params.clone()),
+            (&**law, params.clone()),
             (prepared, history),
             curve,
         );

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{DirectSolver, LoadHistory};
-use indentify_laws::Law;
+use indentify_laws::Material;
 
 use crate::config::{Config, Prepared};
 use crate::data::Curve;
@@ -54,7 +54,7 @@ pub(crate) fn run(
     opts: &GradientOptions,
     cfg: &Config,
     name: &str,
-    (law, params): (&dyn Law, Vec<f64>),
+    (law, params): (&dyn Material, Vec<f64>),
     (prepared, history): (Prepared, LoadHistory),
     curve: Curve,
 ) -> Result<GradientOutcome> {
@@ -88,12 +88,7 @@ pub(crate) fn run(
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let start = Instant::now();
     let traj = solver
-        .run_history(
-            &indentify_laws::LawMaterial(law),
-            &params,
-            &history,
-            &solver_opts,
-        )
+        .run_history(law, &params, &history, &solver_opts)
         .map_err(|e| {
             Error::new(
                 ErrorKind::Solver,
@@ -121,7 +116,7 @@ pub(crate) fn run(
                 anyhow::anyhow!(e).context(format!("the adjoint sweep of `{name}` failed")),
             )
         })?;
-    let names = param_names(&indentify_laws::LawMaterial(law));
+    let names = param_names(law);
     if let Some(k) = grad.dj_dc.iter().position(|g| !g.is_finite()) {
         return Err(Error::msg(
             ErrorKind::Solver,
