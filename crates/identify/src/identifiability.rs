@@ -179,6 +179,14 @@ pub struct Identifiability {
     /// values travel while the undetermined one ranges over its own interval, and the
     /// undetermined one's interval is that range (possibly infinite).
     pub intervals: Vec<(f64, f64)>,
+    /// For each free parameter, the variance `s_k^2` (N^2) that puts its profile-likelihood
+    /// threshold on the same scale as its standard deviation: `sigma^2` under
+    /// [`NoiseModel::Residual`]; under a stated or estimated noise model the ratio of its
+    /// variance under that model to its unit-variance Gauss-Newton one,
+    /// `Cov_y,kk / (S^T S)^-1_kk` (for a linear model the profile interval
+    /// `J_k - J* <= chi2_1(0.95) s_k^2 / 2` is then exactly `c_k ± 1.96 std_k`). An
+    /// undetermined parameter gets the model's mean weighted variance `mean_i w_i Var(F_i)`.
+    pub profile_variance: Vec<f64>,
 }
 
 /// Relative column norm of `S`, as a fraction of the largest, under which a parameter
@@ -536,10 +544,26 @@ impl Identifiability {
         // the correlations of the classical formula do not depend on sigma^2: computed
         // with 1 so that exact data (J = 0) still show them
         let cov = analysis.covariance(&sub, 1.0, row_var.as_deref().filter(|_| !kept.is_empty()));
+        // the profile thresholds' variances: the model's mean weighted variance for the
+        // undetermined parameters, the per-parameter ratio below for the kept ones
+        let mean_var = match row_var.as_deref() {
+            Some(d) if !d.is_empty() => d.iter().sum::<f64>() / d.len() as f64,
+            Some(_) => f64::NAN,
+            None => sigma2,
+        };
+        let mut profile_variance = vec![mean_var; p];
         for (i, &a) in kept.iter().enumerate() {
             let faa = cov[i][i];
             let scale = if row_var.is_some() { 1.0 } else { sigma2 };
             std_dev[a] = (scale * faa).max(0.0).sqrt() * columns[a].dc_dy.abs();
+            if row_var.is_some() {
+                let unit = analysis.inv_fisher(i, i);
+                profile_variance[a] = if unit > 0.0 && unit.is_finite() {
+                    faa.max(0.0) / unit
+                } else {
+                    mean_var
+                };
+            }
             for (j, &b) in kept.iter().enumerate() {
                 let fbb = cov[j][j];
                 correlation[a][b] = if i == j {
@@ -576,6 +600,7 @@ impl Identifiability {
             reasons,
             noise,
             noise_level,
+            profile_variance,
         }
     }
 
@@ -1232,6 +1257,100 @@ mod tests {
         assert!(NoiseModel::Absolute(0.0).validate().is_err());
         assert!(NoiseModel::Relative(f64::NAN).validate().is_err());
         assert!(NoiseModel::Relative(0.01).validate().is_ok());
+    }
+
+    /// Under a stated noise model the profile threshold's variance shall give, for a linear
+    /// model, a profile interval equal to the model's `± 1.96 std` (the profile computed
+    /// here by bisection on `min_b J(a, b)`, `b` in closed form); with weights
+    /// `1 / Var(F_i)` of a stated absolute noise it shall be 1 (the exact likelihood-ratio
+    /// threshold), and under `Residual` it shall be `sigma^2`.
+    #[test]
+    fn profile_variance_puts_the_profile_interval_on_the_stated_scale() {
+        let n = 20;
+        let x: Vec<f64> = (1..=n).map(|i| i as f64).collect();
+        let f: Vec<f64> = x.iter().map(|xi| 2.0 * xi + 3.0).collect();
+        // data off the line by a fixed pattern (J* > 0), relative noise stated at 5%
+        let d: Vec<f64> = f
+            .iter()
+            .enumerate()
+            .map(|(i, fi)| fi * (1.0 + 0.01 * ((i * 7 % 5) as f64 - 2.0)))
+            .collect();
+        let jac: Vec<Vec<f64>> = x.iter().map(|&xi| vec![xi, 1.0]).collect();
+        let w = vec![1.0; n];
+        let cols = linear_columns();
+        let cost_at = |a: f64, b: f64| {
+            0.5 * x
+                .iter()
+                .zip(&d)
+                .map(|(u, v)| (a * u + b - v).powi(2))
+                .sum::<f64>()
+        };
+        // the least-squares line and the profile of a (b minimized: the mean of d - a x)
+        let nf = n as f64;
+        let (sx, sxx) = (x.iter().sum::<f64>(), x.iter().map(|v| v * v).sum::<f64>());
+        let (sy, sxy) = (
+            d.iter().sum::<f64>(),
+            x.iter().zip(&d).map(|(u, v)| u * v).sum::<f64>(),
+        );
+        let a_opt = (nf * sxy - sx * sy) / (nf * sxx - sx * sx);
+        let b_of = |a: f64| (sy - a * sx) / nf;
+        let j_opt = cost_at(a_opt, b_of(a_opt));
+        let profile = |a: f64| cost_at(a, b_of(a)) - j_opt;
+        for noise in [
+            NoiseModel::Relative(0.05),
+            NoiseModel::Absolute(0.3),
+            NoiseModel::RelativeEstimated,
+        ] {
+            let s = Identifiability::with_noise(
+                &jac,
+                &w,
+                j_opt,
+                &[a_opt, b_of(a_opt)],
+                &cols,
+                noise,
+                Some(Forces {
+                    fitted: &f,
+                    measured: &d,
+                }),
+            );
+            let rise = crate::profile::CHI2_1_95 * s.profile_variance[0] / 2.0;
+            // bisection for the upper end of the profile interval of a
+            let (mut lo, mut hi) = (a_opt, a_opt + 1.0);
+            assert!(profile(hi) > rise);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if profile(mid) > rise {
+                    hi = mid
+                } else {
+                    lo = mid
+                }
+            }
+            let half = lo - a_opt;
+            assert!(
+                (half / (1.959964 * s.std_dev[0]) - 1.0).abs() < 1e-6,
+                "{noise:?}: profile half-width {half}, 1.96 std {}",
+                1.959964 * s.std_dev[0]
+            );
+        }
+        // weights 1 / Var(F_i) of a stated absolute noise: the exact likelihood threshold
+        let w4 = vec![4.0; n];
+        let s = Identifiability::with_noise(
+            &jac,
+            &w4,
+            0.0,
+            &[2.0, 3.0],
+            &cols,
+            NoiseModel::Absolute(0.5),
+            Some(Forces {
+                fitted: &f,
+                measured: &f,
+            }),
+        );
+        for v in &s.profile_variance {
+            assert!((v - 1.0).abs() < 1e-12, "{:?}", s.profile_variance);
+        }
+        let r = Identifiability::from_columns(&jac, &w, j_opt, &[a_opt, b_of(a_opt)], &cols);
+        assert_eq!(r.profile_variance, vec![r.sigma2; 2]);
     }
 
     #[test]

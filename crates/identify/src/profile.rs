@@ -8,7 +8,12 @@
 //! `c_k` is `J_k(v) = min { J(c) : c_k = v }`, and the likelihood-ratio statistic
 //! `2 (J_k(v) - J*) / s^2` is compared with `chi2_1(0.95) = 3.841`: the 95% interval is the
 //! set where `J_k(v) - J* <= chi2_1(0.95) s^2 / 2 = chi2_1(0.95) J* / (n - p)`
-//! ([`threshold`]). For a linear model this interval is the Gauss-Newton `+-1.96 sigma`; for
+//! ([`threshold`]). Under a stated or estimated noise model (multiplicative, additive) the
+//! standard deviations are the sandwich ones of that model, and the front end uses for each
+//! parameter `s_k^2 = Cov_kk / (S^T S)^-1_kk` instead
+//! ([`crate::identifiability::Identifiability::profile_variance`]): the interval and the
+//! deviation then follow the same noise model. For a linear model this interval is the
+//! Gauss-Newton `+-1.96 sigma`; for
 //! the indentation models it may be asymmetric, or open on one side (the profile never
 //! rises enough before the parameter's bound), which the Gauss-Newton deviations cannot
 //! show.

@@ -357,7 +357,7 @@ pub fn profiles(
             "profiles need the identifiability summary (s^2): set identify.identifiability: true",
         )
     })?;
-    if !id.sigma2.is_finite() {
+    if !id.profile_variance.iter().all(|v| v.is_finite()) {
         return Err(Error::msg(
             ErrorKind::Config,
             format!(
@@ -369,9 +369,17 @@ pub fn profiles(
     }
     let param = Parameterization::new(&*problem.law, &config.params)
         .map_err(|e| Error::new(ErrorKind::Config, anyhow::anyhow!(e)))?;
-    // s^2 = 2 J* / (n - p), the threshold chi2_1(0.95) s^2 / 2
-    let threshold = CHI2_1_95 * id.sigma2 / 2.0;
-    let stop_rise = settings.stop_factor * threshold;
+    // the threshold chi2_1(0.95) s_k^2 / 2, s_k^2 on the scale of the noise model the
+    // deviations use (s^2 = 2 J* / (n - p) under `Residual`)
+    let thresholds: Vec<f64> = param
+        .free
+        .iter()
+        .map(|f| {
+            let k = id.names.iter().position(|n| *n == f.name);
+            let s2 = k.map_or(id.sigma2, |k| id.profile_variance[k]);
+            CHI2_1_95 * s2 / 2.0
+        })
+        .collect();
     let steps: Vec<f64> = param
         .free
         .iter()
@@ -400,14 +408,14 @@ pub fn profiles(
                 k,
                 step,
                 settings.points_per_side,
-                stop_rise,
+                settings.stop_factor * thresholds[k],
             )
             .map_err(|e| Error::new(ErrorKind::Solver, anyhow::anyhow!(e)))
         })
         .collect();
     let mut sides = sides.into_iter();
     let mut out = Vec::new();
-    for f in &param.free {
+    for (f, &threshold) in param.free.iter().zip(&thresholds) {
         let (Some(below), Some(above)) = (sides.next(), sides.next()) else {
             break;
         };
@@ -447,6 +455,7 @@ pub fn profiles_table(profiles: &[Profile]) -> String {
             "95% upper",
             "points",
             "re-fits not converged",
+            "rise allowed (N^2)",
         ]
         .map(String::from)
         .to_vec(),
@@ -460,15 +469,16 @@ pub fn profiles_table(profiles: &[Profile]) -> String {
             limit_text(&p.upper, "above"),
             p.points.len().to_string(),
             p.points.iter().filter(|q| !q.converged).count().to_string(),
+            format!("{:.4e}", p.threshold),
         ]);
     }
     let mut s = format!(
-        "profile likelihood: 95% intervals where 2 (J_profile - J*) / s^2 <= {CHI2_1_95:.3}, \
-         s^2 = 2 J* / (n - p){}\n{}",
-        profiles.first().map_or(String::new(), |p| format!(
-            " (J* = {:.4e} N^2, rise allowed {:.4e} N^2)",
-            p.cost, p.threshold
-        )),
+        "profile likelihood: 95% intervals where 2 (J_profile - J*) / s_k^2 <= {CHI2_1_95:.3}, \
+         s_k^2 on the scale of the std. dev.'s noise model (2 J* / (n - p) under the residual \
+         model){}\n{}",
+        profiles
+            .first()
+            .map_or(String::new(), |p| format!(" (J* = {:.4e} N^2)", p.cost)),
         table(&rows, "  ")
     );
     for p in profiles {
@@ -496,8 +506,11 @@ pub fn profiles_markdown(profiles: &[Profile], figures: &[String]) -> String {
     let mut s = format!(
         "## Profile likelihood\n\nEach profile point holds one parameter and re-fits the others \
          (started from the neighbouring point's optimum). The 95% interval is where \
-         2 (J_profile - J*) / s² ≤ χ²₁(0.95) = {CHI2_1_95:.3}, with s² = 2 J* / (n - p) the \
-         residual variance at the fit; ends are interpolated linearly between profile points.\n\n\
+         2 (J_profile - J*) / s_k² ≤ χ²₁(0.95) = {CHI2_1_95:.3}, with s_k² on the scale of the \
+         standard deviations' noise model (the residual variance 2 J* / (n - p) under the \
+         residual model; under a stated model the ratio of the parameter's variance under that \
+         model to its unit-variance Gauss-Newton one), so that the interval of a linear model is \
+         the value ± 1.96 std. dev.; ends are interpolated linearly between profile points.\n\n\
          | parameter | unit | value | 95% lower | 95% upper | points |\n|---|---|---|---|---|---|\n"
     );
     for p in profiles {

@@ -120,6 +120,58 @@ fn profile_intervals_match_gauss_newton_on_a_nearly_linear_problem() {
     assert!(text.contains("95% lower") && text.contains("eta"), "{text}");
 }
 
+/// Under `--noise A` alone the deviations assume the stated multiplicative noise
+/// (Relative(A / sqrt 3)); the profile threshold shall follow that same model, so the
+/// profile intervals of the nearly linear R1 problem match its +-1.96 sigma to a few
+/// percent. Also with a stated level 1.7x the drawn one's (the residual scale s^2 would then
+/// give intervals about 1.7x too narrow): the stated model wins, as for the deviations.
+#[test]
+fn profile_threshold_follows_the_stated_noise_model() {
+    for stated in [None, Some(0.02)] {
+        let mut o = opts();
+        o.noise = Some((0.02, 5));
+        if let Some(level) = stated {
+            o.overrides.noise = Some(indentify_study::config::NoiseSetting::Relative(level));
+        }
+        o.profiles = Some(ProfileSettings {
+            points_per_side: 8,
+            ..ProfileSettings::default()
+        });
+        let out = identify::run(&o, &mut ()).unwrap();
+        assert!(out.converged());
+        let id = out.result.identifiability.as_ref().unwrap();
+        assert!(
+            !matches!(id.noise, indentify_identify::NoiseModel::Residual),
+            "{:?}",
+            id.noise
+        );
+        let profiles = out.profiles.as_ref().unwrap();
+        assert_eq!(profiles.len(), 2);
+        for p in profiles {
+            let sd = out.std_dev(p.name).unwrap();
+            assert!(
+                matches!(p.lower, indentify_identify::profile::Limit::At(_))
+                    && matches!(p.upper, indentify_identify::profile::Limit::At(_)),
+                "{p:#?}"
+            );
+            let (lo, hi) = (p.lower.value(), p.upper.value());
+            // both scalings are logarithmic: compare in ln c, where the model is nearly linear
+            for half in [(p.optimum / lo).ln(), (hi / p.optimum).ln()] {
+                let want = 1.96 * sd / p.optimum;
+                println!(
+                    "{stated:?} {}: half-width {half:.5}, 1.96 rel. std {want:.5}",
+                    p.name
+                );
+                assert!(
+                    (half / want - 1.0).abs() < 0.05,
+                    "{stated:?} {}: half-width {half}, 1.96 sigma {want}",
+                    p.name
+                );
+            }
+        }
+    }
+}
+
 fn map_opts(pair: &[&str], grid: usize) -> MapOptions {
     MapOptions {
         identify: opts(),

@@ -106,7 +106,8 @@ pub struct Args {
     /// Profile-likelihood 95% intervals of every free parameter after the fit: each
     /// parameter held at values stepping away from the optimum (half a Gauss-Newton std.
     /// dev. per step, at most 8 per side), the others re-fitted from the neighbouring point;
-    /// the interval is where 2 (J - J*) / s^2 <= 3.841 with s^2 = 2 J* / (n - p). Chains of
+    /// the interval is where 2 (J - J*) / s_k^2 <= 3.841 with s_k^2 on the scale of the
+    /// std. dev.'s noise model (2 J* / (n - p) under `noise: Residual`). Chains of
     /// different parameters and sides run in parallel. Console, report.md, result.json
     /// `profiles`, figures profile_{name}.svg/png.
     #[arg(long)]
