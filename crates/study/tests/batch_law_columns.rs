@@ -44,7 +44,7 @@ fn law_columns_of_the_new_laws_are_checked_before_anything_runs() {
     let check = |csv: &str| {
         let m = write(d, "m.csv", csv);
         let manifest = batch::read_manifest(&m, None).unwrap();
-        batch::check_law_columns(&manifest, None).map_err(|e| format!("{e:#}"))
+        batch::check_law_columns(&manifest, None).map_err(|e| e.messages().join(": "))
     };
     // every parameter of the new laws by its registry name
     check(
