@@ -20,13 +20,26 @@ fn laws_lists_the_registry() {
     assert_ok(&o);
     let text = stdout(&o);
     for v in indentify_study::laws_list::laws().unwrap() {
-        assert!(text.contains(&format!("{} ({})", v.variant, v.name)), "{text}");
+        assert!(
+            text.contains(&format!("{} ({})", v.variant, v.name)),
+            "{text}"
+        );
         for p in &v.parameters {
-            assert!(text.contains(&format!("    {}", p.name)), "{}: {text}", p.name);
+            assert!(
+                text.contains(&format!("    {}", p.name)),
+                "{}: {text}",
+                p.name
+            );
         }
     }
-    assert!(text.contains("hardening: one of Linear(H), Power(n), Voce(Q, b)"), "{text}");
-    assert!(text.contains("rate: omitted (rate-independent), or Norton(K, m)"), "{text}");
+    assert!(
+        text.contains("hardening: one of Linear(H), Power(n), Voce(Q, b)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("rate: omitted (rate-independent), or Norton(K, m)"),
+        "{text}"
+    );
 }
 
 /// The number after `key` (`sY: 412.5,`) in the template's `law` section.
@@ -65,13 +78,9 @@ fn init_plastic_data_reproduces_h_over_3_through_the_flow_rule() {
         radius: 0.01,
     })
     .unwrap();
-    let op = indentify_study::first_guess::analyse_file(
-        std::path::Path::new(&file),
-        Some(3),
-        &tip,
-        0.3,
-    )
-    .unwrap();
+    let op =
+        indentify_study::first_guess::analyse_file(std::path::Path::new(&file), Some(3), &tip, 0.3)
+            .unwrap();
     let (e, s_y, n, k, m) = (
         law_value(&text, "E"),
         law_value(&text, "sY"),
@@ -84,7 +93,11 @@ fn init_plastic_data_reproduces_h_over_3_through_the_flow_rule() {
     // sigma_y(p) = sY (1 + E p / sY)^n (Dao), overstress K eps'^(1/m)
     let flow = s_y * (1.0 + e * 0.08 / s_y).powf(n) + k * rate.powf(1.0 / m);
     // the template prints 6 significant digits or more
-    assert!((flow / (op.h / 3.0) - 1.0).abs() < 1e-4, "{flow} vs H/3 {}", op.h / 3.0);
+    assert!(
+        (flow / (op.h / 3.0) - 1.0).abs() < 1e-4,
+        "{flow} vs H/3 {}",
+        op.h / 3.0
+    );
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.ron");
     let mut with_out = args.to_vec();

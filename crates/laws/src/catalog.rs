@@ -11,7 +11,7 @@
 
 use crate::LawError;
 use crate::law::ParamInfo;
-use crate::registry::{FieldKind, FieldSchema, LawEntry, REGISTRY, SpecValue};
+use crate::registry::{FieldKind, FieldSchema, LawEntry, REGISTRY, SpecValue, VariantSchema};
 
 /// One kind choice of a law (`hardening` with its variants `Linear`, `Power`, ...).
 #[derive(Clone, Debug, PartialEq)]
@@ -81,15 +81,14 @@ const CANDIDATES: [f64; 8] = [1000.0, 0.3, 0.2, 2.0, 0.05, 10.0, 100.0, 1e4];
 const LIST_ELEMENTS: usize = 2;
 
 /// One choice per kind field: `None` omits an optional field.
-type Pick<'a> = Vec<Option<&'a crate::registry::VariantSchema>>;
+type Pick<'a> = Vec<Option<&'a VariantSchema>>;
 
 /// Every combination of the kind fields' variants (an optional field also omitted).
 fn picks(fields: &'static [FieldSchema]) -> Vec<Pick<'static>> {
     let mut out: Vec<Pick<'static>> = vec![Vec::new()];
     for f in fields {
         if let FieldKind::OneOf(vs) = f.kind {
-            let mut options: Vec<Option<&crate::registry::VariantSchema>> =
-                vs.iter().map(Some).collect();
+            let mut options: Vec<Option<&VariantSchema>> = vs.iter().map(Some).collect();
             if f.optional {
                 options.insert(0, None);
             }
@@ -139,7 +138,7 @@ impl Values {
 
 fn spec_fields(
     fields: &'static [FieldSchema],
-    pick: &Pick<'static>,
+    pick: &[Option<&'static VariantSchema>],
     values: &mut Values,
 ) -> Vec<(String, SpecValue)> {
     let mut k = 0;
@@ -152,14 +151,14 @@ fn spec_fields(
                 k += 1;
                 chosen.map(|v| SpecValue::Variant {
                     name: v.name.into(),
-                    fields: spec_fields(v.fields, &Vec::new(), values),
+                    fields: spec_fields(v.fields, &[], values),
                 })
             }
             FieldKind::ListOf(inner) => Some(SpecValue::List(
                 (0..LIST_ELEMENTS)
                     .map(|_| SpecValue::Variant {
                         name: String::new(),
-                        fields: spec_fields(inner, &Vec::new(), values),
+                        fields: spec_fields(inner, &[], values),
                     })
                     .collect(),
             )),
@@ -180,9 +179,15 @@ fn spec_fields(
 }
 
 /// A specification of the form `pick` of `entry` that builds, and its parameters.
-fn form(entry: &'static LawEntry, pick: &Pick<'static>) -> Result<Form, LawError> {
+fn form(
+    entry: &'static LawEntry,
+    pick: &[Option<&'static VariantSchema>],
+) -> Result<Form, LawError> {
     let mut values = Values(Vec::new());
-    let mut kinds = entry.fields.iter().filter(|f| matches!(f.kind, FieldKind::OneOf(_)));
+    let mut kinds = entry
+        .fields
+        .iter()
+        .filter(|f| matches!(f.kind, FieldKind::OneOf(_)));
     let label = pick
         .iter()
         .map(|p| {
@@ -284,7 +289,10 @@ mod tests {
         );
         assert_eq!(
             plastic.forms_with("Q"),
-            ["hardening: Voce, rate: omitted", "hardening: Voce, rate: Norton"]
+            [
+                "hardening: Voce, rate: omitted",
+                "hardening: Voce, rate: Norton"
+            ]
         );
         let prony = c.iter().find(|l| l.entry.variant == "Prony").unwrap();
         let names: Vec<&str> = prony.params().iter().map(|p| p.name).collect();

@@ -350,9 +350,10 @@ mod tests {
     /// The guessed `g1`, `tau1` reach the law's first term (a list element).
     #[test]
     fn list_parameters_are_set() {
-        let mut law: LawSpec =
-            ron::from_str("Prony(E: 3000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0), (g: 0.1, tau: 9.0)])")
-                .unwrap();
+        let mut law: LawSpec = ron::from_str(
+            "Prony(E: 3000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0), (g: 0.1, tau: 9.0)])",
+        )
+        .unwrap();
         assert!(set_list_number(&mut law, "g1", 0.2));
         assert!(set_list_number(&mut law, "tau2", 4.0));
         assert!(!set_list_number(&mut law, "g3", 0.1));

@@ -254,7 +254,12 @@ pub fn text(laws: &[LawInfo]) -> String {
         s.push_str("  parameters (--set law.NAME=VALUE; identify.params.NAME):\n");
         let w = l.parameters.iter().map(|p| p.name.len()).max().unwrap_or(1);
         let wu = l.parameters.iter().map(|p| p.unit.len()).max().unwrap_or(1);
-        let wr = l.parameters.iter().map(|p| p.range.len()).max().unwrap_or(1);
+        let wr = l
+            .parameters
+            .iter()
+            .map(|p| p.range.len())
+            .max()
+            .unwrap_or(1);
         for p in &l.parameters {
             let only = if p.only_in.is_empty() {
                 String::new()

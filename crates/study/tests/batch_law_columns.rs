@@ -54,8 +54,8 @@ fn law_columns_of_the_new_laws_are_checked_before_anything_runs() {
     .unwrap();
     check("id,config,law.g1,law.tau1,law.g2,law.tau2\np,prony.ron,0.2,0.5,0.1,5\n").unwrap();
     // out of range: n in [0, 1]
-    let e = check("id,config,law.K,law.n\na,plastic.ron,150,0.3\nb,plastic.ron,150,1.5\n")
-        .unwrap_err();
+    let e =
+        check("id,config,law.K,law.n\na,plastic.ron,150,0.3\nb,plastic.ron,150,1.5\n").unwrap_err();
     assert!(
         e.contains("m.csv:3") && e.contains("indent `b`") && e.contains("column `law.n`"),
         "{e}"
@@ -70,11 +70,18 @@ fn law_columns_of_the_new_laws_are_checked_before_anything_runs() {
     let e = check("id,config,law.tau2\np,prony.ron,0\n").unwrap_err();
     assert!(e.contains("column `law.tau2`") && e.contains("tau2"), "{e}");
     // a batch run refuses before writing anything
-    let m = write(d, "bad.csv", "id,config,law.n\nok,plastic.ron,0.3\nbad,plastic.ron,-1\n");
+    let m = write(
+        d,
+        "bad.csv",
+        "id,config,law.n\nok,plastic.ron,0.3\nbad,plastic.ron,-1\n",
+    );
     let out = d.join("out");
     let err = batch::run(&BatchOptions::new(m, out.clone()), &()).unwrap_err();
     let text = err.messages().join(": ");
-    assert!(text.contains("bad.csv:3") && text.contains("column `law.n`"), "{text}");
+    assert!(
+        text.contains("bad.csv:3") && text.contains("column `law.n`"),
+        "{text}"
+    );
     assert!(!out.join("batch.json").exists());
     assert!(!out.join("indents").exists());
 }

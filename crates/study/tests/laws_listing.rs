@@ -9,7 +9,11 @@ use indentify_study::laws_list;
 /// A value inside the parameter's range different from `v` (so that the set is seen).
 fn other(p: &laws_list::ParamEntry, v: f64) -> f64 {
     let w = v * (1.0 + 1e-3) + 1e-6;
-    if p.max.is_none_or(|m| w < m) { w } else { v * (1.0 - 1e-3) }
+    if p.max.is_none_or(|m| w < m) {
+        w
+    } else {
+        v * (1.0 - 1e-3)
+    }
 }
 
 /// The system shall accept `--set law.NAME` for every listed parameter of every form, and
