@@ -324,3 +324,8 @@ def make_map(
 
 def load_config(config: ConfigLike = None, sets: Sets = None) -> dict[str, Any]:
     """A validated configuration as a dict with the RON structure."""
+
+def laws() -> list[dict[str, Any]]:
+    """Every registered law: name, variant, summary, example, kinds, lists, parameters
+    (name, set, unit, description, range, min, min_inclusive, max, max_inclusive,
+    only_in) and forms (label, parameters); the data of `indentify laws --json`."""

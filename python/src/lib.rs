@@ -628,6 +628,16 @@ fn load_config<'py>(
     convert::to_python(py, &cfg)
 }
 
+/// Every registered law with its parameters (the names `sets={"law.NAME": ..}` and
+/// `free`/`fixed` take), units, admissible ranges and kinds (hardening and rate forms,
+/// lists of terms), as a list of dicts: the data of `indentify laws --json`, generated from
+/// the laws registry.
+#[pyfunction]
+fn laws(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    let list = indentify_study::laws_list::laws().map_err(study_error)?;
+    convert::to_python(py, &list)
+}
+
 /// The package: functions, result classes and exceptions.
 #[pymodule]
 fn indentify(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -640,6 +650,7 @@ fn indentify(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(make_map, m)?)?;
     m.add_function(wrap_pyfunction!(design, m)?)?;
     m.add_function(wrap_pyfunction!(load_config, m)?)?;
+    m.add_function(wrap_pyfunction!(laws, m)?)?;
     m.add_class::<Record>()?;
     m.add_class::<GradientResult>()?;
     m.add_class::<IdentifyResult>()?;

@@ -9,7 +9,7 @@ import pytest
 import indentify
 
 PUBLIC = [
-    "read_record", "simulate", "gradient", "identify", "make_map", "load_config",
+    "read_record", "simulate", "gradient", "identify", "make_map", "load_config", "laws",
     "Record", "GradientResult", "Result",
     "Error", "ConfigError", "DataError", "SolverError", "IoError",
 ]

@@ -59,6 +59,9 @@ enum Command {
                             indentify init maxwell --data examples/data/anton-paar-unht-berkovich/anonNI.TXT --out my-tests/anon.ron"
     )]
     Init(commands::init::Args),
+    /// List every law with its parameters (--set law.NAME), units, ranges and kinds.
+    #[command(after_help = "Examples:\n  indentify laws\n  indentify laws --json")]
+    Laws(commands::laws::Args),
     /// Validate a configuration and its --set overrides without solving; print it resolved.
     Check(commands::check::Args),
     /// Misfit J to a measured curve and its exact gradient dJ/dc by the discrete adjoint.
@@ -204,6 +207,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Simulate(args) => commands::simulate::run(args),
         Command::Init(args) => commands::init::run(args),
+        Command::Laws(args) => commands::laws::run(args),
         Command::Check(args) => commands::check::run(args),
         Command::Gradient(args) => commands::gradient::run(args),
         Command::GradientCheck(args) => commands::gradient_check::run(args),

@@ -1,7 +1,8 @@
 //! The worked example of docs/adding-a-law.md for a law with internal variables, compiled
 //! and tested so that the guide cannot drift from the trait: a Burgers solid (a Maxwell
-//! element in series with a Kelvin-Voigt element, in shear; bulk elastic). Test-only: its
-//! registry entry is shown but not added to [`crate::registry::REGISTRY`].
+//! element in series with a Kelvin-Voigt element, in shear; bulk elastic). Compiled for the
+//! crate's tests, and registered in [`crate::registry::REGISTRY`] behind the feature
+//! `example-law` (`tests/example_law.rs` checks it from outside the crate).
 
 use crate::LawError;
 use crate::elastic::{E_INFO, NU_INFO, isotropic_compliance, isotropic_compliance_derivative};

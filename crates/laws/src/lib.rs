@@ -5,11 +5,12 @@
 //! Units: MPa for stresses and moduli, s for times. This crate knows nothing of
 //! elements, meshes or contact: it works at one material point.
 
+pub mod catalog;
 pub mod elastic;
 #[cfg(test)]
 mod example_law;
-#[cfg(test)]
-mod example_material;
+#[cfg(any(test, feature = "example-law"))]
+pub mod example_material;
 pub mod hardening;
 pub mod law;
 pub mod logstrain;

@@ -110,11 +110,21 @@ pub const REGISTRY: &[LawEntry] = &[
     NORTON_HOFF,
     crate::plastic::ENTRY,
     crate::prony::ENTRY,
+    #[cfg(feature = "example-law")]
+    crate::example_material::ENTRY,
 ];
 
 /// The configuration variants of [`REGISTRY`], in its order (for a reader's
 /// `deserialize_enum`; checked against the registry by a test).
-pub const VARIANTS: &[&str] = &["Elastic", "Maxwell", "NortonHoff", "Plastic", "Prony"];
+pub const VARIANTS: &[&str] = &[
+    "Elastic",
+    "Maxwell",
+    "NortonHoff",
+    "Plastic",
+    "Prony",
+    #[cfg(feature = "example-law")]
+    "Burgers",
+];
 
 /// The entry whose name (`plastic`) or variant (`Plastic`) is `key`.
 pub fn entry(key: &str) -> Option<&'static LawEntry> {

@@ -6,6 +6,9 @@
 //! with a base configuration), `data` (a record or curve file), `test` (a multi-test
 //! file's test), `x`, `y` (positions, optional), and any further column named by a
 //! configuration path (`law.E`, `identify.params.E.start`, ...), applied as `--set`.
+//! The `law.*` columns take every parameter by its registry name (`law.n`, `law.K`,
+//! `law.g2`; `indentify laws`) and are checked for every row before anything runs
+//! ([`check_law_columns`]).
 //! Relative paths are relative to the manifest's folder.
 //!
 //! Each indent ends with `status.json` written atomically last: an indent with one is
@@ -510,6 +513,7 @@ pub fn run(opts: &BatchOptions, observer: &dyn BatchObserver) -> Result<BatchSum
         // the base configuration must at least load
         ConfigSource::Path(base.clone()).load(&[])?;
     }
+    check_law_columns(&manifest, opts.config.as_deref())?;
     claim(&opts.out, &manifest)?;
     let in_shard: Vec<&Indent> = manifest
         .indents
@@ -965,6 +969,45 @@ pub fn validate(manifest: &Manifest, base: Option<&Path>, overrides: &Overrides)
                 indent.id
             ))
         })?;
+    }
+    Ok(())
+}
+
+/// Checks the `law.*` columns of every indent before anything runs: each row's law
+/// values (`law.E`, and every parameter of the laws with internal variables by its
+/// registry name: `law.n`, `law.Q`, `law.K`, `law.g2`, `law.tau2`, ...) must name a
+/// parameter of the row's law and lie in its range. A row whose configuration does not
+/// load at all stays that indent's failure, as any other.
+///
+/// # Errors
+/// The first bad cell, naming the manifest, its line, the indent and the column, with the
+/// law's message (the parameter's range, or the paths available).
+pub fn check_law_columns(manifest: &Manifest, base: Option<&Path>) -> Result<()> {
+    for indent in &manifest.indents {
+        let sets: Vec<String> = indent
+            .sets
+            .iter()
+            .filter(|s| s.starts_with("law."))
+            .cloned()
+            .collect();
+        if sets.is_empty() {
+            continue;
+        }
+        let (config, _) = indent_source(indent, base);
+        if config.load(&sets).is_ok() || config.load(&[]).is_err() {
+            continue;
+        }
+        for k in 0..sets.len() {
+            if let Err(e) = config.load(&sets[..=k]) {
+                let column = sets[k].split_once('=').map_or("", |p| p.0);
+                return Err(e.context(format!(
+                    "{}:{}: indent `{}`, column `{column}`",
+                    manifest.path.display(),
+                    indent.line,
+                    indent.id
+                )));
+            }
+        }
     }
     Ok(())
 }

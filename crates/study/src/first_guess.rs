@@ -13,7 +13,10 @@
 //!   `phi = m * SRS` (from the uniaxial `sigma = sY + K eps'^(1/m)`, whose strain-rate
 //!   sensitivity is `d ln sigma / d ln eps' = phi / m`), clamped to `[0.05, 0.9]` (0.5 when
 //!   the hold gives no SRS), `sY = (1 - phi) sigma_r`, `K = phi sigma_r / eps'^(1/m)`;
-//!   without a hold `sY = sigma_r` and `K`, `m` stay the template's.
+//!   without a hold `sY = sigma_r` and `K`, `m` stay the template's;
+//! - `Plastic` (`sY` at Tabor's representative strain through the law's own hardening, `K`
+//!   of a `Norton` rate as Norton-Hoff's) and `Prony` (`g1`, `tau1` from the hold's creep
+//!   by Lee-Radok): `crate::first_guess_laws`.
 //!
 //! These are starts for a minimizer, not results: a pile-up, the tip's bluntness or time
 //! dependence make O&P differ from the FE fit, which is why a fit reports both.
@@ -63,6 +66,10 @@ pub struct OpSummary {
     pub srs: Option<f64>,
     /// Sample Poisson's ratio used for E_IT.
     pub nu: f64,
+    /// The hold's creep (duration, depths, end rate, the tip's exponent), when it creeps
+    /// forward: what `Prony`'s guess reads (`crate::first_guess_laws`).
+    #[serde(skip)]
+    pub hold: Option<crate::first_guess_laws::HoldCreep>,
 }
 
 /// A law's start values from an [`OpSummary`], and how each was obtained.
@@ -148,6 +155,18 @@ pub fn analyse_record(r: &Record, tip: &Tip, nu: f64) -> Result<OpSummary> {
         strain_rate: hold.map(|h| h.strain_rate).filter(|v| *v > 0.0),
         srs: hold.and_then(|h| h.srs).filter(|v| v.is_finite()),
         nu,
+        hold: hold
+            .filter(|h| h.strain_rate > 0.0 && h.h.1 > h.h.0 && h.h.0 > 0.0)
+            .map(|h| crate::first_guess_laws::HoldCreep {
+                duration: h.t.1 - h.t.0,
+                h: h.h,
+                strain_rate: h.strain_rate,
+                q: match tip.area {
+                    AreaFunction::Sphere { .. } => 1.5,
+                    AreaFunction::Flat { .. } => 1.0,
+                    _ => 2.0,
+                },
+            }),
     })
 }
 
@@ -249,8 +268,9 @@ pub fn guess(law: &LawSpec, op: &OpSummary) -> FirstGuess {
                 ));
             }
         },
-        // Elastic: E only; the laws with internal variables keep their template values
-        // but E (the registry's other parameters have no O&P counterpart here yet)
+        "Plastic" => crate::first_guess_laws::plastic(law, op, &mut values, &mut notes),
+        "Prony" => crate::first_guess_laws::prony(law, op, &mut values, &mut notes),
+        // Elastic: E only
         _ => {}
     }
     FirstGuess {
@@ -263,7 +283,9 @@ pub fn guess(law: &LawSpec, op: &OpSummary) -> FirstGuess {
 /// Sets the guessed values in `law`.
 pub fn apply(law: &mut LawSpec, g: &FirstGuess) {
     for (name, v) in &g.values {
-        law.set_number(name, *v);
+        if !law.set_number(name, *v) {
+            crate::first_guess_laws::set_list_number(law, name, *v);
+        }
     }
 }
 
@@ -329,6 +351,7 @@ mod tests {
             strain_rate: rate,
             srs,
             nu: 0.3,
+            hold: None,
         }
     }
 

@@ -203,7 +203,61 @@ pub fn data_template_with_guess(
     d: &DataTemplate,
     guess: Option<&crate::first_guess::FirstGuess>,
 ) -> String {
-    let mut cfg = reference.config();
+    let cfg = reference.config();
+    let name = cfg.law.name().to_string();
+    data_config(cfg, reference.identify_section(), d, guess, &name)
+}
+
+/// The law `init KIND --data` starts from for a kind of [`LAW_TEMPLATES`]: its template
+/// law, except `prony`, which has one term (one hold determines one `(g, tau)`).
+///
+/// # Errors
+/// A kind not in [`LAW_TEMPLATES`].
+pub fn data_law(kind: &str) -> anyhow::Result<crate::config::LawSpec> {
+    if kind == "prony" {
+        return Ok(ron::from_str(
+            "Prony(E: 3000.0, nu: 0.3, terms: [(g: 0.3, tau: 1.0)])",
+        )?);
+    }
+    let (_, text) = LAW_TEMPLATES
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .ok_or_else(|| anyhow::anyhow!("no template `{kind}`"))?;
+    Ok(ron::from_str(text)?)
+}
+
+/// [`data_template_with_guess`] for the law `law` of `init KIND --data` (a kind of
+/// [`LAW_TEMPLATES`]): every parameter but nu free (`m` within [1.1, 30]).
+pub fn data_template_law(
+    kind: &str,
+    law: crate::config::LawSpec,
+    d: &DataTemplate,
+    guess: Option<&crate::first_guess::FirstGuess>,
+) -> String {
+    let mut cfg = Reference::R2NortonHoff.config();
+    let mut id = IdentifySection::default();
+    for (name, _) in law.named_params() {
+        id.params.insert(
+            name.to_string(),
+            ParamSetting::Free {
+                start: None,
+                lower: None,
+                upper: None,
+                scaling: None,
+            },
+        );
+    }
+    cfg.law = law;
+    data_config(cfg, id, d, guess, kind)
+}
+
+fn data_config(
+    mut cfg: Config,
+    mut id: IdentifySection,
+    d: &DataTemplate,
+    guess: Option<&crate::first_guess::FirstGuess>,
+    init_name: &str,
+) -> String {
     if let Some(g) = guess {
         crate::first_guess::apply(&mut cfg.law, g);
     }
@@ -231,7 +285,6 @@ pub fn data_template_with_guess(
         },
         substeps: crate::config::DEFAULT_SUBSTEPS,
     });
-    let mut id = reference.identify_section();
     for (name, setting) in id.params.iter_mut() {
         *setting = match name.as_str() {
             "nu" => ParamSetting::Fixed { value: Some(0.3) },
@@ -273,7 +326,7 @@ pub fn data_template_with_guess(
         header.extend(g.notes.iter().map(|n| format!("  {n}.")));
     }
     header.push(format!(
-        "indentify configuration written by `indentify init {law} --data {file}`: check the \
+        "indentify configuration written by `indentify init {init_name} --data {file}`: check the \
          punch, the law's start values (the vendor's E_IT is a fair start for E) and nu, check \
          it with `indentify check FILE.ron`, run it with `indentify identify FILE.ron` \
          (docs/tutorial-real-data.md)."

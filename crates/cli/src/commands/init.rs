@@ -8,8 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indentify_study::config::Reference;
 use indentify_study::templates::{
-    DataTemplate, data_path_for, data_template_with_guess, law_template, parse_tip, template,
-    tip_from_metadata,
+    DataTemplate, data_law, data_path_for, data_template_law, data_template_with_guess,
+    law_template, parse_tip, template, tip_from_metadata,
 };
 
 /// Arguments of `indentify init`.
@@ -38,8 +38,9 @@ pub struct Args {
     pub tip: Option<String>,
 
     /// Keep the template's start values instead of those of the record's Oliver-Pharr
-    /// analysis (E from E_IT, sY from H/3, viscous parameters from the hold's creep;
-    /// docs/analysis.md).
+    /// analysis (E from E_IT, sY from H/3 (Plastic: at Tabor's representative strain 0.08
+    /// through the law's hardening), viscous parameters and Prony's g1, tau1 from the
+    /// hold's creep; docs/analysis.md).
     #[arg(long, requires = "data")]
     pub no_guess: bool,
 
@@ -98,21 +99,18 @@ impl LawKind {
 /// An unreadable record, an unwritable `--out`, a closed standard output.
 pub fn run(args: &Args) -> Result<()> {
     let reference = args.law.reference();
-    if let Some(kind) = args.law.registry_kind() {
-        if args.data.is_some() {
-            bail!(
-                "`init {kind} --data` is not available yet: write `init norton-hoff --data ...` \
-                 and replace its `law` by the one of `init {kind}`"
-            );
-        }
-    }
     let text = match &args.data {
         Some(file) => {
             let mut d = inspect(file, args)?;
+            let kind = args.law.registry_kind();
+            let law = match &kind {
+                Some(k) => data_law(k)?,
+                None => reference.config().law,
+            };
             let guess = if args.no_guess {
                 None
             } else {
-                first_guess(file, &d, reference)
+                first_guess(file, &d, &law)
             };
             if let Some(out) = &args.out {
                 d.file = data_path_for(Path::new(file), out).with_context(|| {
@@ -122,7 +120,10 @@ pub fn run(args: &Args) -> Result<()> {
                     )
                 })?;
             }
-            data_template_with_guess(reference, &d, guess.as_ref())
+            match &kind {
+                Some(k) => data_template_law(k, law, &d, guess.as_ref()),
+                None => data_template_with_guess(reference, &d, guess.as_ref()),
+            }
         }
         None => match args.law.registry_kind() {
             Some(kind) => law_template(&kind)?,
@@ -148,7 +149,7 @@ pub fn run(args: &Args) -> Result<()> {
 fn first_guess(
     file: &str,
     d: &DataTemplate,
-    reference: indentify_study::config::Reference,
+    law: &indentify_study::config::LawSpec,
 ) -> Option<indentify_study::first_guess::FirstGuess> {
     use indentify_study::first_guess as fg;
     let Some(tip) = fg::tip_for_punch(&d.punch) else {
@@ -159,12 +160,11 @@ fn first_guess(
         );
         return None;
     };
-    let law = reference.config().law;
     // the nu the data template fixes
     let nu = 0.3;
     match fg::analyse_file(Path::new(file), d.test, &tip, nu) {
         Ok(op) => {
-            let g = fg::guess(&law, &op);
+            let g = fg::guess(law, &op);
             tracing::info!("{}", fg::describe(&op));
             Some(g)
         }

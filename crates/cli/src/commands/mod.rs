@@ -8,6 +8,7 @@ pub mod gradient;
 pub mod gradient_check;
 pub mod identify;
 pub mod init;
+pub mod laws;
 pub mod map;
 pub mod serve;
 pub mod simulate;
