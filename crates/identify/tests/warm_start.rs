@@ -50,7 +50,15 @@ fn problem() -> Problem {
         .forces();
     let f = multiplicative_noise(&f, 0.02, 3);
     let rec = ForceRecord::new(s.t.clone(), f).unwrap();
-    Problem::new(model(), &NortonHoff, s, &rec, None, SolverOptions::default()).unwrap()
+    Problem::new(
+        model(),
+        &NortonHoff,
+        s,
+        &rec,
+        None,
+        SolverOptions::default(),
+    )
+    .unwrap()
 }
 
 fn lm() -> IdentifyConfig {
