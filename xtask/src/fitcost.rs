@@ -6,8 +6,11 @@
 //! optimizer and its final identifiability summary, as `indentify identify` runs it,
 //! without the discretization check or the report), and prints the fit's wall time over
 //! the median forward run with the iterations, the forward, adjoint and sensitivity solves,
-//! the rejected Levenberg-Marquardt trials (forward solves spent without progress) and the
-//! stop reason. `--json FILE` keeps the numbers and the fitted parameters with
+//! the rejected Levenberg-Marquardt trials (forward solves spent without progress), the
+//! forward runs' Newton iterations and factorizations, and the stop reason. The fit's
+//! forward runs are warm started from the accepted point's trajectory
+//! (`Problem::set_warm_start`); `--cold` starts every one cold, for before/after counts
+//! (the timed forward runs are always cold). `--json FILE` keeps the numbers and the fitted parameters with
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`.
@@ -32,7 +35,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE]`.
+/// [--compare FILE] [--cold]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
