@@ -6,8 +6,11 @@
 //! optimizer and its final identifiability summary, as `indentify identify` runs it,
 //! without the discretization check or the report), and prints the fit's wall time over
 //! the median forward run with the iterations, the forward, adjoint and sensitivity solves,
-//! the rejected Levenberg-Marquardt trials (forward solves spent without progress) and the
-//! stop reason. `--json FILE` keeps the numbers and the fitted parameters with
+//! the rejected Levenberg-Marquardt trials (forward solves spent without progress), the
+//! forward runs' Newton iterations and factorizations, and the stop reason. The fit's
+//! forward runs are warm started from the accepted point's trajectory
+//! (`Problem::set_warm_start`); `--cold` starts every one cold, for before/after counts
+//! (the timed forward runs are always cold). `--json FILE` keeps the numbers and the fitted parameters with
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`.
@@ -32,13 +35,14 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE]`.
+/// [--compare FILE] [--cold]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
     let mut rounds = 3usize;
     let mut json_out: Option<PathBuf> = None;
     let mut compare: Option<PathBuf> = None;
+    let mut cold = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -48,6 +52,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "--rounds" => rounds = val().parse().context("--rounds: a number >= 1")?,
             "--json" => json_out = Some(PathBuf::from(val())),
             "--compare" => compare = Some(PathBuf::from(val())),
+            "--cold" => cold = true,
             other => bail!("unknown option {other}"),
         }
     }
@@ -83,13 +88,13 @@ pub fn run(args: &[String]) -> Result<()> {
         .unwrap_or_default();
     let mut results = Vec::new();
     println!(
-        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | stop |"
+        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | stop |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds)?;
+        let m = measure(&root, case, rounds, cold)?;
         println!(
-            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} |",
+            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
             m["fit_s"].as_f64().unwrap_or(f64::NAN),
             m["ratio"].as_f64().unwrap_or(f64::NAN),
@@ -98,6 +103,8 @@ pub fn run(args: &[String]) -> Result<()> {
             m["rejected_trials"],
             m["adjoint_solves"],
             m["sensitivity_solves"],
+            m["newton_iterations"],
+            m["factorizations"],
             m["stop"].as_str().unwrap_or("")
         );
         results.push(m);
@@ -184,11 +191,14 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// One case: forward runs, the fit, forward runs again.
-fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
+fn measure(root: &Path, case: &str, rounds: usize, cold: bool) -> Result<Value> {
     let opts = options(root, case)?;
     let resolved = identify::resolve(&opts)?;
     let mut s = identify::setup(resolved, &opts)?;
     s.problem.set_threads(1)?;
+    // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
+    // from the last one's solution)
+    s.problem.set_warm_start(false);
     let start: Vec<f64> = s
         .id_cfg
         .params
@@ -196,6 +206,7 @@ fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
         .map(|p| p.value.unwrap_or(0.0))
         .collect();
     let mut fwd = forward_times(&s.problem, &start, rounds, 0)?;
+    s.problem.set_warm_start(!cold);
     let clock = Instant::now();
     let r: IdentifyResult = s.problem.install(|| {
         indentify_identify::identify(&s.problem, &s.id_cfg, &mut |rec| {
@@ -206,6 +217,7 @@ fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
         })
     })?;
     let fit = clock.elapsed().as_secs_f64();
+    s.problem.set_warm_start(false);
     fwd.extend(forward_times(&s.problem, &start, rounds, rounds + 1)?);
     let forward = median(&mut fwd);
     let params: Vec<Value> = r
@@ -232,6 +244,8 @@ fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
         "adjoint_solves": r.adjoint_solves,
         "sensitivity_solves": r.sensitivity_solves,
         "rejected_trials": r.rejected_trials,
+        "newton_iterations": r.newton_iterations,
+        "factorizations": r.factorizations,
         "stop": r.stop_reason.to_string(),
         "converged": r.stop_reason.is_converged(),
         "cost": r.cost,
@@ -246,9 +260,12 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| case | fit / forward before | after | iterations before | after | forward solves before | after | rejected before | after | sensitivity before | after |"
+        "| case | fit / forward before | after | iterations before | after | forward solves before | after | rejected before | after | sensitivity before | after | Newton iterations before | after | factorizations before | after |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     let find = |case: &str| -> Option<&Value> {
         before
             .as_array()
@@ -259,7 +276,7 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
         if let Some(b) = find(case) {
             let _ = writeln!(
                 s,
-                "| {case} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {case} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 b["ratio"].as_f64().unwrap_or(f64::NAN),
                 a["ratio"].as_f64().unwrap_or(f64::NAN),
                 b["iterations"],
@@ -269,7 +286,11 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
                 b["rejected_trials"],
                 a["rejected_trials"],
                 b["sensitivity_solves"],
-                a["sensitivity_solves"]
+                a["sensitivity_solves"],
+                b["newton_iterations"],
+                a["newton_iterations"],
+                b["factorizations"],
+                a["factorizations"]
             );
         }
     }

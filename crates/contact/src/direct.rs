@@ -321,12 +321,65 @@ impl<'m> DirectSolver<'m> {
             schedule,
             drive: &DepthDrive(schedule),
             opts,
+            guess: None,
         };
         let stretch = Stretch {
             j0: 0,
             j1: schedule.t.len() - 1,
             record: opts.record_fields,
             every: opts.checkpoint_every,
+        };
+        self.advance(&run, state, &stretch, &mut traj)?;
+        Ok(traj)
+    }
+
+    /// Runs the schedule as [`DirectSolver::run`] does, but starts each step's Newton
+    /// iterations of a nonlinear law from the increment `guess` (a converged trajectory of
+    /// the same schedule at other parameters, with its fields recorded) took over the same
+    /// step, instead of the time extrapolation: near the guess's parameters that increment
+    /// is within `O(dc)` of the solution, where the extrapolation is within `O(dt^p)`.
+    /// Steps the guess does not have (a step cut in either run) fall back to the
+    /// extrapolation. The result is the same solution to the solver's tolerance
+    /// ([`SolverOptions::residual_tol`]), not the same bits. Affine laws (one solve from
+    /// anywhere), runs with checkpoints (a replay must repeat the run bit for bit) and a
+    /// guess without fields run exactly as [`DirectSolver::run`].
+    ///
+    /// # Errors
+    /// As [`DirectSolver::run`].
+    pub fn run_warm(
+        &mut self,
+        law: &dyn Material,
+        c: &[f64],
+        schedule: &Schedule,
+        opts: &SolverOptions,
+        guess: &Trajectory,
+    ) -> Result<Trajectory, ContactError> {
+        let usable = opts.record_fields
+            && opts.checkpoint_every == 0
+            && guess.fields.len() == guess.steps.len() + 1
+            && guess.fields[0].u.len() == self.model.disc.n_dofs();
+        if !usable {
+            return self.run(law, c, schedule, opts);
+        }
+        check_material(self.model, law, c)?;
+        let mut traj = Trajectory {
+            params: c.to_vec(),
+            ..Default::default()
+        };
+        let state = State::initial(self.model, law, schedule.t[0], schedule.depth[0]);
+        let run = Run {
+            law,
+            c,
+            schedule,
+            drive: &DepthDrive(schedule),
+            opts,
+            guess: Some(guess),
+        };
+        let stretch = Stretch {
+            j0: 0,
+            j1: schedule.t.len() - 1,
+            record: true,
+            every: 0,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -366,6 +419,7 @@ impl<'m> DirectSolver<'m> {
             schedule,
             drive: &ForceDrive(history),
             opts,
+            guess: None,
         };
         // no checkpoints: a replay (the adjoint's) drives by depth only
         let stretch = Stretch {
@@ -417,6 +471,7 @@ impl<'m> DirectSolver<'m> {
             schedule,
             drive: &DepthDrive(schedule),
             opts,
+            guess: None,
         };
         let stretch = Stretch {
             j0: checkpoint.schedule_index,
@@ -489,6 +544,9 @@ impl<'m> DirectSolver<'m> {
                     t1,
                     depth,
                     load,
+                    guess: run
+                        .guess
+                        .and_then(|g| guessed_step(g, schedule, state.t, t1)),
                 };
                 match self.newton.step(&spec, &mut traj.timing) {
                     Ok((rec_state, mut rec)) => {
@@ -567,6 +625,9 @@ struct Run<'a> {
     schedule: &'a Schedule,
     drive: &'a dyn Drive,
     opts: &'a SolverOptions,
+    /// A converged trajectory of the same schedule (other parameters) whose increments
+    /// start the nonlinear law's Newton iterations ([`DirectSolver::run_warm`]).
+    guess: Option<&'a Trajectory>,
 }
 
 /// The stretch of the schedule one call of [`DirectSolver::advance`] covers: from
@@ -578,6 +639,28 @@ struct Stretch {
     j1: usize,
     record: bool,
     every: usize,
+}
+
+/// The displacements before and after the step of `guess` from `t0` to `t1` (the same
+/// times to the bit), if it has that step.
+fn guessed_step<'g>(
+    guess: &'g Trajectory,
+    schedule: &Schedule,
+    t0: f64,
+    t1: f64,
+) -> Option<(&'g [f64], &'g [f64])> {
+    let k = guess.steps.partition_point(|s| s.t < t1);
+    let step = guess.steps.get(k)?;
+    let start = match k {
+        0 => schedule.t[0],
+        _ => guess.steps[k - 1].t,
+    };
+    (step.t == t1 && start == t0).then(|| {
+        (
+            guess.fields[k].u.as_slice(),
+            guess.fields[k + 1].u.as_slice(),
+        )
+    })
 }
 
 /// The checks of a run's material: its parameters.

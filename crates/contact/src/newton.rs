@@ -184,6 +184,10 @@ pub(crate) struct StepSpec<'a> {
     pub t1: f64,
     pub depth: f64,
     pub load: Option<Load>,
+    /// The displacements before and after the same step of an earlier converged run at
+    /// other parameters: their difference starts a nonlinear law's Newton iterations
+    /// instead of the time extrapolation (`DirectSolver::run_warm`).
+    pub guess: Option<(&'a [f64], &'a [f64])>,
 }
 
 /// The time extrapolation of a nonlinear law's first iterate: the polynomial of degree 1
@@ -397,7 +401,14 @@ impl<'m> Newton<'m> {
             None => 0.0,
         };
         let extra = Extrapolation::new(state, dt, rate, law.affine.is_some(), it.u.len());
-        extra.apply(state, &mut it.u);
+        match spec.guess {
+            Some((u0, u1)) if law.affine.is_none() => {
+                for ((x, a), b) in it.u.iter_mut().zip(u0).zip(u1) {
+                    *x += b - a;
+                }
+            }
+            _ => extra.apply(state, &mut it.u),
+        }
         it.seen.push(it.set.clone());
         self.residuals.clear();
         let mut last: Option<(f64, u32)> = None;

@@ -317,6 +317,8 @@ mod tests {
             adjoint_solves: 1,
             sensitivity_solves: 0,
             rejected_trials: 0,
+            newton_iterations: 0,
+            factorizations: 0,
             cache_hits: 0,
             distinct_points: 1,
             stop_reason: StopReason::GradientNorm,

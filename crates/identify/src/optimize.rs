@@ -439,6 +439,11 @@ pub struct IdentifyResult {
     /// Levenberg-Marquardt trials that did not decrease the cost (each one forward solve
     /// spent without progress; 0 for the other methods; this run only, not across resumes).
     pub rejected_trials: usize,
+    /// Newton iterations of this run's forward solves, summed over their steps (this run
+    /// only, not across resumes).
+    pub newton_iterations: u64,
+    /// Numeric factorizations of this run's forward solves (this run only).
+    pub factorizations: usize,
     /// Requests (cost, gradient, forces, Jacobian) answered by the evaluation cache.
     pub cache_hits: usize,
     /// Distinct parameter points requested by this run (excluding a resumed run's past).
@@ -1071,6 +1076,8 @@ fn run(
         sensitivity_solves: offset_sum(resume_from, |r| r.sensitivity_solves)
             + counts.sensitivities,
         rejected_trials: monitor_rejected,
+        newton_iterations: counts.newton_iterations,
+        factorizations: counts.factorizations,
         cache_hits: counts.cache_hits,
         distinct_points: counts.distinct_points,
         stop_reason: reason,

@@ -265,6 +265,9 @@ pub struct Problem {
     /// The pool the tests are solved on ([`Problem::set_threads`]); `None`: the current
     /// rayon pool (by default the global one, all cores).
     pool: Option<Arc<rayon::ThreadPool>>,
+    /// Whether an [`Evaluator`] starts each forward run's Newton iterations from the best
+    /// point's trajectory ([`Problem::set_warm_start`]).
+    warm_start: bool,
 }
 
 impl Problem {
@@ -313,6 +316,7 @@ impl Problem {
             target,
             weights,
             pool: None,
+            warm_start: true,
         })
     }
 
@@ -340,6 +344,16 @@ impl Problem {
             })?;
         self.pool = Some(Arc::new(pool));
         Ok(())
+    }
+
+    /// Whether the [`Evaluator`]s of this problem start a forward run's Newton iterations,
+    /// step by step, from the increments of the lowest-cost point's converged trajectory
+    /// (`DirectSolver::run_warm`) instead of the time extrapolation (default: on). The
+    /// results agree with cold runs to the solver's tolerance, not bit for bit, and depend
+    /// on the sequence of points evaluated (never on the thread count): off, every forward
+    /// run starts cold and a point's forces are the same bits whatever came before.
+    pub fn set_warm_start(&mut self, on: bool) {
+        self.warm_start = on;
     }
 
     /// Runs `f` on the problem's pool ([`Problem::set_threads`]), or on the current rayon
@@ -420,6 +434,11 @@ pub struct Counts {
     pub forward: usize,
     /// Forward solves that failed (the cost is then `+inf`).
     pub forward_failed: usize,
+    /// Newton iterations (linear solves) of the forward solves that converged, summed
+    /// over their steps.
+    pub newton_iterations: u64,
+    /// Numeric factorizations of the forward solves that converged.
+    pub factorizations: usize,
     /// Adjoint sweeps asked for (one per test and gradient request not in the cache,
     /// whether the sweep ran then or had been computed ahead: [`Counts::prefetched`]).
     pub adjoint: usize,
@@ -507,6 +526,9 @@ struct Work<'p> {
     solver: DirectSolver<'p>,
     adjoint: Adjoint<'p>,
     seconds: [Option<f64>; 3],
+    /// The lowest-cost point's trajectory, the warm start of the next forward runs
+    /// ([`Problem::set_warm_start`]).
+    warm: Option<Trajectory>,
 }
 
 /// The cost/gradient oracle of one [`Problem`]: owns each test's forward and adjoint
@@ -543,9 +565,13 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
-    let run = match &t.load {
-        Some(h) => w.solver.run_history(&*p.law, c, h, &t.solver_options),
-        None => w.solver.run(&*p.law, c, &t.schedule, &t.solver_options),
+    let run = match (&t.load, &w.warm) {
+        (Some(h), _) => w.solver.run_history(&*p.law, c, h, &t.solver_options),
+        (None, Some(g)) if p.warm_start => {
+            w.solver
+                .run_warm(&*p.law, c, &t.schedule, &t.solver_options, g)
+        }
+        (None, _) => w.solver.run(&*p.law, c, &t.schedule, &t.solver_options),
     };
     match run {
         Ok(traj) => {
@@ -749,6 +775,7 @@ impl<'p> Evaluator<'p> {
                 solver,
                 adjoint,
                 seconds: [None; 3],
+                warm: None,
             });
         }
         Ok(Evaluator {
@@ -819,7 +846,10 @@ impl<'p> Evaluator<'p> {
         } else {
             let n = p.tests.len();
             self.counts.forward += n;
-            self.entry = None;
+            let old = self.entry.take();
+            if p.warm_start {
+                self.keep_warm(old);
+            }
             let mut tests: Vec<TestEntry> = (0..n).map(|_| TestEntry::default()).collect();
             let (kind, needed) = match (want, self.prefetch) {
                 (Some(k), _) => (Some(k), true),
@@ -829,6 +859,10 @@ impl<'p> Evaluator<'p> {
             };
             self.counts.prefetched +=
                 run_tests(p, c, &mut self.work, &mut tests, true, kind, needed);
+            for t in tests.iter().filter_map(|te| te.traj.as_ref()) {
+                self.counts.newton_iterations += t.total_iterations();
+                self.counts.factorizations += t.timing.factorizations;
+            }
             let mut failed = None;
             let mut error = None;
             for (k, te) in tests.iter_mut().enumerate() {
@@ -882,6 +916,32 @@ impl<'p> Evaluator<'p> {
         match self.entry.as_mut() {
             Some(e) => Ok(e),
             None => Err(IdentifyError::Optimizer("cache entry vanished".into())),
+        }
+    }
+
+    /// Keeps the trajectories of `old`, the entry being replaced, as the warm start of
+    /// the next forward runs when it is the lowest-cost point so far (a point a
+    /// Levenberg-Marquardt iteration or a line search accepted); the previous warm start
+    /// stays otherwise.
+    fn keep_warm(&mut self, old: Option<Entry>) {
+        let Some(old) = old else { return };
+        let best = self
+            .best
+            .as_ref()
+            .is_some_and(|(_, c)| key_of(c) == old.key);
+        if best && old.forces.is_some() {
+            for (w, te) in self.work.iter_mut().zip(old.tests) {
+                if let Some(mut t) = te.traj {
+                    // only the displacements serve (n_steps x n_dofs values)
+                    for f in &mut t.fields {
+                        f.sigma = Vec::new();
+                        f.alpha = Vec::new();
+                        f.regime = Vec::new();
+                    }
+                    t.checkpoints = Vec::new();
+                    w.warm = Some(t);
+                }
+            }
         }
     }
 
