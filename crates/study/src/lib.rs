@@ -38,6 +38,7 @@ pub mod gradient;
 mod gradient_load;
 pub mod history;
 pub mod identify;
+pub mod op_beside;
 pub mod output;
 pub mod run_folder;
 pub mod simulate;
