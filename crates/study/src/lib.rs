@@ -19,6 +19,7 @@
 //! ```
 
 pub mod adequacy;
+pub mod analysis_figures;
 pub mod analyze;
 pub mod atomic;
 pub mod batch;
