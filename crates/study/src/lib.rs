@@ -23,6 +23,7 @@ pub mod analysis_figures;
 pub mod analyze;
 pub mod atomic;
 pub mod batch;
+pub mod batch_analysis;
 pub mod check;
 pub mod config;
 pub mod costmap;
