@@ -46,6 +46,7 @@ pub mod run_folder;
 pub mod simulate;
 pub mod solve;
 pub mod source;
+pub mod start_from_analysis;
 pub mod synthetic;
 pub mod templates;
 
