@@ -286,7 +286,7 @@ def identify(
     max_iterations: Optional[int] = None,
     free: Optional[Sequence[str]] = None,
     fixed: Union[Mapping[str, Optional[float]], Sequence[str], None] = None,
-    start: Optional[Mapping[str, float]] = None,
+    start: Union[Mapping[str, float], Literal["oliver-pharr"], None] = None,
     noise: Optional[float] = None,
     seed: int = 1,
     noise_model: Optional[NoiseModel] = None,
@@ -298,7 +298,8 @@ def identify(
     result is Result.discretization). free: a list of names, or one name as a str.
 
     A joint configuration (tests: [...]) is fitted as a whole (Result.tests). noise_model
-    replaces the configuration's identify.noise."""
+    replaces the configuration's identify.noise. start="oliver-pharr" starts the free
+    parameters from the Oliver-Pharr analysis of the record (as first_guess)."""
 
 def design(
     config: ConfigLike = None,
@@ -329,3 +330,52 @@ def laws() -> list[dict[str, Any]]:
     """Every registered law: name, variant, summary, example, kinds, lists, parameters
     (name, set, unit, description, range, min, min_inclusive, max, max_inclusive,
     only_in) and forms (label, parameters); the data of `indentify laws --json`."""
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+def analyze(
+    file: PathLike,
+    *,
+    test: Optional[int] = None,
+    tip: Optional[PathLike] = None,
+    nu: float = 0.3,
+    epsilon: str = "tip",
+    beta: float = 1.0,
+    fit_range: Optional[tuple[float, float]] = None,
+    zero_point: Optional[bool] = None,
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """Oliver-Pharr (ISO 14577) analysis of every test (or `test`, from 1): the dict of
+    `indentify analyze --json` (tests[k]["E"], ["H"], ["Er"] in MPa, ["S"] in N/mm, ["hc"],
+    ["hmax"] in mm, ["Fmax"] in N; tip["modulus"] the tip's own). tip: "berkovich",
+    "cone:70.3", "sphere:10" (radius in um), "flat:50" or a tip file (.ron) of calibrate;
+    epsilon: "tip", "m" or a number; out: analysis.json, analysis.csv and figures there."""
+
+def calibrate(
+    file: PathLike,
+    *,
+    modulus: float,
+    nu: float,
+    out: Optional[PathLike] = None,
+    tests: Optional[Sequence[int]] = None,
+    compliance: Optional[float] = None,
+    terms: int = 3,
+    beta: float = 1.0,
+    fit_range: Optional[tuple[float, float]] = None,
+) -> dict[str, Any]:
+    """Frame compliance and ISO area function from a reference of known Young's modulus
+    (MPa: fused silica 72000): the dict of `indentify calibrate --json`; out writes the tip
+    file that analyze(tip=...) and punch: Calibrated(file: ...) read."""
+
+class FirstGuess(TypedDict):
+    starts: dict[str, float]
+    op: dict[str, Any]
+    notes: list[str]
+
+def first_guess(
+    config: ConfigLike = None,
+    data: Optional[PathLike] = None,
+    sets: Sets = None,
+) -> FirstGuess:
+    """Start values of the configuration's free parameters from the Oliver-Pharr analysis of
+    its record (or of `data`): E = E_IT, sY from H/3, the viscous parameters from the hold."""

@@ -12,6 +12,7 @@
 //!
 //! Built by maturin (`pip install ./python`); the type stub is `python/indentify.pyi`.
 
+mod analysis;
 mod convert;
 mod errors;
 mod results;
@@ -233,8 +234,9 @@ impl Observer for PyObserver {
 /// `seconds`); an exception it raises stops the run and is raised. `out`: a report
 /// directory (result.json, history.csv, fit.csv, report and figures), `force` replacing
 /// another run's. `method` ("bfgs", "lbfgs", "lbfgsb", "lm"), `max_iterations`, `free`
-/// (names), `fixed` ({name: value or None}) and `start` ({name: value}) override the
-/// configuration's `identify` section. `noise_model` replaces `identify.noise`, what the
+/// (names), `fixed` ({name: value or None}) and `start` ({name: value}, or "oliver-pharr":
+/// the free parameters' starts from the Oliver-Pharr analysis of the record, as
+/// `first_guess`) override the configuration's `identify` section. `noise_model` replaces `identify.noise`, what the
 /// standard deviations assume about the force noise: "Residual" (one variance, the
 /// default), "RelativeEstimated", {"Relative": f} (standard deviation f |F|) or
 /// {"Absolute": s} (N). A joint configuration (`tests: [...]`) is fitted as a whole;
@@ -281,6 +283,8 @@ fn identify(
         }
         None => None,
     };
+    let data_path =
+        data.filter(|d| d.extract::<String>().is_ok() || d.hasattr("__fspath__").unwrap_or(false));
     let (data, _temp) = data_arg(data)?;
     let mut opts = IdentifyOptions::new(config_source(config)?);
     opts.sets = sets_arg(sets)?;
@@ -298,11 +302,19 @@ fn identify(
         fixed: fixed_arg(fixed)?,
         starts: match start.filter(|s| !s.is_none()) {
             None => Vec::new(),
+            // the free parameters' starts from the Oliver-Pharr analysis of the record
+            Some(s) if s.extract::<String>().is_ok_and(|t| t == "oliver-pharr") => {
+                analysis::starts(config, data_path, sets)?
+                    .starts
+                    .into_iter()
+                    .filter_map(|(n, v)| v.as_f64().map(|v| (n, v)))
+                    .collect()
+            }
             Some(s) => s
                 .extract::<std::collections::HashMap<String, f64>>()
                 .map_err(|_| {
                     PyTypeError::new_err(format!(
-                        "start: expected a dict {{name: value}}, got {}",
+                        "start: expected a dict {{name: value}} or \"oliver-pharr\", got {}",
                         type_name(s)
                     ))
                 })?
@@ -651,6 +663,9 @@ fn indentify(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design, m)?)?;
     m.add_function(wrap_pyfunction!(load_config, m)?)?;
     m.add_function(wrap_pyfunction!(laws, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::first_guess, m)?)?;
     m.add_class::<Record>()?;
     m.add_class::<GradientResult>()?;
     m.add_class::<IdentifyResult>()?;

@@ -19,6 +19,12 @@ fn maxwell_on_the_anton_paar_berkovich_record_identifies_and_reports() {
     assert_ok(&o);
     let text = common::stdout(&o);
     assert!(text.contains("fit: R^2 = "), "{text}");
+    // the Oliver-Pharr numbers of the same test beside the FE result
+    assert!(
+        text.contains("Oliver-Pharr of the same test (tip: ideal Berkovich")
+            && text.contains("E_IT vs the fitted E = "),
+        "{text}"
+    );
     for f in [
         "report.md",
         "report.json",

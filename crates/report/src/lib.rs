@@ -80,6 +80,7 @@ pub mod adequacy;
 mod error;
 mod explore;
 mod fit;
+mod lines;
 mod map;
 mod markdown;
 mod model;
@@ -90,6 +91,7 @@ pub use adequacy::{Adequacy, NoiseEstimate, Verdict};
 pub use error::ReportError;
 pub use explore::{CostMapFigure, ProfileFigure, contour_segments};
 pub use fit::FitQuality;
+pub use lines::{LineFigure, Series, Style};
 pub use map::{MapData, MapFigure};
 pub use model::{
     BoundHit, Convergence, Correlation, Curves, DiscretizationSummary, FigureLink,

@@ -3,7 +3,7 @@
 //! preprocesses each test (zero point, the file's drift correction when it gives one, the
 //! tip's frame compliance or the file's), analyses it with `indentify_analysis` (tests in
 //! parallel, results in file order), and writes `analysis.json` and `analysis.csv`
-//! atomically; `calibrate` fits the frame compliance and the area function on a reference
+//! atomically with the figures (`crate::analysis_figures`); `calibrate` fits the frame compliance and the area function on a reference
 //! and writes the tip file. The method is in `docs/analysis.md`.
 
 use std::path::{Path, PathBuf};
@@ -309,6 +309,10 @@ pub fn run(opts: &AnalyzeOptions) -> Result<AnalyzeOutcome> {
         crate::atomic::write(&json, to_json(&out)).map_err(|e| Error::new(ErrorKind::Io, e))?;
         crate::atomic::write(&csv, to_csv(&out)).map_err(|e| Error::new(ErrorKind::Io, e))?;
         out.written = vec![json.display().to_string(), csv.display().to_string()];
+        // the unloading fits and H and E against depth (crate::analysis_figures)
+        let figures = crate::analysis_figures::write(dir, &out, &records, &prep)?;
+        out.written
+            .extend(figures.iter().map(|p| p.display().to_string()));
     }
     out.seconds = start.elapsed().as_secs_f64();
     Ok(out)

@@ -124,7 +124,7 @@ pub fn read_manifest(path: &Path, base: Option<&Path>) -> Result<Manifest> {
         .kind(ErrorKind::Config)
 }
 
-fn parse_manifest(
+pub(crate) fn parse_manifest(
     bytes: &[u8],
     path: &Path,
     has_base: bool,

@@ -230,6 +230,9 @@ pub struct IdentifyOutcome {
     /// fit quality. [`IdentifyOutcome::fit`] then holds every test's curves end to end
     /// and [`IdentifyOutcome::quality`] the quality over all of them.
     pub tests: Vec<TestFit>,
+    /// The Oliver-Pharr analysis of a one-test fit's measured record beside the fitted
+    /// `E` (`None` for synthesized data and joint fits; docs/analysis.md).
+    pub oliver_pharr: Option<crate::op_beside::OpBeside>,
 }
 
 /// One test of a joint fit.
@@ -840,6 +843,11 @@ fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyO
         all.f_final.extend(&f.fit.f_final);
     }
     let joint = s.is_joint();
+    let oliver_pharr = if joint {
+        None
+    } else {
+        oliver_pharr(&s.tests[0], &result)
+    };
     Ok(IdentifyOutcome {
         config: s.name.clone(),
         law: s.law.name(),
@@ -869,7 +877,22 @@ fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyO
         multistart: None,
         profiles: None,
         tests: if joint { fits } else { Vec::new() },
+        oliver_pharr,
     })
+}
+
+/// The O&P analysis of a one-test fit's measured record beside the fitted `E`, with the
+/// fitted `nu` (0.3 when the law has none).
+fn oliver_pharr(test: &TestSetup, result: &IdentifyResult) -> Option<crate::op_beside::OpBeside> {
+    let m = test.measured.as_ref()?;
+    let value = |n: &str| result.params.iter().find(|p| p.name == n).map(|p| p.value);
+    Some(crate::op_beside::compare(
+        &m.raw,
+        &test.config.punch,
+        test.config.base_dir.as_deref(),
+        value("E"),
+        value("nu").unwrap_or(0.3),
+    ))
 }
 
 /// Each test's curves at the start and at the result (the result's forces are the
@@ -1522,6 +1545,10 @@ fn write_report(
 fn explorations(paths: &Paths, outcome: &IdentifyOutcome) -> (String, Vec<PathBuf>) {
     let mut markdown = String::new();
     let mut figures = Vec::new();
+    if let Some(b) = &outcome.oliver_pharr {
+        markdown.push_str(&crate::op_beside::markdown(b));
+        markdown.push('\n');
+    }
     if let Some(m) = &outcome.multistart {
         markdown.push_str(&m.markdown());
     }
@@ -1793,6 +1820,9 @@ struct ResultJson {
     /// A joint fit's tests, each with its weight, share of J and fit quality.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     tests: Vec<TestJson>,
+    /// The Oliver-Pharr numbers of the same test beside the FE result.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    oliver_pharr: Option<crate::op_beside::OpBeside>,
     history: String,
     fit: String,
 }
@@ -2006,6 +2036,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
                 fit_quality: t.quality.as_ref().map(fit_json),
             })
             .collect(),
+        oliver_pharr: o.oliver_pharr.clone(),
         history: paths.history.display().to_string(),
         fit: paths.fit.display().to_string(),
     }

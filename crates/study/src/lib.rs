@@ -19,9 +19,11 @@
 //! ```
 
 pub mod adequacy;
+pub mod analysis_figures;
 pub mod analyze;
 pub mod atomic;
 pub mod batch;
+pub mod batch_analysis;
 pub mod check;
 pub mod config;
 pub mod costmap;
@@ -41,11 +43,13 @@ pub mod history;
 pub mod identify;
 mod identify_load;
 pub mod laws_list;
+pub mod op_beside;
 pub mod output;
 pub mod run_folder;
 pub mod simulate;
 pub mod solve;
 pub mod source;
+pub mod start_from_analysis;
 pub mod synthetic;
 pub mod templates;
 

@@ -77,6 +77,23 @@ pub struct RunArgs {
     /// recording would exceed its share checkpoints instead.
     #[arg(long, value_name = "MB", default_value_t = 1024)]
     pub memory_budget: usize,
+
+    /// Oliver-Pharr analysis of every indent instead of FE fits: OUT/analysis.csv and the
+    /// H_IT and E_IT maps (reads only the id, data, test, x and y columns).
+    #[arg(long)]
+    pub analyze: bool,
+
+    /// The tip of --analyze: berkovich, cone:HALF_ANGLE_DEG, sphere:RADIUS_UM, flat:RADIUS_UM.
+    #[arg(long, default_value = "berkovich", conflicts_with = "tip_file")]
+    pub tip: String,
+
+    /// A tip file of `indentify calibrate` for --analyze.
+    #[arg(long, value_name = "TIP.ron")]
+    pub tip_file: Option<PathBuf>,
+
+    /// Poisson's ratio of the sample for --analyze.
+    #[arg(long, default_value_t = 0.3)]
+    pub nu: f64,
 }
 
 /// `batch slurm`.
@@ -168,6 +185,9 @@ fn run_batch(a: &RunArgs) -> Result<()> {
     let (Some(manifest), Some(out)) = (&a.manifest, &a.out) else {
         bail!("give a manifest and --out DIR (indentify batch MANIFEST.csv --out DIR)");
     };
+    if a.analyze {
+        return analyze_batch(a, manifest, out);
+    }
     let mut opts = BatchOptions::new(manifest.clone(), out.clone());
     opts.config = a.config.clone();
     opts.jobs = a.jobs;
@@ -198,6 +218,36 @@ fn run_batch(a: &RunArgs) -> Result<()> {
             summary.total,
             summary.results.display()
         );
+    }
+    Ok(())
+}
+
+/// `batch --analyze`: the Oliver-Pharr analysis of every indent
+/// (`indentify_study::batch_analysis`).
+fn analyze_batch(a: &RunArgs, manifest: &std::path::Path, out: &std::path::Path) -> Result<()> {
+    use indentify_study::batch_analysis::{self as ba, BatchAnalysisOptions};
+    let mut o = BatchAnalysisOptions::new(manifest, out);
+    o.tip = match &a.tip_file {
+        Some(p) => indentify_study::analyze::read_tip(p)?,
+        None => indentify_study::analyze::tip_from_name(&a.tip)?,
+    };
+    o.nu = a.nu;
+    o.jobs = a.jobs;
+    let r = ba::run(&o)?;
+    println!(
+        "batch --analyze: {} indents, {} analysed, {} without values; tip {}, nu {}; {:.2} s",
+        r.indents.len(),
+        r.analysed,
+        r.failed,
+        o.tip.area.describe(),
+        o.nu,
+        r.seconds
+    );
+    for i in r.indents.iter().filter(|i| i.error.is_some()).take(8) {
+        println!("  ! {}: {}", i.id, i.error.as_deref().unwrap_or(""));
+    }
+    for p in &r.written {
+        println!("  wrote {}", p.display());
     }
     Ok(())
 }

@@ -518,6 +518,9 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
             t.cost
         ));
     }
+    if let Some(b) = &o.oliver_pharr {
+        text.push_str(&indentify_study::op_beside::lines(b));
+    }
     // model adequacy and the caveats of the headline (indentify_study::adequacy)
     text.push_str(&o.adequacy_lines());
     text
