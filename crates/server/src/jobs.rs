@@ -48,10 +48,7 @@ pub(crate) fn when_it_stops(command: &str) -> &'static str {
         "batch" => "stopping after the indents in progress",
         "design" => "stopping after the candidates in progress",
         "map" => "stopping after the grid points (or fit iteration) in progress",
-        "simulate" => {
-            "the simulation is one forward run inside the direct solver, which takes no stop \
-             request: the run ends as cancelled when that forward run is over"
-        }
+        "simulate" => "stopping after the forward run's step in progress",
         "calibrate" => "the calibration ends as cancelled when its fits are over",
         _ => "the analysis ends as cancelled when its pass over the record is over",
     }

@@ -44,8 +44,9 @@ pub const COMMANDS: [&str; 7] = [
 /// The commands a `DELETE` can stop while they run: every one. An identification stops
 /// after its iteration in progress (or its profile re-fits in progress), a batch after its
 /// indents in progress, a design after its candidates in progress, a map after its grid
-/// points in progress; a simulation and an analysis (one forward run; one pass over the
-/// record's unloadings) end as cancelled when that pass is over.
+/// points in progress, a simulation after its forward run's step in progress; an analysis
+/// and a calibration (passes over the record's unloadings) end as cancelled when their
+/// pass is over.
 pub const CANCELLABLE: [&str; 7] = COMMANDS;
 
 /// The file of a run's folder that `GET /api/runs/{id}` answers as `result`.
@@ -1001,7 +1002,7 @@ fn run_simulate(run: &Run) -> Result<End, ErrorBody> {
     let mut opts = SimulateOptions::new(ConfigSource::Path(run.dir.join("config.ron")));
     opts.sets = run.spec.sets.clone();
     opts.out = Some(run.dir.join("curve.csv"));
-    let o = simulate::run(&opts).map_err(|e| error_body(&e))?;
+    let o = simulate::run_cancellable(&opts, &run.cancel).map_err(|e| error_body(&e))?;
     let peak = o
         .rows
         .iter()
@@ -1025,7 +1026,17 @@ fn run_simulate(run: &Run) -> Result<End, ErrorBody> {
             messages: vec![format!("{e:#}")],
         });
     }
+    let reached = o.rows.last().map_or(0.0, |r| r.t);
     match &o.failure {
+        Some(why) if why.contains(indentify_study::stoppable::STOPPED) => Ok((
+            Status::Cancelled,
+            Some(summary),
+            None,
+            Some(format!(
+                "cancelled: the forward run stopped ({why}); the curve up to t = {reached} s \
+                 is kept in curve.csv"
+            )),
+        )),
         Some(why) => Ok((
             Status::Failed,
             Some(summary.clone()),

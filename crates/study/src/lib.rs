@@ -43,6 +43,7 @@ pub mod run_folder;
 pub mod simulate;
 pub mod solve;
 pub mod source;
+pub mod stoppable;
 pub mod synthetic;
 pub mod templates;
 
