@@ -112,6 +112,31 @@ fn a_running_simulation_stops_mid_forward_and_keeps_its_curve() {
             .collect()
     };
     assert_eq!(bits(&plain), bits(&stoppable));
+    // a stop asked before the first step: a stress-only law (R1's Maxwell, through its
+    // fast law path) and a law with internal variables (a Prony series, through the
+    // material path) both end at step 1 with the stop as the reason, nothing solved
+    let raised = Cancel::default();
+    raised.raise();
+    let prony = std::fs::read_to_string(repo().join("examples/prony-sls.ron")).unwrap();
+    for (text, name) in [
+        (indentify_study::DEFAULT_CONFIG.to_string(), "r1.ron"),
+        (prony, "prony-sls.ron"),
+    ] {
+        let o = simulate::run_cancellable(
+            &SimulateOptions::new(ConfigSource::Text {
+                text,
+                name: name.into(),
+            }),
+            &raised,
+        )
+        .unwrap();
+        let why = o.failure.as_deref().unwrap_or_default();
+        assert!(
+            why.contains("stopped on request during step 1"),
+            "{name}: {why}"
+        );
+        assert_eq!(o.rows.len(), 1, "{name}: only the initial state");
+    }
     // a longer forward run (R1 in 3 x 300 steps), cancelled while it runs
     let sets = json!([
         "history.segments.0.steps=300",

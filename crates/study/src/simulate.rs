@@ -187,37 +187,7 @@ fn run_here(opts: &SimulateOptions, cancel: Option<&Cancel>) -> Result<SimulateO
         Some(h) => solver.run_history(mat, &params, h, &solver_opts),
         None => solver.run(mat, &params, &schedule, &solver_opts),
     };
-    let (trajectory, failure) = match run {
-        Ok(t) => (t, None),
-        Err(ContactError::StepFailed {
-            step,
-            t,
-            reason,
-            partial,
-            ..
-        }) if reason.contains(STOPPED) => (
-            *partial,
-            Some(format!("{STOPPED} during step {step} (t = {t} s)")),
-        ),
-        Err(ContactError::StepFailed {
-            step,
-            t,
-            cuts,
-            reason,
-            partial,
-        }) => (
-            *partial,
-            Some(format!(
-                "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
-            )),
-        ),
-        Err(e) => {
-            return Err(Error::new(
-                ErrorKind::Solver,
-                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
-            ));
-        }
-    };
+    let (trajectory, failure) = outcome(run, &name)?;
     let mut rows = output::curve(&schedule, &trajectory);
     if let Some((a, seed)) = opts.noise {
         // test K of a joint configuration draws its own noise, as `identify` does
@@ -276,6 +246,46 @@ fn run_here(opts: &SimulateOptions, cancel: Option<&Cancel>) -> Result<SimulateO
         matrix,
         failure,
         seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The trajectory of a forward run and why it ended early, if it did: a step that failed
+/// even after cutting, or a stop asked through [`run_cancellable`] (not errors: the curve
+/// up to there is the outcome).
+fn outcome(
+    run: std::result::Result<Trajectory, ContactError>,
+    name: &str,
+) -> Result<(Trajectory, Option<String>)> {
+    Ok(match run {
+        Ok(t) => (t, None),
+        Err(ContactError::StepFailed {
+            step,
+            t,
+            reason,
+            partial,
+            ..
+        }) if reason.contains(STOPPED) => (
+            *partial,
+            Some(format!("{STOPPED} during step {step} (t = {t} s)")),
+        ),
+        Err(ContactError::StepFailed {
+            step,
+            t,
+            cuts,
+            reason,
+            partial,
+        }) => (
+            *partial,
+            Some(format!(
+                "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
+            )),
+        ),
+        Err(e) => {
+            return Err(Error::new(
+                ErrorKind::Solver,
+                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
+            ));
+        }
     })
 }
 
