@@ -48,10 +48,8 @@ pub(crate) fn when_it_stops(command: &str) -> &'static str {
         "batch" => "stopping after the indents in progress",
         "design" => "stopping after the candidates in progress",
         "map" => "stopping after the grid points (or fit iteration) in progress",
-        "simulate" => {
-            "the simulation is one forward run inside the direct solver, which takes no stop \
-             request: the run ends as cancelled when that forward run is over"
-        }
+        "simulate" => "stopping after the forward run's step in progress",
+        "calibrate" => "the calibration ends as cancelled when its fits are over",
         _ => "the analysis ends as cancelled when its pass over the record is over",
     }
 }
@@ -61,6 +59,7 @@ pub(crate) fn cancelled_message(command: &str, ended: Status, error: Option<&Err
     let kept = match (command, ended) {
         ("simulate", Status::Done) => "the forward run in progress finished; its curve is kept",
         ("analyze", Status::Done) => "the analysis in progress finished; its tables are kept",
+        ("calibrate", Status::Done) => "the calibration in progress finished; tip.ron is kept",
         ("design" | "map", _) => "stopped before every evaluation was done; nothing written",
         _ => "its files are kept",
     };
@@ -117,13 +116,17 @@ pub(crate) fn prepare_analyze(
     })
 }
 
-/// A joint configuration (`tests`) of the picked tests of `record`, from the one-test
-/// configuration `cfg` (its `data` section repeated per test), as RON text.
+/// A joint configuration (`tests`) of the picked tests, from the one-test configuration
+/// `cfg` (its `data` section repeated per test), as RON text. A pick names a test of
+/// `record` or of its own `record` (found by `lookup`): a test of another record reads
+/// its own file (format detected) and, when its file states a tip other than the first
+/// record's test, takes that tip as its own `punch`.
 pub(crate) fn joint_config(
     cfg: &Config,
     picks: &[TestPick],
     record: Option<&RecordRef>,
     command: &str,
+    lookup: &dyn Fn(&str) -> Result<RecordRef, ApiError>,
 ) -> Result<String, ApiError> {
     if !matches!(command, "identify" | "map") {
         return Err(bad(
@@ -131,7 +134,7 @@ pub(crate) fn joint_config(
             format!("`tests` (a joint fit) is for identify and map, not {command}"),
         ));
     }
-    let (Some((rid, _, info)), Some(data)) = (record, &cfg.data) else {
+    let (Some(base), Some(data)) = (record, &cfg.data) else {
         return Err(bad(
             "config",
             "`tests` picks tests of a record: give `record` (and a configuration with a `data` \
@@ -139,15 +142,31 @@ pub(crate) fn joint_config(
                 .into(),
         ));
     };
-    let n = info["tests"].as_array().map_or(0, Vec::len);
     if picks.is_empty() {
         return Err(bad(
             "config",
             "`tests` is empty: pick at least one test".into(),
         ));
     }
+    let mut others: Vec<RecordRef> = Vec::new();
+    for p in picks {
+        if let Some(rid) = p.record.as_deref().filter(|r| *r != base.0) {
+            if !others.iter().any(|o| o.0 == rid) {
+                others.push(lookup(rid)?);
+            }
+        }
+    }
+    let several = !others.is_empty();
+    // the tip the base configuration's punch was made for: the record's test's stated tip
+    let base_tip = |k: usize| base.2["tests"][k.saturating_sub(1)]["tip"].clone();
+    let base_k = cfg.data.as_ref().and_then(|d| d.test).unwrap_or(1);
     let mut specs = Vec::with_capacity(picks.len());
     for (i, p) in picks.iter().enumerate() {
+        let (rid, rel, info) = match p.record.as_deref() {
+            Some(r) if r != base.0 => others.iter().find(|o| o.0 == r).unwrap_or(base),
+            _ => base,
+        };
+        let n = info["tests"].as_array().map_or(0, Vec::len);
         if p.test == 0 || p.test > n {
             return Err(bad(
                 "data",
@@ -157,10 +176,17 @@ pub(crate) fn joint_config(
                 ),
             ));
         }
-        if picks[..i].iter().any(|q| q.test == p.test) {
+        let same_record = |q: &TestPick| q.record.as_deref().unwrap_or(&base.0) == rid.as_str();
+        if picks[..i]
+            .iter()
+            .any(|q| q.test == p.test && same_record(q))
+        {
             return Err(bad(
                 "config",
-                format!("tests[{i}]: test {} is picked twice", p.test),
+                format!(
+                    "tests[{i}]: test {} of record `{rid}` is picked twice",
+                    p.test
+                ),
             ));
         }
         if let Some(w) = p.weight {
@@ -171,15 +197,27 @@ pub(crate) fn joint_config(
                 ));
             }
         }
-        let name = info["tests"][p.test - 1]["name"]
+        let t = &info["tests"][p.test - 1];
+        let mut name = t["name"]
             .as_str()
             .map_or_else(|| format!("test {}", p.test), String::from);
+        if several {
+            name = format!("{name} ({})", info["name"].as_str().unwrap_or(rid));
+        }
         let mut d = data.clone();
         d.test = Some(p.test);
+        let mut punch = None;
+        if rid != &base.0 {
+            d.file.clone_from(rel);
+            d.format = Default::default();
+            if t["tip"] != base_tip(base_k) {
+                punch = Some(stated_punch(t));
+            }
+        }
         specs.push(TestSpec {
             name: Some(name),
             specimen: None,
-            punch: None,
+            punch,
             contact: None,
             history: None,
             data: Some(d),
@@ -191,15 +229,35 @@ pub(crate) fn joint_config(
     joint.tests = Some(specs);
     let text = ron::ser::to_string_pretty(&joint, ron::ser::PrettyConfig::new())
         .map_err(ApiError::internal)?;
+    let what = picks
+        .iter()
+        .map(|p| match p.record.as_deref() {
+            Some(r) if several => format!("{r}:{}", p.test),
+            _ if several => format!("{}:{}", base.0, p.test),
+            _ => p.test.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let what = if several {
+        format!("record:test {what}")
+    } else {
+        format!("tests {what} of record {}", base.0)
+    };
     Ok(format!(
-        "// Written by `indentify serve`: a joint fit of tests {} of record {rid} (every --set \
-         applied). Units: N, mm, s, MPa.\n{text}\n",
-        picks
-            .iter()
-            .map(|p| p.test.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
+        "// Written by `indentify serve`: a joint fit of {what} (every --set applied). \
+         Units: N, mm, s, MPa.\n{text}\n"
     ))
+}
+
+/// The punch a record's test states (record.json's `tip`, `tip_radius`), Berkovich when
+/// it states none the templates recognize (as `GET /api/templates` assumes).
+fn stated_punch(t: &Value) -> indentify_study::Punch {
+    indentify_study::templates::tip_from_metadata(&indentify_study::records::Meta {
+        tip: t["tip"].as_str().map(String::from),
+        tip_radius: t["tip_radius"].as_f64(),
+        ..Default::default()
+    })
+    .unwrap_or(indentify_study::Punch::Berkovich { tip_radius: None })
 }
 
 /// The command's own checks on a loaded configuration and the request's options.
@@ -367,7 +425,7 @@ fn io_error(e: impl std::fmt::Display) -> ErrorBody {
 }
 
 /// The record's file of an analyze run (its folder's `../../records/ID/NAME`).
-fn record_file(run: &Run) -> Result<PathBuf, ErrorBody> {
+pub(crate) fn record_file(run: &Run) -> Result<PathBuf, ErrorBody> {
     let rid = run.meta().record.unwrap_or_default();
     let ws_root = run.dir.join("../..");
     let ws = Workspace::open(&normalize(&ws_root)).map_err(io_error)?;

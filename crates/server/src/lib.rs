@@ -2,10 +2,10 @@
 //!
 //! One process: an axum server on tokio answers the page (HTML, JS and CSS compiled in,
 //! no third-party code) and the API of docs/web.md; runs (`identify`, `simulate`,
-//! `analyze`, `design`, `batch`, `map`; joint fits of a record's tests) are
-//! checked when submitted, exactly as the CLI checks its configuration, then executed by a
-//! fixed pool of worker threads calling `indentify_study` (the same options, observer and
-//! cancellation as the CLI). Everything a run writes goes into `WORKSPACE/runs/<id>/`: the
+//! `analyze`, `calibrate`, `design`, `batch`, `map`; joint fits of tests of one or several
+//! records) are checked when submitted, exactly as the CLI checks its configuration, then
+//! executed by a fixed pool of worker threads calling `indentify_study` (the same options,
+//! observer and cancellation as the CLI). Everything a run writes goes into `WORKSPACE/runs/<id>/`: the
 //! files the CLI writes (config.ron, result.json, report.md, history.csv, fit.csv,
 //! figures) and `status.json`, so runs survive a restart and open in the CLI and Python.
 //!
@@ -16,6 +16,7 @@
 //! server, and runs queue behind a bounded number of workers.
 
 pub mod api;
+pub mod calibrate;
 mod jobs;
 mod page;
 pub mod records;

@@ -31,19 +31,29 @@ pub fn now() -> f64 {
 }
 
 /// The commands a run may execute.
-pub const COMMANDS: [&str; 6] = ["identify", "simulate", "analyze", "design", "batch", "map"];
+pub const COMMANDS: [&str; 7] = [
+    "identify",
+    "simulate",
+    "analyze",
+    "design",
+    "batch",
+    "map",
+    "calibrate",
+];
 
 /// The commands a `DELETE` can stop while they run: every one. An identification stops
 /// after its iteration in progress (or its profile re-fits in progress), a batch after its
 /// indents in progress, a design after its candidates in progress, a map after its grid
-/// points in progress; a simulation and an analysis (one forward run; one pass over the
-/// record's unloadings) end as cancelled when that pass is over.
-pub const CANCELLABLE: [&str; 6] = COMMANDS;
+/// points in progress, a simulation after its forward run's step in progress; an analysis
+/// and a calibration (passes over the record's unloadings) end as cancelled when their
+/// pass is over.
+pub const CANCELLABLE: [&str; 7] = COMMANDS;
 
 /// The file of a run's folder that `GET /api/runs/{id}` answers as `result`.
 pub fn result_file(command: &str) -> &'static str {
     match command {
         "analyze" => "analysis.json",
+        "calibrate" => "calibration.json",
         "design" => "design.json",
         "batch" => "batch.json",
         "map" => "map.json",
@@ -194,9 +204,16 @@ pub struct RunRequest {
     /// analyze: the tip (`berkovich`, `cone:DEG`, `sphere:UM`, `flat:UM`; `--tip`).
     #[serde(default)]
     pub tip: Option<String>,
-    /// analyze: Poisson's ratio of the sample (`--nu`, default 0.3).
+    /// analyze: Poisson's ratio of the sample (`--nu`, default 0.3); calibrate: the
+    /// reference's (required).
     #[serde(default)]
     pub nu: Option<f64>,
+    /// calibrate: the reference's Young's modulus, GPa (`--modulus`, required).
+    #[serde(default)]
+    pub modulus: Option<f64>,
+    /// calibrate: the number of area coefficients (`--terms`, default 3, 1 to 6).
+    #[serde(default)]
+    pub terms: Option<usize>,
     /// map: the two parameters (`--pair`).
     #[serde(default)]
     pub pair: Option<Vec<String>>,
@@ -219,6 +236,10 @@ pub struct RunRequest {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TestPick {
+    /// The record of this test (an id of `POST /api/records`); default: the request's
+    /// `record`. Tests of several records make one joint fit.
+    #[serde(default)]
+    pub record: Option<String>,
     /// The record's test, from 1.
     pub test: usize,
     /// Its weight in the joint cost (default `1 / (n F_max^2)`).
@@ -426,7 +447,7 @@ impl Runs {
     /// A 400 with the CLI's messages (unknown command, configuration, `--set`, a data
     /// file outside the workspace's records, a test out of range), 404 for an unknown
     /// record, 503 when the queue is full.
-    pub fn submit(&self, req: RunRequest) -> Result<String, ApiError> {
+    pub fn submit(&self, mut req: RunRequest) -> Result<String, ApiError> {
         if !COMMANDS.contains(&req.command.as_str()) {
             return Err(ApiError::bad_request(
                 "config",
@@ -450,6 +471,13 @@ impl Runs {
         }
         let user_sets = sets_of(req.sets.as_ref())?;
         jobs::check_starts(&req)?;
+        // a joint fit of tests of several records without `record`: the first pick's
+        // record gives the one-test template (and the run's `record`)
+        if req.record.is_none() {
+            if let Some(first) = req.tests.as_ref().and_then(|t| t.first()) {
+                req.record.clone_from(&first.record);
+            }
+        }
         let id = self.new_id();
         let dir = self
             .ws
@@ -458,6 +486,8 @@ impl Runs {
         let record = self.resolve_record(&req)?;
         let prepared = if req.command == "analyze" {
             jobs::prepare_analyze(&req, record.as_ref(), &user_sets)?
+        } else if req.command == "calibrate" {
+            crate::calibrate::prepare(&req, record.as_ref(), &user_sets)?
         } else {
             self.prepare_config(&req, &id, &dir, record.as_ref(), user_sets)?
         };
@@ -562,12 +592,20 @@ impl Runs {
         let mut cfg = source.load(&sets).map_err(|e| ApiError::study(&e))?;
         cfg.base_dir = Some(dir.to_path_buf());
         let joint = match &req.tests {
-            Some(picks) => Some(jobs::joint_config(
-                &cfg,
-                picks,
-                record,
-                req.command.as_str(),
-            )?),
+            Some(picks) => {
+                let lookup = |rid: &str| -> Result<RecordRef, ApiError> {
+                    let info = records::load(&self.ws, rid)?;
+                    let (rel, _) = records::file_of(&self.ws, rid)?;
+                    Ok((rid.to_string(), rel, info))
+                };
+                Some(jobs::joint_config(
+                    &cfg,
+                    picks,
+                    record,
+                    req.command.as_str(),
+                    &lookup,
+                )?)
+            }
             None => None,
         };
         if let Some(j) = &joint {
@@ -794,6 +832,7 @@ fn execute(run: &Arc<Run>) {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command.as_str() {
             "identify" => run_identify(run),
             "analyze" => jobs::run_analyze(run),
+            "calibrate" => crate::calibrate::run(run),
             "design" => jobs::run_design(run),
             "batch" => jobs::run_batch(run),
             "map" => jobs::run_map(run),
@@ -963,7 +1002,7 @@ fn run_simulate(run: &Run) -> Result<End, ErrorBody> {
     let mut opts = SimulateOptions::new(ConfigSource::Path(run.dir.join("config.ron")));
     opts.sets = run.spec.sets.clone();
     opts.out = Some(run.dir.join("curve.csv"));
-    let o = simulate::run(&opts).map_err(|e| error_body(&e))?;
+    let o = simulate::run_cancellable(&opts, &run.cancel).map_err(|e| error_body(&e))?;
     let peak = o
         .rows
         .iter()
@@ -987,7 +1026,17 @@ fn run_simulate(run: &Run) -> Result<End, ErrorBody> {
             messages: vec![format!("{e:#}")],
         });
     }
+    let reached = o.rows.last().map_or(0.0, |r| r.t);
     match &o.failure {
+        Some(why) if why.contains(indentify_study::stoppable::STOPPED) => Ok((
+            Status::Cancelled,
+            Some(summary),
+            None,
+            Some(format!(
+                "cancelled: the forward run stopped ({why}); the curve up to t = {reached} s \
+                 is kept in curve.csv"
+            )),
+        )),
         Some(why) => Ok((
             Status::Failed,
             Some(summary.clone()),

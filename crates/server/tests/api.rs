@@ -173,13 +173,13 @@ fn malformed_requests_get_the_clis_messages() {
         r.json()["messages"],
         json!(cli(indentify_study::DEFAULT_CONFIG, &["law.nu=0.7"]))
     );
-    let r = submit(s.addr, json!({"command": "calibrate"}));
+    let r = submit(s.addr, json!({"command": "gradient"}));
     assert_eq!(r.status, 400);
     assert!(
         r.json()["error"]
             .as_str()
             .unwrap()
-            .contains("identify, simulate, analyze, design, batch, map")
+            .contains("identify, simulate, analyze, design, batch, map, calibrate")
     );
     let r = submit(s.addr, json!({"command": "simulate", "bogus": 1}));
     assert_eq!(r.status, 400);

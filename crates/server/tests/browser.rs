@@ -543,6 +543,48 @@ fn a_batch_map_and_an_analysis_in_headless_chromium() {
     );
     d.js("document.querySelector('#profile-plots').scrollIntoView(); return 0;");
     d.screenshot(&out.join("profiles.png"));
+
+    // calibrate: the fused-silica workbook, E 72 GPa, nu 0.17: the frame compliance and the
+    // area function with its plot, then saved as a tip the configuration uses
+    let silica = repo()
+        .join("examples/data/kla-fused-silica/FusedSilica.xlsx")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &silica.display().to_string());
+    d.until(
+        "the workbook's record",
+        "document.querySelector('#record-info').textContent.includes('FusedSilica.xlsx')",
+        120.0,
+    );
+    choose(&d, "#command", "calibrate");
+    d.click("#run");
+    d.until(
+        "the area function's coefficients",
+        "document.querySelectorAll('#calibration-table tr').length === 4",
+        300.0,
+    );
+    let c0 = d.js("return document.querySelector('#calibration-table tr:nth-child(2) td:nth-child(2)').textContent;");
+    let c0: f64 = c0.as_str().unwrap().parse().unwrap();
+    assert!((20.0..30.0).contains(&c0), "C0 = {c0}");
+    assert!(
+        d.js("return document.querySelector('#result-summary').textContent;")
+            .as_str()
+            .unwrap()
+            .contains("frame compliance")
+    );
+    d.until(
+        "the area plot",
+        "document.querySelectorAll('#calibration-plot circle').length >= 3 && document.querySelector('#calibration-plot polyline')",
+        30.0,
+    );
+    d.click("#save-tip");
+    d.until(
+        "the tip stored and in the configuration",
+        "document.querySelector('#save-tip-note').textContent.includes('stored') && document.querySelector('#config').value.includes('punch: Calibrated(file: \"../../tips/')",
+        30.0,
+    );
+    d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
+    d.screenshot(&out.join("calibrate.png"));
 }
 
 #[test]
@@ -587,7 +629,8 @@ fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
     d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
     d.screenshot(&out.join("costmap.png"));
 
-    // a joint fit of tests 1 and 2 of a multi-test record, test 2 weighted
+    // a joint fit of tests 1 and 2 of a multi-test record, test 2 weighted, and test 1 of
+    // another record (a Berkovich file: the spherical record's tests keep their sphere)
     let record = repo()
         .join("examples/data/anton-paar-sphere-creep/HT_V_100mN.TXT")
         .canonicalize()
@@ -609,7 +652,23 @@ fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
     d.send_keys("#tests input.weight[data-test='2']", "2");
     d.until(
         "the joint note",
-        "document.querySelector('#joint-note').textContent.includes('Joint fit of tests 1, 2')",
+        "document.querySelector('#joint-note').textContent.includes('HT_V_100mN.TXT test 1, HT_V_100mN.TXT test 2')",
+        5.0,
+    );
+    let other = repo()
+        .join("examples/data/anton-paar-unht-berkovich/anonNI.TXT")
+        .canonicalize()
+        .unwrap();
+    d.send_keys("#file-input", &other.display().to_string());
+    d.until(
+        "the second record",
+        "document.querySelector('#record-info').textContent.includes('anonNI.TXT') && document.querySelector('#config').value.includes('anonNI.TXT')",
+        60.0,
+    );
+    d.click("#tests input.joint[data-test='1']");
+    d.until(
+        "the joint note over two records",
+        "document.querySelector('#joint-note').textContent.includes('HT_V_100mN.TXT test 2, anonNI.TXT test 1')",
         5.0,
     );
     d.send_keys(
@@ -640,6 +699,14 @@ fn a_design_a_cost_map_and_a_joint_fit_in_headless_chromium() {
         "[...document.querySelectorAll('#downloads a')].some(a => a.textContent.includes('test-2/'))",
         30.0,
     );
+    // each test's share of J and its own fit
+    d.until(
+        "the joint tests table and a fit per test",
+        "document.querySelectorAll('#joint-table tr').length === 4 && document.querySelectorAll('#joint-plots .joint-fit polyline').length === 3",
+        30.0,
+    );
+    let name = d.js("return document.querySelector('#joint-table tr:nth-child(4) td:nth-child(1)').textContent;");
+    assert!(name.as_str().unwrap().contains("anonNI.TXT"), "{name}");
     d.js("document.querySelector('#result-card').scrollIntoView(); return 0;");
     d.screenshot(&out.join("joint.png"));
 }

@@ -1,7 +1,7 @@
 //! `DELETE /api/runs/{id}` on a running run of every command beyond identify and batch
 //! (those are in api.rs and commands.rs): simulate, analyze, design, map and the profile
 //! likelihoods of an identification, over a real loopback socket. Each ends `cancelled`
-//! with a message saying what was kept; design and map write nothing. The latency from
+//! with a message saying what was kept (a simulation stops mid-forward, between steps); design and map write nothing. The latency from
 //! the `DELETE` to the final status is printed (`--nocapture`) and not asserted: it is
 //! measured, and its worst case stated, in docs/web.md.
 
@@ -10,6 +10,8 @@ mod common;
 use std::time::{Duration, Instant};
 
 use common::*;
+use indentify_study::simulate::{self, SimulateOptions};
+use indentify_study::{Cancel, ConfigSource};
 use serde_json::{Value, json};
 
 const BERKOVICH: &str = "examples/data/anton-paar-unht-berkovich/anonNI.TXT";
@@ -95,21 +97,87 @@ fn files(v: &Value) -> Vec<String> {
 }
 
 #[test]
-fn a_running_simulation_ends_cancelled_after_its_forward_run() {
+fn a_running_simulation_stops_mid_forward_and_keeps_its_curve() {
+    // not cancelled, the stoppable forward run gives the plain one's bits (R1)
+    let opts = SimulateOptions::new(ConfigSource::Text {
+        text: indentify_study::DEFAULT_CONFIG.to_string(),
+        name: "r1.ron".into(),
+    });
+    let plain = simulate::run(&opts).unwrap();
+    let stoppable = simulate::run_cancellable(&opts, &Cancel::default()).unwrap();
+    let bits = |o: &simulate::SimulateOutcome| -> Vec<(u64, u64, u64)> {
+        o.rows
+            .iter()
+            .map(|r| (r.t.to_bits(), r.h.to_bits(), r.f.to_bits()))
+            .collect()
+    };
+    assert_eq!(bits(&plain), bits(&stoppable));
+    // a stop asked before the first step: a stress-only law (R1's Maxwell, through its
+    // fast law path) and a law with internal variables (a Prony series, through the
+    // material path) both end at step 1 with the stop as the reason, nothing solved
+    let raised = Cancel::default();
+    raised.raise();
+    let prony = std::fs::read_to_string(repo().join("examples/prony-sls.ron")).unwrap();
+    for (text, name) in [
+        (indentify_study::DEFAULT_CONFIG.to_string(), "r1.ron"),
+        (prony, "prony-sls.ron"),
+    ] {
+        let o = simulate::run_cancellable(
+            &SimulateOptions::new(ConfigSource::Text {
+                text,
+                name: name.into(),
+            }),
+            &raised,
+        )
+        .unwrap();
+        let why = o.failure.as_deref().unwrap_or_default();
+        assert!(
+            why.contains("stopped on request during step 1"),
+            "{name}: {why}"
+        );
+        assert_eq!(o.rows.len(), 1, "{name}: only the initial state");
+    }
+    // a longer forward run (R1 in 3 x 300 steps), cancelled while it runs
+    let sets = json!([
+        "history.segments.0.steps=300",
+        "history.segments.1.steps=300",
+        "history.segments.2.steps=300"
+    ]);
     let s = serve(|_| {});
-    // R1, the embedded default
-    let id = start(&s, json!({"command": "simulate"}));
+    let id = start(&s, json!({"command": "simulate", "sets": sets}));
     assert!(
         until(&s, &id, |v| v["status"] == "running"),
         "finished first"
     );
-    let (v, _) = cancel_running(&s, &id, "forward run");
+    std::thread::sleep(Duration::from_millis(300));
+    let (v, latency) = cancel_running(&s, &id, "step in progress");
     let msg = v["message"].as_str().unwrap();
-    assert!(msg.contains("curve is kept"), "{msg}");
-    // the forward run in progress finished: its curve is there, as the CLI writes it
+    assert!(
+        msg.contains("stopped on request") && msg.contains("curve.csv"),
+        "{msg}"
+    );
+    // it stopped mid-forward: fewer steps than the schedule's, the curve up to there kept
+    let r = &v["result"];
+    let (steps, all) = (
+        r["steps"].as_u64().unwrap(),
+        r["schedule_steps"].as_u64().unwrap(),
+    );
+    assert!(steps < all, "{r}");
     let f = files(&v);
     assert!(f.contains(&"curve.csv".to_string()), "{f:?}");
-    assert!(v["result"]["max_force"].as_f64().unwrap() > 0.0, "{v}");
+    let csv = get(s.addr, &format!("/api/runs/{id}/files/curve.csv")).text();
+    assert_eq!(csv.lines().count() as u64, steps + 2, "header + rows");
+    // the same run to its end, as the latency was before (the rest of the forward run)
+    let t = Instant::now();
+    let full = start(&s, json!({"command": "simulate", "sets": sets}));
+    let done = wait(s.addr, &full);
+    assert_eq!(done["status"], "done", "{done}");
+    eprintln!(
+        "simulate: cancelled after {steps} of {all} steps in {:.3} s; the whole run takes \
+         {:.3} s",
+        latency.as_secs_f64(),
+        t.elapsed().as_secs_f64()
+    );
 }
 
 #[test]

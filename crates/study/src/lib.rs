@@ -50,6 +50,7 @@ pub mod simulate;
 pub mod solve;
 pub mod source;
 pub mod start_from_analysis;
+pub mod stoppable;
 pub mod synthetic;
 pub mod templates;
 

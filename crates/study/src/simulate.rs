@@ -6,13 +6,15 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use indentify_contact::{ContactError, DirectSolver, Trajectory};
-use indentify_identify::multiplicative_noise;
+use indentify_identify::{Cancel, multiplicative_noise};
+use indentify_laws::Material;
 
 use crate::config::Config;
 use crate::config::{Measured, Mesher};
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::output::{self, CurveRow};
 use crate::source::ConfigSource;
+use crate::stoppable::{STOPPED, Stoppable};
 
 /// What to simulate and what to write.
 #[derive(Clone, Debug)]
@@ -98,6 +100,21 @@ pub struct SimulateOutcome {
 /// before solving). A step that fails even after cutting is not an error: the outcome's
 /// `failure` says so and the curve up to there is written.
 pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
+    run_here(opts, None)
+}
+
+/// [`run`] that stops between steps once `cancel` is raised: the forward run ends at the
+/// step in progress ([`crate::stoppable`]), the outcome's `failure` says it was stopped
+/// (containing [`crate::stoppable::STOPPED`]) and the curve up to the last converged
+/// step is written as for a failed step. Until then, the same bits as [`run`].
+///
+/// # Errors
+/// As [`run`].
+pub fn run_cancellable(opts: &SimulateOptions, cancel: &Cancel) -> Result<SimulateOutcome> {
+    run_here(opts, Some(cancel))
+}
+
+fn run_here(opts: &SimulateOptions, cancel: Option<&Cancel>) -> Result<SimulateOutcome> {
     let start = Instant::now();
     let name = opts.config.name();
     crate::identify::check_noise(opts.noise)?;
@@ -161,31 +178,16 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         crate::atomic::ensure_writable_dir(dir).kind(ErrorKind::Io)?;
     }
     let mut solver = DirectSolver::new(&model).kind(ErrorKind::Solver)?;
+    let stoppable = cancel.map(|c| Stoppable::new(&**law, c.clone()));
+    let mat: &dyn Material = match &stoppable {
+        Some(s) => s,
+        None => &**law,
+    };
     let run = match &load {
-        Some(h) => solver.run_history(&**law, &params, h, &solver_opts),
-        None => solver.run(&**law, &params, &schedule, &solver_opts),
+        Some(h) => solver.run_history(mat, &params, h, &solver_opts),
+        None => solver.run(mat, &params, &schedule, &solver_opts),
     };
-    let (trajectory, failure) = match run {
-        Ok(t) => (t, None),
-        Err(ContactError::StepFailed {
-            step,
-            t,
-            cuts,
-            reason,
-            partial,
-        }) => (
-            *partial,
-            Some(format!(
-                "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
-            )),
-        ),
-        Err(e) => {
-            return Err(Error::new(
-                ErrorKind::Solver,
-                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
-            ));
-        }
-    };
+    let (trajectory, failure) = outcome(run, &name)?;
     let mut rows = output::curve(&schedule, &trajectory);
     if let Some((a, seed)) = opts.noise {
         // test K of a joint configuration draws its own noise, as `identify` does
@@ -244,6 +246,46 @@ pub fn run(opts: &SimulateOptions) -> Result<SimulateOutcome> {
         matrix,
         failure,
         seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The trajectory of a forward run and why it ended early, if it did: a step that failed
+/// even after cutting, or a stop asked through [`run_cancellable`] (not errors: the curve
+/// up to there is the outcome).
+fn outcome(
+    run: std::result::Result<Trajectory, ContactError>,
+    name: &str,
+) -> Result<(Trajectory, Option<String>)> {
+    Ok(match run {
+        Ok(t) => (t, None),
+        Err(ContactError::StepFailed {
+            step,
+            t,
+            reason,
+            partial,
+            ..
+        }) if reason.contains(STOPPED) => (
+            *partial,
+            Some(format!("{STOPPED} during step {step} (t = {t} s)")),
+        ),
+        Err(ContactError::StepFailed {
+            step,
+            t,
+            cuts,
+            reason,
+            partial,
+        }) => (
+            *partial,
+            Some(format!(
+                "step {step} (t = {t} s) failed after {cuts} step cuts: {reason}"
+            )),
+        ),
+        Err(e) => {
+            return Err(Error::new(
+                ErrorKind::Solver,
+                anyhow::anyhow!(e).context(format!("cannot simulate `{name}`")),
+            ));
+        }
     })
 }
 

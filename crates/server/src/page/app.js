@@ -158,13 +158,14 @@ function renderTests() {
   for (const t of r.tests) {
     const radio = el('input', { type: 'radio', name: 'test', value: t.index });
     radio.checked = t.index === state.test;
-    const pick = state.joint.get(t.index) || { on: false, weight: '' };
+    const key = `${r.id}:${t.index}`;
+    const pick = state.joint.get(key) || { on: false, weight: '' };
     const jbox = el('input', { type: 'checkbox', class: 'joint', 'data-test': t.index });
     jbox.checked = pick.on;
     const wbox = el('input', { type: 'number', class: 'weight', step: 'any', min: '0', placeholder: 'default', 'data-test': t.index });
     wbox.value = pick.weight;
     for (const b of [jbox, wbox]) b.addEventListener('click', (ev) => ev.stopPropagation());
-    const keep = () => { state.joint.set(t.index, { on: jbox.checked, weight: wbox.value }); jointNote(); };
+    const keep = () => { state.joint.set(key, { record: r.id, name: r.name, test: t.index, on: jbox.checked, weight: wbox.value }); jointNote(); };
     jbox.addEventListener('change', keep);
     wbox.addEventListener('input', keep);
     const tr = el('tr', { class: 'clickable' + (t.index === state.test ? ' selected' : '') },
@@ -189,18 +190,19 @@ function renderTests() {
   jointNote();
 }
 
-// the ticked tests of a joint fit: [{test, weight?}] (two or more), or null
+// the ticked tests of a joint fit, of this record and of others ticked before choosing
+// this one (in the order ticked): [{record, test, weight?}] (two or more), or null
 function jointPicks() {
-  if (!state.record) return null;
-  const picks = [...state.joint.entries()].filter(([, p]) => p.on).sort((a, b) => a[0] - b[0])
-    .map(([k, p]) => (parseFloat(p.weight) > 0 ? { test: k, weight: parseFloat(p.weight) } : { test: k }));
+  const picks = [...state.joint.values()].filter((p) => p.on)
+    .map((p) => (parseFloat(p.weight) > 0 ? { record: p.record, test: p.test, weight: parseFloat(p.weight) } : { record: p.record, test: p.test }));
   return picks.length >= 2 ? picks : null;
 }
 
 function jointNote() {
   const p = jointPicks();
-  $('#joint-note').textContent = p ? `Joint fit of tests ${p.map((x) => x.test).join(', ')} (identify, map): one law for all, each test with its weight.` :
-    (state.record && state.record.tests.length > 1 ? 'Tick two or more tests for a joint fit.' : '');
+  const names = Object.fromEntries([...state.joint.values()].map((x) => [x.record, x.name]));
+  $('#joint-note').textContent = p ? `Joint fit (identify, map) of ${p.map((x) => `${names[x.record]} test ${x.test}`).join(', ')}: one law for all, each test with its weight.` :
+    'Tick two or more tests (of this record, or of several: choose another record and tick on) for a joint fit.';
 }
 
 // ---- configuration -------------------------------------------------------------------------
@@ -263,13 +265,26 @@ async function submit() {
     if (seed >= 0) body.seed = seed;
   }
   const joint = jointPicks();
-  if (joint && ['identify', 'map'].includes(body.command)) { body.record = state.record.id; body.tests = joint; }
+  if (joint && ['identify', 'map'].includes(body.command)) {
+    body.tests = joint;
+    // the one-test configuration in the editor is the first pick's record's template
+    body.record = joint.some((p) => state.record && p.record === state.record.id) ? state.record.id : joint[0].record;
+  }
   if (body.command === 'map') {
     Object.assign(body, { pair: [$('#map-a').value, $('#map-b').value], grid: parseInt($('#map-grid').value, 10) || 7, through: $('#map-through').value });
   }
   if (body.command === 'batch') {
     if (state.record) body.record = state.record.id;
     if ($('#manifest').value.trim()) body.manifest = $('#manifest').value;
+  }
+  if (body.command === 'calibrate') {
+    for (const k of ['config', 'sets']) delete body[k];
+    if (state.record) body.record = state.record.id;
+    if (!$('#cal-all').checked && state.record) body.test = state.test;
+    body.modulus = parseFloat($('#cal-modulus').value);
+    body.nu = parseFloat($('#cal-nu').value);
+    const terms = parseInt($('#cal-terms').value, 10);
+    if (terms > 0) body.terms = terms;
   }
   if (body.command === 'analyze') {
     for (const k of ['config', 'sets']) delete body[k];
@@ -360,7 +375,7 @@ function renderProgress(m) {
 
 function clearResult() {
   for (const s of ['#param-table thead', '#param-table tbody', '#identifiability', '#fit-plot', '#residual-plot', '#figures', '#downloads',
-    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots', '#multistart']) $(s).replaceChildren();
+    '#analysis', '#design', '#batch-map', '#indent-view', '#costmap', '#profile-plots', '#multistart', '#joint-tests', '#joint-plots', '#calibration']) $(s).replaceChildren();
   $('#result-summary').textContent = '';
 }
 
@@ -374,6 +389,8 @@ async function loadResult(id) {
   if (run.command === 'identify' && res) renderIdentify(run, res);
   if (run.command === 'simulate' && res) renderSimulate(res);
   if (run.command === 'analyze' && res) renderAnalysis(res);
+  if (run.command === 'calibrate' && res) renderCalibration(id, res);
+  if (run.command === 'identify' && res && res.tests) renderJointTests(res.tests);
   if (run.command === 'design' && res) renderDesign(res);
   if (run.command === 'map' && res) renderCostMap(res);
   if (run.command === 'batch') { drawBatch(run); renderBatchSummary(run); }
@@ -381,6 +398,7 @@ async function loadResult(id) {
   if (run.command === 'identify' && res && res.multistart) renderMultistart(res.multistart);
   if (has('fit.csv')) {
     const fit = parseCsv(await api(`/api/runs/${id}/files/fit.csv`));
+    if (fit.test) renderJointFits(fit, res);
     plot($('#fit-plot'), [
       { x: fit.h, y: fit.F_data, label: 'data', color: '#222', dots: true },
       { x: fit.h, y: fit.F_start, label: 'start', color: '#999', dash: '4 3' },
@@ -460,6 +478,61 @@ function renderAnalysis(res) {
   $('#result-summary').textContent = `Oliver-Pharr analysis of ${res.file} (${res.format}), ν = ${res.nu}; fit range ${sig(100 * res.fit_range.lower, 3)}–${sig(100 * res.fit_range.upper, 3)}% of F_max (${res.fit_range_source})`;
   const rows = res.tests.map((t) => [t.test || `test ${t.index}`, sig(t.E / 1e3, 4), sig(t.H / 1e3, 4), sig(t.Er / 1e3, 4), sig(t.S / 1e3, 4), sig(t.hc * 1e6, 4), sig(t.hmax * 1e6, 4), sig(t.Fmax * 1e3, 4), t.error || '']);
   $('#analysis').append(table('analysis-table', ['test', 'E (GPa)', 'H (GPa)', 'E_r (GPa)', 'S (mN/nm)', 'h_c (nm)', 'h_max (nm)', 'F_max (mN)', 'error'], rows));
+}
+
+// a joint fit: each test's share of J and fit quality, and its own fit plot (fit.csv's
+// `test` column)
+function renderJointTests(tests) {
+  const rows = tests.map((t, k) => [`${k + 1}: ${t.name}`, t.data, sig(t.weight, 4) + (t.default_weight ? ' (default)' : ''), sig(t.wJ, 4), t.n,
+    t.fit_quality ? sig(t.fit_quality.r2, 6) : '', t.fit_quality ? sig(100 * t.fit_quality.rms_rel, 3) + '%' : '']);
+  $('#joint-tests').append(el('h3', { text: 'Tests of the joint fit' }),
+    table('joint-table', ['test', 'data', 'weight', 'w·J', 'points', 'R²', 'RMS / F_max'], rows));
+}
+
+function renderJointFits(fit, res) {
+  const box = $('#joint-plots');
+  const ks = [...new Set(fit.test)];
+  for (const k of ks) {
+    const idx = fit.test.map((v, i) => (v === k ? i : -1)).filter((i) => i >= 0);
+    const col = (c) => idx.map((i) => fit[c][i]);
+    const d = el('div', { class: 'plot joint-fit' });
+    box.append(d);
+    const name = res && res.tests && res.tests[k - 1] ? res.tests[k - 1].name : `test ${k}`;
+    plot(d, [{ x: col('h'), y: col('F_data'), label: `data, ${name}`, color: '#222', dots: true }, { x: col('h'), y: col('F_final'), label: 'fit', color: '#d62728' }],
+      { xlabel: 'depth h (µm)', ylabel: 'force F (mN)', xscale: 1e3, yscale: 1e3 });
+  }
+}
+
+// calibrate: the frame compliance, the area function's coefficients, A(h_c) of every
+// unloading against the fitted ISO function (C0 h² + C1 h + C2 h^½ + ...), and *Save as tip*
+function renderCalibration(id, res) {
+  const a = res.area;
+  $('#result-summary').textContent = `Tip ${res.tip.name}: frame compliance ${sig(res.compliance_used * 1e3, 4)} nm/mN` +
+    (res.compliance ? ` (fitted on ${res.compliance.n} unloadings, R² ${sig(res.compliance.r2, 4)})` : ' (given)') +
+    `; E_r of the reference ${sig(res.er / 1e3, 4)} GPa; ${a.n} points, RMS area misfit ${sig(100 * a.rms_rel, 3)}%`;
+  const box = $('#calibration');
+  const rows = a.coefficients.map((c, k) => [`C${k}`, sig(c, 6), k === 0 ? '1' : `mm^${2 - 2 ** (1 - k)}`]);
+  box.append(table('calibration-table', ['coefficient', 'value', 'unit'], rows));
+  const save = el('button', { type: 'button', id: 'save-tip', text: 'Save as tip (use it in later runs)' });
+  const note = el('span', { id: 'save-tip-note', class: 'muted' });
+  save.addEventListener('click', async () => {
+    try {
+      const text = await api(`/api/runs/${id}/files/tip.ron`);
+      const t = await api('/api/tips?name=tip.ron', { method: 'POST', body: text });
+      $('#config').value = replacePunch($('#config').value, t.punch);
+      note.textContent = `stored as tip ${t.id}: punch: ${t.punch} (put into the configuration)`;
+    } catch (e) { note.textContent = e.message; note.className = 'error'; }
+  });
+  box.append(el('div', { class: 'row' }, save, note));
+  const d = el('div', { class: 'plot', id: 'calibration-plot' });
+  box.append(d);
+  const hc = a.points.map((p) => p[0]);
+  const lo = Math.min(...hc), hi = Math.max(...hc);
+  const xs = Array.from({ length: 60 }, (_, i) => lo + ((hi - lo) * i) / 59);
+  const area = (h) => a.coefficients.reduce((s, c, k) => s + c * h ** (2 ** (1 - k)), 0);
+  plot(d, [{ x: hc, y: a.points.map((p) => p[1]), label: 'A(h_c) of each unloading', color: '#222', dots: true },
+    { x: xs, y: xs.map(area), label: 'fitted area function', color: '#d62728' }],
+  { xlabel: 'contact depth h_c (nm)', ylabel: 'area A (µm²)', xscale: 1e6, yscale: 1e6 });
 }
 
 function renderDesign(res) {
