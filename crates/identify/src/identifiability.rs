@@ -372,45 +372,7 @@ impl Identifiability {
         let kept_rows: Vec<usize> = (0..weights.len().min(jac.len()))
             .filter(|&i| weights[i] > 0.0)
             .collect();
-        let mut noise_level = f64::NAN;
-        let row_var: Option<Vec<f64>> = match (noise, forces) {
-            (NoiseModel::Residual, _) | (_, None) => None,
-            (NoiseModel::Absolute(level), Some(_)) => Some(
-                kept_rows
-                    .iter()
-                    .map(|&i| weights[i] * level * level)
-                    .collect(),
-            ),
-            (NoiseModel::Relative(_) | NoiseModel::RelativeEstimated, Some(f)) => {
-                let level = match noise {
-                    NoiseModel::Relative(v) => v,
-                    _ => {
-                        let (mut rr, mut ff) = (0.0, 0.0);
-                        for &i in &kept_rows {
-                            let fi = f.fitted.get(i).copied().unwrap_or(f64::NAN);
-                            let di = f.measured.get(i).copied().unwrap_or(f64::NAN);
-                            rr += (fi - di).powi(2);
-                            ff += fi * fi;
-                        }
-                        if n > p && ff > 0.0 {
-                            (rr / ff * n as f64 / (n - p) as f64).sqrt()
-                        } else {
-                            f64::NAN
-                        }
-                    }
-                };
-                noise_level = level;
-                Some(
-                    kept_rows
-                        .iter()
-                        .map(|&i| {
-                            let fi = f.fitted.get(i).copied().unwrap_or(f64::NAN);
-                            weights[i] * (level * fi).powi(2)
-                        })
-                        .collect(),
-                )
-            }
-        };
+        let (row_var, noise_level) = row_variances(noise, forces, weights, &kept_rows, n, p);
         // with a stated noise the deviations do not need n > p
         let var_scale = if row_var.is_some() { 1.0 } else { sigma2 };
         let values: Vec<f64> = columns.iter().map(|col| c[col.index]).collect();
@@ -772,6 +734,59 @@ impl Identifiability {
             }
         })
     }
+}
+
+/// The per-row variances `w_i Var(F_i)` of the kept rows under a stated or estimated noise
+/// model (`None` under `Residual` or without the forces), and the relative level the
+/// model used (`NaN` when none).
+fn row_variances(
+    noise: NoiseModel,
+    forces: Option<Forces<'_>>,
+    weights: &[f64],
+    kept_rows: &[usize],
+    n: usize,
+    p: usize,
+) -> (Option<Vec<f64>>, f64) {
+    let mut noise_level = f64::NAN;
+    let row_var: Option<Vec<f64>> = match (noise, forces) {
+        (NoiseModel::Residual, _) | (_, None) => None,
+        (NoiseModel::Absolute(level), Some(_)) => Some(
+            kept_rows
+                .iter()
+                .map(|&i| weights[i] * level * level)
+                .collect(),
+        ),
+        (NoiseModel::Relative(_) | NoiseModel::RelativeEstimated, Some(f)) => {
+            let level = match noise {
+                NoiseModel::Relative(v) => v,
+                _ => {
+                    let (mut rr, mut ff) = (0.0, 0.0);
+                    for &i in kept_rows {
+                        let fi = f.fitted.get(i).copied().unwrap_or(f64::NAN);
+                        let di = f.measured.get(i).copied().unwrap_or(f64::NAN);
+                        rr += (fi - di).powi(2);
+                        ff += fi * fi;
+                    }
+                    if n > p && ff > 0.0 {
+                        (rr / ff * n as f64 / (n - p) as f64).sqrt()
+                    } else {
+                        f64::NAN
+                    }
+                }
+            };
+            noise_level = level;
+            Some(
+                kept_rows
+                    .iter()
+                    .map(|&i| {
+                        let fi = f.fitted.get(i).copied().unwrap_or(f64::NAN);
+                        weights[i] * (level * fi).powi(2)
+                    })
+                    .collect(),
+            )
+        }
+    };
+    (row_var, noise_level)
 }
 
 /// The value `c + dc/dy dy` of a column moved by `dy` in its scaled variable (`c e^dy`

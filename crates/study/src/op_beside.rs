@@ -85,10 +85,12 @@ pub fn compare(
             return out;
         }
     };
-    out.tip = if tip.name.is_empty() {
-        tip.area.describe()
+    // a tip's name may already be its area function's description (the ideal tips)
+    let area = tip.area.describe();
+    out.tip = if tip.name.is_empty() || tip.name == area {
+        area
     } else {
-        format!("{} ({})", tip.name, tip.area.describe())
+        format!("{} ({area})", tip.name)
     };
     match analyse_record(record, &tip, nu) {
         Ok(op) => {
