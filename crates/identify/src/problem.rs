@@ -432,7 +432,8 @@ fn weighted_half_squares(forces: &[f64], target: &[f64], weights: &[f64]) -> f64
 pub struct Counts {
     /// Forward (direct problem) solves, failed ones included.
     pub forward: usize,
-    /// Forward solves that failed (the cost is then `+inf`).
+    /// Forward solves that failed, or points the law does not admit (the cost is then
+    /// `+inf`).
     pub forward_failed: usize,
     /// Newton iterations (linear solves) of the forward solves that converged, summed
     /// over their steps.
@@ -867,7 +868,13 @@ impl<'p> Evaluator<'p> {
             let mut error = None;
             for (k, te) in tests.iter_mut().enumerate() {
                 if let Some(source) = te.forward_error.take() {
-                    let step_failed = matches!(source, ContactError::StepFailed { .. });
+                    // a step that failed, or a point the law does not admit (a box face
+                    // on an open end of its range, `sum g_i >= 1` of a Prony law): the
+                    // cost there is +inf, so a line search or a trial step backs off
+                    let step_failed = matches!(
+                        source,
+                        ContactError::StepFailed { .. } | ContactError::Parameters(_)
+                    );
                     if step_failed {
                         self.counts.forward_failed += 1;
                     }
