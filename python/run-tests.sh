@@ -44,6 +44,13 @@ echo "== building and installing the package (cargo profile $profile)"
 VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" \
     "$venv/bin/maturin" develop --profile "$profile" --manifest-path python/Cargo.toml --quiet
 
+# the CLI's own binary, built by `cargo test` in the same target directory, for the tests
+# that compare the package with the command line (they skip without it, fail under CI)
+exe="${CARGO_TARGET_DIR:-$root/target}/debug/indentify"
+if [ -z "${INDENTIFY_EXE:-}" ] && [ -x "$exe" ]; then
+    export INDENTIFY_EXE="$exe"
+fi
+
 echo "== pytest"
 set +e
 INDENTIFY_REQUIRE_MYPY=1 "$py" -m pytest python/tests "$@"
