@@ -317,6 +317,13 @@ impl<'m> Adjoint<'m> {
         if traj.fields.len() == traj.steps.len() + 1 {
             return self.gradient(mat, c, traj, dj_df);
         }
+        if !std::ptr::eq(replay.solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
+        }
         let Some(law) = mat.as_law() else {
             return self.gradient_replayed_material(mat, c, traj, dj_df, replay);
         };
@@ -325,13 +332,6 @@ impl<'m> Adjoint<'m> {
             schedule,
             opts,
         } = replay;
-        if !std::ptr::eq(solver.model(), self.model) {
-            return Err(AdjointError::Replay(
-                "the replaying solver runs another model than this adjoint's: build both \
-                 from the same Model"
-                    .into(),
-            ));
-        }
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
         self.contact.begin();
