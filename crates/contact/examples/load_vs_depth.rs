@@ -3,7 +3,9 @@
 //! reference mesh, vertical contact; the depth-controlled load and hold of the trapezoid,
 //! then the load-controlled run of its force history (one load segment per step). Prints
 //! the fastest of REPEAT alternated runs of each and their ratio:
-//! `cargo run --release -p indentify-contact --example load_vs_depth -- r2 [REPEAT]`.
+//! `cargo run --release -p indentify-contact --example load_vs_depth -- r2 [REPEAT]`
+//! (then each run's steps and counts: factorizations, CG iterations; with `LVD_STEPS`
+//! set, every step's Newton iterations, sub-steps of a cut marked `*`).
 use std::time::Instant;
 
 use indentify_contact::{
@@ -48,6 +50,8 @@ fn main() {
         LoadHistory::from_force_record(&schedule.t, &by_depth.forces()).expect("force history");
     let (mut best_d, mut best_f) = (f64::INFINITY, f64::INFINITY);
     let (mut it_d, mut it_f) = (0, 0);
+    let (mut timing_d, mut timing_f) = (String::new(), String::new());
+    let (mut steps_d, mut steps_f) = (0, 0);
     let mut worst: f64 = 0.0;
     for _ in 0..repeat {
         let t0 = Instant::now();
@@ -62,6 +66,19 @@ fn main() {
         best_f = best_f.min(t0.elapsed().as_secs_f64());
         it_d = d.total_iterations();
         it_f = f.total_iterations();
+        (steps_d, steps_f) = (d.steps.len(), f.steps.len());
+        timing_d = format!("{}", d.timing);
+        timing_f = format!("{}", f.timing);
+        if std::env::var_os("LVD_STEPS").is_some() {
+            let its = |t: &indentify_contact::Trajectory| {
+                t.steps
+                    .iter()
+                    .map(|s| format!("{}{}", s.iterations, if s.on_schedule { "" } else { "*" }))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            println!("depth: {}\nload:  {}", its(&d), its(&f));
+        }
         for (a, b) in d.schedule_steps().zip(f.schedule_steps()) {
             worst = worst.max((a.depth - b.depth).abs() / 0.1);
         }
@@ -73,4 +90,6 @@ fn main() {
         1e3 * best_f,
         best_f / best_d
     );
+    println!("  depth control: {steps_d} steps; {timing_d}");
+    println!("  load control: {steps_f} steps; {timing_f}");
 }

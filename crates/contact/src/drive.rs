@@ -12,14 +12,11 @@
 use crate::history::{LoadHistory, Schedule, Target};
 use crate::newton::State;
 
-/// What a load-controlled step prescribes: the punch force at its end (N) and a key of
-/// its segment (`rate`, N/s: the steps of one segment share it, so that the time
-/// extrapolation of nonlinear laws stays within a segment, as the depth rate does under
-/// depth control).
+/// What a load-controlled step prescribes: the punch force at its end (N). (The time
+/// extrapolation of nonlinear laws keys on the step's force rate, `newton.rs`.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Load {
     pub force: f64,
-    pub rate: f64,
 }
 
 /// The drive of a run: what sets the punch of each step.
@@ -60,20 +57,16 @@ impl Drive for ForceDrive<'_> {
                 } else {
                     state.force + f * (p - state.force)
                 };
-                // Newton starts from the depth extrapolated from the last step
+                // Newton starts from the depth extrapolated linearly from the last step
+                // (a nonlinear law's Newton driver replaces it by the displacement's own
+                // time extrapolation, `newton.rs`)
                 let last = &state.past[0];
                 let depth = if last.dt > 0.0 {
                     state.depth + (t1 - state.t) / last.dt * last.depth
                 } else {
                     state.depth
                 };
-                (
-                    depth,
-                    Some(Load {
-                        force,
-                        rate: p / t_end,
-                    }),
-                )
+                (depth, Some(Load { force }))
             }
         }
     }

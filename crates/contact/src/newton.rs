@@ -122,6 +122,8 @@ pub(crate) struct Increment {
     pub(crate) rate: f64,
     /// The step's depth increment (mm).
     pub(crate) depth: f64,
+    /// Whether the step prescribed the force (`rate` then is its force rate, N/s).
+    pub(crate) load: bool,
 }
 
 impl State {
@@ -146,6 +148,7 @@ impl State {
                 dt: 0.0,
                 rate: 0.0,
                 depth: 0.0,
+                load: false,
             }),
             order: 1,
             depth: depth0,
@@ -200,12 +203,19 @@ struct Extrapolation {
 }
 
 impl Extrapolation {
-    /// For a step of length `dt` at the depth rate `rate` from `state`; `affine` laws
-    /// converge in one solve from anywhere and keep their cheap first pass (no
-    /// extrapolation).
-    fn new(state: &State, dt: f64, rate: f64, affine: bool, n: usize) -> Extrapolation {
+    /// For a step of length `dt` at the depth rate `rate` from `state` (under load
+    /// control, `load`, the force rate); `affine` laws converge in one solve from
+    /// anywhere and keep their cheap first pass (no extrapolation). The past steps of
+    /// the same drive count while their rate is the step's: the depth rate to round-off
+    /// (a segment of the schedule), the force rate within [`LOAD_RATE_CHANGE`] (a force
+    /// history prescribed point by point, a record's, changes its rate a little at
+    /// every step and still moves smoothly; a ramp's end does not).
+    fn new(state: &State, dt: f64, rate: f64, affine: bool, load: bool, n: usize) -> Extrapolation {
         let last = &state.past[0];
-        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let tol = if load { LOAD_RATE_CHANGE } else { 1e-9 };
+        let same = |a: f64, b: f64, b_load: bool| {
+            b_load == load && (a - b).abs() <= tol * a.abs().max(b.abs())
+        };
         // the highest degree the segment's past steps allow (0: no extrapolation; 1 for a
         // step more than twice the last one, after a cut, where the higher degrees' weights
         // grow like (dt / h_1)^degree)
@@ -215,7 +225,7 @@ impl Extrapolation {
             let kept = state
                 .past
                 .iter()
-                .take_while(|p| p.dt > 0.0 && p.du.len() == n && same(rate, p.rate))
+                .take_while(|p| p.dt > 0.0 && p.du.len() == n && same(rate, p.rate, p.load))
                 .count();
             if dt > 2.0 * last.dt {
                 kept.min(1)
@@ -242,6 +252,17 @@ impl Extrapolation {
                 *x += self.predict(&state.past, d, i);
             }
         }
+    }
+
+    /// The depth (mm) the state's best degree predicts for the step (`None` without
+    /// extrapolation).
+    fn depth(&self, state: &State) -> Option<f64> {
+        if self.degrees == 0 {
+            return None;
+        }
+        let d = state.order.min(self.degrees);
+        let w = &self.weights[d - 1];
+        Some(state.depth + (0..d).map(|k| w[k] * state.past[k].depth).sum::<f64>())
     }
 
     /// Hindsight: the degree that would have predicted the increment `du` best.
@@ -294,6 +315,10 @@ enum Check {
     /// The sets changed (or hold without converged equilibrium): solve again.
     Continue,
 }
+
+/// How much the force rate of a load-controlled step may differ from that of an earlier
+/// step (relative to the larger) for the time extrapolation to reach back to it.
+const LOAD_RATE_CHANGE: f64 = 0.5;
 
 /// The Newton driver's pieces and work space on one model.
 #[derive(Debug)]
@@ -370,7 +395,8 @@ impl<'m> Newton<'m> {
         let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         self.constraint
             .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
-        if spec.load.is_some() && !it.set.active.contains(&true) {
+        let triggered = spec.load.is_some() && !it.set.active.contains(&true);
+        if triggered {
             // load control out of contact: the trigger moves the punch to where its first
             // candidate touches (a hair beyond), where the contact stiffness is positive
             it.depth = touch_depth(self.model, &it.u) + 1e-9 * self.model.gap_length();
@@ -396,18 +422,44 @@ impl<'m> Newton<'m> {
         // fewer per step). Affine laws converge in one solve from anywhere and keep their
         // cheap first pass.
         let rate = match spec.load {
-            Some(load) => load.rate,
+            // a hold's force change is the last step's residual: zero
+            Some(load) if dt > 0.0 => {
+                let df = load.force - state.force;
+                if df.abs() <= 1e-6 * load.force.abs() {
+                    0.0
+                } else {
+                    df / dt
+                }
+            }
             None if dt > 0.0 => (spec.depth - state.depth) / dt,
-            None => 0.0,
+            _ => 0.0,
         };
-        let extra = Extrapolation::new(state, dt, rate, law.affine.is_some(), it.u.len());
+        let extra = Extrapolation::new(
+            state,
+            dt,
+            rate,
+            law.affine.is_some(),
+            spec.load.is_some(),
+            it.u.len(),
+        );
         match spec.guess {
             Some((u0, u1)) if law.affine.is_none() => {
                 for ((x, a), b) in it.u.iter_mut().zip(u0).zip(u1) {
                     *x += b - a;
                 }
             }
-            _ => extra.apply(state, &mut it.u),
+            _ => {
+                extra.apply(state, &mut it.u);
+                if spec.load.is_some() && !triggered {
+                    // under load control the depth is an unknown: it starts from the same
+                    // polynomial as the displacement, so that the first iterate is one
+                    // state of the extrapolated motion (the drive's linear guess left a
+                    // depth inconsistent with it: R2 took 38% more iterations)
+                    if let Some(d) = extra.depth(state) {
+                        it.depth = d;
+                    }
+                }
+            }
         }
         it.seen.push(it.set.clone());
         self.residuals.clear();
@@ -702,6 +754,7 @@ impl<'m> Newton<'m> {
                     dt,
                     rate,
                     depth: ddepth,
+                    load: spec.load.is_some(),
                 },
                 p0,
                 p1,
@@ -817,19 +870,45 @@ impl Newton<'_> {
         model
             .pattern
             .sym_mul_add(self.system.k_values(), &self.v, &mut self.kv);
-        self.col.copy_from_slice(&self.kv);
-        // the first solve's prescribed increments are spent: the depth column holds its
-        // constrained equations at zero
-        // s below is a difference of two close numbers: the depth column is solved
-        // tighter than Newton's forcing term
-        self.aux.fill(0.0);
-        self.system
-            .solve_inexact(model, &mut self.col, &self.aux, eta.min(1e-9))
-            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-        let g_du1 = -dot(&self.kv, &self.rhs);
         let vkv = dot(&self.v, &self.kv);
-        let s = vkv - dot(&self.kv, &self.col);
+        // the depth column `du_2 = w - v` into `self.col`: from the capacitance mode's
+        // stored columns when it holds the system (an affine law under vertical contact:
+        // no solve), else by one more solve
+        let s = match self.system.depth_column_capacitance(&self.v, &mut self.col) {
+            Some(s) => s,
+            None => {
+                self.col.copy_from_slice(&self.kv);
+                // the first solve's prescribed increments are spent: the depth column
+                // holds its constrained equations at zero. Under vertical contact `s` is
+                // the column's energy `du_2 . K du_2` (the reactions of a unit settlement:
+                // stationary, so its error is second order in the solve's, and a sum
+                // without cancellation): the column is solved to Newton's forcing term.
+                // Otherwise `s = v . K v - (K v) . w` is a difference of two close
+                // numbers: the column is solved tighter.
+                let energy = !self.system.has_frames();
+                let tol = if energy { eta.min(1e-2) } else { eta.min(1e-9) };
+                self.aux.fill(0.0);
+                self.system
+                    .solve_inexact(model, &mut self.col, &self.aux, tol)
+                    .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
+                let s = vkv - dot(&self.kv, &self.col);
+                for (c, v) in self.col.iter_mut().zip(&self.v) {
+                    *c -= v;
+                }
+                if energy {
+                    model
+                        .pattern
+                        .sym_mul_add(self.system.k_values(), &self.col, &mut self.aux);
+                    let e = dot(&self.col, &self.aux);
+                    self.aux.fill(0.0);
+                    e
+                } else {
+                    s
+                }
+            }
+        };
+        let g_du1 = -dot(&self.kv, &self.rhs);
         let f = punch_force(model, &it.set, &self.body.f_int);
         let n_active = it.set.active().count();
         if !(s.is_finite() && s > 1e-12 * vkv.abs()) {
@@ -846,8 +925,8 @@ impl Newton<'_> {
         // would throw the punch far beyond the contact that then forms
         let cap = (2.0 * (it.depth - start).abs()).max(0.1 * model.gap_length());
         let du = ((force - f - g_du1) / s).clamp(-cap, cap);
-        for ((x, c), v) in self.rhs.iter_mut().zip(&self.col).zip(&self.v) {
-            *x += du * (c - v);
+        for (x, c) in self.rhs.iter_mut().zip(&self.col) {
+            *x += du * c;
         }
         it.depth += du;
         Ok(())

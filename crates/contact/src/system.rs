@@ -92,6 +92,8 @@ pub struct ConstrainedSystem {
     slip_piv: Vec<usize>,
     /// The work space of this system's own solves.
     scratch: SolveScratch,
+    /// Load control's multipliers `S^-1 1` of the capacitance depth column (work space).
+    depth_mu: Vec<f64>,
 }
 
 /// The local frame of an active node under normal contact: its equations, the unit
@@ -157,6 +159,7 @@ impl ConstrainedSystem {
             slip_lu: Vec::new(),
             slip_piv: Vec::new(),
             scratch: SolveScratch::default(),
+            depth_mu: Vec::new(),
         })
     }
 
@@ -305,6 +308,12 @@ impl ConstrainedSystem {
             .pattern
             .constrain(&rotated, &self.constrained, &mut values);
         (model.pattern.to_csmat(&values), self.constrained.clone())
+    }
+
+    /// Whether the active nodes have frames (normal contact) rather than vertical
+    /// constraints.
+    pub(crate) fn has_frames(&self) -> bool {
+        !self.frames.is_empty()
     }
 
     /// Whether equation `e` is currently constrained.
@@ -1037,6 +1046,52 @@ impl ConstrainedSystem {
     }
 }
 
+impl ConstrainedSystem {
+    /// Load control's depth column without a solve, where the capacitance mode holds the
+    /// current system (a reusable tangent, vertical contact, no friction): the solution
+    /// `du_U` of `K du_U = 0` on the free equations with `du_U = -1` on the prescribed
+    /// ones `C` (the active candidates' vertical equations, marked 1 in `v`) is
+    /// `-sum_c mu_c z_c` with `S mu = 1` on the stored columns `z_c = K^-1 e_c`, and the
+    /// contact stiffness is `s = -(K v) . du_U = 1 . mu` (the reactions of a unit
+    /// settlement, the Schur complement `[K^-1]_CC^-1` summed): `m` vector updates instead
+    /// of a triangular solve pair. `col` receives `du_U`; returns `s`, or `None` (nothing
+    /// written) when the current system is not in that mode or its prescribed equations
+    /// are not exactly those of `v`.
+    pub(crate) fn depth_column_capacitance(&mut self, v: &[f64], col: &mut [f64]) -> Option<f64> {
+        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+            return None;
+        }
+        let set = &self.schur_set;
+        let m = set.len();
+        let marked = v.iter().filter(|&&x| x != 0.0).count();
+        if m == 0
+            || marked != m
+            || !set
+                .iter()
+                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
+        {
+            return None;
+        }
+        let mu = &mut self.depth_mu;
+        mu.clear();
+        mu.resize(m, 1.0);
+        dense_cholesky_solve(&self.schur, m, mu);
+        col.fill(0.0);
+        for (&c, &f) in set.iter().zip(mu.iter()) {
+            let Some(z) = self.columns.get(&c) else {
+                continue;
+            };
+            for (x, zi) in col.iter_mut().zip(z) {
+                *x -= f * zi;
+            }
+        }
+        for &c in set {
+            col[c] = -1.0;
+        }
+        Some(mu.iter().sum())
+    }
+}
+
 /// Index of each frame's tangential unknown in the capacitance system (after the `nf`
 /// normal ones), `None` on the axis.
 fn alpha_indices(frames: &[NodeFrame]) -> Vec<Option<usize>> {
@@ -1368,6 +1423,60 @@ mod tests {
         assert!(reusable.capacitance);
         assert_eq!(reusable.factorizations(), 1);
         assert_eq!(direct.factorizations(), 6);
+    }
+
+    /// Load control's depth column from the capacitance mode's stored columns (no solve)
+    /// equals the column solved by the direct factorization (`K du = 0` on the free
+    /// equations, `du = -1` on the prescribed ones) to 1e-10, and its contact stiffness
+    /// `1 . S^-1 1` the reactions' sum `-(K v) . du` of the solved column to 1e-10, for
+    /// growing and shrinking contact sets; other modes decline.
+    #[test]
+    fn capacitance_depth_column_equals_the_solved_one() {
+        let model = small_model(6, 5);
+        let c = [20000.0, 0.3];
+        let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
+        let tangents = vec![t; model.disc.qp.len()];
+        let n = model.dofs.n_eq;
+        let nc = model.candidates.len();
+        let mut reusable = ConstrainedSystem::new(&model).unwrap();
+        let mut direct = ConstrainedSystem::new(&model).unwrap();
+        for k_active in [1, 3, 4, 2, nc] {
+            let active: Vec<bool> = (0..nc).map(|k| k < k_active).collect();
+            reusable.set_tangent(&model, &tangents, Some((&c, 1.0)));
+            reusable.set_active(&model, &active);
+            reusable.factorize(&model).unwrap();
+            direct.set_tangent(&model, &tangents, None);
+            direct.set_active(&model, &active);
+            direct.factorize(&model).unwrap();
+            let mut v = vec![0.0; n];
+            for k in (0..nc).filter(|&k| active[k]) {
+                v[model.dofs.equation(2 * model.candidates[k] + 1).unwrap()] = 1.0;
+            }
+            let mut col = vec![0.0; n];
+            let s1 = reusable.depth_column_capacitance(&v, &mut col).unwrap();
+            assert!(
+                direct
+                    .depth_column_capacitance(&v, &mut col.clone())
+                    .is_none()
+            );
+            let xbar: Vec<f64> = v.iter().map(|x| -x).collect();
+            let mut x2 = vec![0.0; n];
+            direct.solve_dirichlet(&model, &mut x2, &xbar);
+            let mut kv = vec![0.0; n];
+            model.pattern.sym_mul_add(direct.k_values(), &v, &mut kv);
+            let s2 = -kv.iter().zip(&x2).map(|(a, b)| a * b).sum::<f64>();
+            let what = format!("{k_active} active");
+            assert_same_solution(&col, &x2, &xbar, &direct, 1e-10, &what);
+            assert!(
+                s1 > 0.0 && (s1 - s2).abs() <= 1e-10 * s2,
+                "{what}: s {s1} vs {s2}"
+            );
+            // a `v` that is not the prescribed set: declined
+            let mut w = v.clone();
+            w[(0..n).find(|&e| v[e] == 0.0).unwrap()] = 1.0;
+            assert!(reusable.depth_column_capacitance(&w, &mut col).is_none());
+        }
+        assert_eq!(reusable.factorizations(), 1);
     }
 
     /// With normal-contact frames (rotated dofs, curvature stiffness), the direct, the
