@@ -885,7 +885,7 @@ impl Newton<'_> {
                 // stationary, so its error is second order in the solve's, and a sum
                 // without cancellation): the column is solved to Newton's forcing term,
                 // at most 1e-2 (R2, load_vs_depth: Newton iterations 255 at the forcing
-                // term, 236 at 1e-2, 221 at 1e-4 with three times the factorizations,
+                // term, 236 at 1e-2, 221 at 1e-4 but 96 factorizations against 31,
                 // since CG then falls back to one; 1e-9 before). Otherwise
                 // `s = v . K v - (K v) . w` is a difference of two close numbers: the
                 // column is solved tighter.
