@@ -36,7 +36,7 @@ mod finite;
 mod load;
 mod material;
 
-pub use load::LoadSensitivities;
+pub use load::{LoadReplay, LoadSensitivities};
 
 use indentify_contact::{
     DirectSolver, ForceCotangent, Model, RecordedContact, Schedule, SolverOptions, StepFields,

@@ -14,7 +14,8 @@
 //! depth-controlled steps of a mixed history keep `rho_i = dJ/dF_i`.
 
 use indentify_contact::{
-    ForceCotangent, LoadHistory, RecordedContact, StepRecord, Target, Trajectory,
+    DirectSolver, ForceCotangent, LoadHistory, RecordedContact, SolverOptions, StepFields,
+    StepRecord, Target, Trajectory,
 };
 use indentify_laws::{Law, Material, Vec4};
 
@@ -48,12 +49,75 @@ impl Adjoint<'_> {
         dj_dh: &[f64],
         dj_df: &[f64],
     ) -> Result<Gradient, AdjointError> {
+        self.gradient_load_from(mat, c, (traj, history), (dj_dh, dj_df), None)
+    }
+
+    /// [`Adjoint::gradient_load`] of a run recorded with checkpoints instead of fields
+    /// ([`SolverOptions::checkpoint_every`] in [`DirectSolver::run_history`]): each stretch
+    /// between checkpoints is replayed by `replay.solver` with
+    /// [`DirectSolver::replay_history`] (its load-controlled segments driven by their
+    /// force again, the same bits), swept backward and dropped. A trajectory with every
+    /// step's fields is swept as by [`Adjoint::gradient_load`].
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient_load`]; [`AdjointError::Replay`] as for
+    /// [`Adjoint::gradient_replayed`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradient_load_replayed(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        history: &LoadHistory,
+        dj_dh: &[f64],
+        dj_df: &[f64],
+        replay: LoadReplay<'_, '_>,
+    ) -> Result<Gradient, AdjointError> {
+        if traj.fields.len() == traj.steps.len() + 1 {
+            return self.gradient_load(mat, c, traj, history, dj_dh, dj_df);
+        }
+        if !std::ptr::eq(replay.solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
+        }
+        if traj.checkpoints.first().is_none_or(|cp| cp.steps_done != 0) {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: traj.steps.len(),
+            });
+        }
+        self.gradient_load_from(mat, c, (traj, history), (dj_dh, dj_df), Some(replay))
+    }
+
+    /// [`Adjoint::gradient_load`] from the recorded fields (`replay` `None`) or from the
+    /// replayed stretches between checkpoints.
+    fn gradient_load_from(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        (traj, history): (&Trajectory, &LoadHistory),
+        (dj_dh, dj_df): (&[f64], &[f64]),
+        replay: Option<LoadReplay<'_, '_>>,
+    ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
         let law = mat.as_law();
-        match law {
-            Some(law) => check_inputs(law, c, traj, dj_df.len())?,
-            None => self.check_material(mat, c, traj, dj_df.len(), true)?,
+        match (law, &replay) {
+            (Some(law), None) => check_inputs(law, c, traj, dj_df.len())?,
+            (Some(law), Some(_)) => {
+                if dj_df.len() != traj.steps.len() {
+                    return Err(AdjointError::Length {
+                        expected: traj.steps.len(),
+                        got: dj_df.len(),
+                    });
+                }
+                law.check_params(c)?;
+                law.check_differentiable(c)?;
+            }
+            (None, _) => self.check_material(mat, c, traj, dj_df.len(), replay.is_none())?,
         }
         if dj_dh.len() != traj.steps.len() {
             return Err(AdjointError::Length {
@@ -62,22 +126,24 @@ impl Adjoint<'_> {
             });
         }
         self.contact.begin();
+        let source = Source {
+            mat,
+            c,
+            traj,
+            history,
+            replay,
+        };
         let dj_dc = if let Some(law) = law {
             let mut sweep = Sweep::new(law, c);
             self.field_a.fill(Vec4::ZERO);
-            self.load_sweep(
-                traj,
-                history,
-                (dj_dh, dj_df),
-                |adj, step, border| match border {
-                    Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
-                    None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
-                },
-            )?;
+            self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| match border {
+                Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
+                None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
+            })?;
             sweep.finish(law, c)
         } else {
             let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
-            self.load_sweep(traj, history, (dj_dh, dj_df), |adj, step, border| {
+            self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| {
                 let Recorded {
                     i,
                     rec,
@@ -98,11 +164,11 @@ impl Adjoint<'_> {
 
     /// The reversed-time sweep of a load-controlled run: `step(adjoint, step, border)`
     /// sweeps one step, with the cotangent `step.rho = dJ/dF_i` given (`border` `None`)
-    /// or set by its depth column (`border`), and returns the cotangent it used.
+    /// or set by its depth column (`border`), and returns the cotangent it used. The
+    /// steps' fields come from the trajectory or its replayed stretches (`source`).
     fn load_sweep(
         &mut self,
-        traj: &Trajectory,
-        history: &LoadHistory,
+        source: Source<'_, '_, '_>,
         (dj_dh, dj_df): (&[f64], &[f64]),
         mut step_fn: impl FnMut(
             &mut Self,
@@ -110,6 +176,7 @@ impl Adjoint<'_> {
             Option<BorderedRho<'_>>,
         ) -> Result<f64, AdjointError>,
     ) -> Result<(), AdjointError> {
+        let (traj, history) = (source.traj, source.history);
         let n_eq = self.model.dofs.n_eq;
         let mut col = Column {
             col: vec![0.0; n_eq],
@@ -119,8 +186,12 @@ impl Adjoint<'_> {
         // values start from its state: the force (load after depth) or the depth (depth
         // after load)
         let mut pending = 0.0;
-        for i in (0..traj.steps.len()).rev() {
-            let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
+        let mut visit = |adj: &mut Self,
+                         i: usize,
+                         s0: &StepFields,
+                         s1: &StepFields|
+         -> Result<(), AdjointError> {
+            let rec = &traj.steps[i];
             let j = segment_index(history, rec.t);
             let load = load_controlled(history, rec.t);
             // this step starts the next step's segment: it takes that segment's carry
@@ -152,7 +223,7 @@ impl Adjoint<'_> {
                     col: &mut col,
                     rho_of: &mut rho_of,
                 };
-                let rho = step_fn(self, &step, Some(border))?;
+                let rho = step_fn(adj, &step, Some(border))?;
                 if mixed && theta < 1.0 {
                     // P_i = F_s + theta (P - F_s): the start's force takes
                     // -(1 - theta) rho_i (the multiplier of F_i = P_i is -rho_i)
@@ -170,14 +241,98 @@ impl Adjoint<'_> {
                     col: &mut col,
                     rho_of: &mut rho_of,
                 };
-                step_fn(self, &step, Some(border))?;
+                step_fn(adj, &step, Some(border))?;
                 pending += (1.0 - theta) * d;
             } else {
-                step_fn(self, &step, None)?;
+                step_fn(adj, &step, None)?;
+            }
+            Ok(())
+        };
+        match source.replay {
+            None => {
+                for i in (0..traj.steps.len()).rev() {
+                    visit(self, i, &traj.fields[i], &traj.fields[i + 1])?;
+                }
+            }
+            Some(LoadReplay { solver, opts }) => {
+                replayed_load_steps_rev(
+                    solver,
+                    (source.mat, source.c),
+                    history,
+                    opts,
+                    traj,
+                    |i, s0, s1| visit(self, i, s0, s1),
+                )?;
             }
         }
         Ok(())
     }
+}
+
+/// The forward run with which [`Adjoint::gradient_load_replayed`] replays a checkpointed
+/// load-controlled trajectory: the solver (built on the adjoint's model) and the options
+/// of the recorded run (with its `checkpoint_every`).
+#[derive(Debug)]
+pub struct LoadReplay<'a, 'm> {
+    /// The direct solver on the adjoint's model.
+    pub solver: &'a mut DirectSolver<'m>,
+    /// The options of the recorded run.
+    pub opts: &'a SolverOptions,
+}
+
+/// Where a load-controlled sweep reads its steps: the trajectory, its history, and the
+/// replay of its stretches between checkpoints (`None`: its recorded fields).
+struct Source<'a, 'r, 'm> {
+    mat: &'a dyn Material,
+    c: &'a [f64],
+    traj: &'a Trajectory,
+    history: &'a LoadHistory,
+    replay: Option<LoadReplay<'r, 'm>>,
+}
+
+/// Replays a checkpointed run of [`DirectSolver::run_history`] stretch by stretch, the
+/// last first, and visits its steps in reverse order: `visit(i, fields before, fields
+/// after)` with `i` the step's index in the whole run. A stretch that replays another
+/// number of steps than the run had, or other steps, is an error.
+fn replayed_load_steps_rev(
+    solver: &mut DirectSolver<'_>,
+    (mat, c): (&dyn Material, &[f64]),
+    history: &LoadHistory,
+    opts: &SolverOptions,
+    traj: &Trajectory,
+    mut visit: impl FnMut(usize, &StepFields, &StepFields) -> Result<(), AdjointError>,
+) -> Result<(), AdjointError> {
+    let (last, n) = (history.schedule.t.len() - 1, traj.steps.len());
+    for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+        let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+            Some(next) => (next.schedule_index, next.steps_done),
+            None => (last, n),
+        };
+        let seg = solver
+            .replay_history(mat, c, history, opts, cp, j_end)
+            .map_err(|e| AdjointError::Replay(e.to_string()))?;
+        // the same steps: their times, and their depths to round-off (a capacitance
+        // system with frames keeps factors grown in the run's order)
+        let recorded = traj.steps.get(cp.steps_done..steps_end).unwrap_or(&[]);
+        let scale = recorded.iter().fold(0.0f64, |m, s| m.max(s.depth.abs()));
+        if seg.steps.len() != recorded.len()
+            || seg.steps.iter().zip(recorded).any(|(a, b)| {
+                a.t.to_bits() != b.t.to_bits() || (a.depth - b.depth).abs() > 1e-9 * scale
+            })
+        {
+            return Err(AdjointError::Replay(format!(
+                "the stretch from schedule index {} replayed {} steps, the run had {} (or \
+                 other depths)",
+                cp.schedule_index,
+                seg.steps.len(),
+                recorded.len()
+            )));
+        }
+        for i in (0..seg.steps.len()).rev() {
+            visit(cp.steps_done + i, &seg.fields[i], &seg.fields[i + 1])?;
+        }
+    }
+    Ok(())
 }
 
 /// The error of a load-controlled step under Coulomb friction (step `i` ending at `t`).

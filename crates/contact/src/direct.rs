@@ -393,9 +393,9 @@ impl<'m> DirectSolver<'m> {
     ///
     /// # Errors
     /// As [`DirectSolver::run`]; a load-controlled step whose force cannot be carried
-    /// fails with the reason ([`ContactError::StepFailed`]). A load-controlled run saves
-    /// no checkpoints ([`SolverOptions::checkpoint_every`] is ignored): replays drive by
-    /// depth.
+    /// fails with the reason ([`ContactError::StepFailed`]). Checkpoints
+    /// ([`SolverOptions::checkpoint_every`]) are replayed by
+    /// [`DirectSolver::replay_history`].
     pub fn run_history(
         &mut self,
         law: &dyn Material,
@@ -421,12 +421,11 @@ impl<'m> DirectSolver<'m> {
             opts,
             guess: None,
         };
-        // no checkpoints: a replay (the adjoint's) drives by depth only
         let stretch = Stretch {
             j0: 0,
             j1: schedule.t.len() - 1,
             record: opts.record_fields,
-            every: 0,
+            every: opts.checkpoint_every,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -445,6 +444,44 @@ impl<'m> DirectSolver<'m> {
         law: &dyn Material,
         c: &[f64],
         schedule: &Schedule,
+        opts: &SolverOptions,
+        checkpoint: &Checkpoint,
+        j_end: usize,
+    ) -> Result<Trajectory, ContactError> {
+        let drive = DepthDrive(schedule);
+        self.replay_with(law, c, (schedule, &drive), opts, checkpoint, j_end)
+    }
+
+    /// Replays a run of [`DirectSolver::run_history`] from `checkpoint` up to schedule
+    /// index `j_end` as [`DirectSolver::replay`] does a depth-controlled run: its
+    /// load-controlled segments driven by their force again (the checkpoint holds the
+    /// state the drive reads: depth, force and past increments), so the replayed steps
+    /// are the run's, bit for bit.
+    ///
+    /// # Errors
+    /// As [`DirectSolver::replay`].
+    pub fn replay_history(
+        &mut self,
+        law: &dyn Material,
+        c: &[f64],
+        history: &LoadHistory,
+        opts: &SolverOptions,
+        checkpoint: &Checkpoint,
+        j_end: usize,
+    ) -> Result<Trajectory, ContactError> {
+        if !history.is_load_controlled() {
+            return self.replay(law, c, &history.schedule, opts, checkpoint, j_end);
+        }
+        let drive = ForceDrive(history);
+        self.replay_with(law, c, (&history.schedule, &drive), opts, checkpoint, j_end)
+    }
+
+    /// [`DirectSolver::replay`] with the run's drive.
+    fn replay_with(
+        &mut self,
+        law: &dyn Material,
+        c: &[f64],
+        (schedule, drive): (&Schedule, &dyn Drive),
         opts: &SolverOptions,
         checkpoint: &Checkpoint,
         j_end: usize,
@@ -469,7 +506,7 @@ impl<'m> DirectSolver<'m> {
             law,
             c,
             schedule,
-            drive: &DepthDrive(schedule),
+            drive,
             opts,
             guess: None,
         };
