@@ -9,7 +9,7 @@ use std::collections::HashSet;
 use std::sync::Arc;
 use std::time::Instant;
 
-use indentify_adjoint::{Adjoint, Replay};
+use indentify_adjoint::{Adjoint, LoadReplay, Replay};
 use indentify_contact::{
     ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Trajectory,
 };
@@ -152,8 +152,9 @@ impl Test {
     /// depth-controlled segments), `depths` is the measured depth record (s, mm; read
     /// through [`ForceRecord`], whose values are then depths), interpolated onto the
     /// history's times; the observable is the depth. Weights as in [`Test::new`]. The
-    /// solver records every step's fields (the bordered adjoint reads them; load-controlled
-    /// runs save no checkpoints).
+    /// solver records every step's fields, or with checkpoints
+    /// ([`SolverOptions::checkpoint_every`]) saves states the bordered adjoint replays
+    /// (`Adjoint::gradient_load_replayed`).
     ///
     /// # Errors
     /// As [`Test::new`].
@@ -165,16 +166,12 @@ impl Test {
         solver_options: SolverOptions,
         weight: f64,
     ) -> Result<Test, IdentifyError> {
-        let opts = SolverOptions {
-            checkpoint_every: 0,
-            ..solver_options
-        };
         let mut t = Test::new(
             model,
             history.schedule.clone(),
             depths,
             weights,
-            opts,
+            solver_options,
             weight,
         )?;
         t.load = Some(history);
@@ -602,7 +599,18 @@ fn gradient_task(
     let rho = t.dj_df(traj);
     let g = if let Some(h) = &t.load {
         let zero = vec![0.0; rho.len()];
-        w.adjoint.gradient_load(&*p.law, c, traj, h, &rho, &zero)
+        w.adjoint.gradient_load_replayed(
+            &*p.law,
+            c,
+            traj,
+            h,
+            &rho,
+            &zero,
+            LoadReplay {
+                solver: &mut w.solver,
+                opts: &t.solver_options,
+            },
+        )
     } else if t.solver_options.checkpoint_every > 0 {
         w.adjoint.gradient_replayed(
             &*p.law,
@@ -643,6 +651,24 @@ fn jacobian_task(
     // the forward sensitivities need every step's fields: a checkpointed trajectory is
     // recorded again in full for them (the memory of one unbounded run)
     if let Some(h) = &t.load {
+        let full;
+        let traj = if traj.fields.len() == traj.steps.len() + 1 {
+            traj
+        } else {
+            let opts = SolverOptions {
+                record_fields: true,
+                checkpoint_every: 0,
+                ..t.solver_options.clone()
+            };
+            full = w
+                .solver
+                .run_history(&*p.law, c, h, &opts)
+                .map_err(|source| IdentifyError::Forward {
+                    params: c.to_vec(),
+                    source,
+                })?;
+            &full
+        };
         let sens = w
             .adjoint
             .sensitivities_load(&*p.law, c, traj, h)

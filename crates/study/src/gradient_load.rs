@@ -7,8 +7,8 @@
 
 use std::time::Instant;
 
-use indentify_adjoint::Adjoint;
-use indentify_contact::{DirectSolver, LoadHistory};
+use indentify_adjoint::{Adjoint, LoadReplay};
+use indentify_contact::{DirectSolver, LoadHistory, SolverOptions};
 use indentify_laws::Material;
 
 use crate::config::{Config, Prepared};
@@ -48,8 +48,7 @@ fn depth_at(curve: &Curve, h: &[f64], t: f64) -> Result<f64> {
 ///
 /// # Errors
 /// Data without a depth column or not covering the history, a failing forward run or
-/// adjoint (Coulomb friction is refused there, with the reason), checkpoints (a
-/// load-controlled run records every step's fields).
+/// adjoint (Coulomb friction is refused there, with the reason), `--checkpoint 0`.
 pub(crate) fn run(
     opts: &GradientOptions,
     cfg: &Config,
@@ -58,15 +57,6 @@ pub(crate) fn run(
     (prepared, history): (Prepared, LoadHistory),
     curve: Curve,
 ) -> Result<GradientOutcome> {
-    if opts.checkpoint.is_some() {
-        return Err(Error::msg(
-            ErrorKind::Config,
-            format!(
-                "--checkpoint with the load-controlled `{name}`: a load-controlled run saves \
-                 no checkpoints (its gradient reads every step's fields); drop --checkpoint"
-            ),
-        ));
-    }
     let Some(h_exp) = curve.h.clone() else {
         return Err(Error::msg(
             ErrorKind::Data,
@@ -84,7 +74,22 @@ pub(crate) fn run(
         .map(|&t| depth_at(&curve, &h_exp, t))
         .collect::<Result<_>>()?;
     let model = &prepared.model;
-    let solver_opts = cfg.solver.options(true);
+    // with --checkpoint the states are saved every n steps and the adjoint replays the
+    // stretches between them with the history's drive
+    let solver_opts = match opts.checkpoint {
+        Some(0) => {
+            return Err(Error::msg(
+                ErrorKind::Config,
+                "--checkpoint 0 is not allowed: expected a number of schedule steps >= 1",
+            ));
+        }
+        Some(n) => SolverOptions {
+            record_fields: false,
+            checkpoint_every: n,
+            ..cfg.solver.options(false)
+        },
+        None => cfg.solver.options(true),
+    };
     let mut solver = DirectSolver::new(model).kind(ErrorKind::Solver)?;
     let start = Instant::now();
     let traj = solver
@@ -109,7 +114,18 @@ pub(crate) fn run(
     let zero = vec![0.0; traj.steps.len()];
     let grad = Adjoint::new(model)
         .kind(ErrorKind::Solver)?
-        .gradient_load(law, &params, &traj, &history, &dj_dh, &zero)
+        .gradient_load_replayed(
+            law,
+            &params,
+            &traj,
+            &history,
+            &dj_dh,
+            &zero,
+            LoadReplay {
+                solver: &mut solver,
+                opts: &solver_opts,
+            },
+        )
         .map_err(|e| {
             Error::new(
                 ErrorKind::Solver,

@@ -574,19 +574,9 @@ fn set_up_test(
             &solver_opts,
         )?,
     };
-    if load.is_some() && opts.checkpoint.is_some() {
-        return Err(Error::msg(
-            ErrorKind::Config,
-            format!(
-                "--checkpoint with the load-controlled {what}: a load-controlled run saves no \
-                 checkpoints (its gradient reads every step's fields); drop --checkpoint"
-            ),
-        ));
-    }
-    solver_opts.checkpoint_every = match load {
-        Some(_) => 0,
-        None => checkpoint_interval(opts, &prepared)?,
-    };
+    // load control replays its checkpoints with the history's drive
+    // (`Adjoint::gradient_load_replayed`)
+    solver_opts.checkpoint_every = checkpoint_interval(opts, &prepared)?;
     let Prepared {
         schedule,
         model,
