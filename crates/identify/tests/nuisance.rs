@@ -406,3 +406,46 @@ fn refusals_name_the_test_and_the_field() {
     .unwrap();
     assert_eq!(ok.free_names(), ["E", "Cf", "vd", "h0"]);
 }
+
+/// Back-to-back cost of the instrument (printed, not asserted: no timed assertions): the
+/// evaluator's cost, adjoint gradient and sensitivity Jacobian at five points, with and
+/// without the three instrument parameters, alternated over three rounds (best of each).
+#[test]
+fn instrument_cost_back_to_back() {
+    let m = model(cone());
+    let h = lhu(60.0);
+    let record = measured(&m, &h, (0.0, 0.0, 0.0), 0.0, 1);
+    let plain = Problem::joint(
+        &Maxwell,
+        vec![Test::new_load(m, h.clone(), &record, None, opts(), 1.0).unwrap()],
+    )
+    .unwrap();
+    let inst = Problem::joint_instrumented(
+        &Maxwell,
+        all(),
+        vec![Test::new_load(model(cone()), h, &record, None, opts(), 1.0).unwrap()],
+    )
+    .unwrap();
+    let time = |p: &Problem, extra: &[f64]| {
+        let mut ev = Evaluator::new(p).unwrap();
+        let start = std::time::Instant::now();
+        for i in 0..5 {
+            let mut c = vec![15000.0 + 100.0 * i as f64, 0.3, 45000.0];
+            c.extend_from_slice(extra);
+            ev.cost_and_gradient(&c).unwrap();
+            ev.jacobian(&c).unwrap();
+        }
+        start.elapsed().as_secs_f64()
+    };
+    let (mut a, mut b) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..3 {
+        a = a.min(time(&plain, &[]));
+        b = b.min(time(&inst, &[5e-4, -2e-4, 1e-4]));
+    }
+    println!(
+        "5 x (cost + gradient + Jacobian): law only {:.1} ms, with Cf, vd, h0 {:.1} ms, ratio {:.3}",
+        1e3 * a,
+        1e3 * b,
+        b / a
+    );
+}

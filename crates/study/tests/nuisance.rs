@@ -93,7 +93,8 @@ fn rel(a: f64, b: f64) -> f64 {
 }
 
 /// A drift and an offset added to exact load-controlled depths: `vd` and `h0` free beside
-/// E and eta, all recovered; the result names them with their units.
+/// E and eta, all recovered; the result names them with their units; the report, its
+/// figures and the discretization check run with them.
 #[test]
 fn drift_and_offset_are_recovered_with_the_law() {
     let dir = temp_dir("nuisance-one");
@@ -109,6 +110,8 @@ fn drift_and_offset_are_recovered_with_the_law() {
     o.data = Some(csv);
     o.out = Some(dir.join("out"));
     o.figures = true;
+    // the discretization check runs the instrumented law on the refined model too
+    o.refine = true;
     let out = identify::run(&o, &mut ()).unwrap();
     println!(
         "E {:?} eta {:?} vd {:?} h0 {:?}, {}",
