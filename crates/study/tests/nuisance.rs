@@ -221,3 +221,31 @@ fn refusals_name_the_field_or_the_test() {
     };
     assert!(m.contains("vd"), "{m}");
 }
+
+/// `gradient-check` of a load-controlled configuration naming Cf, vd and h0: the
+/// instrument's parameters are checked with the law's (adjoint vs central differences of
+/// the cost the fit minimizes, and vs the sensitivities), all passing.
+#[test]
+fn gradient_check_covers_the_instrument_parameters() {
+    use indentify_study::check::{self, CheckOptions};
+    let unload = "(segments: [(duration: 1.0, force: 100.0, steps: 6), (duration: 1.0, force: \
+                  100.0, steps: 6), (duration: 1.0, force: 40.0, steps: 6)])";
+    let cfg = format!(
+        "({MODEL} history: {unload}, {})",
+        id(", \"Cf\": Free(start: 0.0), \"vd\": Free(start: 0.0), \"h0\": Free(start: 0.0)")
+    );
+    let report = match check::run(&CheckOptions::new(text("check-inst", cfg))) {
+        Ok(r) => r,
+        Err(e) => panic!("{e:?}"),
+    };
+    for c in &report.checks {
+        println!(
+            "{}: adjoint {:.6e} fd {:.6e} (rel {:.1e}) sens rel {:.1e}",
+            c.name, c.adjoint, c.fd, c.rel_diff_fd, c.rel_diff_sensitivity
+        );
+    }
+    let names: Vec<&str> = report.checks.iter().map(|c| c.name).collect();
+    assert_eq!(names, ["E", "nu", "eta", "Cf", "vd", "h0"]);
+    assert!(report.passed, "{:?}", report.failures);
+    assert!(report.checks[3..].iter().all(|c| c.adjoint != 0.0));
+}
