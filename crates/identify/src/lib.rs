@@ -9,6 +9,8 @@
 //! - [`problem`]: [`Problem`] (model, law, schedule, data, weights) and
 //!   [`Evaluator`], the cached cost / gradient / Jacobian oracle (one forward and one
 //!   adjoint solve per parameter point, keyed on the exact parameter bits).
+//! - [`instrument`]: the instrument's parameters identified beside the law's (frame
+//!   compliance `Cf`, drift rate `vd`, a depth offset `h0` per test; load control).
 //! - [`params`]: free and fixed parameters, bounds and scaling ([`ParamSpec`],
 //!   [`Parameterization`]).
 //! - [`optimize`]: [`IdentifyConfig`], [`identify`], [`resume`], [`multistart()`]: argmin
@@ -64,6 +66,7 @@
 
 pub mod data;
 pub mod identifiability;
+pub mod instrument;
 pub mod linalg;
 pub mod multistart;
 pub mod noise;
@@ -78,6 +81,7 @@ mod tasks;
 
 pub use data::ForceRecord;
 pub use identifiability::{Identifiability, NoiseModel};
+pub use instrument::{Instrument, Instrumented};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
     BfgsStart, Cancel, DEFAULT_STEP_SIGMA, IdentifyConfig, IdentifyResult, IterationRecord, Method,

@@ -10,6 +10,9 @@
 //! | `Bounds` | `(c - lo) / (hi - lo)` | `lo + y (hi - lo)` | `hi - lo` |
 //! | `Linear` | `c / |c0|` | `|c0| y` | `|c0|` |
 //!
+//! An instrument parameter (`Cf`, `vd`, `h0`; [`crate::instrument`]) that starts at 0 and
+//! is linearly scaled takes its nominal scale ([`Instrument::nominal_scale`]) for `|c0|`.
+//!
 //! The box maps to a box in `y`. The optimizer's point is projected onto it before use,
 //! `c = c(P(y))`, so `J(c(P(y)))` is defined everywhere; its gradient is
 //! `dc/dy * dJ/dc` inside the box (and on its faces) and 0 along a coordinate that lies
@@ -18,6 +21,7 @@
 use indentify_laws::Material;
 
 use crate::IdentifyError;
+use crate::instrument::Instrument;
 
 /// How a free parameter is scaled for the optimizer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -253,7 +257,9 @@ impl Parameterization {
                         "bounds scaling needs finite bounds lower < upper, got [{lower}, {upper}]"
                     )));
                 }
-                Scaling::Linear if start == 0.0 => {
+                Scaling::Linear
+                    if start == 0.0 && Instrument::nominal_scale(info.name).is_none() =>
+                {
                     return Err(invalid(
                         "linear scaling divides by the start, which is 0".into(),
                     ));
@@ -269,7 +275,11 @@ impl Parameterization {
                 lower,
                 upper,
                 scaling: s.scaling,
-                scale: start.abs(),
+                scale: if start == 0.0 {
+                    Instrument::nominal_scale(info.name).unwrap_or(0.0)
+                } else {
+                    start.abs()
+                },
             });
         }
         if free.is_empty() {

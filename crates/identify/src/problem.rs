@@ -11,12 +11,13 @@ use std::time::Instant;
 
 use indentify_adjoint::{Adjoint, LoadReplay, Replay};
 use indentify_contact::{
-    ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Trajectory,
+    ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Target, Trajectory,
 };
 use indentify_laws::{Law, LawMaterial, Material};
 
 use crate::IdentifyError;
 use crate::data::ForceRecord;
+use crate::instrument::{Applied, Instrument, Instrumented};
 use crate::tasks::{self, Follow, Todo};
 
 /// What a [`Problem`] takes as its law: a material shared by the tests' solvers. A
@@ -265,6 +266,11 @@ pub struct Problem {
     /// Whether an [`Evaluator`] starts each forward run's Newton iterations from the best
     /// point's trajectory ([`Problem::set_warm_start`]).
     warm_start: bool,
+    /// The material the solvers run: [`Problem::law`] itself, or the law inside the
+    /// [`Instrumented`] of [`Problem::joint_instrumented`] (run at `c[..n_law]`).
+    material: Arc<dyn Material>,
+    /// The instrument's parameters and what they add to the observables.
+    applied: Option<Applied>,
 }
 
 impl Problem {
@@ -308,13 +314,90 @@ impl Problem {
             .flat_map(|t| t.weights.iter().copied())
             .collect();
         Ok(Problem {
+            material: law.clone(),
             law,
             tests,
             target,
             weights,
             pool: None,
             warm_start: true,
+            applied: None,
         })
+    }
+
+    /// A joint problem whose parameters are the law's followed by those of `instrument`
+    /// (docs/theory.md §13.6): `Cf`, `vd`, then `h0` (one test) or `h0[1]`, `h0[2]`, ...
+    /// (one per test). [`Problem::law`] is then the [`Instrumented`] law, so every
+    /// parameter list ([`crate::Parameterization`], results, identifiability) shows them;
+    /// the evaluator runs the law at `c[..n_law]` and adds `Cf F_i + vd (t_i - t_0) + h0_k`
+    /// to test `k`'s depths, their derivatives to its gradient and sensitivity rows. An
+    /// empty instrument is [`Problem::joint`].
+    ///
+    /// # Errors
+    /// As [`Problem::joint`]; [`IdentifyError::InvalidSpec`] naming the first instrument
+    /// parameter and the test when a test is depth-controlled (its force is the observable:
+    /// the instrument would change the prescribed depth, the model's input, not its output).
+    pub fn joint_instrumented(
+        law: impl IntoMaterial,
+        instrument: Instrument,
+        tests: Vec<Test>,
+    ) -> Result<Problem, IdentifyError> {
+        let inner = law.into_material();
+        if instrument.is_empty() {
+            return Problem::joint(inner, tests);
+        }
+        let n = tests.len();
+        if let Some(k) = tests.iter().position(|t| t.load.is_none()) {
+            let name = instrument.names(n.max(1)).first().copied().unwrap_or("Cf");
+            return Err(IdentifyError::InvalidSpec {
+                name: name.into(),
+                why: format!(
+                    "test {} is depth-controlled (its depth history is prescribed and its force \
+                     is the observable): an instrument parameter (Cf, vd, h0) would change the \
+                     prescribed depth, the model's input, which this fit does not differentiate; \
+                     drive the test by force (`data: (..., drive: Force)` or force segments) \
+                     or hold the instrument parameters out of the fit",
+                    k + 1
+                ),
+            });
+        }
+        let wrapped = Instrumented::new(inner.clone(), instrument, n);
+        let applied = wrapped.applied();
+        let mut p = Problem::joint(Arc::new(wrapped) as Arc<dyn Material>, tests)?;
+        p.material = inner;
+        p.applied = Some(applied);
+        Ok(p)
+    }
+
+    /// The material the solvers run (the law without the instrument's parameters; see
+    /// [`Problem::law_part`]).
+    pub fn material(&self) -> &Arc<dyn Material> {
+        &self.material
+    }
+
+    /// The law's part of a full parameter vector (all of it without an instrument).
+    pub fn law_part<'c>(&self, c: &'c [f64]) -> &'c [f64] {
+        match &self.applied {
+            Some(a) => &c[..a.n_law.min(c.len())],
+            None => c,
+        }
+    }
+
+    /// Whether the problem carries instrument parameters ([`Problem::joint_instrumented`]).
+    pub fn has_instrument(&self) -> bool {
+        self.applied.is_some()
+    }
+
+    /// Test `k`'s observables at `c` from its trajectory `traj` (a run of
+    /// [`Problem::material`] at [`Problem::law_part`]): [`Test::observables`] plus the
+    /// instrument's terms.
+    pub fn observables_of(&self, k: usize, c: &[f64], traj: &Trajectory) -> Vec<f64> {
+        let t = &self.tests[k];
+        let mut obs = t.observables(traj);
+        if let Some(a) = &self.applied {
+            a.observe(k, t, c, traj, &mut obs);
+        }
+        obs
     }
 
     /// Solves the tests on a pool of `threads` threads of its own (instead of the current
@@ -563,17 +646,18 @@ fn key_of(c: &[f64]) -> Vec<u64> {
 /// Test `k`'s forward run at `c` into its cache entry; false when it failed.
 fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
     let t = &p.tests[k];
+    let (law, cl) = (&*p.material, p.law_part(c));
     let run = match (&t.load, &w.warm) {
-        (Some(h), _) => w.solver.run_history(&*p.law, c, h, &t.solver_options),
+        (Some(h), _) => w.solver.run_history(law, cl, h, &t.solver_options),
         (None, Some(g)) if p.warm_start => {
             w.solver
-                .run_warm(&*p.law, c, &t.schedule, &t.solver_options, g)
+                .run_warm(law, cl, &t.schedule, &t.solver_options, g)
         }
-        (None, _) => w.solver.run(&*p.law, c, &t.schedule, &t.solver_options),
+        (None, _) => w.solver.run(law, cl, &t.schedule, &t.solver_options),
     };
     match run {
         Ok(traj) => {
-            te.forces = Some(t.observables(&traj));
+            te.forces = Some(p.observables_of(k, c, &traj));
             te.traj = Some(traj);
             true
         }
@@ -596,6 +680,9 @@ fn gradient_task(
     let Some(traj) = te.traj.as_ref() else {
         return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
+    if let (Some(a), Some(h)) = (&p.applied, &t.load) {
+        return instrumented_gradient(p, a, c, k, w, te, h);
+    }
     let rho = t.dj_df(traj);
     let g = if let Some(h) = &t.load {
         let zero = vec![0.0; rho.len()];
@@ -633,8 +720,104 @@ fn gradient_task(
     Ok(g.dj_dc)
 }
 
-/// The stress-only law of a problem with load-controlled tests (checked by
-/// [`Problem::joint`]).
+/// Test `k`'s adjoint gradient with the instrument (load control, checked by
+/// [`Problem::joint_instrumented`]): the law's part by the bordered adjoint with
+/// `dJ/dh_i = r_i` and `dJ/dF_i = Cf r_i` (read at depth-controlled steps), `r_i =
+/// w_i (h_meas,i - h_exp,i)`; the instrument's entries in closed form ([`Applied`]).
+fn instrumented_gradient(
+    p: &Problem,
+    a: &Applied,
+    c: &[f64],
+    k: usize,
+    w: &mut Work,
+    te: &TestEntry,
+    history: &LoadHistory,
+) -> Result<Vec<f64>, IdentifyError> {
+    let t = &p.tests[k];
+    let (Some(traj), Some(obs)) = (te.traj.as_ref(), te.forces.as_ref()) else {
+        return Err(IdentifyError::Optimizer("trajectory missing".into()));
+    };
+    let r: Vec<f64> = obs
+        .iter()
+        .zip(&t.target)
+        .zip(&t.weights)
+        .map(|((h, d), w)| w * (h - d))
+        .collect();
+    let rho: Vec<f64> = traj
+        .steps
+        .iter()
+        .map(|s| {
+            if s.on_schedule {
+                r[s.schedule_index]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let cf = a.compliance(c);
+    let mut rho_f: Vec<f64> = rho.iter().map(|v| cf * v).collect();
+    if cf != 0.0 {
+        fold_interpolated_forces(traj, history, &mut rho_f);
+    }
+    let g = w
+        .adjoint
+        .gradient_load_replayed(
+            &*p.material,
+            p.law_part(c),
+            traj,
+            history,
+            &rho,
+            &rho_f,
+            LoadReplay {
+                solver: &mut w.solver,
+                opts: &t.solver_options,
+            },
+        )
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
+    let mut full = vec![0.0; c.len()];
+    full[..g.dj_dc.len()].copy_from_slice(&g.dj_dc);
+    a.gradient(k, t, traj, &r, &mut full);
+    Ok(full)
+}
+
+/// Moves `dJ/dF_i` of the load-controlled steps whose prescribed force depends on the
+/// parameters onto the depth-controlled step it depends on (the adjoint reads `dJ/dF` at
+/// depth-controlled steps only). A load-controlled segment that follows a depth-controlled
+/// step `a` prescribes the straight line from its computed force `F_a(c)` to the target
+/// `p` (contact's `ForceDrive`): `F_i = F_a + (t_i - t_a) / (t_end - t_a) (p - F_a)`, so
+/// `dF_i/dc = (1 - (t_i - t_a) / (t_end - t_a)) dF_a/dc`; later segments start from their
+/// predecessor's target and do not depend on `c`.
+fn fold_interpolated_forces(traj: &Trajectory, history: &LoadHistory, dj_df: &mut [f64]) {
+    // the last depth-controlled step before the current load-controlled segment, if the
+    // segment began right after it: (its index, its time, the segment's end time)
+    let mut anchor: Option<(usize, f64, f64)> = None;
+    let mut prev: Option<(usize, f64, bool)> = None; // (index, time, load-controlled)
+    for (i, s) in traj.steps.iter().enumerate() {
+        let (t_end, target) = history.segment_at(s.t);
+        let load = matches!(target, Target::Force(_));
+        if load {
+            let same_segment = anchor.is_some_and(|(_, _, e)| e == t_end);
+            if !same_segment {
+                anchor = match prev {
+                    Some((a, t_a, false)) => Some((a, t_a, t_end)),
+                    _ => None,
+                };
+            }
+            if let Some((a, t_a, e)) = anchor {
+                let w = 1.0 - (s.t - t_a) / (e - t_a);
+                dj_df[a] += w * dj_df[i];
+            }
+            dj_df[i] = 0.0;
+        } else {
+            anchor = None;
+        }
+        prev = Some((i, s.t, load));
+    }
+}
+
 /// Test `k`'s Jacobian rows (`dF/dc` at its schedule times) at `c` by forward
 /// sensitivities from its cached trajectory.
 fn jacobian_task(
@@ -651,6 +834,7 @@ fn jacobian_task(
     // the forward sensitivities need every step's fields: a checkpointed trajectory is
     // recorded again in full for them (the memory of one unbounded run)
     if let Some(h) = &t.load {
+        let cl = p.law_part(c);
         let full;
         let traj = if traj.fields.len() == traj.steps.len() + 1 {
             traj
@@ -662,7 +846,7 @@ fn jacobian_task(
             };
             full = w
                 .solver
-                .run_history(&*p.law, c, h, &opts)
+                .run_history(&*p.material, cl, h, &opts)
                 .map_err(|source| IdentifyError::Forward {
                     params: c.to_vec(),
                     source,
@@ -671,16 +855,25 @@ fn jacobian_task(
         };
         let sens = w
             .adjoint
-            .sensitivities_load(&*p.law, c, traj, h)
+            .sensitivities_load(&*p.material, cl, traj, h)
             .map_err(|source| IdentifyError::Adjoint {
                 params: c.to_vec(),
                 source,
             })?;
         let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
-        for (s, row) in traj.steps.iter().zip(&sens.dh_dc) {
+        // the measured depth's law columns: dh/dc + Cf dF/dc (the force's are non-zero on
+        // depth-controlled steps only)
+        let cf = p.applied.as_ref().map_or(0.0, |a| a.compliance(c));
+        for ((s, dh), df) in traj.steps.iter().zip(&sens.dh_dc).zip(&sens.df_dc) {
             if s.on_schedule {
-                jac[s.schedule_index].clone_from(row);
+                let row = &mut jac[s.schedule_index];
+                for (r, (a, b)) in row.iter_mut().zip(dh.iter().zip(df)) {
+                    *r = if cf != 0.0 { a + cf * b } else { *a };
+                }
             }
+        }
+        if let Some(a) = &p.applied {
+            a.jacobian(k, t, traj, &mut jac);
         }
         return Ok(jac);
     }

@@ -16,7 +16,7 @@ use anyhow::{Context, anyhow};
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference, scan};
 use indentify_contact::{DirectSolver, SolverOptions};
-use indentify_identify::{ForceRecord, Problem};
+use indentify_identify::{Evaluator, ForceRecord, Problem};
 use indentify_laws::Material;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -212,6 +212,9 @@ pub fn run(args: &CheckOptions) -> Result<CheckReport> {
         ));
     }
     let (law, truth) = cfg.law.build().kind(ErrorKind::Config)?;
+    // the instrument's parameters (Cf, vd, h0) that the `identify` section names, checked
+    // with the law's (load control; the check point holds them at 0)
+    let (law, truth) = crate::instrument::with_instrument(&cfg, law, truth, &Default::default());
     let law = &law;
     // tight forward solves for the differences (and the synthesized data)
     cfg.solver.residual_tol = cfg.solver.residual_tol.min(CHECK_RESIDUAL_TOL);
@@ -414,8 +417,7 @@ fn set_up(
             );
         }
     }
-    let problem = Problem::joint(law.clone(), tests)
-        .map_err(|e| crate::Error::new(ErrorKind::Config, anyhow!(e)))?;
+    let problem = crate::instrument::problem(cfg, name, law, tests, &Default::default())?;
     Ok(SetUp {
         problem,
         run_names,
@@ -444,7 +446,12 @@ fn check_point(
                 } else {
                     PERTURBATION
                 };
-                round_significant(v * factor)
+                // an instrument parameter (0 at the truth) at its nominal scale, so that
+                // the stencil stays admissible (Cf >= 0) and its terms are exercised
+                match indentify_identify::Instrument::nominal_scale(n) {
+                    Some(s) if *v == 0.0 => s,
+                    _ => round_significant(v * factor),
+                }
             })
             .collect()
     } else {
@@ -540,6 +547,9 @@ fn at_point(
     opts: &SolverOptions,
     names: &[String],
 ) -> Result<AtPoint> {
+    if problem.has_instrument() {
+        return at_point_evaluated(problem, point);
+    }
     let law = &problem.law;
     let start = Instant::now();
     let runs = each_test(problem, solvers, |k, test, solver| {
@@ -621,6 +631,50 @@ fn at_point(
     Ok(at)
 }
 
+/// A fresh evaluator of `problem` (under load control each forward run starts cold).
+fn evaluator(problem: &Problem) -> Result<Evaluator<'_>> {
+    Evaluator::new(problem).map_err(solver_error)
+}
+
+/// An identification error as a solver error.
+fn solver_error(e: indentify_identify::IdentifyError) -> crate::Error {
+    crate::Error::new(ErrorKind::Solver, anyhow!(e))
+}
+
+/// [`at_point`] for a problem with instrument parameters, through the identification's
+/// evaluator (the cost the fit minimizes, its adjoint gradient with the instrument's
+/// terms, the sensitivity rows with the instrument's columns: docs/theory.md §13.6).
+fn at_point_evaluated(problem: &Problem, point: &[f64]) -> Result<AtPoint> {
+    let mut ev = evaluator(problem)?;
+    let start = Instant::now();
+    ev.cost(point).map_err(solver_error)?;
+    let forward_seconds = start.elapsed().as_secs_f64();
+    let (j, gradient) = ev.cost_and_gradient(point).map_err(solver_error)?;
+    let adjoint_seconds = start.elapsed().as_secs_f64() - forward_seconds;
+    let observed = ev.forces(point).map_err(solver_error)?;
+    let jac = ev.jacobian(point).map_err(solver_error)?;
+    let sensitivity_seconds = start.elapsed().as_secs_f64() - forward_seconds - adjoint_seconds;
+    let mut jt_rho = vec![0.0; point.len()];
+    for ((row, h), (d, w)) in jac
+        .iter()
+        .zip(&observed)
+        .zip(problem.target.iter().zip(&problem.weights))
+    {
+        for (g, r) in jt_rho.iter_mut().zip(row) {
+            *g += w * (h - d) * r;
+        }
+    }
+    Ok(AtPoint {
+        j,
+        gradient,
+        jt_rho,
+        statuses: vec![None; problem.tests.len()],
+        forward_seconds,
+        adjoint_seconds,
+        sensitivity_seconds,
+    })
+}
+
 /// Central differences of the cost (every test's forward run at `c +- h e_k`) against the
 /// adjoint and the sensitivities, per parameter; the forward solves they took.
 fn compare(
@@ -642,6 +696,9 @@ fn compare(
     let mut solves = 0usize;
     let mut cost = |c: &[f64]| -> Result<f64> {
         solves += problem.tests.len();
+        if problem.has_instrument() {
+            return evaluator(problem)?.cost(c).map_err(solver_error);
+        }
         let runs = each_test(problem, solvers, |k, test, solver| {
             let t = run_test(
                 solver,

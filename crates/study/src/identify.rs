@@ -308,11 +308,15 @@ pub fn resolve(opts: &IdentifyOptions) -> Result<Resolved> {
     let name = opts.config.name();
     let cfg = opts.config.load(&opts.sets)?;
     let (law, law_values) = cfg.law.build().kind(ErrorKind::Config)?;
+    // the instrument's parameters (Cf, vd, h0) after the law's when a name asks for them
+    let (law, law_values) =
+        crate::instrument::with_instrument(&cfg, law, law_values, &opts.overrides);
     let law = &law;
     let names = param_names(&**law);
-    let mut id_cfg = IdentifySection::resolve(cfg.identify.as_ref(), &cfg.law, &opts.overrides)
-        .with_context(|| format!("invalid identification settings for `{name}`"))
-        .kind(ErrorKind::Config)?;
+    let mut id_cfg =
+        IdentifySection::resolve_with(cfg.identify.as_ref(), &**law, &law_values, &opts.overrides)
+            .with_context(|| format!("invalid identification settings for `{name}`"))
+            .kind(ErrorKind::Config)?;
     id_cfg.cancel = opts.cancel.clone();
     let start: Vec<f64> = id_cfg
         .params
@@ -502,8 +506,7 @@ pub(crate) fn set_up_tests(
         infos.push(info);
         warnings.extend(w);
     }
-    let mut problem = Problem::joint(law.clone(), tests)
-        .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)))?;
+    let mut problem = crate::instrument::problem(cfg, name, law, tests, &opts.overrides)?;
     // a one-test problem runs on the current pool (a batch indent's worker may lend its
     // idle neighbours to the sensitivities)
     if let (Some(j), Some(_)) = (opts.jobs, &cfg.tests) {
@@ -913,7 +916,7 @@ fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
                 )
                 .kind(ErrorKind::Solver)?,
             };
-            Ok((test.observables(&traj), traj.forces()))
+            Ok((s.problem.observables_of(k, c, &traj), traj.forces()))
         };
         let (f_start, _) = curve_at(&start_params)?;
         let fit = match &test.load {

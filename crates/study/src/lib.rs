@@ -42,6 +42,7 @@ mod gradient_load;
 pub mod history;
 pub mod identify;
 mod identify_load;
+mod instrument;
 pub mod laws_list;
 pub mod op_beside;
 pub mod output;

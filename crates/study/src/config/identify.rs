@@ -8,13 +8,19 @@
 //! (or with an empty `params`) every parameter but `nu` is free from its `law` value. An
 //! omitted start or fixed value is the `law` value; omitted bounds are the law's admissible
 //! range; the default scaling is `Log`, or `Linear` when the lower bound is negative.
+//!
+//! Instrument parameters (`Cf`, `vd`, `h0`; load control, docs/theory.md §13.6) exist when
+//! a name in `params`, `--free`, `--fixed` or `--start` asks for them ([`instrument_of`]);
+//! their `law` value is 0, their default scaling `Linear`. `h0` names every test's offset
+//! (`h0[1]`, `h0[2]`, ... in a joint configuration), `h0[k]` one of them (its setting wins
+//! over `h0`'s).
 
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Method, NoiseModel, ParamSpec, Parameterization,
-    Scaling, StopCriteria,
+    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Instrument, Method, NoiseModel, ParamSpec,
+    Parameterization, Scaling, StopCriteria,
 };
 use indentify_laws::Material;
 use serde::{Deserialize, Serialize};
@@ -394,6 +400,87 @@ pub fn fixed_item(text: &str) -> Result<(String, Option<f64>)> {
     }
 }
 
+/// `law` with the parameters of `instrument` for `n_tests` tests appended, and its values
+/// (the law's, then 0 for each instrument parameter).
+pub fn instrumented(
+    law: std::sync::Arc<dyn Material>,
+    values: &[f64],
+    instrument: Instrument,
+    n_tests: usize,
+) -> (std::sync::Arc<dyn Material>, Vec<f64>) {
+    let w = indentify_identify::Instrumented::new(law, instrument, n_tests);
+    let mut v = values.to_vec();
+    v.resize(w.params().len(), 0.0);
+    (std::sync::Arc::new(w), v)
+}
+
+/// Whether the setting key `key` applies to parameter `name`: the same name, or `h0`
+/// for every test's offset `h0[k]`.
+fn key_matches(key: &str, name: &str) -> bool {
+    key == name || (key == "h0" && Instrument::offset_test(name).is_some())
+}
+
+/// The instrument parameters the names of `section` and `overrides` ask for (`Cf`, `vd`,
+/// `h0` or `h0[k]`), and the largest test index an `h0[k]` names (0 without).
+pub fn instrument_of(
+    section: Option<&IdentifySection>,
+    overrides: &Overrides,
+) -> (Instrument, usize) {
+    let mut names: Vec<&str> = Vec::new();
+    if let Some(s) = section {
+        names.extend(s.params.keys().map(String::as_str));
+    }
+    if let Some(f) = &overrides.free {
+        names.extend(f.iter().map(String::as_str));
+    }
+    names.extend(overrides.fixed.iter().map(|(n, _)| n.as_str()));
+    names.extend(overrides.starts.iter().map(|(n, _)| n.as_str()));
+    let mut i = Instrument::default();
+    let mut k_max = 0;
+    for n in names {
+        match n {
+            "Cf" => i.compliance = true,
+            "vd" => i.drift = true,
+            _ => {
+                if let Some(k) = Instrument::offset_test(n) {
+                    i.offset = true;
+                    k_max = k_max.max(k.unwrap_or(0));
+                }
+            }
+        }
+    }
+    (i, k_max)
+}
+
+/// `--start name=v` on setting `k`: the start of a free parameter; an error for a held one.
+fn set_start(
+    settings: &mut [(&'static str, ParamSetting)],
+    k: usize,
+    name: &str,
+    v: f64,
+) -> Result<()> {
+    match &mut settings[k].1 {
+        ParamSetting::Free { start, .. } => *start = Some(v),
+        ParamSetting::Fixed { .. } => {
+            let free: Vec<&str> = settings
+                .iter()
+                .filter(|(_, s)| matches!(s, ParamSetting::Free { .. }))
+                .map(|(n, _)| *n)
+                .collect();
+            bail!(
+                "--start {name}={v}: `{name}` is held fixed (the free parameters are {}); \
+                 make it free with --free or in identify.params",
+                if free.is_empty() {
+                    "none".to_string()
+                } else {
+                    free.join(", ")
+                }
+            );
+        }
+    }
+    Ok(())
+}
+
 impl IdentifySection {
     /// The parameter settings in the law's order, after the resolution rules of the module
     /// and the command-line `overrides`.
@@ -414,9 +501,10 @@ impl IdentifySection {
                 names.join(", ")
             )
         };
+        let known = |key: &str| names.iter().any(|n| key_matches(key, n));
         let listed = section.map(|s| &s.params).filter(|p| !p.is_empty());
         if let Some(params) = listed {
-            if let Some(n) = params.keys().find(|n| !names.contains(&n.as_str())) {
+            if let Some(n) = params.keys().find(|n| !known(n)) {
                 return Err(unknown(&format!("identify.params.{n}"), n));
             }
         }
@@ -424,7 +512,11 @@ impl IdentifySection {
             .iter()
             .map(|&n| {
                 let s = match listed {
-                    Some(p) => p.get(n).copied().unwrap_or(ParamSetting::FIXED),
+                    Some(p) => p
+                        .get(n)
+                        .or_else(|| p.get("h0").filter(|_| key_matches("h0", n)))
+                        .copied()
+                        .unwrap_or(ParamSetting::FIXED),
                     None if n == "nu" => ParamSetting::FIXED,
                     None => ParamSetting::FREE,
                 };
@@ -432,11 +524,11 @@ impl IdentifySection {
             })
             .collect();
         if let Some(free) = &overrides.free {
-            if let Some(n) = free.iter().find(|n| !names.contains(&n.as_str())) {
+            if let Some(n) = free.iter().find(|n| !known(n)) {
                 return Err(unknown(&format!("--free {}", free.join(",")), n));
             }
             for (n, s) in &mut settings {
-                let wanted = free.iter().any(|f| f == n);
+                let wanted = free.iter().any(|f| key_matches(f, n));
                 match (wanted, &s) {
                     (true, ParamSetting::Fixed { .. }) => *s = ParamSetting::FREE,
                     (false, ParamSetting::Free { .. }) => *s = ParamSetting::FIXED,
@@ -444,10 +536,16 @@ impl IdentifySection {
                 }
             }
         }
+        let indices = |key: &str| -> Vec<usize> {
+            (0..names.len())
+                .filter(|&k| key_matches(key, names[k]))
+                .collect()
+        };
         for (name, value) in &overrides.fixed {
-            let Some(k) = names.iter().position(|n| n == name) else {
+            let ks = indices(name);
+            if ks.is_empty() {
                 return Err(unknown(&format!("--fixed {name}"), name));
-            };
+            }
             if overrides
                 .free
                 .as_ref()
@@ -455,30 +553,17 @@ impl IdentifySection {
             {
                 bail!("`{name}` is both in --free and in --fixed");
             }
-            settings[k].1 = ParamSetting::Fixed { value: *value };
+            for k in ks {
+                settings[k].1 = ParamSetting::Fixed { value: *value };
+            }
         }
         for (name, v) in &overrides.starts {
-            let Some(k) = names.iter().position(|n| n == name) else {
+            let ks = indices(name);
+            if ks.is_empty() {
                 return Err(unknown(&format!("--start {name}={v}"), name));
-            };
-            match &mut settings[k].1 {
-                ParamSetting::Free { start, .. } => *start = Some(*v),
-                ParamSetting::Fixed { .. } => {
-                    let free: Vec<&str> = settings
-                        .iter()
-                        .filter(|(_, s)| matches!(s, ParamSetting::Free { .. }))
-                        .map(|(n, _)| *n)
-                        .collect();
-                    bail!(
-                        "--start {name}={v}: `{name}` is held fixed (the free parameters are {}); \
-                         make it free with --free or in identify.params",
-                        if free.is_empty() {
-                            "none".to_string()
-                        } else {
-                            free.join(", ")
-                        }
-                    );
-                }
+            }
+            for k in ks {
+                set_start(&mut settings, k, name, *v)?;
             }
         }
         Ok(settings)
@@ -498,8 +583,21 @@ impl IdentifySection {
         overrides: &Overrides,
     ) -> Result<IdentifyConfig> {
         let built = law.material()?;
-        let mat = built.material.as_ref();
-        let values = &built.params;
+        IdentifySection::resolve_with(section, built.material.as_ref(), &built.params, overrides)
+    }
+
+    /// [`IdentifySection::resolve`] for a built material `mat` whose `law` values are
+    /// `values` (an [`indentify_identify::Instrumented`] law: the law's values, then 0 for
+    /// each instrument parameter).
+    ///
+    /// # Errors
+    /// As [`IdentifySection::resolve`].
+    pub fn resolve_with(
+        section: Option<&IdentifySection>,
+        mat: &dyn Material,
+        values: &[f64],
+        overrides: &Overrides,
+    ) -> Result<IdentifyConfig> {
         let defaults = IdentifySection::default();
         let s = section.unwrap_or(&defaults);
         s.validate_options()?;
@@ -515,7 +613,7 @@ impl IdentifySection {
                     scaling,
                 } => {
                     let min = info_min(mat, name);
-                    let auto = if lower.unwrap_or(min) >= 0.0 {
+                    let auto = if !Instrument::is_name(name) && lower.unwrap_or(min) >= 0.0 {
                         ScalingName::Log
                     } else {
                         ScalingName::Linear
@@ -561,7 +659,6 @@ impl IdentifySection {
             cancel: Default::default(),
         })
     }
-
     /// The identification library's check of the parameter specifications (starts within
     /// bounds, bounds within the law's range, something free), naming the parameter.
     fn check_specs(lib_law: &dyn Material, specs: &[ParamSpec]) -> Result<()> {
@@ -640,8 +737,24 @@ impl IdentifySection {
     ///
     /// # Errors
     /// As [`IdentifySection::resolve`] without overrides.
+    /// Instrument parameters are checked for as many tests as an `h0[k]` names (the run
+    /// checks them against the configuration's tests).
     pub fn validate(&self, law: &LawSpec) -> Result<()> {
-        IdentifySection::resolve(Some(self), law, &Overrides::default())
+        let ov = Overrides::default();
+        let (instrument, k_max) = instrument_of(Some(self), &ov);
+        if instrument.is_empty() {
+            return IdentifySection::resolve(Some(self), law, &ov)
+                .map(|_| ())
+                .context("invalid `identify` section");
+        }
+        let built = law.material()?;
+        let (mat, values) = instrumented(
+            std::sync::Arc::from(built.material),
+            &built.params,
+            instrument,
+            k_max.max(1),
+        );
+        IdentifySection::resolve_with(Some(self), &*mat, &values, &ov)
             .map(|_| ())
             .context("invalid `identify` section")
     }
