@@ -327,7 +327,11 @@ impl Run {
         let out = simulate::run(&SimulateOptions::new(source))
             .map_err(|e| anyhow::anyhow!("{:#}", anyhow::Error::from(e)))?;
         if let Some(f) = out.failure {
-            bail!("E/sY = {}, n = {}: the run stopped early: {f}", self.ratio, self.n);
+            bail!(
+                "E/sY = {}, n = {}: the run stopped early: {f}",
+                self.ratio,
+                self.n
+            );
         }
         Ok((
             out.rows
