@@ -38,6 +38,9 @@
 //!   (Simo 1988) viscoplasticity of `incplas.f`: the overstress `q = sigma_eq - sY` of the
 //!   Kirchhoff stress drives `eps_dot_eq = A q^n`; elasticity is hyperelastic (neo-Hooke
 //!   deviatoric part, `K (J^2 - 1)/2` volumetric).
+//! - rate-independent J2 plasticity (the cases `r2-j2-linear`, `r2-j2-power`, [`J2_CASES`]):
+//!   `*ELASTIC` and `*PLASTIC` with the flow curve as points, the same points as our
+//!   `Table(points)` (or our `Linear(H)`), `*STATIC`; docs/validation-laws.md §10;
 //! - `--elastic hencky-umat` under `NLGEOM`: our own finite-strain law for every law
 //!   (Hencky-linear elasticity, Maxwell, Norton-Hoff in the Hencky strain, backward
 //!   Euler), the user material `USERHENCKY` of `validation/calculix/umat/umat_user.f`,
