@@ -20,7 +20,9 @@
 //! What is measured on our curve ([`measure`]): `C` by least squares of `P = C h^2` over
 //! the loading's upper half (`h >= h_m/2`), `S` as the slope at `h_m` of a quadratic fitted
 //! to the unloading points above `0.75 P_m`, `h_r` where the unloading force reaches zero
-//! (linear between the two steps around it), the works by the trapezoid rule, `p_ave` with
+//! (linear between the two steps around it: the first step out of contact, since the force
+//! is exactly zero there, so `h_r` is resolved to the unloading step), the works by the
+//! trapezoid rule, `p_ave` with
 //! our contact radius at `h_m` (node-resolved: one element of the core is about 8% of it on
 //! the coarse mesh).
 
