@@ -38,6 +38,9 @@
 //!   (Simo 1988) viscoplasticity of `incplas.f`: the overstress `q = sigma_eq - sY` of the
 //!   Kirchhoff stress drives `eps_dot_eq = A q^n`; elasticity is hyperelastic (neo-Hooke
 //!   deviatoric part, `K (J^2 - 1)/2` volumetric).
+//! - rate-independent J2 plasticity (the cases `r2-j2-linear`, `r2-j2-power`, [`J2_CASES`]):
+//!   `*ELASTIC` and `*PLASTIC` with the flow curve as points, the same points as our
+//!   `Table(points)` (or our `Linear(H)`), `*STATIC`; docs/validation-laws.md §10;
 //! - `--elastic hencky-umat` under `NLGEOM`: our own finite-strain law for every law
 //!   (Hencky-linear elasticity, Maxwell, Norton-Hoff in the Hencky strain, backward
 //!   Euler), the user material `USERHENCKY` of `validation/calculix/umat/umat_user.f`,
@@ -50,7 +53,7 @@ use indentify_contact::{Punch, Schedule};
 use indentify_mesh::Mesh;
 
 /// The specimen's material as CalculiX is told it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Material {
     /// Linear isotropic elasticity.
     Elastic {
@@ -71,6 +74,17 @@ pub enum Material {
         n: f64,
         /// Yield stress (MPa), 0 for none.
         sy: f64,
+    },
+    /// Rate-independent J2 plasticity with isotropic hardening: `*ELASTIC` and `*PLASTIC`
+    /// with the flow curve as points (CalculiX interpolates linearly between them and keeps
+    /// the last stress beyond the last one).
+    Plastic {
+        /// Young's modulus (MPa).
+        e: f64,
+        /// Poisson's ratio.
+        nu: f64,
+        /// The flow curve `(eps_p, sigma)` (-, MPa), from `eps_p = 0`.
+        curve: Vec<(f64, f64)>,
     },
 }
 
@@ -350,6 +364,14 @@ pub fn deck(
             punch.describe()
         )
     };
+    if o.nlgeom
+        && o.finite_elastic == FiniteElastic::HenckyUmat
+        && matches!(material, Material::Plastic { .. })
+    {
+        bail!(
+            "the user material USERHENCKY has no hardening: run the J2 cases with CalculiX's own *PLASTIC (no --elastic hencky-umat)"
+        );
+    }
     let cot = 1.0 / half_angle_deg.to_radians().tan();
     let dt = uniform_step(schedule)?;
     let t_end = schedule.t[schedule.t.len() - 1];
@@ -410,7 +432,7 @@ pub fn deck(
     }
     let n_inc = 20 * schedule.t.len();
     let procedure = match material {
-        Material::Elastic { .. } => "*STATIC",
+        Material::Elastic { .. } | Material::Plastic { .. } => "*STATIC",
         Material::Viscoplastic { .. } => "*VISCO",
     };
     // One step, or (split_load) the loading segment and the rest as two steps: a step
@@ -602,6 +624,23 @@ fn material_cards(w: &mut String, material: &Material, o: &DeckOptions) -> Resul
             writeln!(w, "{a:.12e}, {n}, 0.0")?;
             writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
         }
+        Material::Plastic { e, nu, ref curve } => {
+            // small strain and NLGEOM alike: CalculiX's incremental J2 plasticity of
+            // incplas.f (under NLGEOM Simo's multiplicative model with its neo-Hookean
+            // elasticity, docs/validation-finite-strain.md §3.1)
+            writeln!(
+                w,
+                "** rate-independent J2 plasticity, isotropic hardening: *PLASTIC (sigma, eps_p)"
+            )?;
+            writeln!(w, "*MATERIAL, NAME=SPEC")?;
+            writeln!(w, "*ELASTIC")?;
+            writeln!(w, "{e:e}, {nu}")?;
+            writeln!(w, "*PLASTIC, HARDENING=ISOTROPIC")?;
+            for (eps, sigma) in curve {
+                writeln!(w, "{sigma:.12e}, {eps:.12e}")?;
+            }
+            writeln!(w, "*SOLID SECTION, ELSET=ESPEC, MATERIAL=SPEC")?;
+        }
         Material::Viscoplastic { e, nu, a, n, sy } => {
             let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
             let mu = e / (2.0 * (1.0 + nu));
@@ -636,7 +675,7 @@ fn material_cards(w: &mut String, material: &Material, o: &DeckOptions) -> Resul
 /// [`Material::norton_hoff`]).
 pub fn hencky_umat_constants(material: &Material) -> Vec<f64> {
     match *material {
-        Material::Elastic { e, nu } => vec![e, nu],
+        Material::Elastic { e, nu } | Material::Plastic { e, nu, .. } => vec![e, nu],
         Material::Viscoplastic { e, nu, a, n, sy } if n == 1.0 && sy == 0.0 => {
             vec![e, nu, 2.0 / (3.0 * a)]
         }
@@ -716,8 +755,9 @@ pub struct Case {
 
 /// R0 (elastic), R1 (Maxwell), R2 (Norton-Hoff, sY = 500) and R2 with sY = 0; R0 with
 /// `nu = 0.49` isolates the kinematics from the volumetric elastic law (`r0-nu049`, not run
-/// by default).
-pub const CASES: [Case; 5] = [
+/// by default); R2's problem with rate-independent J2 plasticity, linear and power-law
+/// hardening (`r2-j2-linear`, `r2-j2-power`, [`J2_CASES`], not run by default).
+pub const CASES: [Case; 7] = [
     Case {
         name: "r0",
         example: "examples/r0-elastic.ron",
@@ -743,7 +783,142 @@ pub const CASES: [Case; 5] = [
         example: "examples/r2-norton-hoff.ron",
         sets: &["law.sY=0"],
     },
+    Case {
+        name: "r2-j2-linear",
+        example: "examples/r2-norton-hoff.ron",
+        sets: &[],
+    },
+    Case {
+        name: "r2-j2-power",
+        example: "examples/r2-norton-hoff.ron",
+        sets: &[],
+    },
 ];
+
+/// The hardening of a J2 case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum J2Hardening {
+    /// `sigma = sY + H eps_p`: ours `Linear(H)`, CalculiX's `*PLASTIC` two points (the last
+    /// at [`J2_EPS_LAST`]).
+    Linear {
+        /// Hardening modulus (MPa).
+        h: f64,
+    },
+    /// Dao's `sigma = sY (1 + E eps_p / sY)^n` as a table of [`J2_POINTS`] points
+    /// (`eps_p` = 0, then geometric from 1e-5 to [`J2_EPS_LAST`]): the same table is our
+    /// `Table(points)` and CalculiX's `*PLASTIC`, so both codes run one law.
+    PowerTable {
+        /// Hardening exponent.
+        n: f64,
+    },
+}
+
+/// The last plastic strain of a J2 case's table (CalculiX keeps the stress constant beyond
+/// it, ours extends the last slope; no point of R2 comes near it).
+pub const J2_EPS_LAST: f64 = 5.0;
+/// Points of the power-law table.
+pub const J2_POINTS: usize = 41;
+
+/// A J2 case: R2's mesh, cone and trapezoid (`examples/r2-norton-hoff.ron`) with a
+/// rate-independent `Plastic` law, its flow curve given to both codes point for point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct J2Case {
+    /// The case's name in [`CASES`].
+    pub name: &'static str,
+    /// Young's modulus (MPa).
+    pub e: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// Initial yield stress (MPa).
+    pub sy: f64,
+    /// The hardening.
+    pub hardening: J2Hardening,
+}
+
+/// The J2 cases: R2's `E`, `nu`, `sY` with linear hardening `H = E/10` and Dao's power
+/// law with `n = 0.2`.
+pub const J2_CASES: [J2Case; 2] = [
+    J2Case {
+        name: "r2-j2-linear",
+        e: 1e5,
+        nu: 0.3,
+        sy: 500.0,
+        hardening: J2Hardening::Linear { h: 10000.0 },
+    },
+    J2Case {
+        name: "r2-j2-power",
+        e: 1e5,
+        nu: 0.3,
+        sy: 500.0,
+        hardening: J2Hardening::PowerTable { n: 0.2 },
+    },
+];
+
+/// The J2 case named `name`, if it is one.
+pub fn j2_case(name: &str) -> Option<J2Case> {
+    J2_CASES.iter().copied().find(|c| c.name == name)
+}
+
+impl J2Case {
+    /// The flow curve `(eps_p, sigma)` both codes are given.
+    pub fn curve(&self) -> Vec<(f64, f64)> {
+        match self.hardening {
+            J2Hardening::Linear { h } => {
+                vec![(0.0, self.sy), (J2_EPS_LAST, self.sy + h * J2_EPS_LAST)]
+            }
+            J2Hardening::PowerTable { n } => {
+                let first: f64 = 1e-5;
+                let ratio = (J2_EPS_LAST / first).powf(1.0 / (J2_POINTS - 2) as f64);
+                std::iter::once(0.0)
+                    .chain((0..J2_POINTS - 1).map(|i| first * ratio.powi(i as i32)))
+                    .map(|p| (p, self.sy * (1.0 + self.e * p / self.sy).powf(n)))
+                    .collect()
+            }
+        }
+    }
+
+    /// Our law: `Plastic(E, nu, sY, hardening: Linear(H))` or `Table(points)` of
+    /// [`J2Case::curve`], rate-independent.
+    pub fn law(&self) -> String {
+        let hardening = match self.hardening {
+            J2Hardening::Linear { h } => format!("Linear(H: {h:?})"),
+            J2Hardening::PowerTable { .. } => {
+                let points: Vec<String> = self
+                    .curve()
+                    .iter()
+                    .map(|(p, s)| format!("({p:?}, {s:?})"))
+                    .collect();
+                format!("Table(points: [{}])", points.join(", "))
+            }
+        };
+        format!(
+            "Plastic(E: {:?}, nu: {:?}, sY: {:?}, hardening: {hardening})",
+            self.e, self.nu, self.sy
+        )
+    }
+
+    /// The configuration: R2's (`examples/r2-norton-hoff.ron`: 20 x 20 graded cylinder of
+    /// 10 mm, cone 68 deg, 0.1 mm in 1 s, held 1 s, unloaded in 1 s, 30 steps each) with
+    /// [`J2Case::law`].
+    pub fn config(&self) -> String {
+        format!(
+            "(specimen: Cylinder(radius: 10.0, height: 10.0, nr: 20, nz: 20, grading_r: 1.3, grading_z: 1.3), \
+             punch: Cone(half_angle_deg: 68.0), contact: Vertical, kinematics: Small, law: {}, \
+             history: (segments: [(duration: 1.0, depth: 0.1, steps: 30), \
+             (duration: 1.0, depth: 0.1, steps: 30), (duration: 1.0, depth: 0.0, steps: 30)]))",
+            self.law()
+        )
+    }
+
+    /// CalculiX's material: `*ELASTIC` and `*PLASTIC` with [`J2Case::curve`].
+    pub fn material(&self) -> Material {
+        Material::Plastic {
+            e: self.e,
+            nu: self.nu,
+            curve: self.curve(),
+        }
+    }
+}
 
 /// The times (s) at which the forces are compared.
 pub const TIMES: [f64; 4] = [0.5, 1.0, 1.5, 2.0];
@@ -846,10 +1021,22 @@ pub fn our_sets(case: &Case, friction: f64, nlgeom: bool) -> Vec<String> {
 /// # Errors
 /// A configuration that cannot be read or prepared, a law without a CalculiX material.
 pub fn load(root: &std::path::Path, case: &Case) -> Result<Loaded> {
-    let source = indentify_study::source::ConfigSource::Path(root.join(case.example));
+    let j2 = j2_case(case.name);
+    let source = match j2 {
+        Some(j) => indentify_study::source::ConfigSource::Text {
+            text: j.config(),
+            name: case.name.to_string(),
+        },
+        None => indentify_study::source::ConfigSource::Path(root.join(case.example)),
+    };
     let cfg = source.load(&our_sets(case, 0.0, false))?;
-    let (law, params) = cfg.law.build()?;
-    let material = Material::from_law(law.name(), &params)?;
+    let material = match j2 {
+        Some(j) => j.material(),
+        None => {
+            let (law, params) = cfg.law.build()?;
+            Material::from_law(law.name(), &params)?
+        }
+    };
     let prepared = cfg.prepare(case.name)?;
     Ok(Loaded {
         prepared,
@@ -995,7 +1182,9 @@ pub fn run(o: &RunOptions) -> Result<String> {
     );
     for name in &o.cases {
         let case = CASES.iter().find(|c| c.name == name).ok_or_else(|| {
-            anyhow::anyhow!("unknown case `{name}`: expected r0, r0-nu049, r1, r2 or r2-sy0")
+            anyhow::anyhow!(
+                "unknown case `{name}`: expected r0, r0-nu049, r1, r2, r2-sy0, r2-j2-linear or r2-j2-power"
+            )
         })?;
         let loaded = load(&o.root, case)?;
         let mesh = &loaded.prepared.model.mesh;

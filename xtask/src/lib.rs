@@ -3,6 +3,7 @@
 //! the snapshot test.
 
 pub mod calculix;
+pub mod dao;
 pub mod doc;
 pub mod mesh_study;
 pub mod paper;

@@ -13,7 +13,7 @@ use xtask::calculix::{self, ContactType, DeckOptions, Material};
 fn ccx_uniaxial_rate(m: &Material, sigma: f64) -> f64 {
     match *m {
         Material::Viscoplastic { a, n, sy, .. } => a * (sigma - sy).max(0.0).powf(n),
-        Material::Elastic { .. } => 0.0,
+        Material::Elastic { .. } | Material::Plastic { .. } => 0.0,
     }
 }
 
