@@ -30,7 +30,6 @@ type Rows = Vec<Vec<f64>>;
 /// The accumulators and per-point work of one sweep (allocated once per sweep).
 pub(crate) struct MatSweep {
     m: usize,
-    np: usize,
     /// `z = D_{i+1}^T mu_{i+1}` per point (`m` each).
     z: Vec<f64>,
     /// `e = E_{i+1}^T mu_{i+1}` per point.
@@ -86,7 +85,6 @@ impl MatSweep {
         let m = mat.state_len();
         MatSweep {
             m,
-            np,
             z: vec![0.0; nq * m],
             e: vec![Vec4::ZERO; nq],
             g: vec![0.0; nq * m * 4],
@@ -497,7 +495,7 @@ impl Adjoint<'_> {
         }
         sw.zero = false;
         let model = self.model;
-        let (m, np) = (sw.m, sw.np);
+        let m = sw.m;
         let nq = model.disc.n_qp();
         let fail = |q: usize, what: &str| AdjointError::Step {
             step: i,
@@ -670,10 +668,8 @@ impl Adjoint<'_> {
                 regime: f1.regime[q],
             };
             let w = model.disc.qp[q].w;
-            mat.jac_params(c, &step, &mut sw.p);
-            for (k, g) in sw.grad.iter_mut().enumerate() {
-                *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
-            }
+            // dJ/dc -= w mu^T P (the material's contraction: a closed form, or its block)
+            mat.jac_params_transpose(c, &step, &sw.x, -w, &mut sw.p, &mut sw.grad);
             if linear {
                 // the carry is `mu_i` itself (folded into the step before)
                 sw.z[q * m..(q + 1) * m].copy_from_slice(&sw.x);
