@@ -3,7 +3,8 @@
 //! contact), back to back: the stress-only laws (Elastic, Maxwell, R2's Norton-Hoff), J2
 //! plasticity with each hardening form, rate-independent and Norton, and Prony series of
 //! one to three terms; the gradient / forward ratio of one run is printed per law.
-//! `cargo bench -p indentify-adjoint --bench laws_cost` (docs/performance.md).
+//! `cargo bench -p indentify-adjoint --bench laws_cost` (docs/performance.md);
+//! `LAWS_COST=prony` keeps the cases whose name contains `prony`.
 
 use std::time::Duration;
 
@@ -94,7 +95,10 @@ fn bench_laws(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(3));
     let mut solver = DirectSolver::new(&model).expect("solver");
     let mut adj = Adjoint::new(&model).expect("adjoint");
-    for (name, mat, params) in cases() {
+    // `LAWS_COST=prony` runs only the cases whose name contains `prony` (each case's
+    // first run, which prints the ratio, comes before criterion's own filter)
+    let only = std::env::var("LAWS_COST").unwrap_or_default();
+    for (name, mat, params) in cases().into_iter().filter(|c| c.0.contains(&only)) {
         let mat = &*mat;
         let traj = solver.run(mat, &params, &schedule, &opts).expect("run");
         // a cost with rho_i = F_i (data = 0): every step contributes

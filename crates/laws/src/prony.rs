@@ -115,6 +115,7 @@ const PARAMS: [[ParamInfo; 2]; MAX_TERMS + 1] = [
     term_params!("g8", "tau8"),
 ];
 
+#[inline]
 fn view(y: &[f64], i: usize) -> Vec4 {
     let o = 4 + 4 * i;
     Vec4([y[o], y[o + 1], y[o + 2], y[o + 3]])
@@ -293,6 +294,7 @@ impl Material for Prony {
     /// - `nu`: `(mu_s.ds - tr(mu_s) tr(ds) - dt m_v.dev(s1)) / E`,
     /// - `g_j`: `dev(mu_s).dv_j - dt dev(m_v).v1_j`,
     /// - `tau_j`: `mu_j.dv_j`.
+    #[allow(clippy::needless_range_loop)] // (plain loops: no calls in the `dev` profile)
     fn jac_params_transpose(
         &self,
         c: &[f64],
@@ -303,25 +305,45 @@ impl Material for Prony {
         out: &mut [f64],
     ) {
         let (e, nu, dt) = (c[0], c[1], step.dt);
-        let (s0, s1) = (stress_of(step.y0), stress_of(step.y1));
-        let mus = stress_of(mu);
-        let mut mv = Vec4::ZERO;
-        for i in 0..self.terms {
-            mv += view(mu, i);
+        let (y0, y1) = (step.y0, step.y1);
+        // mu_s.ds, tr(mu_s), tr(ds), m_v
+        let (mut mds, mut trm, mut trd) = (0.0, 0.0, 0.0);
+        let mut mv = [0.0; 4];
+        for a in 0..4 {
+            let d = y1[a] - y0[a];
+            mds += mu[a] * d;
+            if a < 3 {
+                trm += mu[a];
+                trd += d;
+            }
+            for i in 0..self.terms {
+                mv[a] += mu[4 + 4 * i + a];
+            }
         }
-        let ds = s1 - s0;
-        let (mds, trs) = (mus.dot(&ds), mus.trace() * ds.trace());
-        let mvd = mv.dot(&s1.deviator());
+        let trs = trm * trd;
+        // dev(mu_s), dev(m_v), and m_v.dev(s1) = dev(m_v).s1
+        let (pm, pv) = (trm / 3.0, (mv[0] + mv[1] + mv[2]) / 3.0);
+        let dmus = [mu[0] - pm, mu[1] - pm, mu[2] - pm, mu[3]];
+        let dmv = [mv[0] - pv, mv[1] - pv, mv[2] - pv, mv[3]];
+        let mut mvd = 0.0;
+        for a in 0..4 {
+            mvd += dmv[a] * y1[a];
+        }
         out[0] += weight * ((nu * trs - (1.0 + nu) * mds + dt * (1.0 + nu) * mvd) / (e * e));
         out[1] += weight * ((mds - trs - dt * mvd) / e);
-        let (dmus, dmv) = (mus.deviator(), mv.deviator());
         for j in 0..self.terms {
-            let (v0, v1) = (view(step.y0, j), view(step.y1, j));
-            let dv = v1 - v0;
-            out[2 + 2 * j] += weight * (dmus.dot(&dv) - dt * dmv.dot(&v1));
-            out[3 + 2 * j] += weight * view(mu, j).dot(&dv);
+            let o = 4 + 4 * j;
+            let (mut g, mut t) = (0.0, 0.0);
+            for a in 0..4 {
+                let dv = y1[o + a] - y0[o + a];
+                g += dmus[a] * dv - dt * dmv[a] * y1[o + a];
+                t += mu[o + a] * dv;
+            }
+            out[2 + 2 * j] += weight * g;
+            out[3 + 2 * j] += weight * t;
         }
     }
+
     /// Closed form (see [`Prony`]).
     ///
     /// # Errors
