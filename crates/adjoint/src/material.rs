@@ -728,8 +728,12 @@ impl Adjoint<'_> {
     ) -> Result<(), String> {
         let disc = &self.model.disc;
         for e in 0..disc.elements.len() {
-            let dofs = disc.element_dofs(e);
             let (u0, u1) = (disc.gather(e, &f0.u), disc.gather(e, &f1.u));
+            // (small strain: the element's increment once, not once per Gauss point)
+            let mut due = [0.0; 16];
+            for ((d, a), b) in due.iter_mut().zip(&u1).zip(&u0) {
+                *d = a - b;
+            }
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
                 let qp = &disc.qp[q];
@@ -744,7 +748,6 @@ impl Adjoint<'_> {
                     };
                     hencky(&u1)? - hencky(&u0)?
                 } else {
-                    let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
                     Vec4(qp.strain(&due))
                 };
             }
