@@ -30,7 +30,6 @@ type Rows = Vec<Vec<f64>>;
 /// The accumulators and per-point work of one sweep (allocated once per sweep).
 pub(crate) struct MatSweep {
     m: usize,
-    np: usize,
     /// `z = D_{i+1}^T mu_{i+1}` per point (`m` each).
     z: Vec<f64>,
     /// `e = E_{i+1}^T mu_{i+1}` per point.
@@ -86,7 +85,6 @@ impl MatSweep {
         let m = mat.state_len();
         MatSweep {
             m,
-            np,
             z: vec![0.0; nq * m],
             e: vec![Vec4::ZERO; nq],
             g: vec![0.0; nq * m * 4],
@@ -174,14 +172,35 @@ impl MatSweep {
         true
     }
 
-    /// Loads `y0, y1` of point `q` from the recorded fields.
+    /// Loads `y0, y1` of point `q` from the recorded fields (plain loops: a few numbers,
+    /// which `copy_from_slice` makes four `memmove` calls per point).
+    #[allow(clippy::manual_memcpy)]
     fn load(&mut self, f0: &StepFields, f1: &StepFields, q: usize) {
         let n = self.m - 4;
-        self.y0[..4].copy_from_slice(&f0.sigma[q].0);
-        self.y0[4..].copy_from_slice(&f0.alpha[q * n..(q + 1) * n]);
-        self.y1[..4].copy_from_slice(&f1.sigma[q].0);
-        self.y1[4..].copy_from_slice(&f1.alpha[q * n..(q + 1) * n]);
+        let (s0, s1) = (&f0.sigma[q].0, &f1.sigma[q].0);
+        for k in 0..4 {
+            self.y0[k] = s0[k];
+            self.y1[k] = s1[k];
+        }
+        let (a0, a1) = (&f0.alpha[q * n..(q + 1) * n], &f1.alpha[q * n..(q + 1) * n]);
+        for k in 0..n {
+            self.y0[4 + k] = a0[k];
+            self.y1[4 + k] = a1[k];
+        }
     }
+}
+
+/// `sum_j a[j] b[j]` in index order, as a plain loop: the bits of
+/// `a.iter().zip(b).map(|(x, y)| x * y).sum()` (a sum starts from `-0.0`), without the
+/// iterator adapters the `dev` profile leaves as calls in the sweep's per-point products.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = -0.0;
+    for j in 0..a.len() {
+        s += a[j] * b[j];
+    }
+    s
 }
 
 impl Adjoint<'_> {
@@ -497,7 +516,7 @@ impl Adjoint<'_> {
         }
         sw.zero = false;
         let model = self.model;
-        let (m, np) = (sw.m, sw.np);
+        let m = sw.m;
         let nq = model.disc.n_qp();
         let fail = |q: usize, what: &str| AdjointError::Step {
             step: i,
@@ -544,8 +563,7 @@ impl Adjoint<'_> {
                 let mu1 = &sw.z[q * m..(q + 1) * m];
                 let az = &mut sw.az[q * m..(q + 1) * m];
                 for (k, a) in az.iter_mut().enumerate() {
-                    let row = &sw.qm[k * m..(k + 1) * m];
-                    *a = row.iter().zip(mu1).map(|(a, b)| a * b).sum();
+                    *a = dot(&sw.qm[k * m..(k + 1) * m], mu1);
                 }
                 let mut src = Vec4::ZERO;
                 for (r, mu) in mu1.iter().enumerate() {
@@ -660,7 +678,7 @@ impl Adjoint<'_> {
                 &sw.g[q * m * 4..(q + 1) * m * 4]
             };
             for k in 0..m {
-                sw.x[k] = -(sw.az[q * m + k] + (0..4).map(|j| gq[k * 4 + j] * bv[j]).sum::<f64>());
+                sw.x[k] = -(sw.az[q * m + k] + dot(&gq[k * 4..k * 4 + 4], &bv));
             }
             let step = Step {
                 y0: &sw.y0,
@@ -670,13 +688,14 @@ impl Adjoint<'_> {
                 regime: f1.regime[q],
             };
             let w = model.disc.qp[q].w;
-            mat.jac_params(c, &step, &mut sw.p);
-            for (k, g) in sw.grad.iter_mut().enumerate() {
-                *g -= w * (0..m).map(|r| sw.x[r] * sw.p[r * np + k]).sum::<f64>();
-            }
+            // dJ/dc -= w mu^T P (the material's contraction: a closed form, or its block)
+            mat.jac_params_transpose(c, &step, &sw.x, -w, &mut sw.p, &mut sw.grad);
             if linear {
                 // the carry is `mu_i` itself (folded into the step before)
-                sw.z[q * m..(q + 1) * m].copy_from_slice(&sw.x);
+                #[allow(clippy::manual_memcpy)] // (no `memmove` call per point)
+                for k in 0..m {
+                    sw.z[q * m + k] = sw.x[k];
+                }
                 continue;
             }
             mat.jac_previous(c, &step, &mut sw.d);
@@ -709,8 +728,12 @@ impl Adjoint<'_> {
     ) -> Result<(), String> {
         let disc = &self.model.disc;
         for e in 0..disc.elements.len() {
-            let dofs = disc.element_dofs(e);
             let (u0, u1) = (disc.gather(e, &f0.u), disc.gather(e, &f1.u));
+            // (small strain: the element's increment once, not once per Gauss point)
+            let mut due = [0.0; 16];
+            for ((d, a), b) in due.iter_mut().zip(&u1).zip(&u0) {
+                *d = a - b;
+            }
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
                 let qp = &disc.qp[q];
@@ -725,7 +748,6 @@ impl Adjoint<'_> {
                     };
                     hencky(&u1)? - hencky(&u0)?
                 } else {
-                    let due: [f64; 16] = std::array::from_fn(|k| f1.u[dofs[k]] - f0.u[dofs[k]]);
                     Vec4(qp.strain(&due))
                 };
             }

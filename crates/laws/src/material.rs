@@ -165,6 +165,32 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// `P = dR/dc` (`m x n_c`, row-major) into `out`.
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]);
 
+    /// `out[k] += weight * sum_r mu[r] P[r][k]`: the parameter block transposed applied
+    /// to a cotangent `mu` (length `m`), what an adjoint sweep asks of `P` at every Gauss
+    /// point and step (`dJ/dc -= w mu^T P`). The default forms `P` with
+    /// [`Material::jac_params`] in `scratch` (length `m x n_c`) and contracts it; a law
+    /// with a closed form overrides it and forms no block (`Prony`).
+    /// `testing::check_material` checks it against `P`.
+    fn jac_params_transpose(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        mu: &[f64],
+        weight: f64,
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let nc = c.len();
+        self.jac_params(c, step, scratch);
+        for (k, o) in out[..nc].iter_mut().enumerate() {
+            *o += weight
+                * mu.iter()
+                    .enumerate()
+                    .map(|(r, m)| m * scratch[r * nc + k])
+                    .sum::<f64>();
+        }
+    }
+
     /// The implicit update from `y0` under `deps` over `dt`: writes `y1` (length `m`) and
     /// returns the consistent tangent and the branch taken.
     ///

@@ -92,6 +92,18 @@ impl Material for Stoppable<'_> {
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
         self.inner.jac_params(c, step, out);
     }
+    fn jac_params_transpose(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        mu: &[f64],
+        weight: f64,
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        self.inner
+            .jac_params_transpose(c, step, mu, weight, scratch, out);
+    }
     fn update(
         &self,
         c: &[f64],

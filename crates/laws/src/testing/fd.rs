@@ -2,7 +2,8 @@
 //! residual's Jacobians `A, D, E, P` (regime held), the update's residual, its consistent
 //! tangent (against the blocks and against finite differences of the update) and the
 //! update's derivatives in the previous state and the parameters (`-A^-1 D`, `-A^-1 P`,
-//! what the adjoint and the sensitivities use).
+//! what the adjoint and the sensitivities use), and the adjoint's contraction `mu^T P`
+//! ([`Material::jac_params_transpose`]) against `P`.
 
 use crate::mandel::Vec4;
 use crate::material::{Material, Regime, Step, dense_solve, tangent_from_blocks};
@@ -213,6 +214,34 @@ pub fn check_material(mat: &dyn Material, pt: &Point<'_>, tol: f64) -> Result<Fd
         resid(&cc, pt.y0, &y1, &pt.deps)
     });
     push(&mut checks, "P = dR/dc", row_error(&p, &fd_p, m, &tc));
+
+    // the adjoint's contraction `mu^T P` (a law's closed form, or the default) against
+    // the block, with a cotangent of mixed signs scaled by the state's sizes, added to
+    // a nonzero `out`
+    let mu: Vec<f64> = (0..m)
+        .map(|r| (0.7 + 1.3 * r as f64).sin() / ty[r])
+        .collect();
+    let weight = -1.75;
+    // (each entry's offset on the scale of its terms: it is added to, not overwritten)
+    let size: Vec<f64> = (0..nc)
+        .map(|k| (0..m).map(|r| (mu[r] * p[r * nc + k]).abs()).sum())
+        .collect();
+    let mut got: Vec<f64> = size.iter().map(|s| 0.5 * s).collect();
+    let mut scratch = vec![0.0; m * nc];
+    step(pt.y0, &y1, &pt.deps, &mut |s| {
+        mat.jac_params_transpose(c, s, &mu, weight, &mut scratch, &mut got)
+    });
+    let (mut diff, mut scale) = (0.0f64, 0.0f64);
+    for k in 0..nc {
+        let want: f64 = (0..m).map(|r| mu[r] * p[r * nc + k]).sum();
+        diff = diff.max((got[k] - 0.5 * size[k] - weight * want).abs() * tc[k]);
+        scale = scale.max(weight.abs() * size[k] * tc[k]);
+    }
+    push(
+        &mut checks,
+        "mu^T P (jac_params_transpose)",
+        if scale > 0.0 { diff / scale } else { diff },
+    );
 
     // the update's tangent against the blocks
     let mut tb = None;
