@@ -68,14 +68,11 @@ impl AnalyzeOptions {
     }
 }
 
-/// One test's outcome: the summary values (from its main unloading, in N, mm, N/mm, MPa),
-/// the preprocessing applied, every unloading, the vendor's values.
-#[derive(Debug, Clone, Serialize)]
-pub struct TestOutcome {
-    /// 1-based index in the file.
-    pub index: usize,
-    /// Test name.
-    pub test: String,
+/// The O&P values of a test's main unloading (MPa, N/mm, mm, N), `None` when it gave
+/// none: one struct for `analyze`'s tests and `batch --analyze`'s indents (flattened into
+/// their JSON as `E`, `H`, `Er`, `S`, `hc`, `hmax`, `Fmax`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct OpValues {
     /// Indentation modulus E_IT, MPa.
     #[serde(rename = "E")]
     pub e: Option<f64>,
@@ -95,6 +92,37 @@ pub struct TestOutcome {
     /// Force at the start of the unloading, N.
     #[serde(rename = "Fmax")]
     pub fmax: Option<f64>,
+}
+
+impl OpValues {
+    /// The values of an analysis' main unloading (all `None` without one).
+    pub fn of(a: &TestAnalysis) -> OpValues {
+        let Some((u, op)) = a.values() else {
+            return OpValues::default();
+        };
+        OpValues {
+            e: op.e,
+            h: Some(op.hardness),
+            er: Some(op.er),
+            s: Some(op.s),
+            hc: Some(op.hc),
+            hmax: Some(u.h_max),
+            fmax: Some(u.f_max),
+        }
+    }
+}
+
+/// One test's outcome: the summary values (from its main unloading, in N, mm, N/mm, MPa),
+/// the preprocessing applied, every unloading, the vendor's values.
+#[derive(Debug, Clone, Serialize)]
+pub struct TestOutcome {
+    /// 1-based index in the file.
+    pub index: usize,
+    /// Test name.
+    pub test: String,
+    /// The O&P values of the main unloading.
+    #[serde(flatten)]
+    pub values: OpValues,
     /// Why the test gave no values.
     pub error: Option<String>,
     /// The preprocessing steps applied.
@@ -190,13 +218,7 @@ fn analyse_records(
             let mut t = TestOutcome {
                 index: first_index + i,
                 test: r.meta.test_name.clone().unwrap_or_else(|| r.name.clone()),
-                e: None,
-                h: None,
-                er: None,
-                s: None,
-                hc: None,
-                hmax: None,
-                fmax: None,
+                values: OpValues::default(),
                 error: None,
                 preprocessing: Vec::new(),
                 analysis: None,
@@ -212,15 +234,7 @@ fn analyse_records(
             t.preprocessing = applied;
             match indentify_analysis::analyze(&x, o) {
                 Ok(a) => {
-                    if let Some((u, op)) = a.values() {
-                        t.e = op.e;
-                        t.h = Some(op.hardness);
-                        t.er = Some(op.er);
-                        t.s = Some(op.s);
-                        t.hc = Some(op.hc);
-                        t.hmax = Some(u.h_max);
-                        t.fmax = Some(u.f_max);
-                    }
+                    t.values = OpValues::of(&a);
                     t.error = a.error.clone();
                     t.analysis = Some(a);
                 }
@@ -414,13 +428,13 @@ pub fn summary_table(o: &AnalyzeOutcome) -> String {
         let n_all = a.map_or(0, |a| a.unloadings.len());
         rows.push(vec![
             format!("{} {}", t.index, t.test),
-            opt(t.fmax, 1e3, 5),
-            opt(t.hmax, 1e6, 5),
-            opt(t.s, 1e-3, 4),
-            opt(t.hc, 1e6, 5),
-            opt(t.h, 1e-3, 4),
-            opt(t.er, 1e-3, 4),
-            opt(t.e, 1e-3, 4),
+            opt(t.values.fmax, 1e3, 5),
+            opt(t.values.hmax, 1e6, 5),
+            opt(t.values.s, 1e-3, 4),
+            opt(t.values.hc, 1e6, 5),
+            opt(t.values.h, 1e-3, 4),
+            opt(t.values.er, 1e-3, 4),
+            opt(t.values.e, 1e-3, 4),
             main.and_then(|(u, _)| u.fit.as_ref().map(|f| sig(f.m, 3)))
                 .unwrap_or_default(),
             format!("{n_ok}/{n_all}"),
