@@ -47,6 +47,10 @@ pub struct AnalyzeOptions {
     /// zero point): `Some(false)` keeps the file's own zero; `None` decides by the format
     /// ([`zero_point_default`]).
     pub zero_point: Option<bool>,
+    /// Find the contact on the stiffness instead: the first sample where the 5-sample
+    /// median of `|dF/dh|` exceeds this, N/mm (= mN/µm; indentationGUI's surface, 1 on
+    /// fused silica); implies the zero point. `None`: the force threshold.
+    pub surface_stiffness: Option<f64>,
 }
 
 impl AnalyzeOptions {
@@ -64,6 +68,7 @@ impl AnalyzeOptions {
             results: None,
             out: None,
             zero_point: None,
+            surface_stiffness: None,
         }
     }
 }
@@ -297,7 +302,13 @@ pub fn run(opts: &AnalyzeOptions) -> Result<AnalyzeOutcome> {
         crate::atomic::ensure_writable_dir(dir).map_err(|e| Error::new(ErrorKind::Io, e))?;
     }
     let zero = opts.zero_point.unwrap_or(zero_point_default(format));
-    let prep = preprocessing(opts.tip.frame_compliance, zero);
+    let mut prep = preprocessing(opts.tip.frame_compliance, zero);
+    if let Some(k) = opts.surface_stiffness {
+        prep.zero_point = Some(ZeroPoint {
+            stiffness: Some(k),
+            ..ZeroPoint::default()
+        });
+    }
     let tests = analyse_records(&records, opts.test.unwrap_or(1), &o, &prep);
     let mut out = AnalyzeOutcome {
         file: opts.file.display().to_string(),

@@ -157,6 +157,40 @@ fn indentation_gui_tab_he_is_reproduced_on_its_own_file() {
     }
 }
 
+/// `analyze --zero-point stiffness:1` (the contact on the stiffness, `records::prep`) with
+/// indentationGUI's settings gives its numbers as the test's own surface above does.
+#[test]
+fn the_stiffness_zero_point_gives_indentation_guis_numbers() {
+    let mut tip = Tip::berkovich();
+    tip.frame_compliance = Some(0.0);
+    let o = AnalyzeOptions {
+        tip,
+        nu: 0.179,
+        fit_range: Some(FitRange {
+            lower: 0.5,
+            upper: 0.98,
+        }),
+        surface_stiffness: Some(1.0),
+        ..AnalyzeOptions::new(data("FusedSilica-45mN.xlsx"))
+    };
+    let out = analyze::run(&o).unwrap();
+    assert_eq!(out.tests.len(), 12);
+    for (t, (name, hc, h, e)) in out.tests.iter().zip(GUI) {
+        assert_eq!(t.test, name);
+        assert!(
+            t.preprocessing
+                .iter()
+                .any(|a| a.description.contains("|dF/dh|")),
+            "{name}: {:?}",
+            t.preprocessing
+        );
+        let (our_hc, our_h, our_e, _) = gui_summary(t.analysis.as_ref().unwrap());
+        assert!((our_hc / hc - 1.0).abs() < 3e-3, "{name}: h_c {our_hc} vs {hc}");
+        assert!((our_h / h - 1.0).abs() < 6e-3, "{name}: H {our_h} vs {h}");
+        assert!((our_e / e - 1.0).abs() < 4e-3, "{name}: E {our_e} vs {e}");
+    }
+}
+
 #[test]
 fn the_vendors_cycle_values_are_reproduced_from_the_files_zero() {
     let o = AnalyzeOptions {
