@@ -92,10 +92,7 @@ fn gui_surface(r: &Record) -> Record {
             w[2]
         })
         .collect();
-    let s = filtered
-        .iter()
-        .position(|&x| x > 1.0)
-        .expect("a surface");
+    let s = filtered.iter().position(|&x| x > 1.0).expect("a surface");
     let mut x = r.clone();
     let (h0, f0) = (h[s], f[s]);
     x.h.iter_mut().for_each(|v| *v -= h0);
@@ -150,7 +147,10 @@ fn indentation_gui_tab_he_is_reproduced_on_its_own_file() {
         );
         // measured: h_c within 0.17 %, H within 0.45 %, E within 0.28 % (the rest is their
         // thermal drift correction from the unloading hold, not applied here)
-        assert!((our_hc / hc - 1.0).abs() < 3e-3, "{name}: h_c {our_hc} vs {hc}");
+        assert!(
+            (our_hc / hc - 1.0).abs() < 3e-3,
+            "{name}: h_c {our_hc} vs {hc}"
+        );
         assert!((our_h / h - 1.0).abs() < 6e-3, "{name}: H {our_h} vs {h}");
         assert!((our_e / e - 1.0).abs() < 4e-3, "{name}: E {our_e} vs {e}");
         assert!(n >= 4, "{name}: {n} unloadings averaged");
@@ -185,7 +185,10 @@ fn the_stiffness_zero_point_gives_indentation_guis_numbers() {
             t.preprocessing
         );
         let (our_hc, our_h, our_e, _) = gui_summary(t.analysis.as_ref().unwrap());
-        assert!((our_hc / hc - 1.0).abs() < 3e-3, "{name}: h_c {our_hc} vs {hc}");
+        assert!(
+            (our_hc / hc - 1.0).abs() < 3e-3,
+            "{name}: h_c {our_hc} vs {hc}"
+        );
         assert!((our_h / h - 1.0).abs() < 6e-3, "{name}: H {our_h} vs {h}");
         assert!((our_e / e - 1.0).abs() < 4e-3, "{name}: E {our_e} vs {e}");
     }

@@ -124,9 +124,9 @@ pub fn run(args: &Args) -> Result<()> {
             "on" => Some(true),
             "off" => Some(false),
             s if s.starts_with("stiffness:") => Some(true),
-            other => bail!(
-                "--zero-point {other}: expected auto, on, off or stiffness:K (K in mN/um)"
-            ),
+            other => {
+                bail!("--zero-point {other}: expected auto, on, off or stiffness:K (K in mN/um)")
+            }
         },
         surface_stiffness: match args.zero_point.strip_prefix("stiffness:") {
             None => None,
