@@ -152,6 +152,37 @@ class Result:
     """The discretization check (None with refine=False or after an interruption)."""
     caveats: list[str]
     """What makes the result less than it looks (empty when nothing)."""
+    oliver_pharr: Optional["OliverPharrBeside"]
+    """The Oliver-Pharr analysis of the fitted record beside the FE result (result.json's
+    `oliver_pharr`); without values and with `skipped` when the record cannot be analysed.
+    None for synthesized data and joint fits (each of `tests` has its own)."""
+
+class OliverPharrBeside(TypedDict, total=False):
+    """The O&P values of a fitted record beside the FE result (MPa, N/mm, mm, N)."""
+
+    test: str
+    """The analysed test's name."""
+    E: float
+    """Indentation modulus E_IT (MPa)."""
+    H: float
+    """Indentation hardness H_IT (MPa)."""
+    Er: float
+    S: float
+    """Contact stiffness (N/mm)."""
+    hc: float
+    hmax: float
+    Fmax: float
+    strain_rate: Optional[float]
+    srs: Optional[float]
+    nu: float
+    tip: str
+    E_fe: Optional[float]
+    """The fitted E (MPa)."""
+    E_difference_pct: Optional[float]
+    """100 (E_IT - E_fe) / E_fe."""
+    why_they_differ: str
+    skipped: str
+    """Why there are no values (no unloading, a punch without an area function, ...)."""
 
 class Discretization(TypedDict):
     """The fit re-run on a 2x refined mesh with twice the steps (`identify(refine=True)`)."""
@@ -184,6 +215,8 @@ class TestFit(TypedDict):
     """Its share w_k J_k of the final cost."""
     quality: Optional[dict[str, float]]
     fit: Fit
+    oliver_pharr: Optional[OliverPharrBeside]
+    """This test's record analysed beside the shared fitted E (None: synthesized data)."""
 
 NoiseModel = Union[
     Literal["Residual", "RelativeEstimated"],

@@ -294,10 +294,19 @@ pub struct IdentifyResult {
     files: Py<PyAny>,
     /// A joint fit's tests (empty for a one-test configuration), in the configuration's
     /// order: dicts `name`, `data`, `weight` (w_k), `default_weight` (bool), `wJ` (its
-    /// share w_k J_k of the final cost), `quality` (as `Result.quality`) and `fit` (its
-    /// curves, as `Result.fit`). `Result.fit` then holds every test's curves end to end.
+    /// share w_k J_k of the final cost), `quality` (as `Result.quality`), `fit` (its
+    /// curves, as `Result.fit`) and `oliver_pharr` (as `Result.oliver_pharr`, for that
+    /// test's record). `Result.fit` then holds every test's curves end to end.
     #[pyo3(get)]
     tests: Py<PyList>,
+    /// The Oliver-Pharr analysis of the fitted record beside the FE result, as result.json's
+    /// `oliver_pharr`: a dict `E`, `H`, `Er` (MPa), `S` (N/mm), `hc`, `hmax` (mm), `Fmax`
+    /// (N), `strain_rate`, `srs`, `nu`, `tip`, `E_fe` (the fitted E), `E_difference_pct`,
+    /// `why_they_differ`; a record that cannot be analysed gives the dict without the values
+    /// and `skipped` with the reason. None when there is no record (synthesized data) and for
+    /// a joint fit (each of `Result.tests` has its own).
+    #[pyo3(get)]
+    oliver_pharr: Py<PyAny>,
     /// The discretization check (the fit re-run on a 2x refined mesh with twice the
     /// steps): a dict `mesh`, `steps` (the refined discretization in words), `rms` (N),
     /// `rms_rel`, `max_abs` (N) of the force change, `shift` and `relative_shift`
@@ -312,6 +321,17 @@ pub struct IdentifyResult {
     /// values at a bound); empty when there is nothing to add.
     #[pyo3(get)]
     caveats: Vec<String>,
+}
+
+/// The O&P values beside the FE result as result.json's dict (None without).
+fn op_dict(
+    py: Python<'_>,
+    b: Option<&indentify_study::op_beside::OpBeside>,
+) -> PyResult<Py<PyAny>> {
+    Ok(match b {
+        Some(b) => to_python(py, b)?.unbind(),
+        None => py.None(),
+    })
 }
 
 /// The discretization check as a dict (None when not run).
@@ -425,6 +445,7 @@ impl IdentifyResult {
             d.set_item("wJ", t.cost)?;
             d.set_item("quality", quality_dict(py, t.quality.as_ref())?)?;
             d.set_item("fit", fit_dict(py, &t.fit)?)?;
+            d.set_item("oliver_pharr", op_dict(py, t.oliver_pharr.as_ref())?)?;
             tests.append(d)?;
         }
         let history = PyList::empty(py);
@@ -476,6 +497,7 @@ impl IdentifyResult {
             truth,
             files,
             tests: tests.unbind(),
+            oliver_pharr: op_dict(py, o.oliver_pharr.as_ref())?,
             discretization: discretization_dict(py, o)?,
             caveats: o.caveats(),
         })

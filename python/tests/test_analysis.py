@@ -7,7 +7,7 @@ import json
 import pytest
 
 import indentify
-from conftest import ANTON_PAAR, ANTON_PAAR_MULTI, EXAMPLES, REAL_MAXWELL
+from conftest import ANTON_PAAR, ANTON_PAAR_MULTI, EXAMPLES, R1, REAL_MAXWELL
 
 KLA = EXAMPLES / "data" / "kla-fused-silica" / "FusedSilica.xlsx"
 
@@ -74,3 +74,28 @@ def test_first_guess_and_identify_start_from_the_analysis():
     assert starts["eta"] == pytest.approx(g["starts"]["eta"])
     with pytest.raises(TypeError, match="oliver-pharr"):
         indentify.identify(REAL_MAXWELL, start=3.0, max_iterations=0)
+
+
+def test_result_carries_the_oliver_pharr_numbers_beside_the_fit(coarse):
+    res = indentify.identify(
+        REAL_MAXWELL,
+        sets={"data.preprocessing.resample.n": 16, "specimen.elements_in_contact": 4},
+        max_iterations=0,
+        refine=False,
+    )
+    op = res.oliver_pharr
+    assert isinstance(op, dict)
+    assert "skipped" not in op
+    # the same test as analyze gives it (the configuration's Berkovich, its nu 0.3)
+    a = indentify.analyze(ANTON_PAAR)["tests"][0]
+    for key in ("E", "H", "S", "hc", "hmax", "Fmax"):
+        assert op[key] == pytest.approx(a[key], rel=1e-12), key
+    assert op["E_fe"] == pytest.approx(res.params["E"])
+    assert op["E_difference_pct"] == pytest.approx(
+        100.0 * (op["E"] - op["E_fe"]) / op["E_fe"], rel=1e-9
+    )
+    assert "Berkovich" in op["tip"] and op["why_they_differ"]
+    assert res.tests == []
+    # synthesized data: no record, no analysis
+    syn = indentify.identify(R1, sets=coarse, max_iterations=0, refine=False)
+    assert syn.oliver_pharr is None

@@ -82,6 +82,8 @@ fn options(rng: &mut Rng) -> Preprocessing {
             threshold: rng.chance(0.2).then(|| rng.unit() * 1e-2 - 1e-3),
             noise_band: rng.unit() * 10.0 - 1.0,
             trim: rng.chance(0.8),
+            // the stiffness contact, sometimes, with values outside its range too
+            stiffness: rng.chance(0.2).then(|| rng.unit() * 3.0 - 0.5),
         }),
         segments: rng.chance(0.8).then(|| Segments {
             control: [Control::Auto, Control::Load, Control::Depth][rng.below(3)],

@@ -91,6 +91,7 @@ mod hysitron;
 mod kla;
 pub mod prep;
 mod record;
+mod surface;
 mod table;
 mod text;
 

@@ -36,6 +36,12 @@ pub struct ZeroPoint {
     pub noise_band: f64,
     /// Drop the samples before contact (the approach). Default true.
     pub trim: bool,
+    /// Contact at the first sample where the median over 5 samples of `|dF/dh|` exceeds
+    /// this stiffness, N/mm (> 0), instead of the force threshold (indentationGUI's
+    /// surface; for multi-cycle tests whose first cycles stay below the threshold).
+    /// Default `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
 }
 
 impl Default for ZeroPoint {
@@ -45,6 +51,7 @@ impl Default for ZeroPoint {
             threshold: None,
             noise_band: 3.0,
             trim: true,
+            stiffness: None,
         }
     }
 }
@@ -517,6 +524,9 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
             ));
         }
     }
+    if let Some(k) = o.stiffness {
+        return stiffness_zero_point(r, o, k);
+    }
     let f = &r.f;
     let i_max = argmax(f);
     let f_max = f.get(i_max).copied().unwrap_or(0.0);
@@ -644,6 +654,80 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
             Quantity::new("F offset", base * 1e3, "mN"),
             Quantity::new("baseline noise", sigma * 1e3, "mN"),
             Quantity::new("threshold", rise * 1e3, "mN"),
+            Quantity::new(
+                "samples dropped",
+                if o.trim { contact as f64 } else { 0.0 },
+                "",
+            ),
+        ],
+    );
+    Ok((x, a))
+}
+
+/// [`zero_point`] with the contact on the stiffness (`o.stiffness`, N/mm): depth, force
+/// and time offset there.
+fn stiffness_zero_point(r: &Record, o: &ZeroPoint, k: f64) -> Result<(Record, Applied), PrepError> {
+    if !(k > 0.0 && k.is_finite()) {
+        return Err(option_error(
+            "zero_point.stiffness",
+            k,
+            "a finite stiffness > 0 (N/mm)",
+        ));
+    }
+    let contact = crate::surface::stiffness_contact(&r.h, &r.f, k).ok_or_else(|| {
+        option_error(
+            "zero_point.stiffness",
+            k,
+            &format!(
+                "a stiffness the record `{}` reaches (the 5-sample median of its |dF/dh| never \
+                 exceeds {k} N/mm)",
+                r.name
+            ),
+        )
+    })?;
+    let (t0, h0, f0) = (r.t[contact], r.h[contact], r.f[contact]);
+    let keep = if o.trim { contact } else { 0 };
+    let take = |v: &[f64], off: f64| {
+        v.get(keep..)
+            .unwrap_or(&[])
+            .iter()
+            .map(|x| x - off)
+            .collect::<Vec<_>>()
+    };
+    let x = Record {
+        name: r.name.clone(),
+        t: take(&r.t, t0),
+        h: take(&r.h, h0),
+        f: take(&r.f, f0),
+        segment: r
+            .segment
+            .as_ref()
+            .map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
+        meta: r.meta.clone(),
+    };
+    if x.len() < 2 {
+        return Err(PrepError::TooShort {
+            record: r.name.clone(),
+            step: "zero_point",
+            n: x.len(),
+            min: 2,
+        });
+    }
+    let a = Applied::new(
+        "zero_point",
+        format!(
+            "contact at t = {t0:.4} s (sample {contact}, the 5-sample median of |dF/dh| rising \
+             through {k} N/mm): h offset {:.3} nm, F offset {:.5} mN, {contact} approach samples \
+             {}; t = 0 at contact",
+            h0 * 1e6,
+            f0 * 1e3,
+            if o.trim { "dropped" } else { "kept" }
+        ),
+        vec![
+            Quantity::new("contact time", t0, "s"),
+            Quantity::new("h offset", h0 * 1e6, "nm"),
+            Quantity::new("F offset", f0 * 1e3, "mN"),
+            Quantity::new("stiffness threshold", k, "N/mm"),
             Quantity::new(
                 "samples dropped",
                 if o.trim { contact as f64 } else { 0.0 },

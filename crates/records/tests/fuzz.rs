@@ -83,6 +83,7 @@ fn options() -> impl Strategy<Value = Preprocessing> {
                 threshold,
                 noise_band,
                 trim,
+                stiffness: None,
             }),
             segments: s.map(|(c, tolerance, min_hold)| Segments {
                 control: [Control::Auto, Control::Load, Control::Depth][c],

@@ -456,8 +456,8 @@ pub(crate) fn run_analyze(run: &Run) -> Result<End, ErrorBody> {
         .tests
         .iter()
         .map(|t| {
-            json!({"index": t.index, "test": t.test, "E": t.e, "H": t.h, "Er": t.er, "S": t.s,
-                   "hc": t.hc, "hmax": t.hmax, "Fmax": t.fmax, "error": t.error})
+            json!({"index": t.index, "test": t.test, "E": t.values.e, "H": t.values.h, "Er": t.values.er, "S": t.values.s,
+                   "hc": t.values.hc, "hmax": t.values.hmax, "Fmax": t.values.fmax, "error": t.error})
         })
         .collect();
     let failed = o.tests.iter().filter(|t| t.error.is_some()).count();

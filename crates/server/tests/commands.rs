@@ -77,10 +77,10 @@ fn analyze_gives_the_pipelines_oliver_pharr_values() {
     let served = v["result"]["tests"].as_array().unwrap();
     assert_eq!(served.len(), direct.tests.len());
     for (a, b) in served.iter().zip(&direct.tests) {
-        let e = b.e.expect("the direct analysis gives E");
+        let e = b.values.e.expect("the direct analysis gives E");
         assert!(e > 0.0);
         assert_eq!(a["E"].as_f64().unwrap(), e, "{a}");
-        assert_eq!(a["H"].as_f64(), b.h);
+        assert_eq!(a["H"].as_f64(), b.values.h);
     }
     let files: Vec<&str> = v["files"]
         .as_array()

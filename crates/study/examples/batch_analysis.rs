@@ -62,7 +62,11 @@ fn main() {
             .indents
             .iter()
             .enumerate()
-            .map(|(k, a)| a.e.map_or(f64::INFINITY, |e| (e / modulus(k) - 1.0).abs()))
+            .map(|(k, a)| {
+                a.values
+                    .e
+                    .map_or(f64::INFINITY, |e| (e / modulus(k) - 1.0).abs())
+            })
             .fold(0.0, f64::max);
         println!(
             "{jobs} thread(s): {wall:.2} s wall ({:.2} ms per indent), {} analysed, {} failed, \

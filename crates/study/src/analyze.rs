@@ -47,6 +47,10 @@ pub struct AnalyzeOptions {
     /// zero point): `Some(false)` keeps the file's own zero; `None` decides by the format
     /// ([`zero_point_default`]).
     pub zero_point: Option<bool>,
+    /// Find the contact on the stiffness instead: the first sample where the 5-sample
+    /// median of `|dF/dh|` exceeds this, N/mm (= mN/µm; indentationGUI's surface, 1 on
+    /// fused silica); implies the zero point. `None`: the force threshold.
+    pub surface_stiffness: Option<f64>,
 }
 
 impl AnalyzeOptions {
@@ -64,18 +68,16 @@ impl AnalyzeOptions {
             results: None,
             out: None,
             zero_point: None,
+            surface_stiffness: None,
         }
     }
 }
 
-/// One test's outcome: the summary values (from its main unloading, in N, mm, N/mm, MPa),
-/// the preprocessing applied, every unloading, the vendor's values.
-#[derive(Debug, Clone, Serialize)]
-pub struct TestOutcome {
-    /// 1-based index in the file.
-    pub index: usize,
-    /// Test name.
-    pub test: String,
+/// The O&P values of a test's main unloading (MPa, N/mm, mm, N), `None` when it gave
+/// none: one struct for `analyze`'s tests and `batch --analyze`'s indents (flattened into
+/// their JSON as `E`, `H`, `Er`, `S`, `hc`, `hmax`, `Fmax`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct OpValues {
     /// Indentation modulus E_IT, MPa.
     #[serde(rename = "E")]
     pub e: Option<f64>,
@@ -95,6 +97,37 @@ pub struct TestOutcome {
     /// Force at the start of the unloading, N.
     #[serde(rename = "Fmax")]
     pub fmax: Option<f64>,
+}
+
+impl OpValues {
+    /// The values of an analysis' main unloading (all `None` without one).
+    pub fn of(a: &TestAnalysis) -> OpValues {
+        let Some((u, op)) = a.values() else {
+            return OpValues::default();
+        };
+        OpValues {
+            e: op.e,
+            h: Some(op.hardness),
+            er: Some(op.er),
+            s: Some(op.s),
+            hc: Some(op.hc),
+            hmax: Some(u.h_max),
+            fmax: Some(u.f_max),
+        }
+    }
+}
+
+/// One test's outcome: the summary values (from its main unloading, in N, mm, N/mm, MPa),
+/// the preprocessing applied, every unloading, the vendor's values.
+#[derive(Debug, Clone, Serialize)]
+pub struct TestOutcome {
+    /// 1-based index in the file.
+    pub index: usize,
+    /// Test name.
+    pub test: String,
+    /// The O&P values of the main unloading.
+    #[serde(flatten)]
+    pub values: OpValues,
     /// Why the test gave no values.
     pub error: Option<String>,
     /// The preprocessing steps applied.
@@ -190,13 +223,7 @@ fn analyse_records(
             let mut t = TestOutcome {
                 index: first_index + i,
                 test: r.meta.test_name.clone().unwrap_or_else(|| r.name.clone()),
-                e: None,
-                h: None,
-                er: None,
-                s: None,
-                hc: None,
-                hmax: None,
-                fmax: None,
+                values: OpValues::default(),
                 error: None,
                 preprocessing: Vec::new(),
                 analysis: None,
@@ -212,15 +239,7 @@ fn analyse_records(
             t.preprocessing = applied;
             match indentify_analysis::analyze(&x, o) {
                 Ok(a) => {
-                    if let Some((u, op)) = a.values() {
-                        t.e = op.e;
-                        t.h = Some(op.hardness);
-                        t.er = Some(op.er);
-                        t.s = Some(op.s);
-                        t.hc = Some(op.hc);
-                        t.hmax = Some(u.h_max);
-                        t.fmax = Some(u.f_max);
-                    }
+                    t.values = OpValues::of(&a);
                     t.error = a.error.clone();
                     t.analysis = Some(a);
                 }
@@ -283,7 +302,13 @@ pub fn run(opts: &AnalyzeOptions) -> Result<AnalyzeOutcome> {
         crate::atomic::ensure_writable_dir(dir).map_err(|e| Error::new(ErrorKind::Io, e))?;
     }
     let zero = opts.zero_point.unwrap_or(zero_point_default(format));
-    let prep = preprocessing(opts.tip.frame_compliance, zero);
+    let mut prep = preprocessing(opts.tip.frame_compliance, zero);
+    if let Some(k) = opts.surface_stiffness {
+        prep.zero_point = Some(ZeroPoint {
+            stiffness: Some(k),
+            ..ZeroPoint::default()
+        });
+    }
     let tests = analyse_records(&records, opts.test.unwrap_or(1), &o, &prep);
     let mut out = AnalyzeOutcome {
         file: opts.file.display().to_string(),
@@ -414,13 +439,13 @@ pub fn summary_table(o: &AnalyzeOutcome) -> String {
         let n_all = a.map_or(0, |a| a.unloadings.len());
         rows.push(vec![
             format!("{} {}", t.index, t.test),
-            opt(t.fmax, 1e3, 5),
-            opt(t.hmax, 1e6, 5),
-            opt(t.s, 1e-3, 4),
-            opt(t.hc, 1e6, 5),
-            opt(t.h, 1e-3, 4),
-            opt(t.er, 1e-3, 4),
-            opt(t.e, 1e-3, 4),
+            opt(t.values.fmax, 1e3, 5),
+            opt(t.values.hmax, 1e6, 5),
+            opt(t.values.s, 1e-3, 4),
+            opt(t.values.hc, 1e6, 5),
+            opt(t.values.h, 1e-3, 4),
+            opt(t.values.er, 1e-3, 4),
+            opt(t.values.e, 1e-3, 4),
             main.and_then(|(u, _)| u.fit.as_ref().map(|f| sig(f.m, 3)))
                 .unwrap_or_default(),
             format!("{n_ok}/{n_all}"),

@@ -4,8 +4,11 @@
 //!
 //! Manifest columns: `id` (unique; letters, digits, `-`, `_`, `.`), `config` (optional
 //! with a base configuration), `data` (a record or curve file), `test` (a multi-test
-//! file's test), `x`, `y` (positions, optional), and any further column named by a
-//! configuration path (`law.E`, `identify.params.E.start`, ...), applied as `--set`.
+//! file's test), `x`, `y` (positions, optional), `start` (optional: `oliver-pharr` starts
+//! the indent's fit from the Oliver-Pharr analysis of its own record,
+//! `crate::start_from_analysis`; empty or `config`: the configuration's start values), and
+//! any further column named by a configuration path (`law.E`, `identify.params.E.start`,
+//! ...), applied as `--set`.
 //! The `law.*` columns take every parameter by its registry name (`law.n`, `law.K`,
 //! `law.g2`; `indentify laws`) and are checked for every row before anything runs
 //! ([`check_law_columns`]).
@@ -35,7 +38,7 @@ use crate::identify::{self, IdentifyOptions};
 use crate::source::ConfigSource;
 
 /// The columns with a meaning of their own; any other must be a configuration path.
-pub const KNOWN_COLUMNS: [&str; 6] = ["id", "config", "data", "test", "x", "y"];
+pub const KNOWN_COLUMNS: [&str; 7] = ["id", "config", "data", "test", "x", "y", "start"];
 
 /// One indent of the manifest.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +59,10 @@ pub struct Indent {
     pub y: Option<f64>,
     /// `path=value` overrides from the further columns.
     pub sets: Vec<String>,
+    /// Start the fit from the Oliver-Pharr analysis of the indent's own record (the
+    /// `start` column's `oliver-pharr`) instead of the configuration's start values.
+    #[serde(default)]
+    pub start_from_analysis: bool,
 }
 
 /// A manifest read and checked.
@@ -165,8 +172,8 @@ pub(crate) fn parse_manifest(
                 .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'));
         if !path_like {
             bail!(
-                "{name}:1: unknown column `{h}`: expected id, config, data, test, x, y, or a \
-                 configuration path such as law.E or identify.params.E.start"
+                "{name}:1: unknown column `{h}`: expected id, config, data, test, x, y, start, or \
+                 a configuration path such as law.E or identify.params.E.start"
             );
         }
         set_columns.push(h.clone());
@@ -213,6 +220,15 @@ pub(crate) fn parse_manifest(
                 _ => bail!("{name}:{line}: column `test`: `{s}` is not a test number (1, 2, ...)"),
             },
         };
+        let start_from_analysis = match cell(col("start")) {
+            None | Some("config") => false,
+            Some("oliver-pharr") => true,
+            Some(s) => bail!(
+                "{name}:{line}: column `start`: `{s}` is not a start: expected oliver-pharr (the \
+                 Oliver-Pharr analysis of the indent's record) or config (the configuration's \
+                 start values; also an empty cell)"
+            ),
+        };
         let config = cell(col("config")).map(resolve);
         if config.is_none() && !has_base {
             bail!(
@@ -233,6 +249,7 @@ pub(crate) fn parse_manifest(
             x: number("x")?,
             y: number("y")?,
             sets,
+            start_from_analysis,
         });
     }
     if indents.is_empty() {
@@ -621,12 +638,37 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
             ..IndentStatus::failed(indent)
         };
     }
+    let mut overrides = opts.overrides.clone();
+    if indent.start_from_analysis {
+        // the free parameters' starts from the O&P analysis of this indent's record
+        match crate::start_from_analysis::starts(&config, &sets, indent.data.as_deref()) {
+            Ok(s) => {
+                overrides
+                    .starts
+                    .retain(|(n, _)| !s.starts.iter().any(|(m, _)| m == n));
+                overrides.starts.extend(s.starts);
+            }
+            Err(e) => {
+                let why = e.messages().join(": ");
+                return IndentStatus {
+                    message: if why.starts_with("start from the Oliver-Pharr analysis") {
+                        why
+                    } else {
+                        format!("start from the Oliver-Pharr analysis: {why}")
+                    },
+                    error_kind: Some(e.kind().name().to_string()),
+                    seconds: t0.elapsed().as_secs_f64(),
+                    ..IndentStatus::failed(indent)
+                };
+            }
+        }
+    }
     let id_opts = IdentifyOptions {
         config,
         sets,
         data: indent.data.clone(),
         out: Some(dir),
-        overrides: opts.overrides.clone(),
+        overrides,
         resume: false,
         // an indent without a status is redone from the start
         force: true,
@@ -707,6 +749,7 @@ pub fn merge(out: &Path) -> Result<BatchSummary> {
                 x: *x,
                 y: *y,
                 sets: Vec::new(),
+                start_from_analysis: false,
             })
             .collect(),
         set_columns: Vec::new(),

@@ -17,6 +17,7 @@ use indentify_report::{FigureSize, MapData, MapFigure};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::analyze::OpValues;
 use crate::batch::Indent;
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::format::sig;
@@ -68,25 +69,9 @@ pub struct IndentAnalysis {
     pub x: Option<f64>,
     /// Position (mm).
     pub y: Option<f64>,
-    /// Indentation modulus, MPa.
-    #[serde(rename = "E")]
-    pub e: Option<f64>,
-    /// Indentation hardness, MPa.
-    #[serde(rename = "H")]
-    pub h: Option<f64>,
-    /// Reduced modulus, MPa.
-    #[serde(rename = "Er")]
-    pub er: Option<f64>,
-    /// Contact stiffness, N/mm.
-    #[serde(rename = "S")]
-    pub s: Option<f64>,
-    /// Contact depth, mm.
-    pub hc: Option<f64>,
-    /// Depth at the start of the unloading, mm.
-    pub hmax: Option<f64>,
-    /// Force at the start of the unloading, N.
-    #[serde(rename = "Fmax")]
-    pub fmax: Option<f64>,
+    /// The O&P values of the main unloading (`analyze`'s, one struct for both).
+    #[serde(flatten)]
+    pub values: OpValues,
     /// The unloading exponent.
     pub m: Option<f64>,
     /// Why the indent gave no values.
@@ -139,13 +124,7 @@ fn analyse_indent(
         id: indent.id.clone(),
         x: indent.x,
         y: indent.y,
-        e: None,
-        h: None,
-        er: None,
-        s: None,
-        hc: None,
-        hmax: None,
-        fmax: None,
+        values: OpValues::default(),
         m: None,
         error: None,
     };
@@ -190,18 +169,12 @@ fn fill(
     };
     opts.validate().map_err(|e| e.to_string())?;
     let t = indentify_analysis::analyze(&x, &opts).map_err(|e| e.to_string())?;
-    let (u, op) = t.values().ok_or_else(|| {
+    let (u, _) = t.values().ok_or_else(|| {
         t.error
             .clone()
             .unwrap_or_else(|| "no unloading could be analysed".into())
     })?;
-    a.e = op.e;
-    a.h = Some(op.hardness);
-    a.er = Some(op.er);
-    a.s = Some(op.s);
-    a.hc = Some(op.hc);
-    a.hmax = Some(u.h_max);
-    a.fmax = Some(u.f_max);
+    a.values = OpValues::of(&t);
     a.m = u.fit.as_ref().map(|f| f.m);
     Ok(())
 }
@@ -271,14 +244,14 @@ pub fn to_csv(indents: &[IndentAnalysis]) -> String {
             a.id.clone(),
             a.x.map_or(String::new(), |v| v.to_string()),
             a.y.map_or(String::new(), |v| v.to_string()),
-            cell(a.fmax, 1e3, 6),
-            cell(a.hmax, 1e6, 6),
-            cell(a.hc, 1e6, 6),
-            cell(a.s, 1e-3, 6),
+            cell(a.values.fmax, 1e3, 6),
+            cell(a.values.hmax, 1e6, 6),
+            cell(a.values.hc, 1e6, 6),
+            cell(a.values.s, 1e-3, 6),
             cell(a.m, 1.0, 5),
-            cell(a.h, 1e-3, 6),
-            cell(a.er, 1e-3, 6),
-            cell(a.e, 1e-3, 6),
+            cell(a.values.h, 1e-3, 6),
+            cell(a.values.er, 1e-3, 6),
+            cell(a.values.e, 1e-3, 6),
             a.error
                 .as_deref()
                 .unwrap_or("")
@@ -310,7 +283,7 @@ fn write_maps(out: &Path, indents: &[IndentAnalysis]) -> Result<Vec<PathBuf>> {
             "indentation hardness H_IT (GPa)",
             placed
                 .iter()
-                .map(|a| a.h.map_or(f64::NAN, |v| v * 1e-3))
+                .map(|a| a.values.h.map_or(f64::NAN, |v| v * 1e-3))
                 .collect::<Vec<_>>(),
         ),
         (
@@ -318,7 +291,7 @@ fn write_maps(out: &Path, indents: &[IndentAnalysis]) -> Result<Vec<PathBuf>> {
             "indentation modulus E_IT (GPa)",
             placed
                 .iter()
-                .map(|a| a.e.map_or(f64::NAN, |v| v * 1e-3))
+                .map(|a| a.values.e.map_or(f64::NAN, |v| v * 1e-3))
                 .collect(),
         ),
     ] {

@@ -231,7 +231,8 @@ pub struct IdentifyOutcome {
     /// and [`IdentifyOutcome::quality`] the quality over all of them.
     pub tests: Vec<TestFit>,
     /// The Oliver-Pharr analysis of a one-test fit's measured record beside the fitted
-    /// `E` (`None` for synthesized data and joint fits; docs/analysis.md).
+    /// `E` (`None` for synthesized data and joint fits: a joint fit's are its tests',
+    /// [`TestFit::oliver_pharr`]; docs/analysis.md).
     pub oliver_pharr: Option<crate::op_beside::OpBeside>,
 }
 
@@ -252,6 +253,10 @@ pub struct TestFit {
     pub fit: FitCurves,
     /// R², RMS and largest residual of its final curve.
     pub quality: Option<indentify_report::FitQuality>,
+    /// The Oliver-Pharr analysis of its measured record beside the shared fitted `E`
+    /// (`None` for synthesized data; docs/analysis.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub oliver_pharr: Option<crate::op_beside::OpBeside>,
 }
 
 impl IdentifyOutcome {
@@ -952,6 +957,12 @@ fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
             cost: test.cost_of(&fit.f_final),
             quality: indentify_report::FitQuality::compute(&fit.f_data, &fit.f_final).ok(),
             fit,
+            // a one-test fit has its own (IdentifyOutcome::oliver_pharr)
+            oliver_pharr: if s.is_joint() {
+                oliver_pharr(info, result)
+            } else {
+                None
+            },
         });
     }
     Ok(fits)
@@ -1466,7 +1477,10 @@ fn write_report(
                         seconds: d.seconds,
                     })
                 }),
-                extra_markdown: String::new(),
+                extra_markdown: t
+                    .oliver_pharr
+                    .as_ref()
+                    .map_or(String::new(), crate::op_beside::markdown),
             })
             .collect()
     } else {
@@ -1650,6 +1664,7 @@ fn joint_index(o: &IdentifyOutcome, extra: &str) -> String {
             k + 1
         ));
     }
+    md.push_str(&crate::op_beside::joint_markdown(&o.tests));
     if !extra.is_empty() {
         md.push('\n');
         md.push_str(extra);
@@ -1832,6 +1847,9 @@ struct TestJson {
     n: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     fit_quality: Option<FitJson>,
+    /// Its Oliver-Pharr numbers beside the shared fitted `E`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    oliver_pharr: Option<crate::op_beside::OpBeside>,
 }
 
 /// The discretization error in result.json.
@@ -2027,6 +2045,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
                 cost: t.cost,
                 n: t.fit.t.len(),
                 fit_quality: t.quality.as_ref().map(fit_json),
+                oliver_pharr: t.oliver_pharr.clone(),
             })
             .collect(),
         oliver_pharr: o.oliver_pharr.clone(),

@@ -2,7 +2,9 @@
 //! analyses the measured record of a one-test fit as `indentify analyze` does (the
 //! configuration's punch as the analysis tip, the fitted `nu`) and reports `E_IT`, `H_IT`,
 //! `S`, `h_c` and the tip used beside the fitted `E`, with their difference and why the two
-//! may differ (docs/analysis.md, "O&P beside the FE result").
+//! may differ (docs/analysis.md, "O&P beside the FE result"). A joint fit gets the same for
+//! each test with a measured record (its page and result.json's `tests[k].oliver_pharr`)
+//! and a table of them all on its index page ([`joint_markdown`]).
 
 use indentify_analysis::Tip;
 use indentify_contact::Punch;
@@ -165,5 +167,54 @@ pub fn markdown(b: &OpBeside) -> String {
         sig(op.fmax, 4)
     ));
     s.push_str(&format!("Why they may differ: {}\n", b.why_they_differ));
+    s
+}
+
+/// The joint index's section: each test's O&P beside the shared fitted `E` (a test with
+/// synthesized data has none and is left out; nothing when no test has a record).
+pub fn joint_markdown(tests: &[crate::identify::TestFit]) -> String {
+    let with: Vec<(&str, &OpBeside)> = tests
+        .iter()
+        .filter_map(|t| Some((t.name.as_str(), t.oliver_pharr.as_ref()?)))
+        .collect();
+    let Some((_, first)) = with.first() else {
+        return String::new();
+    };
+    let mut s = String::from("\n## Oliver-Pharr beside the FE result\n\n");
+    s.push_str(&format!(
+        "Each test's record analysed as `indentify analyze` does (its punch as the tip), \
+         beside the shared fitted E = {} MPa.\n\n",
+        first.e_fe.map_or("-".into(), |e| sig(e, 4))
+    ));
+    s.push_str(
+        "| test | tip | E_IT (MPa) | difference to the fitted E | H_IT (MPa) | S (N/mm) | h_c \
+         (mm) |\n|---|---|---:|---:|---:|---:|---:|\n",
+    );
+    for (name, b) in &with {
+        match &b.op {
+            Some(op) => s.push_str(&format!(
+                "| {name} | {} | {} | {} | {} | {} | {} |\n",
+                b.tip,
+                sig(op.e, 4),
+                b.e_difference_pct
+                    .map_or("-".into(), |d| format!("{} %", sig(d, 3))),
+                sig(op.h, 4),
+                sig(op.s, 4),
+                sig(op.hc, 4)
+            )),
+            None => s.push_str(&format!(
+                "| {name} | {} | not analysed: {} | | | | |\n",
+                b.tip,
+                b.skipped
+                    .as_deref()
+                    .unwrap_or("no reason given")
+                    .replace('|', "\\|")
+            )),
+        }
+    }
+    s.push_str(&format!(
+        "\nWhy they may differ: {}\n",
+        first.why_they_differ
+    ));
     s
 }

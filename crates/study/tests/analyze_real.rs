@@ -43,11 +43,31 @@ fn anton_paar_sphere_tests_agree_with_the_vendor() {
                 t.test
             );
         };
-        rel(t.e.unwrap() * 1e-3, vendor(t, "EIT (O&P)"), 2e-3, "E_IT");
-        rel(t.h.unwrap() * 1e-3, vendor(t, "HIT (O&P)"), 2e-3, "H_IT");
-        rel(t.s.unwrap() * 1e-3, vendor(t, "S (O&P)"), 3e-3, "S"); // vendor: 3 digits
-        rel(t.hc.unwrap() * 1e6, vendor(t, "hc (O&P)"), 2e-3, "h_c");
-        rel(t.hmax.unwrap() * 1e6, vendor(t, "hm (O&P)"), 1e-3, "h_m");
+        rel(
+            t.values.e.unwrap() * 1e-3,
+            vendor(t, "EIT (O&P)"),
+            2e-3,
+            "E_IT",
+        );
+        rel(
+            t.values.h.unwrap() * 1e-3,
+            vendor(t, "HIT (O&P)"),
+            2e-3,
+            "H_IT",
+        );
+        rel(t.values.s.unwrap() * 1e-3, vendor(t, "S (O&P)"), 3e-3, "S"); // vendor: 3 digits
+        rel(
+            t.values.hc.unwrap() * 1e6,
+            vendor(t, "hc (O&P)"),
+            2e-3,
+            "h_c",
+        );
+        rel(
+            t.values.hmax.unwrap() * 1e6,
+            vendor(t, "hm (O&P)"),
+            1e-3,
+            "h_m",
+        );
         let (u, op) = t.analysis.as_ref().unwrap().values().unwrap();
         rel(u.fit.as_ref().unwrap().m, vendor(t, "m (O&P)"), 2e-3, "m");
         rel(op.epsilon, vendor(t, "Epsilon (O&P)"), 2e-3, "epsilon");
@@ -73,12 +93,20 @@ fn anton_paar_berkovich_agrees_with_the_header() {
     o.beta = 1.034;
     let out = analyze::run(&o).unwrap();
     let t = &out.tests[0];
-    assert!((t.h.unwrap() / 134.71 - 1.0).abs() < 2e-3, "{:?}", t.h);
-    assert!((t.e.unwrap() / 2518.7 - 1.0).abs() < 5e-3, "{:?}", t.e);
     assert!(
-        (t.hc.unwrap() * 1e6 / 1834.56 - 1.0).abs() < 2e-3,
+        (t.values.h.unwrap() / 134.71 - 1.0).abs() < 2e-3,
         "{:?}",
-        t.hc
+        t.values.h
+    );
+    assert!(
+        (t.values.e.unwrap() / 2518.7 - 1.0).abs() < 5e-3,
+        "{:?}",
+        t.values.e
+    );
+    assert!(
+        (t.values.hc.unwrap() * 1e6 / 1834.56 - 1.0).abs() < 2e-3,
+        "{:?}",
+        t.values.hc
     );
 }
 
@@ -110,10 +138,10 @@ fn fused_silica_calibrated_on_half_gives_72_gpa_on_the_other_half() {
     let out = analyze::run(&o).unwrap();
     assert_eq!(out.tests.len(), 16);
     for t in out.tests.iter().filter(|t| t.index % 2 == 0) {
-        let e = t.e.unwrap() * 1e-3;
+        let e = t.values.e.unwrap() * 1e-3;
         assert!((e / 72.0 - 1.0).abs() < 0.03, "{}: E = {e} GPa", t.test);
         // fused silica's hardness, not calibrated in: 9 to 10.5 GPa at these depths
-        let h = t.h.unwrap() * 1e-3;
+        let h = t.values.h.unwrap() * 1e-3;
         assert!((9.0..10.5).contains(&h), "{}: H = {h} GPa", t.test);
     }
     let json: serde_json::Value = serde_json::from_str(

@@ -86,23 +86,23 @@ fn a_map_of_sneddon_cones_gives_back_e_and_h() {
             a.id[3..4].parse::<usize>().unwrap(),
         );
         let e = modulus_at(i, j);
-        let got = a.e.unwrap();
+        let got = a.values.e.unwrap();
         assert!((got / e - 1.0).abs() < 1e-4, "{}: E {got} vs {e}", a.id);
         let h_max = 1e-3 * (1.0 + 0.1 * j as f64);
         let hc = 2.0 * h_max / PI;
         let f_max = 2.0 / PI * reduced_modulus(e, 0.25, &tip()) * tan * h_max * h_max;
         let h = f_max / (PI * (hc * tan).powi(2));
         assert!(
-            (a.h.unwrap() / h - 1.0).abs() < 1e-4,
+            (a.values.h.unwrap() / h - 1.0).abs() < 1e-4,
             "{}: H {:?} vs {h}",
             a.id,
-            a.h
+            a.values.h
         );
         assert!((a.m.unwrap() - 2.0).abs() < 1e-4);
     }
     let loading = &r.indents[20];
     assert!(
-        loading.e.is_none() && loading.error.is_some(),
+        loading.values.e.is_none() && loading.error.is_some(),
         "{loading:?}"
     );
     let missing = r.indents[21].error.as_deref().unwrap();

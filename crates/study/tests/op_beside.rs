@@ -38,10 +38,10 @@ fn identify_reports_oliver_pharr_beside_the_fe_result() {
     let r = analyze::run(&a).unwrap();
     let t = &r.tests[0];
     for (ours, theirs) in [
-        (op.e, t.e.unwrap()),
-        (op.h, t.h.unwrap()),
-        (op.s, t.s.unwrap()),
-        (op.hc, t.hc.unwrap()),
+        (op.e, t.values.e.unwrap()),
+        (op.h, t.values.h.unwrap()),
+        (op.s, t.values.s.unwrap()),
+        (op.hc, t.values.hc.unwrap()),
     ] {
         assert!(
             (ours - theirs).abs() <= 1e-12 * theirs.abs(),

@@ -25,7 +25,7 @@ fn anon_maxwell_starts_from_its_analysis() {
         ex.join("data/anton-paar-unht-berkovich/anonNI.TXT"),
     ))
     .unwrap();
-    let e = a.tests[0].e.unwrap();
+    let e = a.tests[0].values.e.unwrap();
     assert!(
         (s.starts[0].1 - e).abs() <= 1e-12 * e,
         "{} vs {e}",

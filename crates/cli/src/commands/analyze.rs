@@ -58,8 +58,11 @@ pub struct Args {
     pub results: Option<PathBuf>,
 
     /// Contact detection (zero point): `auto` (off for Anton Paar files, which the instrument
-    /// zeroes at contact; on for the others), `on`, `off` (the file's own zero).
-    #[arg(long, value_name = "auto|on|off", default_value = "auto")]
+    /// zeroes at contact; on for the others), `on`, `off` (the file's own zero), or
+    /// `stiffness:K`: the first sample where the 5-sample median of |dF/dh| exceeds K mN/um
+    /// (indentationGUI's surface; for multi-cycle tests whose first cycles stay below the
+    /// force threshold).
+    #[arg(long, value_name = "auto|on|off|stiffness:K", default_value = "auto")]
     pub zero_point: String,
 
     /// Print the outcome as JSON (N, mm, N/mm, MPa) instead of the table.
@@ -120,7 +123,17 @@ pub fn run(args: &Args) -> Result<()> {
             "auto" => None,
             "on" => Some(true),
             "off" => Some(false),
-            other => bail!("--zero-point {other}: expected auto, on or off"),
+            s if s.starts_with("stiffness:") => Some(true),
+            other => {
+                bail!("--zero-point {other}: expected auto, on, off or stiffness:K (K in mN/um)")
+            }
+        },
+        surface_stiffness: match args.zero_point.strip_prefix("stiffness:") {
+            None => None,
+            Some(k) => match k.parse::<f64>() {
+                Ok(v) if v > 0.0 && v.is_finite() => Some(v),
+                _ => bail!("--zero-point stiffness:{k}: expected a stiffness > 0 in mN/um"),
+            },
         },
         ..AnalyzeOptions::new(args.file.clone())
     };

@@ -37,7 +37,8 @@ pub enum Action {
 /// Running a batch (or one shard of it).
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// The manifest (CSV): id, config, data, test, x, y and configuration paths as columns.
+    /// The manifest (CSV): id, config, data, test, x, y, start (oliver-pharr: start from the
+    /// analysis of the indent's record) and configuration paths as columns.
     #[arg(required = true)]
     pub manifest: Option<PathBuf>,
 
