@@ -55,15 +55,16 @@ impl DesignSection {
         }
         match self.depth_noise {
             None => {}
-            Some(n @ (NoiseSetting::Relative(v) | NoiseSetting::Absolute(v))) => {
-                if !(v.is_finite() && v > 0.0) {
-                    anyhow::bail!(
-                        "design.depth_noise = {n:?} is not allowed: the noise level must be a \
-                         finite number > 0 (Relative(f): standard deviation f x h, e.g. \
-                         Relative(0.01) for 1%; Absolute(s): standard deviation s in mm)"
-                    );
-                }
+            Some(n @ (NoiseSetting::Relative(v) | NoiseSetting::Absolute(v)))
+                if !(v.is_finite() && v > 0.0) =>
+            {
+                anyhow::bail!(
+                    "design.depth_noise = {n:?} is not allowed: the noise level must be a finite \
+                     number > 0 (Relative(f): standard deviation f x h, e.g. Relative(0.01) for \
+                     1%; Absolute(s): standard deviation s in mm)"
+                );
             }
+            Some(NoiseSetting::Relative(_) | NoiseSetting::Absolute(_)) => {}
             Some(other) => anyhow::bail!(
                 "design.depth_noise = {other:?} is not allowed: a design needs a stated noise \
                  level of the depth, Relative(f) (standard deviation f x h) or Absolute(s) \
