@@ -22,6 +22,14 @@
 //!    (the identifiability rules: no effect, a numerically null direction, a deviation
 //!    as large as the value or a 2-sigma interval as wide as the bounds).
 //!
+//! A candidate's tests may be load-controlled (a `history` with `force` segments, e.g. a
+//! ramp to a hold load, the hold, an unload; docs/theory.md §13): the prescribed force
+//! drives the run and the depth is the observable, with the stated `depth_noise`
+//! (`Relative(f)`: `f h_i`; `Absolute(s)`: `s` mm; default: a `Relative` `noise`). Depth-
+//! and load-controlled tests may be mixed within a candidate and across candidates: the
+//! covariance takes every row's own stated deviation (force rows `noise`, depth rows
+//! `depth_noise`), `Var = w_i s_i^2`.
+//!
 //! The candidates are evaluated in parallel (rayon; `jobs` threads), each with its own
 //! solvers; a forward run does not depend on what ran before it, and the results are
 //! gathered in the candidates' order, so the table is bit-identical for any thread count.
@@ -36,7 +44,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 pub use crate::config::{Candidate, DesignSection};
-use crate::config::{Config, Overrides};
+use crate::config::{Config, Drive, Overrides, TestSpec};
 use crate::error::{Classify, Error, ErrorKind, Result};
 use crate::format::sig;
 use crate::identify::{IdentifyOptions, resolve, set_up_tests};
@@ -90,6 +98,8 @@ pub struct CandidateResult {
     pub name: String,
     /// Its tests' names.
     pub tests: Vec<String>,
+    /// Which of its tests are load-controlled (their observable the depth).
+    pub load_controlled: Vec<bool>,
     /// Data points (schedule times with a non-zero weight, all tests).
     pub n_data: usize,
     /// The free parameters' deviations.
@@ -115,8 +125,10 @@ pub struct CandidateResult {
 pub struct Design {
     /// Configuration name.
     pub config: String,
-    /// The noise model in words.
+    /// The noise model in words (of the force, the observable of depth-controlled tests).
     pub noise: String,
+    /// The noise of the depth in words, when a candidate has a load-controlled test.
+    pub depth_noise: Option<String>,
     /// Free parameter names.
     pub names: Vec<&'static str>,
     /// The nominal parameters (law order) and their names.
@@ -189,6 +201,7 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     })?;
     section.validate().kind(ErrorKind::Config)?;
     let noise = section.noise.model();
+    let depth_noise = depth_noise_of(&section)?;
     if let Some(out) = &opts.out {
         crate::atomic::ensure_writable_dir(out).kind(ErrorKind::Io)?;
     }
@@ -231,7 +244,14 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
                     ),
                 ));
             }
-            evaluate(cand, cfg, &id_opts, &name, law, &nominal, &param, noise)
+            evaluate(
+                cand,
+                cfg,
+                &id_opts,
+                &name,
+                (law, &nominal, &param),
+                (noise, depth_noise.unwrap_or(noise)),
+            )
         })
         .collect::<Vec<Result<CandidateResult>>>()
         .into_iter()
@@ -250,6 +270,7 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     let mut design = Design {
         config: name,
         noise: noise.describe(f64::NAN),
+        depth_noise: depth_noise.map(|d| d.describe_observed(f64::NAN, "h", "mm")),
         names,
         nominal: infos.iter().map(|i| i.name).zip(nominal).collect(),
         candidates,
@@ -265,18 +286,83 @@ fn run_here(opts: &DesignOptions, cancel: &Cancel) -> Result<Design> {
     Ok(design)
 }
 
+/// Whether a test of a candidate is load-controlled: a history with a `force` segment, or
+/// a record that prescribes the force (`data.drive: Force`).
+fn is_load_controlled(t: &TestSpec) -> bool {
+    t.history
+        .iter()
+        .flat_map(|h| &h.segments)
+        .any(|s| s.force.is_some())
+        || t.data.as_ref().is_some_and(|d| d.drive == Drive::Force)
+}
+
+/// The noise of the depth (the observable of load-controlled tests): `design.depth_noise`,
+/// or a `Relative` `design.noise`; `None` without load-controlled tests.
+///
+/// # Errors
+/// [`ErrorKind::Config`] for a load-controlled test under an `Absolute` `noise` (N) and no
+/// `depth_noise`, naming the candidate and the field.
+fn depth_noise_of(section: &DesignSection) -> Result<Option<NoiseModel>> {
+    let load = section.candidates.iter().enumerate().find_map(|(k, c)| {
+        c.tests
+            .iter()
+            .position(is_load_controlled)
+            .map(|j| (k, j, &c.name))
+    });
+    let Some((k, j, cand)) = load else {
+        return Ok(None);
+    };
+    match (section.depth_noise, section.noise.model()) {
+        (Some(d), _) => Ok(Some(d.model())),
+        (None, NoiseModel::Relative(f)) => Ok(Some(NoiseModel::Relative(f))),
+        (None, n) => Err(Error::msg(
+            ErrorKind::Config,
+            format!(
+                "design.depth_noise is missing: design.candidates[{k}].tests[{j}] (`{cand}`) is \
+                 load-controlled (its depth is the observable) and design.noise = {n:?} is a \
+                 force in N; state the depth's noise, e.g. depth_noise: Absolute(1e-5) (mm) or \
+                 Relative(0.01)"
+            ),
+        )),
+    }
+}
+
+/// The stated standard deviation of every row (the tests' observables end to end): the
+/// force noise on the rows of depth-controlled tests, the depth noise on those of
+/// load-controlled tests; `Relative(f)` gives `f |y_i|`, `Absolute(s)` gives `s`.
+fn row_deviations(
+    problem: &indentify_identify::Problem,
+    observed: &[f64],
+    (force, depth): (NoiseModel, NoiseModel),
+) -> Vec<f64> {
+    let mut sd = vec![f64::NAN; observed.len()];
+    for (k, t) in problem.tests.iter().enumerate() {
+        let model = if t.load.is_some() { depth } else { force };
+        for i in problem.rows_of(k) {
+            sd[i] = match model {
+                NoiseModel::Relative(f) => f * observed[i].abs(),
+                NoiseModel::Absolute(s) => s,
+                NoiseModel::Residual | NoiseModel::RelativeEstimated => f64::NAN,
+            };
+        }
+    }
+    sd
+}
+
 /// One candidate: its joint problem at the nominal parameters (exact synthesized data),
-/// forces and sensitivities, the covariance under `noise`.
-#[allow(clippy::too_many_arguments)]
+/// observables and sensitivities, the covariance under the stated noise of the force
+/// (depth-controlled tests) and of the depth (load-controlled tests).
 fn evaluate(
     cand: &Candidate,
     cfg: &Config,
     id_opts: &IdentifyOptions,
     name: &str,
-    law: &std::sync::Arc<dyn indentify_laws::Material>,
-    nominal: &[f64],
-    param: &Parameterization,
-    noise: NoiseModel,
+    (law, nominal, param): (
+        &std::sync::Arc<dyn indentify_laws::Material>,
+        &[f64],
+        &Parameterization,
+    ),
+    noise: (NoiseModel, NoiseModel),
 ) -> Result<CandidateResult> {
     let label = format!("{name} [{}]", cand.name);
     let (problem, tests, _warnings) = set_up_tests(cfg, &label, law, nominal, id_opts)
@@ -295,15 +381,18 @@ fn evaluate(
         .iter()
         .map(|f| Column::of(f, nominal[f.index]))
         .collect();
+    // every row's own stated deviation s_i: `Relative(1)` on `s_i` in place of the fitted
+    // observable is the row variance `w_i s_i^2` (the sandwich of `Identifiability`)
+    let sd = row_deviations(&problem, &forces, noise);
     let id = Identifiability::with_noise(
         &jac,
         &problem.weights,
         problem.cost_of(&forces),
         nominal,
         &columns,
-        noise,
+        NoiseModel::Relative(1.0),
         Some(Forces {
-            fitted: &forces,
+            fitted: &sd,
             measured: &problem.target,
         }),
     );
@@ -337,6 +426,7 @@ fn evaluate(
     Ok(CandidateResult {
         name: cand.name.clone(),
         tests: tests.iter().map(|t| t.label.clone()).collect(),
+        load_controlled: problem.tests.iter().map(|t| t.load.is_some()).collect(),
         n_data: id.n_data,
         log_det: id.log_det_information(),
         worst,
@@ -409,6 +499,19 @@ impl Design {
         s
     }
 
+    /// The noise in words: of the force, and of the depth when a candidate has a
+    /// load-controlled test.
+    fn noise_text(&self) -> String {
+        match &self.depth_noise {
+            None => self.noise.clone(),
+            Some(d) => format!(
+                "{} on the force (depth-controlled tests), {d} on the depth (load-controlled \
+                 tests)",
+                self.noise
+            ),
+        }
+    }
+
     /// The console summary: the setting, the table, the best candidates.
     pub fn summary(&self) -> String {
         let nominal: Vec<String> = self
@@ -424,7 +527,7 @@ impl Design {
             nominal.join(", "),
             self.names.len(),
             self.names.join(", "),
-            self.noise,
+            self.noise_text(),
             self.threads,
             self.seconds
         );
@@ -484,7 +587,7 @@ impl Design {
                 .map(|(n, v)| format!("{n} = {}", sig(*v, 6)))
                 .collect::<Vec<_>>()
                 .join(", "),
-            self.noise
+            self.noise_text()
         ));
         s.push_str(&self.table());
         s.push_str("\n## Candidates\n\n");
@@ -493,7 +596,16 @@ impl Design {
                 "- **{}** ({} tests: {}; {} data points): condition number of S^T S {}",
                 c.name,
                 c.tests.len(),
-                c.tests.join(", "),
+                c.tests
+                    .iter()
+                    .zip(&c.load_controlled)
+                    .map(|(t, &l)| if l {
+                        format!("{t} (load control: the depth observed)")
+                    } else {
+                        t.clone()
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 c.n_data,
                 indentify_identify::identifiability::condition_text(c.condition_number)
             ));
