@@ -929,8 +929,15 @@ mod tests {
             assert!(rate >= 0.95, "n {n}: wrong law flagged in {rate}");
         }
         let (a, _) = assess_multiplicative(300, 1, 0.02, 2.0);
-        assert!(a.relative && a.message.contains("% of the fitted value"), "{}", a.message);
-        assert!((a.sigma_record / (0.02 / 3f64.sqrt()) - 1.0).abs() < 0.3, "{a:?}");
+        assert!(
+            a.relative && a.message.contains("% of the fitted value"),
+            "{}",
+            a.message
+        );
+        assert!(
+            (a.sigma_record / (0.02 / 3f64.sqrt()) - 1.0).abs() < 0.3,
+            "{a:?}"
+        );
     }
 
     /// The robust portmanteau by hand, and equal to Box-Pierce for alternating signs.
@@ -967,7 +974,11 @@ mod tests {
         );
         let ok = assess_case(300, 3, 1e-2, 2.0, 0.0);
         assert!(ok.fired().is_empty());
-        assert!(ok.short().starts_with("adequacy: adequate (RMS"), "{}", ok.short());
+        assert!(
+            ok.short().starts_with("adequacy: adequate (RMS"),
+            "{}",
+            ok.short()
+        );
     }
 
     /// Noise-free data: the law's own curve cannot be tested, a wrong law still shows.
