@@ -4,7 +4,9 @@
 //!
 //! Commands are the lines of fenced blocks tagged `sh`, `bash`, `shell` or `console` (in a
 //! `console` block only the `$ ` lines), and the lines starting with `indentify ` or
-//! `cargo ` in untagged blocks (the tutorials show a command above its output). Comment
+//! `cargo ` in untagged blocks (the tutorials show a command above its output); blocks
+//! tagged otherwise (`text`, `ron`, `python`) are not run, which is how a document shows
+//! commands too long for the walk (hours of fits) without running them. Comment
 //! lines are dropped, a trailing ` # comment` is cut, `\` continues a line. `indentify` is
 //! what the README says it is: `cargo run --release -p indentify-cli --`. Python blocks
 //! are not run (the Python package's tests run them: python/tests/test_readme.py).
@@ -49,10 +51,11 @@ pub fn extract(doc: &str, text: &str) -> Vec<Step> {
                     Some(c) => body = c.to_string(),
                     None => continue,
                 }
-            } else if !shell {
-                if !(body.starts_with("indentify ") || body.starts_with("cargo ")) {
-                    continue;
-                }
+            } else if !shell
+                && !(tag.is_empty()
+                    && (body.starts_with("indentify ") || body.starts_with("cargo ")))
+            {
+                continue;
             }
             if body.is_empty() || body.starts_with('#') {
                 continue;
@@ -121,6 +124,17 @@ fn documents(root: &Path) -> Result<Vec<PathBuf>> {
     Ok(docs)
 }
 
+/// `git ARGS` in `dir`, its trimmed standard output (empty on failure).
+fn git_out(dir: &Path, args: &[&str]) -> String {
+    Command::new("git")
+        .arg("-C")
+        .arg(dir)
+        .args(args)
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default()
+}
+
 /// `cargo xtask newcomer-walk [--skip SUBSTRING,...] [--keep] [--timeout SECONDS]
 /// [--list]`: clones HEAD into a temporary folder and runs every command there.
 pub fn run(args: &[String]) -> Result<()> {
@@ -167,6 +181,18 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     let log_dir = clone.join("target").join("newcomer-walk");
     std::fs::create_dir_all(&log_dir)?;
+    let commit = git_out(&clone, &["rev-parse", "--short", "HEAD"]);
+    let date = Command::new("date")
+        .args(["-u", "+%Y-%m-%d %H:%M UTC"])
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    let mut table = vec![
+        format!("Newcomer walk of commit {commit}, {date}:"),
+        String::new(),
+        "| # | where | command | exit | wall (s) |".to_string(),
+        "|--:|---|---|--:|--:|".to_string(),
+    ];
     let mut failed = 0;
     let wall = Instant::now();
     for (k, s) in steps.iter().enumerate() {
@@ -176,6 +202,12 @@ pub fn run(args: &[String]) -> Result<()> {
                 .any(|p| !p.is_empty() && s.command.contains(p.as_str()))
         {
             println!("{:>3}  skipped          {}  {}", k + 1, s.at, s.command);
+            table.push(format!(
+                "| {} | {} | `{}` | skipped | |",
+                k + 1,
+                s.at,
+                s.command
+            ));
             continue;
         }
         let log = log_dir.join(format!("{:02}.log", k + 1));
@@ -197,15 +229,23 @@ pub fn run(args: &[String]) -> Result<()> {
         if !status.success() {
             failed += 1;
         }
+        let secs = t0.elapsed().as_secs_f64();
         println!(
             "{:>3}  exit {:>6}  {:>7.1} s  {}  {}",
             k + 1,
             code,
-            t0.elapsed().as_secs_f64(),
+            secs,
             s.at,
             s.command
         );
+        table.push(format!(
+            "| {} | {} | `{}` | {code} | {secs:.1} |",
+            k + 1,
+            s.at,
+            s.command
+        ));
     }
+    println!("\n{}\n", table.join("\n"));
     println!(
         "{} commands, {failed} failed, {:.0} s; logs in {}",
         steps.len(),
@@ -222,6 +262,41 @@ pub fn run(args: &[String]) -> Result<()> {
     Ok(())
 }
 
+/// `cargo xtask doc-numbers [--cheap]`: the numbers the documents quote from the tool
+/// (`crates/cli/tests/doc_numbers.rs`), the long runs (the anon-nh fit) included, checked
+/// against a release build's output; `--cheap` runs only what CI runs.
+pub fn doc_numbers(args: &[String]) -> Result<()> {
+    let mut include_ignored = true;
+    for a in args {
+        match a.as_str() {
+            "--cheap" => include_ignored = false,
+            other => bail!("unknown option {other}"),
+        }
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .context("workspace root")?;
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cmd.current_dir(root).args([
+        "test",
+        "--release",
+        "-p",
+        "indentify-cli",
+        "--test",
+        "doc_numbers",
+        "--",
+        "--nocapture",
+    ]);
+    if include_ignored {
+        cmd.arg("--include-ignored");
+    }
+    let status = cmd.status().context("running cargo test")?;
+    if !status.success() {
+        bail!("a quoted number differs from the tool's output (above)");
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,7 +305,7 @@ mod tests {
     fn commands_are_found_in_shell_and_console_blocks_and_tutorial_lines() {
         let md = "text\n```sh\n# a comment\ncargo run -- identify \\\n  --out x   # why\n\nscripts/test.sh\n```\n\
                   ```console\n$ indentify check a.ron\noutput line\n```\n```\nindentify identify b.ron\nnot a command\n```\n\
-                  ```python\nimport indentify\n```\n";
+                  ```python\nimport indentify\n```\n```text\nindentify identify long.ron   # hours\n```\n";
         let steps = extract("R.md", md);
         let cmds: Vec<&str> = steps.iter().map(|s| s.command.as_str()).collect();
         assert_eq!(

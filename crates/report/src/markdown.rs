@@ -471,6 +471,9 @@ fn systematic(a: &Adequacy) -> bool {
 fn adequacy_section(out: &mut String, a: &Adequacy, observable: Observable) {
     // the statistics are in the observable's internal unit
     let unit = match observable {
+        _ if a.relative => {
+            "(fraction of the fitted value: residuals standardized by the stated multiplicative noise)"
+        }
         Observable::Force => "N",
         Observable::Depth => "mm",
     };

@@ -437,10 +437,10 @@ impl Report {
         if let Some(a) = &self.adequacy
             && a.verdict == Verdict::Systematic
         {
+            // the verdict with the tests that fired and their thresholds
             out.push(format!(
-                "systematic residuals (RMS {:.2} σ_rec, runs z = {:.2}): the σ assume a law \
-                 that fits",
-                a.ratio, a.runs_z
+                "{}: the σ assume a law that fits",
+                a.short().trim_start_matches("adequacy: ")
             ));
         }
         if let Some(d) = &self.discretization {

@@ -11,6 +11,7 @@
 //! residuals or a discretization error beyond its deviations exits 0, and says so on the
 //! headline line, in result.json (`adequacy.verdict`, `caveats`) and in the reports.
 
+use indentify_identify::NoiseModel;
 use indentify_report::{Adequacy, Verdict};
 use serde::Serialize;
 
@@ -70,9 +71,26 @@ fn sigmas(x: f64) -> String {
     }
 }
 
-/// The adequacy of `curves` fitted with `free` parameters.
-pub fn assess(curves: &FitCurves, free: usize) -> Option<Adequacy> {
-    Adequacy::assess(&curves.t, &curves.f_data, &curves.f_final, free)
+/// Whether the fit states multiplicative noise (`Relative`, `RelativeEstimated`): its
+/// residuals are then tested standardized by the fitted value.
+pub fn states_relative_noise(result: &indentify_identify::IdentifyResult) -> bool {
+    result.identifiability.as_ref().is_some_and(|i| {
+        matches!(
+            i.noise,
+            NoiseModel::Relative(_) | NoiseModel::RelativeEstimated
+        )
+    })
+}
+
+/// The adequacy of `curves` fitted with `free` parameters; `relative` when the fit states
+/// multiplicative noise (`noise: Relative` / `RelativeEstimated`, the model of `--noise`):
+/// the residuals are then standardized by it before the tests (docs/adequacy.md).
+pub fn assess(curves: &FitCurves, free: usize, relative: bool) -> Option<Adequacy> {
+    if relative {
+        Adequacy::assess_relative(&curves.t, &curves.f_data, &curves.f_final, free)
+    } else {
+        Adequacy::assess(&curves.t, &curves.f_data, &curves.f_final, free)
+    }
 }
 
 impl IdentifyOutcome {
@@ -81,8 +99,9 @@ impl IdentifyOutcome {
     /// when no curve could be assessed.
     pub fn adequacy(&self) -> Option<FitAdequacy> {
         let free = self.result.params.iter().filter(|p| p.free).count();
+        let relative = states_relative_noise(&self.result);
         let tests: Vec<TestAdequacy> = if self.tests.is_empty() {
-            assess(&self.fit, free)
+            assess(&self.fit, free, relative)
                 .map(|adequacy| TestAdequacy {
                     test: self.config.clone(),
                     adequacy,
@@ -93,7 +112,7 @@ impl IdentifyOutcome {
             self.tests
                 .iter()
                 .filter_map(|t| {
-                    assess(&t.fit, free).map(|adequacy| TestAdequacy {
+                    assess(&t.fit, free, relative).map(|adequacy| TestAdequacy {
                         test: t.name.clone(),
                         adequacy,
                     })

@@ -253,7 +253,12 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         discretization: inputs.discretization.clone(),
         identifiability,
         // the residuals of this curve against its record's own noise
-        adequacy: indentify_report::Adequacy::assess(
+        // (standardized by a stated multiplicative noise, as the console's)
+        adequacy: if crate::adequacy::states_relative_noise(result) {
+            indentify_report::Adequacy::assess_relative
+        } else {
+            indentify_report::Adequacy::assess
+        }(
             inputs.t,
             inputs.f_data,
             inputs.f_final,
