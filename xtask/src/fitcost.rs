@@ -13,7 +13,11 @@
 //! (the timed forward runs are always cold). `--json FILE` keeps the numbers and the fitted parameters with
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
-//! in standard deviations, `|after - before| / sigma`.
+//! in standard deviations, `|after - before| / sigma`. `--batch` times the
+//! 100-indent map through the batch path (`batch.rs`: throughput before and after starting
+//! every indent from its Oliver-Pharr first guess, `--jobs N` threads, 2 by default).
+
+mod batch;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -35,7 +39,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold]`.
+/// [--compare FILE] [--cold] [--batch [--jobs N] [--map-n N]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -43,6 +47,9 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut json_out: Option<PathBuf> = None;
     let mut compare: Option<PathBuf> = None;
     let mut cold = false;
+    let mut batch_mode = false;
+    let mut jobs = 2usize;
+    let mut map_n = 10usize;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -53,6 +60,9 @@ pub fn run(args: &[String]) -> Result<()> {
             "--json" => json_out = Some(PathBuf::from(val())),
             "--compare" => compare = Some(PathBuf::from(val())),
             "--cold" => cold = true,
+            "--batch" => batch_mode = true,
+            "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
+            "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
             other => bail!("unknown option {other}"),
         }
     }
@@ -86,6 +96,14 @@ pub fn run(args: &[String]) -> Result<()> {
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_default();
+    if batch_mode {
+        if jobs == 0 || map_n == 0 {
+            bail!("--jobs and --map-n take numbers >= 1");
+        }
+        let m = batch::measure(jobs, map_n)?;
+        println!("{}", batch::table(&m));
+        return write_json(json_out.as_deref(), &m);
+    }
     let mut results = Vec::new();
     println!(
         "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | stop |"
@@ -112,8 +130,13 @@ pub fn run(args: &[String]) -> Result<()> {
     if let Some(b) = &before {
         println!("\n{}", compare_table(b, &results));
     }
-    if let Some(p) = &json_out {
-        std::fs::write(p, serde_json::to_string_pretty(&Value::Array(results))?)
+    write_json(json_out.as_deref(), &Value::Array(results))
+}
+
+/// Writes `v` to `path`, if given.
+fn write_json(path: Option<&Path>, v: &Value) -> Result<()> {
+    if let Some(p) = path {
+        std::fs::write(p, serde_json::to_string_pretty(v)?)
             .with_context(|| format!("writing {}", p.display()))?;
         eprintln!("wrote {}", p.display());
     }

@@ -2,6 +2,7 @@
 //! document writer ([`doc`]) and a small SVG plotter ([`svg`]), shared by the binary and
 //! the snapshot test.
 
+pub mod batch_start;
 pub mod calculix;
 pub mod dao;
 pub mod doc;

@@ -1,0 +1,64 @@
+//! Batch manifests whose rows start from their own record's Oliver-Pharr first guess
+//! (`cargo xtask fit-cost --batch`): the `identify.params.NAME.start` columns computed
+//! once from each row's record (`indentify_study::start_from_analysis::starts`), so that
+//! an indent's start is fixed by the manifest, whatever the thread count or the order the
+//! workers take the indents in.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use indentify_study::ConfigSource;
+use indentify_study::synthetic::MapFiles;
+
+/// Writes `OUT` = the map's manifest with the columns `identify.params.NAME.start` of
+/// every free parameter the O&P first guess of the row's record gives (rows without a
+/// guess keep the base start: the column left empty, and the first reason is logged).
+/// Returns the path and how many rows have a guess.
+pub fn start_manifest(map: &MapFiles, out: &Path) -> Result<(PathBuf, usize)> {
+    let dir = map.manifest.parent().unwrap_or(Path::new("."));
+    let base = ConfigSource::Path(map.base.clone());
+    let mut rows: Vec<(String, Vec<(String, f64)>)> = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    for (id, ..) in &map.indents {
+        let record = dir.join("records").join(format!("{id}.csv"));
+        let starts = match indentify_study::start_from_analysis::starts(&base, &[], Some(&record)) {
+            Ok(s) => s.starts,
+            Err(e) => {
+                eprintln!("{id}: no first guess: {}", e.messages().join(": "));
+                Vec::new()
+            }
+        };
+        for (n, _) in &starts {
+            if !names.contains(n) {
+                names.push(n.clone());
+            }
+        }
+        rows.push((id.clone(), starts));
+    }
+    let text = std::fs::read_to_string(&map.manifest)
+        .with_context(|| format!("reading {}", map.manifest.display()))?;
+    let mut lines = text.lines();
+    let header = lines.next().unwrap_or_default();
+    let mut s = String::from(header);
+    for n in &names {
+        let _ = write!(s, ",identify.params.{n}.start");
+    }
+    s.push('\n');
+    let mut guessed = 0;
+    for (line, (_, starts)) in lines.zip(&rows) {
+        s.push_str(line);
+        if !starts.is_empty() {
+            guessed += 1;
+        }
+        for n in &names {
+            s.push(',');
+            if let Some((_, v)) = starts.iter().find(|(m, _)| m == n) {
+                let _ = write!(s, "{v:e}");
+            }
+        }
+        s.push('\n');
+    }
+    std::fs::write(out, s).with_context(|| format!("writing {}", out.display()))?;
+    Ok((out.to_path_buf(), guessed))
+}
