@@ -148,29 +148,9 @@ fn parameters(result: &IdentifyResult) -> Vec<Parameter> {
         .collect()
 }
 
-/// Builds the report, renders it and its figures into `dir`.
-///
-/// # Errors
-/// A report that cannot be rendered (no finite point in a series), an unwritable file.
-pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result<Written> {
-    let fit = FitQuality::compute(inputs.f_data, inputs.f_final)
-        .context("cannot measure the quality of the fit")?;
-    let id = result.identifiability.as_ref();
-    let parameters = parameters(result);
-    // the determined parameters only: an undetermined one has no correlation to show
-    let correlation = id.map(|i| {
-        let keep: Vec<usize> = (0..i.names.len())
-            .filter(|&k| !i.is_undetermined(i.names[k]))
-            .collect();
-        Correlation {
-            names: keep.iter().map(|&k| i.names[k].to_string()).collect(),
-            matrix: keep
-                .iter()
-                .map(|&a| keep.iter().map(|&b| i.correlation[a][b]).collect())
-                .collect(),
-        }
-    });
-    let identifiability = id.map(|i| indentify_report::IdentifiabilitySummary {
+/// The report's identifiability summary of `i`.
+fn summary(i: &indentify_identify::Identifiability) -> indentify_report::IdentifiabilitySummary {
+    indentify_report::IdentifiabilitySummary {
         names: i.names.iter().map(|n| n.to_string()).collect(),
         singular_values: i.singular_values.clone(),
         directions: i.directions.clone(),
@@ -194,7 +174,32 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
                 None => advice.to_string(),
             }
         },
+    }
+}
+
+/// Builds the report, renders it and its figures into `dir`.
+///
+/// # Errors
+/// A report that cannot be rendered (no finite point in a series), an unwritable file.
+pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result<Written> {
+    let fit = FitQuality::compute(inputs.f_data, inputs.f_final)
+        .context("cannot measure the quality of the fit")?;
+    let id = result.identifiability.as_ref();
+    let parameters = parameters(result);
+    // the determined parameters only: an undetermined one has no correlation to show
+    let correlation = id.map(|i| {
+        let keep: Vec<usize> = (0..i.names.len())
+            .filter(|&k| !i.is_undetermined(i.names[k]))
+            .collect();
+        Correlation {
+            names: keep.iter().map(|&k| i.names[k].to_string()).collect(),
+            matrix: keep
+                .iter()
+                .map(|&a| keep.iter().map(|&b| i.correlation[a][b]).collect())
+                .collect(),
+        }
     });
+    let identifiability = id.map(summary);
     let preprocessing = inputs.measured.map_or_else(Vec::new, |m| {
         m.applied
             .iter()
