@@ -274,6 +274,10 @@ pub struct Adequacy {
     /// fractions of the fitted value, not forces.
     #[serde(default)]
     pub relative: bool,
+    /// Whether the series are depths (mm, a load-controlled test's observable,
+    /// [`Adequacy::of_depth`]) rather than forces (N): the messages' units.
+    #[serde(default)]
+    pub depth: bool,
 }
 
 impl Adequacy {
@@ -366,6 +370,7 @@ impl Adequacy {
             ljung_box_robust,
             z_ljung_box_robust,
             relative: false,
+            depth: false,
         };
         a.decide();
         Some(a)
@@ -398,7 +403,15 @@ impl Adequacy {
         Some(a)
     }
 
-    /// `σ_rec` in words: `1.2e-3 N`, or `1.15% of the fitted force` when standardized.
+    /// The same assessment of a depth series (mm, a load-controlled test's observable):
+    /// only the messages' units change.
+    pub fn of_depth(mut self) -> Adequacy {
+        self.depth = true;
+        self.decide();
+        self
+    }
+
+    /// `σ_rec` in words: `1.2e-3 N` (`mm` for depths), or `1.15% of the fitted force` when standardized.
     fn sigma_text(&self) -> String {
         if self.relative {
             format!(
@@ -406,7 +419,8 @@ impl Adequacy {
                 crate::units::fmt_sig(100.0 * self.sigma_record)
             )
         } else {
-            format!("{} N", crate::units::fmt_sig(self.sigma_record))
+            let unit = if self.depth { "mm" } else { "N" };
+            format!("{} {unit}", crate::units::fmt_sig(self.sigma_record))
         }
     }
 
@@ -432,9 +446,10 @@ impl Adequacy {
         if self.rms <= NOISE_FREE_FLOOR * self.f_max {
             self.verdict = Verdict::CannotTell;
             self.message = format!(
-                "cannot tell: the fit reproduces the record to {} of F_max (noise-free data \
+                "cannot tell: the fit reproduces the record to {} of {}_max (noise-free data \
                  at the solver's precision); the residual test needs a noisy record",
-                crate::units::fmt_sig(self.rms / self.f_max)
+                crate::units::fmt_sig(self.rms / self.f_max),
+                if self.depth { "h" } else { "F" }
             );
             return;
         }
@@ -979,6 +994,19 @@ mod tests {
             "{}",
             ok.short()
         );
+    }
+
+    /// A depth series (load control) says mm where a force says N, and keeps its verdict.
+    #[test]
+    fn depth_series_name_their_unit() {
+        let f = assess_case(300, 3, 1e-2, 2.0, 0.0);
+        assert!(f.message.contains(" N)"), "{}", f.message);
+        let h = f.clone().of_depth();
+        assert_eq!(h.verdict, f.verdict);
+        assert!(h.message.contains(" mm)"), "{}", h.message);
+        assert!(!h.message.contains(" N)"), "{}", h.message);
+        let quiet = assess_case(300, 1, 0.0, 2.0, 0.0).of_depth();
+        assert!(quiet.message.contains("of h_max"), "{}", quiet.message);
     }
 
     /// Noise-free data: the law's own curve cannot be tested, a wrong law still shows.

@@ -86,10 +86,14 @@ pub fn states_relative_noise(result: &indentify_identify::IdentifyResult) -> boo
 /// multiplicative noise (`noise: Relative` / `RelativeEstimated`, the model of `--noise`):
 /// the residuals are then standardized by it before the tests (docs/adequacy.md).
 pub fn assess(curves: &FitCurves, free: usize, relative: bool) -> Option<Adequacy> {
-    if relative {
+    let a = if relative {
         Adequacy::assess_relative(&curves.t, &curves.f_data, &curves.f_final, free)
     } else {
         Adequacy::assess(&curves.t, &curves.f_data, &curves.f_final, free)
+    };
+    match curves.observable {
+        indentify_report::Observable::Depth => a.map(Adequacy::of_depth),
+        indentify_report::Observable::Force => a,
     }
 }
 

@@ -268,7 +268,11 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
             inputs.f_data,
             inputs.f_final,
             result.params.iter().filter(|p| p.free).count(),
-        ),
+        )
+        .map(|a| match inputs.observable {
+            Observable::Depth => a.of_depth(),
+            Observable::Force => a,
+        }),
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();

@@ -511,9 +511,9 @@ fn fit_lines(o: &IdentifyOutcome) -> String {
             t.name,
             t.weight,
             if t.default_weight {
-                " (1/(n F_max^2))"
+                format!(" (1/(n {}_max^2))", t.fit.observable.symbol())
             } else {
-                ""
+                String::new()
             },
             t.cost
         ));
