@@ -604,33 +604,7 @@ pub fn zero_point(r: &Record, o: &ZeroPoint) -> Result<(Record, Applied), PrepEr
             .unwrap_or(0)
     };
     let (t0, h0) = (r.t[contact], r.h[contact]);
-    let keep = if o.trim { contact } else { 0 };
-    let take = |v: &[f64], off: f64| {
-        v.get(keep..)
-            .unwrap_or(&[])
-            .iter()
-            .map(|x| x - off)
-            .collect::<Vec<_>>()
-    };
-    let x = Record {
-        name: r.name.clone(),
-        t: take(&r.t, t0),
-        h: take(&r.h, h0),
-        f: take(&r.f, base),
-        segment: r
-            .segment
-            .as_ref()
-            .map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
-        meta: r.meta.clone(),
-    };
-    if x.len() < 2 {
-        return Err(PrepError::TooShort {
-            record: r.name.clone(),
-            step: "zero_point",
-            n: x.len(),
-            min: 2,
-        });
-    }
+    let x = shifted_from(r, contact, o.trim, (t0, h0, base))?;
     let a = Applied::new(
         "zero_point",
         format!(
@@ -686,33 +660,7 @@ fn stiffness_zero_point(r: &Record, o: &ZeroPoint, k: f64) -> Result<(Record, Ap
         )
     })?;
     let (t0, h0, f0) = (r.t[contact], r.h[contact], r.f[contact]);
-    let keep = if o.trim { contact } else { 0 };
-    let take = |v: &[f64], off: f64| {
-        v.get(keep..)
-            .unwrap_or(&[])
-            .iter()
-            .map(|x| x - off)
-            .collect::<Vec<_>>()
-    };
-    let x = Record {
-        name: r.name.clone(),
-        t: take(&r.t, t0),
-        h: take(&r.h, h0),
-        f: take(&r.f, f0),
-        segment: r
-            .segment
-            .as_ref()
-            .map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
-        meta: r.meta.clone(),
-    };
-    if x.len() < 2 {
-        return Err(PrepError::TooShort {
-            record: r.name.clone(),
-            step: "zero_point",
-            n: x.len(),
-            min: 2,
-        });
-    }
+    let x = shifted_from(r, contact, o.trim, (t0, h0, f0))?;
     let a = Applied::new(
         "zero_point",
         format!(
@@ -1155,6 +1103,47 @@ pub fn resample(r: &Record, o: &Resample) -> Result<(Record, Applied), PrepError
         ],
     );
     Ok((out, a))
+}
+
+/// `r` with `t`, `h` and `F` shifted by `(t0, h0, f0)` and, when `trim`, the samples
+/// before `contact` dropped (the zero point's common last step).
+///
+/// # Errors
+/// [`PrepError::TooShort`] when fewer than 2 samples remain.
+fn shifted_from(
+    r: &Record,
+    contact: usize,
+    trim: bool,
+    (t0, h0, f0): (f64, f64, f64),
+) -> Result<Record, PrepError> {
+    let keep = if trim { contact } else { 0 };
+    let take = |v: &[f64], off: f64| {
+        v.get(keep..)
+            .unwrap_or(&[])
+            .iter()
+            .map(|x| x - off)
+            .collect::<Vec<_>>()
+    };
+    let x = Record {
+        name: r.name.clone(),
+        t: take(&r.t, t0),
+        h: take(&r.h, h0),
+        f: take(&r.f, f0),
+        segment: r
+            .segment
+            .as_ref()
+            .map(|s| s.get(keep..).unwrap_or(&[]).to_vec()),
+        meta: r.meta.clone(),
+    };
+    if x.len() < 2 {
+        return Err(PrepError::TooShort {
+            record: r.name.clone(),
+            step: "zero_point",
+            n: x.len(),
+            min: 2,
+        });
+    }
+    Ok(x)
 }
 
 #[cfg(test)]
