@@ -279,23 +279,51 @@ fn find_unloadings(h: &[f64], f: &[f64], drop: f64, tol: f64) -> Vec<Found> {
     let n = f.len();
     let f_top = f.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let floor = (1e-3 * f_top).max(f64::MIN_POSITIVE);
+    // a force that falls while the depth does not recede is relaxing at a held depth (a
+    // depth-controlled hold), not unloading: the unloading starts where the depth recedes
+    let h_top = h.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let recede = 1e-3 * h_top;
     let mut out = Vec::new();
     let mut from = 0;
     while from < n {
         let mut k = from;
         let mut i = from;
         let mut confirmed = false;
+        // the first drop at a held depth, taken for the unloading when the depth never
+        // recedes afterwards (its analysis then says why it is no unloading)
+        let mut first_drop: Option<(usize, usize)> = None;
         while i < n {
             if f[i] > f[k] {
                 k = i;
             } else if f[k] > floor && f[i] < (1.0 - drop) * f[k] {
-                confirmed = true;
-                break;
+                let deepest = h[k..=i].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                if h[i] < deepest - recede {
+                    confirmed = true;
+                    break;
+                }
+                // relaxation at the held depth: the peak to unload from is later
+                first_drop.get_or_insert((k, i));
+                k = i;
             }
             i += 1;
         }
         if !confirmed {
-            break;
+            match first_drop {
+                Some((k0, i0)) => (k, i) = (k0, i0),
+                None => break,
+            }
+        }
+        // after a relaxation at a held depth the unloading starts at the hold's end, the
+        // last sample at the deepest depth, and the hold itself where that depth is reached
+        let mut held = None;
+        if first_drop.is_some() && confirmed {
+            let deepest = h[from..=i]
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max);
+            let at = |q: &usize| h[*q] >= deepest - 0.1 * recede;
+            k = (from..=i).rev().find(at).unwrap_or(k);
+            held = (from..=k).find(at);
         }
         let mut m = i;
         let mut j = i;
@@ -318,7 +346,8 @@ fn find_unloadings(h: &[f64], f: &[f64], drop: f64, tol: f64) -> Vec<Found> {
         // the hold starts where the force first comes within a fifth of the tolerance of
         // the peak (0.2 % by default): the loading's last samples are not counted as creep
         let hold_level = (1.0 - 0.2 * tol) * f[k];
-        let level_start = (from..=k).find(|&q| f[q] >= hold_level).unwrap_or(k);
+        let level_start =
+            held.unwrap_or_else(|| (from..=k).find(|&q| f[q] >= hold_level).unwrap_or(k));
         out.push(Found {
             level_start,
             peak: k,

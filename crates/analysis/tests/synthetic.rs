@@ -235,3 +235,42 @@ fn bad_tests_are_named_and_the_rest_analysed() {
     let e = analyze(&record("x", &pts), &o).unwrap_err().to_string();
     assert!(e.contains("fit_range"), "{e}");
 }
+
+/// A depth-controlled hold: the force relaxes by 40% at the held depth (more than the
+/// unloading criterion's 10% drop) before a power-law unloading of known `alpha, m, h_f`;
+/// the unloading is the one where the depth recedes, its stiffness the exact
+/// `m alpha (h_max - h_f)^(m - 1)` from the relaxed force.
+#[test]
+fn a_relaxation_at_held_depth_is_not_the_unloading() {
+    let (h_max, h_f, m) = (1e-3, 0.6e-3, 1.5);
+    let f_peak = 0.02;
+    let mut pts: Vec<(f64, f64, f64)> = (0..=200)
+        .map(|i| {
+            let x = i as f64 / 200.0;
+            (i as f64 * 0.05, h_max * x, f_peak * x * x)
+        })
+        .collect();
+    let t0 = pts.last().unwrap().0;
+    // relaxation at h_max: F = f_peak (0.6 + 0.4 e^(-t/2)), 200 samples over 20 s
+    for i in 1..=200 {
+        let t = i as f64 * 0.1;
+        pts.push((t0 + t, h_max, f_peak * (0.6 + 0.4 * (-t / 2.0).exp())));
+    }
+    let (t1, f_end) = (pts.last().unwrap().0, pts.last().unwrap().2);
+    let alpha = f_end / (h_max - h_f).powf(m);
+    for i in 1..=200 {
+        let h = h_max - (h_max - h_f) * i as f64 / 200.0;
+        pts.push((t1 + i as f64 * 0.05, h, alpha * (h - h_f).powf(m)));
+    }
+    let a = analyze(
+        &record("depth hold", &pts),
+        &Options::new(Tip::berkovich(), Format::Csv),
+    )
+    .unwrap();
+    assert_eq!(a.unloadings.len(), 1, "{:#?}", a.unloadings);
+    let (u, op) = a.values().unwrap();
+    let fit = u.fit.as_ref().unwrap();
+    assert!((fit.m - m).abs() < 1e-3, "{fit:?}");
+    let s_exact = m * alpha * (h_max - h_f).powf(m - 1.0);
+    assert!((op.s / s_exact - 1.0).abs() < 1e-3, "{} {s_exact}", op.s);
+}
