@@ -281,7 +281,7 @@ def read_record(
 ) -> Record:
     """Reads one record (CSV, Anton Paar, Hysitron TXT/.hld) and preprocesses it.
 
-    format: None/"auto", "csv", "anton-paar", "anton-paar-multi", "hysitron-txt", "hld".
+    format: None/"auto", "csv", "anton-paar", "anton-paar-multi", "hysitron-txt", "hld", "micro-materials".
     test: 1-based test of a multi-test file. preprocessing: None for the defaults (zero
     point, segments), False for none, or a dict like {"resample": {"n": 60}}.
     """

@@ -38,7 +38,7 @@ use crate::results::{GradientResult, IdentifyResult, Record, iteration_dict};
 ///
 /// `path`: the file (CSV, Anton Paar single or multi-test TXT, Hysitron TXT or .hld).
 /// `format`: None or "auto" detects it; else "csv", "anton-paar", "anton-paar-multi",
-/// "hysitron-txt", "hld". `test`: the 1-based test of a multi-test file.
+/// "hysitron-txt", "hld", "micro-materials". `test`: the 1-based test of a multi-test file.
 /// `preprocessing`: None for the defaults (zero point and segments), False for none, or a
 /// dict with the `Preprocessing` structure of a configuration's `data.preprocessing`
 /// (`drift`, `zero_point`, `compliance`, `segments`, `resample`), e.g.
@@ -61,7 +61,7 @@ fn read_record(
         Some(name) => indentify_study::records::Format::from_name(name).ok_or_else(|| {
             config_error(format!(
                 "unknown format `{name}`: expected one of auto, csv, anton-paar, \
-                 anton-paar-multi, hysitron-txt, hld"
+                 anton-paar-multi, hysitron-txt, hld, micro-materials"
             ))
         })?,
     };

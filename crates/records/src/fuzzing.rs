@@ -42,7 +42,7 @@ pub const TOKENS: &[&[u8]] = &[
 ];
 
 /// Every format, `Auto` first.
-pub const FORMATS: [Format; 7] = [
+pub const FORMATS: [Format; 8] = [
     Format::Auto,
     Format::Csv,
     Format::AntonPaar,
@@ -50,6 +50,7 @@ pub const FORMATS: [Format; 7] = [
     Format::HysitronTxt,
     Format::Hld,
     Format::Kla,
+    Format::MicroMaterials,
 ];
 
 /// One edit of a file; positions are reduced modulo the sizes they index.

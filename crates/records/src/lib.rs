@@ -89,6 +89,7 @@ mod example_reader;
 pub mod fuzzing;
 mod hysitron;
 mod kla;
+mod micromaterials;
 pub mod prep;
 mod record;
 mod surface;
@@ -112,6 +113,8 @@ use error::ReadErrorKind as K;
 /// - [`Format::HysitronTxt`]: a `Number of Points = N` line within the first 20 lines;
 /// - [`Format::AntonPaarMulti`]: the first line starts with `X_<test>_Time_`;
 /// - [`Format::AntonPaar`]: a `Measured values` line exists;
+/// - [`Format::MicroMaterials`]: no header, the first 10-20 lines three tab-separated
+///   numbers;
 /// - [`Format::Csv`] otherwise.
 pub fn detect(bytes: &[u8]) -> Format {
     if kla::is_workbook(bytes) {
@@ -137,6 +140,8 @@ fn detect_text(text: &str) -> Format {
         .any(|(_, l)| l.trim().eq_ignore_ascii_case("measured values"))
     {
         Format::AntonPaar
+    } else if micromaterials::is_nanotest(&ls) {
+        Format::MicroMaterials
     } else {
         Format::Csv
     }
@@ -186,6 +191,7 @@ pub fn read(bytes: &[u8], name: &str, opts: &ReadOptions) -> Result<Vec<Record>,
         Format::HysitronTxt => single(hysitron::read_txt(name, &text)?),
         Format::Hld => single(hysitron::read_hld(name, &text)?),
         Format::Kla => kla::read(name, bytes, opts.test),
+        Format::MicroMaterials => single(micromaterials::read(name, &text)?),
     }
 }
 

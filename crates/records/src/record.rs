@@ -159,6 +159,8 @@ pub enum Format {
     Hld,
     /// KLA/Agilent/Keysight workbook (`.xlsx`, `.xls`): a sheet per test.
     Kla,
+    /// Micro Materials NanoTest text export: no header, time (s), depth (nm), force (mN).
+    MicroMaterials,
 }
 
 impl Format {
@@ -172,6 +174,7 @@ impl Format {
             Format::HysitronTxt => "hysitron-txt",
             Format::Hld => "hld",
             Format::Kla => "kla",
+            Format::MicroMaterials => "micro-materials",
         }
     }
 
@@ -186,6 +189,7 @@ impl Format {
             Format::HysitronTxt,
             Format::Hld,
             Format::Kla,
+            Format::MicroMaterials,
         ]
         .into_iter()
         .find(|f| f.name() == n || f.name().replace('-', "") == n)

@@ -353,3 +353,30 @@ fn anton_paar_results_table() {
         "x.TXT:2: 4 fields; expected 5 tab-separated fields: group, measurement, parameter, unit, value"
     );
 }
+
+/// Micro Materials NanoTest exports (micromechanics' public sample): detected, read in s,
+/// mm, N, each indent's deepest point within 5 % of the target depth its file is named
+/// after (500 nm, 2000 nm), the force rising to a few hundred mN.
+#[test]
+fn micro_materials_nanotest_exports() {
+    for (bytes, target_nm) in [
+        (
+            &include_bytes!("../../../examples/data/micromaterials-nanotest/500nm-4.txt")[..],
+            500.0,
+        ),
+        (
+            &include_bytes!("../../../examples/data/micromaterials-nanotest/2000nm-5.txt")[..],
+            2000.0,
+        ),
+    ] {
+        assert_eq!(detect(bytes), Format::MicroMaterials);
+        let r = read_one(bytes, "nanotest", &ReadOptions::default()).unwrap();
+        assert_eq!(r.meta.format, Format::MicroMaterials);
+        assert!(r.len() > 800, "{}", r.len());
+        let h_max = r.h.iter().copied().fold(f64::MIN, f64::max);
+        assert!((h_max / (target_nm * 1e-6) - 1.0).abs() < 0.05, "{h_max}"); // 511.7, 1985.5 nm
+        let f_max = r.f.iter().copied().fold(f64::MIN, f64::max);
+        assert!(f_max > 0.01 && f_max < 1.0, "{f_max} N");
+        assert!(r.t.windows(2).all(|w| w[1] >= w[0]));
+    }
+}
