@@ -668,6 +668,30 @@ fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEnt
     }
 }
 
+/// `traj` if it holds every step's fields, else the run `run` makes with the fields
+/// recorded and no checkpoints (kept in `slot`): the forward sensitivities need them all.
+fn in_full<'a>(
+    traj: &'a Trajectory,
+    opts: &SolverOptions,
+    c: &[f64],
+    slot: &'a mut Option<Trajectory>,
+    run: impl FnOnce(&SolverOptions) -> Result<Trajectory, ContactError>,
+) -> Result<&'a Trajectory, IdentifyError> {
+    if traj.fields.len() == traj.steps.len() + 1 {
+        return Ok(traj);
+    }
+    let opts = SolverOptions {
+        record_fields: true,
+        checkpoint_every: 0,
+        ..opts.clone()
+    };
+    let full = run(&opts).map_err(|source| IdentifyError::Forward {
+        params: c.to_vec(),
+        source,
+    })?;
+    Ok(slot.insert(full))
+}
+
 /// Test `k`'s adjoint gradient at `c` from its cached trajectory.
 fn gradient_task(
     p: &Problem,
@@ -835,24 +859,10 @@ fn jacobian_task(
     // recorded again in full for them (the memory of one unbounded run)
     if let Some(h) = &t.load {
         let cl = p.law_part(c);
-        let full;
-        let traj = if traj.fields.len() == traj.steps.len() + 1 {
-            traj
-        } else {
-            let opts = SolverOptions {
-                record_fields: true,
-                checkpoint_every: 0,
-                ..t.solver_options.clone()
-            };
-            full = w
-                .solver
-                .run_history(&*p.material, cl, h, &opts)
-                .map_err(|source| IdentifyError::Forward {
-                    params: c.to_vec(),
-                    source,
-                })?;
-            &full
-        };
+        let mut slot = None;
+        let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
+            w.solver.run_history(&*p.material, cl, h, o)
+        })?;
         let sens = w
             .adjoint
             .sensitivities_load(&*p.material, cl, traj, h)
@@ -877,24 +887,10 @@ fn jacobian_task(
         }
         return Ok(jac);
     }
-    let full;
-    let traj = if traj.fields.len() == traj.steps.len() + 1 {
-        traj
-    } else {
-        let opts = SolverOptions {
-            record_fields: true,
-            checkpoint_every: 0,
-            ..t.solver_options.clone()
-        };
-        full = w
-            .solver
-            .run(&*p.law, c, &t.schedule, &opts)
-            .map_err(|source| IdentifyError::Forward {
-                params: c.to_vec(),
-                source,
-            })?;
-        &full
-    };
+    let mut slot = None;
+    let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
+        w.solver.run(&*p.law, c, &t.schedule, o)
+    })?;
     let sens = w
         .adjoint
         .sensitivities(&*p.law, c, traj)
