@@ -86,12 +86,32 @@ pub fn states_relative_noise(result: &indentify_identify::IdentifyResult) -> boo
 /// multiplicative noise (`noise: Relative` / `RelativeEstimated`, the model of `--noise`):
 /// the residuals are then standardized by it before the tests (docs/adequacy.md).
 pub fn assess(curves: &FitCurves, free: usize, relative: bool) -> Option<Adequacy> {
+    assess_series(
+        &curves.t,
+        &curves.f_data,
+        &curves.f_final,
+        curves.observable,
+        free,
+        relative,
+    )
+}
+
+/// [`assess`] of the series `data` and `model` at times `t`, observing `observable`
+/// (depths are assessed alike; only the messages' units change).
+pub fn assess_series(
+    t: &[f64],
+    data: &[f64],
+    model: &[f64],
+    observable: indentify_report::Observable,
+    free: usize,
+    relative: bool,
+) -> Option<Adequacy> {
     let a = if relative {
-        Adequacy::assess_relative(&curves.t, &curves.f_data, &curves.f_final, free)
+        Adequacy::assess_relative(t, data, model, free)
     } else {
-        Adequacy::assess(&curves.t, &curves.f_data, &curves.f_final, free)
+        Adequacy::assess(t, data, model, free)
     };
-    match curves.observable {
+    match observable {
         indentify_report::Observable::Depth => a.map(Adequacy::of_depth),
         indentify_report::Observable::Force => a,
     }

@@ -259,20 +259,14 @@ pub fn write(dir: &Path, result: &IdentifyResult, inputs: &Inputs<'_>) -> Result
         identifiability,
         // the residuals of this curve against its record's own noise
         // (standardized by a stated multiplicative noise, as the console's)
-        adequacy: if crate::adequacy::states_relative_noise(result) {
-            indentify_report::Adequacy::assess_relative
-        } else {
-            indentify_report::Adequacy::assess
-        }(
+        adequacy: crate::adequacy::assess_series(
             inputs.t,
             inputs.f_data,
             inputs.f_final,
+            inputs.observable,
             result.params.iter().filter(|p| p.free).count(),
-        )
-        .map(|a| match inputs.observable {
-            Observable::Depth => a.of_depth(),
-            Observable::Force => a,
-        }),
+            crate::adequacy::states_relative_noise(result),
+        ),
     };
     let mut figures = Vec::new();
     let mut links = Vec::new();
