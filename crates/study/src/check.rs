@@ -779,8 +779,6 @@ fn run_test(
     }
 }
 
-/// The stress-only law a load-controlled adjoint takes (laws with internal variables are
-/// driven by depth for now).
 /// The depths at the schedule times (index 0: the initial state, 0).
 fn depths(traj: &indentify_contact::Trajectory) -> Vec<f64> {
     std::iter::once(0.0)
