@@ -7,7 +7,9 @@
 //! `cargo ` in untagged blocks (the tutorials show a command above its output); blocks
 //! tagged otherwise (`text`, `ron`, `python`) are not run, which is how a document shows
 //! commands too long for the walk (hours of fits) without running them. Comment
-//! lines are dropped, a trailing ` # comment` is cut, `\` continues a line. `indentify` is
+//! lines are dropped, a trailing ` # comment` is cut (` # exit N` there states the exit
+//! status the document promises, 0 otherwise: a fit that ends with undetermined parameters
+//! exits 3 on purpose), `\` continues a line. `indentify` is
 //! what the README says it is: `cargo run --release -p indentify-cli --`. Python blocks
 //! are not run (the Python package's tests run them: python/tests/test_readme.py).
 
@@ -24,6 +26,8 @@ pub struct Step {
     pub at: String,
     /// The command as written.
     pub command: String,
+    /// The exit status the document states (a trailing ` # exit N`), 0 otherwise.
+    pub expect: i32,
 }
 
 /// The commands of one Markdown document, in order.
@@ -61,7 +65,7 @@ pub fn extract(doc: &str, text: &str) -> Vec<Step> {
                 continue;
             }
         }
-        let body = strip_comment(&body);
+        let (body, expect) = (strip_comment(&body), expected_status(&body));
         let (start, mut command) = pending.take().unwrap_or((k + 1, String::new()));
         match body.strip_suffix('\\') {
             Some(head) => {
@@ -74,6 +78,7 @@ pub fn extract(doc: &str, text: &str) -> Vec<Step> {
                 steps.push(Step {
                     at: format!("{doc}:{start}"),
                     command,
+                    expect,
                 });
             }
         }
@@ -96,6 +101,21 @@ fn strip_comment(line: &str) -> String {
         }
     }
     line.trim_end().to_string()
+}
+
+/// The exit status a trailing ` # exit N ...` comment states, 0 without one.
+fn expected_status(line: &str) -> i32 {
+    let comment = &line[strip_comment(line).len()..];
+    comment
+        .trim_start()
+        .trim_start_matches('#')
+        .trim_start()
+        .strip_prefix("exit ")
+        .and_then(|rest| {
+            let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+            digits.parse().ok()
+        })
+        .unwrap_or(0)
 }
 
 /// The command as run: `indentify` replaced by the README's `cargo run --release -p
@@ -226,9 +246,14 @@ pub fn run(args: &[String]) -> Result<()> {
         let code = status
             .code()
             .map_or("signal".to_string(), |c| c.to_string());
-        if !status.success() {
+        if status.code() != Some(s.expect) {
             failed += 1;
         }
+        let code = if s.expect != 0 {
+            format!("{code} (expected {})", s.expect)
+        } else {
+            code
+        };
         let secs = t0.elapsed().as_secs_f64();
         println!(
             "{:>3}  exit {:>6}  {:>7.1} s  {}  {}",
@@ -319,6 +344,11 @@ mod tests {
         );
         assert_eq!(steps[0].at, "R.md:4");
         assert_eq!(strip_comment("echo 'a # b' # c"), "echo 'a # b'");
+        assert_eq!(steps.iter().map(|s| s.expect).sum::<i32>(), 0);
+        let undetermined = extract("T.md", "```\nindentify identify a.ron   # exit 3 (sY undetermined)\n```\n");
+        assert_eq!(undetermined[0].command, "indentify identify a.ron");
+        assert_eq!(undetermined[0].expect, 3);
+        assert_eq!(expected_status("echo '# exit 3'"), 0);
         assert_eq!(
             expand("indentify design x.ron"),
             "cargo run -q --release -p indentify-cli -- design x.ron"
