@@ -4,7 +4,9 @@
 //! runs of the same problem measured against them (`cargo xtask dao`; the table of
 //! docs/validation-laws.md §9).
 //!
-//! The functions (their Appendix A, the coefficients as published; `x = ln(E*/sigma_r)`,
+//! The functions (their Appendix A; the coefficients as publicly transcribed, not yet
+//! compared with the printed appendix: docs/validation-laws.md §9 says how far they are
+//! checked; `x = ln(E*/sigma_r)`,
 //! `sigma_r = sigma(eps_p = 0.033)` the representative stress, `E* = E/(1 - nu^2)` for the
 //! rigid tip used here):
 //! - `Pi1 = C/sigma_r`, `C = P/h^2` on loading ([`pi1`]);

@@ -4,9 +4,11 @@
 //!
 //! - The false-alarm rate: the truth's curve plus the noise of 200 seeds, assessed with the
 //!   truth as the "fit" (the residuals are the noise itself, 4 free parameters) and
-//!   standardized by the stated multiplicative noise as the pipeline does, is flagged
-//!   systematic in 10% of the seeds (at most 12% asserted: not yet the nominal 1-2%, see
-//!   the test); assessed as if every point had one variance (before), in 27.5%.
+//!   standardized by the stated multiplicative noise as the pipeline does (the size test
+//!   over the 47 of 91 points at or above 0.25 F_max), is flagged systematic in 3 seeds
+//!   (1.5%; at most 3% asserted); with the points below the floor held at it in the size
+//!   test (before), in 20 (10%); assessed as if every point had one variance, in 55.
+//!   `r2_table` (ignored) gives docs/adequacy.md's 1000-seed rows, with a 4-deviation bump.
 //! - The case that raised the false alarm: R2 fitted with 2% noise, seed 3 (RMS 0.91
 //!   σ_rec, runs z -0.33, yet "systematic residuals") is not systematic.
 //! - Power: the same data fitted with E held at 60000 MPa (the truth is 1e5, a law that
@@ -21,6 +23,7 @@
 use std::path::PathBuf;
 
 use indentify_identify::multiplicative_noise;
+use indentify_report::adequacy::RELATIVE_FLOOR;
 use indentify_report::{Adequacy, Verdict};
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
@@ -32,45 +35,111 @@ fn r2() -> ConfigSource {
     )
 }
 
-#[test]
-fn r2_noise_at_the_truth_is_not_systematic() {
+/// The standardized assessment before the points below the floor were left out: every
+/// point divided by `max(|F_model|, 0.25 F_max)` (the "before" column of docs/adequacy.md).
+fn floor_held(t: &[f64], y: &[f64], m: &[f64], free: usize) -> Adequacy {
+    let floor = RELATIVE_FLOOR * y.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let s: Vec<f64> = m.iter().map(|v| v.abs().max(floor)).collect();
+    let d: Vec<f64> = y.iter().zip(&s).map(|(v, s)| v / s).collect();
+    let mm: Vec<f64> = m.iter().zip(&s).map(|(v, s)| v / s).collect();
+    Adequacy::assess(t, &d, &mm, free).unwrap()
+}
+
+/// Counts over `seeds` seeds of R2's curve with multiplicative noise `a` at the truth
+/// (4 free parameters): flagged systematic as the pipeline assesses it today, with the
+/// points below the floor held at it (before), assessed with one variance, and by the
+/// classical Ljung-Box `z > 3` alone with one variance, and as today with no free
+/// parameter (`dof = n`: the residuals at the truth are the noise, nothing was fitted to
+/// them); and the points left out.
+fn r2_alarms(
+    a: f64,
+    bump: f64,
+    seeds: std::ops::RangeInclusive<u64>,
+) -> ([usize; 5], usize, usize) {
     let o = simulate::run(&SimulateOptions::new(r2())).unwrap();
     assert!(o.failure.is_none());
     let t: Vec<f64> = o.rows.iter().map(|r| r.t).collect();
     let f: Vec<f64> = o.rows.iter().map(|r| r.f).collect();
-    let seeds = 200u64;
-    let (mut flagged, mut plain, mut classical) = (0, 0, 0);
-    for seed in 1..=seeds {
-        let noisy = multiplicative_noise(&f, 0.02, seed);
+    // a bump of `bump` local noise deviations (a / sqrt(3) of the force) centred on the
+    // peak force, 5% of the history wide
+    let i_peak = (0..f.len()).fold(0, |m, i| if f[i] > f[m] { i } else { m });
+    let width = 0.05 * t[t.len() - 1];
+    let shape: Vec<f64> = t
+        .iter()
+        .zip(&f)
+        .map(|(s, v)| bump * a / 3f64.sqrt() * v * (-((s - t[i_peak]) / width).powi(2)).exp())
+        .collect();
+    let mut count = [0usize; 5];
+    let mut left_out = 0;
+    for seed in seeds {
+        let noisy: Vec<f64> = multiplicative_noise(&f, a, seed)
+            .iter()
+            .zip(&shape)
+            .map(|(v, b)| v + b)
+            .collect();
         // as the pipeline assesses a fit that states the noise of --noise
-        let a = Adequacy::assess_relative(&t, &noisy, &f, 4).unwrap();
-        if a.verdict == Verdict::Systematic {
-            flagged += 1;
-            println!("seed {seed}: {}", a.message);
+        let now = Adequacy::assess_relative(&t, &noisy, &f, 4).unwrap();
+        if now.verdict == Verdict::Systematic {
+            count[0] += 1;
+            println!("seed {seed}: {}", now.message);
         }
-        // as it was assessed before: one variance for every point
+        left_out = now.left_out;
+        count[1] += usize::from(floor_held(&t, &noisy, &f, 4).verdict == Verdict::Systematic);
         let b = Adequacy::assess(&t, &noisy, &f, 4).unwrap();
-        plain += usize::from(b.verdict == Verdict::Systematic);
-        classical += usize::from(b.noisy_record && b.z_ljung_box > 3.0);
+        count[2] += usize::from(b.verdict == Verdict::Systematic);
+        count[3] += usize::from(b.noisy_record && b.z_ljung_box > 3.0);
+        // the residuals at the truth are the noise itself: no parameter was fitted to them
+        let zero = Adequacy::assess_relative(&t, &noisy, &f, 0).unwrap();
+        count[4] += usize::from(zero.verdict == Verdict::Systematic);
     }
+    (count, left_out, t.len())
+}
+
+/// The false-alarm rate on R2 with 2% multiplicative noise at the truth, 200 seeds: at
+/// most 3% (the nominal level of three one-sided tests at 3 deviations is about 0.4%,
+/// 1.1-2.4% measured on the unit tests' record; 3% of 200 is 6 seeds, a binomial margin
+/// over 2%). Before the points below the floor were left out: 20 of 200.
+#[test]
+fn r2_noise_at_the_truth_is_not_systematic() {
+    let seeds = 200u64;
+    let ([flagged, held, plain, classical, _], left_out, n) = r2_alarms(0.02, 0.0, 1..=seeds);
     println!(
-        "R2, 2% noise at the truth, {seeds} seeds: systematic {flagged} (assessed with one \
+        "R2, 2% noise at the truth, {seeds} seeds: systematic {flagged} ({left_out} of {n} \
+         points below the floor left out; held at the floor: {held}; assessed with one \
          variance: {plain}; the classical Ljung-Box z > 3 alone: {classical})"
     );
-    // measured 2026-11-27: 20 of 200 (10%) against 55 (27.5%) before. Still above the
-    // nominal 1-2%: the points below the floor (0.25 F_max, about 40% of R2's points: the
-    // early loading and the zero force after contact is lost) keep a smaller standardized
-    // variance, the noise estimate's trim then cuts the peak's largest windows and the size
-    // test fires (z 3.0-4.5). Not yet fixed; this pins the improvement and fails on a
-    // regression.
     assert!(
-        flagged as f64 <= 0.12 * seeds as f64,
+        flagged as f64 <= 0.03 * seeds as f64,
         "{flagged} false alarms"
+    );
+    assert!(
+        held > 2 * flagged.max(5),
+        "holding the points below the floor was expected to over-reject ({held} vs {flagged})"
     );
     assert!(
         plain > 2 * flagged.max(5),
         "the one-variance assessment was expected to over-reject ({plain} vs {flagged})"
     );
+}
+
+/// The numbers of docs/adequacy.md's R2 table, 1000 seeds at 2% and 0.2% noise:
+/// `cargo test -p indentify-study --test adequacy_noise -- --ignored --nocapture r2_table`.
+#[test]
+#[ignore]
+fn r2_table() {
+    for (a, bump) in [(0.02, 0.0), (0.002, 0.0), (0.02, 4.0), (0.002, 4.0)] {
+        let ([now, held, plain, classical, zero], left_out, n) = r2_alarms(a, bump, 1..=1000);
+        println!(
+            "| R2 at the truth, a = {a}, bump {bump} σ | {:.1}% (dof = n: {:.1}%) | held at the floor {:.1}% \
+             | one variance {:.1}% | classical Ljung-Box alone {:.1}% | {left_out} of {n} \
+             left out |",
+            now as f64 / 10.0,
+            zero as f64 / 10.0,
+            held as f64 / 10.0,
+            plain as f64 / 10.0,
+            classical as f64 / 10.0
+        );
+    }
 }
 
 fn fit(fixed_e: Option<f64>) -> indentify_study::identify::IdentifyOutcome {
