@@ -345,7 +345,10 @@ mod tests {
         assert_eq!(steps[0].at, "R.md:4");
         assert_eq!(strip_comment("echo 'a # b' # c"), "echo 'a # b'");
         assert_eq!(steps.iter().map(|s| s.expect).sum::<i32>(), 0);
-        let undetermined = extract("T.md", "```\nindentify identify a.ron   # exit 3 (sY undetermined)\n```\n");
+        let undetermined = extract(
+            "T.md",
+            "```\nindentify identify a.ron   # exit 3 (sY undetermined)\n```\n",
+        );
         assert_eq!(undetermined[0].command, "indentify identify a.ron");
         assert_eq!(undetermined[0].expect, 3);
         assert_eq!(expected_status("echo '# exit 3'"), 0);
