@@ -278,3 +278,60 @@ fn checkpointed_equals_recorded() {
         }
     }
 }
+
+/// The cost, measured back to back (`cargo test --test gradient_load_friction -- --ignored
+/// --nocapture`; no timed assertion): on a 24 x 24 mesh, Maxwell over the
+/// load-hold-unload, the forward run (fields recorded), the adjoint and the forward
+/// sensitivities, median of 5, frictionless normal contact and Coulomb mu = 0.2.
+#[test]
+#[ignore = "a measurement: run it on an idle machine"]
+fn cost_ratios() {
+    use indentify_mesh::CylinderMesher;
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 24,
+        nz: 24,
+        grading_r: 1.2,
+        grading_z: 1.2,
+    }
+    .build()
+    .unwrap();
+    let h = lhu(300.0, 10);
+    let mat = LawMaterial(&Maxwell);
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (name, kind) in [
+        ("frictionless", ContactKind::Normal),
+        ("mu 0.2", friction(0.2)),
+    ] {
+        let m = Model::with_contact(mesh.clone(), sphere(), kind).unwrap();
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let (mut tf, mut ta, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..5 {
+            let t0 = std::time::Instant::now();
+            let traj = solver.run_history(&mat, &MAXWELL, &h, &opts(true)).unwrap();
+            tf.push(t0.elapsed().as_secs_f64());
+            let n = traj.steps.len();
+            let g = adj
+                .gradient_load(&mat, &MAXWELL, &traj, &h, &weights(n), &vec![0.0; n])
+                .unwrap();
+            ta.push(g.seconds);
+            let s = adj.sensitivities_load(&mat, &MAXWELL, &traj, &h).unwrap();
+            ts.push(s.seconds);
+        }
+        let (f, a, s) = (median(tf), median(ta), median(ts));
+        println!(
+            "{name}: forward {:.1} ms, adjoint {:.1} ms ({:.2}x), sensitivities {:.1} ms \
+             ({:.2}x)",
+            1e3 * f,
+            1e3 * a,
+            a / f,
+            1e3 * s,
+            s / f
+        );
+    }
+}
