@@ -652,6 +652,9 @@ impl ParamStep<'_> {
         expand_into(model, &w.eq, &mut w.full);
         if !w.du_prev.is_empty() {
             w.du_prev.copy_from_slice(&w.full);
+            if let Some(du) = shift {
+                load::relative_to_punch(model, &mut w.du_prev, du);
+            }
         }
         strains_into(model, self.finite, &w.full, &mut w.strain);
         for (qp, y) in yk.iter_mut().enumerate() {

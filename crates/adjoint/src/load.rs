@@ -12,9 +12,16 @@
 //! depth: the sweep's right-hand side `g_i` (before the step's own cotangent enters)
 //! against the step's depth column `du_U,i` ([`RecordedContact::depth_column`]). The
 //! depth-controlled steps of a mixed history keep `rho_i = dJ/dF_i`.
+//!
+//! Coulomb friction (docs/theory.md §13): the sticking ties read each node's position
+//! relative to the punch, `x + U e_z`, so `a_i` gains what the later steps' ties make of
+//! the depth ([`RecordedContact::adjoint_depth`]), the cotangent enters as friction's
+//! shift (`-rho_i K e_A` on the right-hand side, `K e_A` the depth column's `K v`), and
+//! the forward sensitivities keep each step's relative motion `du + dU e_z` for the
+//! next step's ties ([`relative_to_punch`]).
 
 use indentify_contact::{
-    DirectSolver, ForceCotangent, LoadHistory, RecordedContact, SolverOptions, StepFields,
+    DirectSolver, ForceCotangent, LoadHistory, Model, RecordedContact, SolverOptions, StepFields,
     StepRecord, Target, Trajectory,
 };
 use indentify_laws::{Law, Material, Vec4};
@@ -38,8 +45,7 @@ impl Adjoint<'_> {
     ///
     /// # Errors
     /// As [`Adjoint::gradient`]; [`AdjointError::Step`] when a load-controlled step's
-    /// contact stiffness is not positive or its contact kind is not supported
-    /// (Coulomb friction: its sticking ties read the depth; refused with the reason).
+    /// contact stiffness is not positive.
     pub fn gradient_load(
         &mut self,
         mat: &dyn Material,
@@ -335,18 +341,6 @@ fn replayed_load_steps_rev(
     Ok(())
 }
 
-/// The error of a load-controlled step under Coulomb friction (step `i` ending at `t`).
-pub(crate) fn coulomb_refused(i: usize, t: f64) -> AdjointError {
-    AdjointError::Step {
-        step: i,
-        t,
-        reason: "load control: the exact gradient with Coulomb friction is not available \
-                 (its sticking ties read the punch depth); fit this record with \
-                 `contact: Normal` or in depth control"
-            .into(),
-    }
-}
-
 /// A sweep step's cotangent under load control: the step's depth column (scratch) and
 /// `rho_of(a, s)`, the cotangent from `a = g . du_U` (the right-hand side `g` before the
 /// step's own cotangent) and the Schur complement `s = dF_i/dU_i`.
@@ -356,8 +350,10 @@ pub(crate) struct BorderedRho<'a> {
 }
 
 impl Adjoint<'_> {
-    /// The cotangent of a prepared step `i` whose sweep right-hand side is in `self.eq`
-    /// ([`BorderedRho`]).
+    /// The cotangent of a prepared step `i` (displacement `u`, all dofs) whose sweep
+    /// right-hand side is in `self.eq` ([`BorderedRho`]). With a shifted force cotangent
+    /// ([`ForceCotangent::Shifted`], Coulomb friction) `self.eq` holds the right-hand side
+    /// without the shift on entry and with it, `-rho K e_A`, on exit.
     ///
     /// # Errors
     /// As [`Adjoint::gradient_load`].
@@ -365,12 +361,19 @@ impl Adjoint<'_> {
         &mut self,
         i: usize,
         rec: &StepRecord,
+        u: &[f64],
         b: BorderedRho<'_>,
     ) -> Result<f64, AdjointError> {
         let s = self
             .contact
             .depth_column(rec, &mut b.col.col, &mut b.col.kv);
-        let a: f64 = self.eq.iter().zip(&b.col.col).map(|(g, d)| g * d).sum();
+        let a: f64 = self
+            .eq
+            .iter()
+            .zip(&b.col.col)
+            .map(|(g, d)| g * d)
+            .sum::<f64>()
+            + self.contact.adjoint_depth(rec, u, &b.col.col);
         let rho = (b.rho_of)(a, s);
         if !rho.is_finite() {
             return Err(AdjointError::Step {
@@ -381,6 +384,12 @@ impl Adjoint<'_> {
                      recorded step is not positive: its depth is not determined by its force"
                 ),
             });
+        }
+        if self.contact.force_cotangent() == ForceCotangent::Shifted {
+            // the shift's part of the right-hand side: `K e_A` is the depth column's `K v`
+            for (g, kv) in self.eq.iter_mut().zip(&b.col.kv) {
+                *g -= rho * kv;
+            }
         }
         Ok(rho)
     }
@@ -415,18 +424,22 @@ impl Adjoint<'_> {
         border: BorderedRho<'_>,
     ) -> Result<f64, AdjointError> {
         let Recorded { i, rec, f0, f1, .. } = *step;
-        if self.contact.force_cotangent() == ForceCotangent::Shifted {
-            return Err(coulomb_refused(i, rec.t));
-        }
         self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+        // (a shifted cotangent's part of the source is added by `bordered_rho`)
         self.adjoint_source(sweep.s, rec, None);
         self.restrict();
-        let rho = self.bordered_rho(i, rec, border)?;
+        let rho = self.bordered_rho(i, rec, &f1.u, border)?;
         sweep.mu_zero = false;
         let mut eq = std::mem::take(&mut self.eq);
         self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
         self.eq = eq;
         self.expand();
+        if self.contact.force_cotangent() == ForceCotangent::Shifted {
+            // V' = V + rho e_A
+            for d in crate::force_dofs(self.model, rec) {
+                self.full[d] += rho;
+            }
+        }
         self.back_substitute(law, c, sweep, rec.dt, &f0.sigma, &f1.sigma);
         Ok(rho)
     }
@@ -616,8 +629,8 @@ impl SegmentCarry {
     /// depth), with `given`, `col` and `s` set; `None` for a plain depth-controlled step.
     ///
     /// # Errors
-    /// [`AdjointError::Step`] for Coulomb friction on a bordered step, or a
-    /// load-controlled step whose contact stiffness is not positive.
+    /// [`AdjointError::Step`] for a load-controlled step whose contact stiffness is not
+    /// positive.
     pub(crate) fn step(
         &mut self,
         contact: &mut RecordedContact<'_>,
@@ -651,15 +664,6 @@ impl SegmentCarry {
             self.s = 0.0;
             return Ok(None);
         }
-        if contact.force_cotangent() == ForceCotangent::Shifted {
-            return Err(AdjointError::Step {
-                step: i,
-                t: rec.t,
-                reason: "load control: the exact sensitivities with Coulomb friction are \
-                         not available (its sticking ties read the punch depth)"
-                    .into(),
-            });
-        }
         self.s = contact.depth_column(rec, &mut self.col.col, &mut self.col.kv);
         if load && !(self.s.is_finite() && self.s > 0.0) {
             return Err(AdjointError::Step {
@@ -673,5 +677,18 @@ impl SegmentCarry {
             });
         }
         Ok(Some(load))
+    }
+}
+
+/// Friction's sticking ties read a node's motion relative to the punch, `du + dU e_z`
+/// (docs/theory.md §13): adds a step's depth variation `du` (mm per unit parameter) to
+/// the vertical dofs of every candidate in `du_prev` (all dofs), the displacement
+/// variation the next step's ties read.
+pub(crate) fn relative_to_punch(model: &Model, du_prev: &mut [f64], du: f64) {
+    if du_prev.is_empty() || du == 0.0 {
+        return;
+    }
+    for &n in &model.candidates {
+        du_prev[2 * n + 1] += du;
     }
 }

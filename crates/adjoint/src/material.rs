@@ -436,6 +436,7 @@ impl Adjoint<'_> {
                 crate::expand_into(model, &w.eq, &mut w.full);
                 if !w.du_prev.is_empty() {
                     w.du_prev.copy_from_slice(&w.full);
+                    crate::load::relative_to_punch(model, &mut w.du_prev, dh[i][k]);
                 }
                 crate::strains_into(model, finite, &w.full, &mut w.strain);
                 for q in 0..nq {
@@ -534,12 +535,11 @@ impl Adjoint<'_> {
             })?;
         let finite = self.finite.is_some();
         // Coulomb friction: dJ/dF enters as the shift `V' = V + rho e_A` (lib.rs), whose
-        // part `rho B e_A` joins `z`'s stress rows in the source
+        // part `rho B e_A` joins `z`'s stress rows in the source; under load control
+        // (`border`) `rho` is not known yet and `bordered_rho` adds that part, `-rho K e_A`
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
-        if shifted && border.is_some() {
-            return Err(crate::load::coulomb_refused(i, rec.t));
-        }
-        if shifted && !finite {
+        let shift_source = shifted && border.is_none();
+        if shift_source && !finite {
             self.full.fill(0.0);
             for d in crate::force_dofs(model, rec) {
                 self.full[d] = 1.0;
@@ -571,7 +571,7 @@ impl Adjoint<'_> {
                         src.0[b] += sw.sm[r * 4 + b] * mu;
                     }
                 }
-                if shifted && !finite {
+                if shift_source && !finite {
                     src += sw.eg.mul_vec(&Vec4(self.strain[q])) * rho;
                 }
                 self.field_b[q] = src;
@@ -620,7 +620,7 @@ impl Adjoint<'_> {
             }
             self.tangents[q] = ct;
             sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
-            if shifted && !finite {
+            if shift_source && !finite {
                 let bea = self.strain[q];
                 let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
                 for k in 0..m {
@@ -643,7 +643,7 @@ impl Adjoint<'_> {
             .map_err(reason)?;
         // K^T V = B* source, V = rho on the active dofs
         self.force_of_field_b();
-        if let (true, Some(fs)) = (shifted, &self.finite) {
+        if let (true, Some(fs)) = (shift_source, &self.finite) {
             // (finite strain: the shift's part of the source is K (-rho e_A))
             self.e_a.clear();
             self.e_a.resize(self.full.len(), 0.0);
@@ -654,7 +654,7 @@ impl Adjoint<'_> {
         }
         self.restrict();
         let rho = match border {
-            Some(b) => self.bordered_rho(i, rec, b)?,
+            Some(b) => self.bordered_rho(i, rec, &f1.u, b)?,
             None => rho,
         };
         let mut eq = std::mem::take(&mut self.eq);

@@ -48,7 +48,7 @@ fn depth_at(curve: &Curve, h: &[f64], t: f64) -> Result<f64> {
 ///
 /// # Errors
 /// Data without a depth column or not covering the history, a failing forward run or
-/// adjoint (Coulomb friction is refused there, with the reason), `--checkpoint 0`.
+/// adjoint, `--checkpoint 0`.
 pub(crate) fn run(
     opts: &GradientOptions,
     cfg: &Config,

@@ -240,6 +240,24 @@ impl Constraint for Coulomb<'_> {
         }
     }
 
+    /// `l_i . (du_U + e_z)` over the tied nodes: the later sticking ties read each node's
+    /// position relative to the punch, `x + U e_z`, so a unit depth increment moves a tied
+    /// node by its depth column plus `e_z` (an active node's column is `w - e_z`: it moves
+    /// by `w`; a node out of contact stays, and the punch moves past it).
+    fn adjoint_depth(&self, step: &Step<'_>, col: &[f64]) -> f64 {
+        let model = self.normal.model;
+        let rec = step.rec;
+        let active_now = |k: usize| rec.active.binary_search(&(k as u32)).is_ok();
+        let at = |d: usize| model.dofs.equation(d).map_or(0.0, |e| col[e]);
+        let mut a = 0.0;
+        for &(k, pi) in &self.carry {
+            let (rate, t) = arc_rate(model, k, step.u, rec.depth, active_now(k));
+            let n = model.candidates[k];
+            a += pi / rate * (t[0] * at(2 * n) + t[1] * (at(2 * n + 1) + 1.0));
+        }
+        a
+    }
+
     /// This step's sticking nodes load the previous step.
     fn adjoint_carry(&mut self, step: &Step<'_>, stick: &[f64]) {
         let model = self.normal.model;

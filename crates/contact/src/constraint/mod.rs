@@ -244,6 +244,16 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
     /// passes to the one before it (its [`Constraint::adjoint_rhs`] adds it there).
     fn adjoint_carry(&mut self, _step: &Step<'_>, _stick: &[f64]) {}
 
+    /// Load control (docs/theory.md §13): what the load carried into the step `step`
+    /// by the later steps (friction's sticking ties, [`Constraint::adjoint_carry`]; read
+    /// before [`Constraint::adjoint_rhs`] consumes it) makes of a unit increment of the
+    /// step's depth with everything before the step held: the load against the step's
+    /// depth column `col` (equations), plus its direct dependence on the depth through the
+    /// tied nodes' position relative to the punch, `x + U e_z`. 0 without such a load.
+    fn adjoint_depth(&self, _step: &Step<'_>, _col: &[f64]) -> f64 {
+        0.0
+    }
+
     /// Whether [`Constraint::adjoint_carry`] left a load for the step before (the sweep
     /// may skip a step only without one).
     fn adjoint_pending(&self) -> bool {

@@ -240,6 +240,21 @@ impl<'m> RecordedContact<'m> {
         -kv.iter().zip(col.iter()).map(|(a, b)| a * b).sum::<f64>()
     }
 
+    /// Load control with a constraint that ties steps (Coulomb friction; docs/theory.md
+    /// §13): on the prepared step `rec` (displacement `u`, all dofs), before
+    /// [`RecordedContact::adjoint_solve`], what the load the later steps carry into it
+    /// makes of a unit depth increment, its depth column `col` (equations, from
+    /// [`RecordedContact::depth_column`]) held: the part of the bordered scalar `a_i`
+    /// beside the body's `g . du_U` (0 for other constraints).
+    pub fn adjoint_depth(&self, rec: &StepRecord, u: &[f64], col: &[f64]) -> f64 {
+        let step = Step {
+            rec,
+            u,
+            frames: &self.frames,
+        };
+        self.constraint.adjoint_depth(&step, col)
+    }
+
     /// Forms the prescribed values of the prepared step `rec` (displacement `u`) that
     /// depend on the previous step `prev` (its record and displacement; `None` for the
     /// first step), for [`RecordedContact::sensitivity_solve`].
