@@ -119,7 +119,7 @@ pub fn calibrate(map: &MapFiles) -> Result<Calibration> {
     };
     let at = |n: &str| resolved.names.iter().position(|m| *m == n);
     let (Some(ie), Some(inu), Some(ieta), "Maxwell") =
-        (at("E"), at("nu"), at("eta"), resolved.law.name())
+        (at("E"), at("nu"), at("eta"), resolved.cfg.law.variant())
     else {
         bail!("the Lee-Radok pre-fit needs the Maxwell law (E, nu, eta)");
     };
