@@ -1,11 +1,14 @@
 //! `cargo xtask fit-cost --batch`: the 100 indents of the synthetic R1 Maxwell map of
 //! `cargo xtask make-map` (10 x 10, 2% noise) identified through the study's batch path
-//! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), before
-//! (the map's manifest: every indent from the base configuration's start) and after (a
-//! manifest whose rows start from their own record's Oliver-Pharr first guess, the
-//! `identify.params.*.start` columns computed here once, so an indent's start is fixed by
-//! the manifest whatever the thread count), back to back: throughput, iterations,
-//! convergence and each parameter's shift in standard deviations.
+//! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), back to
+//! back in one process: from the base configuration's start (the map's manifest), from
+//! each row's Oliver-Pharr first guess where the analysis gives one, and from each row's
+//! Lee-Radok pre-fit (`xtask::lee_radok`, one calibration run per manifest); the starts are
+//! manifest columns (`identify.params.*.start`) computed here once, so an indent's start is
+//! fixed by the manifest whatever the thread count. Printed: the time (the starts'
+//! computation included), throughput, iterations, convergence and every parameter's shift
+//! in standard deviations against the base start. `--profile`: one indent of each phase
+//! stage by stage (`profile.rs`).
 
 use std::path::Path;
 use std::time::Instant;
