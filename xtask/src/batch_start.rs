@@ -80,6 +80,9 @@ fn write_starts(
     Ok((out.to_path_buf(), guessed))
 }
 
+/// Start overrides: `(name, value)` of each parameter given.
+pub type Starts = Vec<(String, f64)>;
+
 /// The Lee-Radok pre-fit's model ratio for the map's configuration: one forward run of
 /// the finite element model at the base start on the first row's schedule
 /// ([`crate::lee_radok::calibrate`]), with the cone's half-angle and the law's `nu`.
@@ -161,7 +164,7 @@ pub fn lee_radok_starts(
     map: &MapFiles,
     id: &str,
     cal: &Calibration,
-) -> Result<Option<(Vec<(String, f64)>, lee_radok::Prefit)>> {
+) -> Result<Option<(Starts, lee_radok::Prefit)>> {
     let (problem, _) = identify::problem(&row_options(map, id))?;
     let sch = problem.schedule();
     let curve = lee_radok::Curve {

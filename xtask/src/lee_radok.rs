@@ -76,12 +76,10 @@ pub fn unit_forces(
     let lambda = 1.0 / tau;
     let mu = lambda * 3.0 * k / (3.0 * k + 4.0 * g);
     let c = 2.0 * half_angle_deg.to_radians().tan() / std::f64::consts::PI;
-    let (mut ya, mut yb) = (0.0, 0.0);
     let mut out = Vec::with_capacity(end + 1);
     out.push(c * h[0] * h[0] * (a + b));
     // the first sample as an instantaneous (elastic) step from zero
-    ya = ya + a * h[0] * h[0];
-    yb = yb + b * h[0] * h[0];
+    let (mut ya, mut yb) = (a * h[0] * h[0], b * h[0] * h[0]);
     for n in 1..=end {
         let dt = t[n] - t[n - 1];
         let dx = h[n] * h[n] - h[n - 1] * h[n - 1];
