@@ -14,8 +14,9 @@
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`. `--batch` times the
-//! 100-indent map through the batch path (`batch.rs`: throughput before and after starting
-//! every indent from its Oliver-Pharr first guess, `--jobs N` threads, 2 by default;
+//! 100-indent map through the batch path (`batch.rs`: throughput from the base start, from
+//! each row's Oliver-Pharr first guess and from its Lee-Radok pre-fit, `--jobs N` threads,
+//! 2 by default;
 //! `--profile`: one indent's stages timed, `profile.rs`).
 
 mod batch;
