@@ -14,10 +14,13 @@
 //! their standard deviations; `--compare FILE` adds, for each case of an earlier `--json`
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`. `--batch` times the
-//! 100-indent map through the batch path (`batch.rs`: throughput before and after starting
-//! every indent from its Oliver-Pharr first guess, `--jobs N` threads, 2 by default).
+//! 100-indent map through the batch path (`batch.rs`: throughput from the base start, from
+//! each row's Oliver-Pharr first guess and from its Lee-Radok pre-fit, `--jobs N` threads,
+//! 2 by default;
+//! `--profile`: one indent's stages timed, `profile.rs`).
 
 mod batch;
+mod profile;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -39,7 +42,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--batch [--jobs N] [--map-n N]]`.
+/// [--compare FILE] [--cold] [--batch [--jobs N] [--map-n N] [--profile]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -50,6 +53,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut batch_mode = false;
     let mut jobs = 2usize;
     let mut map_n = 10usize;
+    let mut profile = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -61,6 +65,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "--compare" => compare = Some(PathBuf::from(val())),
             "--cold" => cold = true,
             "--batch" => batch_mode = true,
+            "--profile" => profile = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
             "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
             other => bail!("unknown option {other}"),
@@ -99,6 +104,11 @@ pub fn run(args: &[String]) -> Result<()> {
     if batch_mode {
         if jobs == 0 || map_n == 0 {
             bail!("--jobs and --map-n take numbers >= 1");
+        }
+        if profile {
+            let m = batch::profile(map_n)?;
+            println!("{}", profile::table(&m));
+            return write_json(json_out.as_deref(), &m);
         }
         let m = batch::measure(jobs, map_n)?;
         println!("{}", batch::table(&m));

@@ -1,11 +1,14 @@
 //! `cargo xtask fit-cost --batch`: the 100 indents of the synthetic R1 Maxwell map of
 //! `cargo xtask make-map` (10 x 10, 2% noise) identified through the study's batch path
-//! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), before
-//! (the map's manifest: every indent from the base configuration's start) and after (a
-//! manifest whose rows start from their own record's Oliver-Pharr first guess, the
-//! `identify.params.*.start` columns computed here once, so an indent's start is fixed by
-//! the manifest whatever the thread count), back to back: throughput, iterations,
-//! convergence and each parameter's shift in standard deviations.
+//! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), back to
+//! back in one process: from the base configuration's start (the map's manifest), from
+//! each row's Oliver-Pharr first guess where the analysis gives one, and from each row's
+//! Lee-Radok pre-fit (`xtask::lee_radok`, one calibration run per manifest); the starts are
+//! manifest columns (`identify.params.*.start`) computed here once, so an indent's start is
+//! fixed by the manifest whatever the thread count. Printed: the time (the starts'
+//! computation included), throughput, iterations, convergence and every parameter's shift
+//! in standard deviations against the base start. `--profile`: one indent of each phase
+//! stage by stage (`profile.rs`).
 
 use std::path::Path;
 use std::time::Instant;
@@ -14,7 +17,7 @@ use anyhow::Result;
 use indentify_study::batch::{self, BatchOptions};
 use indentify_study::synthetic::{MapFiles, MapOptions, make_map};
 use serde_json::{Value, json};
-use xtask::batch_start::start_manifest;
+use xtask::batch_start::{calibrate, lee_radok_manifest, lee_radok_starts, start_manifest};
 
 /// One batch of `manifest` into a fresh `out` on `jobs` threads: its wall time and every
 /// indent's status.
@@ -39,43 +42,22 @@ fn run_batch(
     Ok((seconds, statuses))
 }
 
-/// `--batch`: before and after on `jobs` threads, a map of `n x n` indents.
-pub fn measure(jobs: usize, n: usize) -> Result<Value> {
-    let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
-    let _ = std::fs::remove_dir_all(&dir);
-    let map = make_map(
-        &dir,
-        &MapOptions {
-            n,
-            ..Default::default()
-        },
-    )?;
-    let clock = Instant::now();
-    let (op_manifest, guessed) = start_manifest(&map, &dir.join("manifest-op-start.csv"))?;
-    let guess_s = clock.elapsed().as_secs_f64();
-    let (tb, before) = run_batch(&map, &map.manifest, &dir.join("out-before"), jobs)?;
-    // without a single guess the after manifest is the before one: not run again
-    let (ta, after) = if guessed > 0 {
-        run_batch(&map, &op_manifest, &dir.join("out-after"), jobs)?
-    } else {
-        eprintln!("no row has an O&P first guess: the after batch would repeat the before one");
-        (tb, before.clone())
-    };
-    let summary = |st: &[batch::IndentStatus]| {
-        let conv = st
-            .iter()
-            .filter(|s| s.state == batch::State::Converged)
-            .count();
-        let its: usize = st.iter().map(|s| s.iterations).sum();
-        (conv, its)
-    };
-    let (cb, ib) = summary(&before);
-    let (ca, ia) = summary(&after);
-    // every free parameter's shift, |after - before| / sigma (after's sigma)
+/// Converged indents and LM iterations of a batch.
+fn summary(st: &[batch::IndentStatus]) -> (usize, usize) {
+    let conv = st
+        .iter()
+        .filter(|s| s.state == batch::State::Converged)
+        .count();
+    (conv, st.iter().map(|s| s.iterations).sum())
+}
+
+/// Every free parameter's shift `|after - before| / sigma` (after's sigma): the largest
+/// and the mean.
+fn shifts(before: &[batch::IndentStatus], after: &[batch::IndentStatus]) -> (f64, f64) {
     let mut worst: f64 = 0.0;
     let mut mean = 0.0;
     let mut count = 0usize;
-    for (b, a) in before.iter().zip(&after) {
+    for (b, a) in before.iter().zip(after) {
         for k in 0..a.values.len() {
             if !a.free.get(k).copied().unwrap_or(false) {
                 continue;
@@ -90,48 +72,159 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
             }
         }
     }
-    let indents = map.indents.len();
-    Ok(json!({
-        "indents": indents,
-        "jobs": jobs,
-        "guessed": guessed,
-        "guess_s": guess_s,
-        "before_s": tb,
-        "after_s": ta + guess_s,
-        "before_per_s": indents as f64 / tb,
-        "after_per_s": indents as f64 / (ta + guess_s),
-        "throughput_ratio": tb / (ta + guess_s),
-        "converged_before": cb,
-        "converged_after": ca,
-        "iterations_before": ib,
-        "iterations_after": ia,
+    (
+        worst,
+        if count > 0 {
+            mean / count as f64
+        } else {
+            f64::NAN
+        },
+    )
+}
+
+/// One case's row: its time (its starts' computation included), throughput, iterations
+/// and shifts against `before`.
+fn case_row(
+    name: &str,
+    seconds: f64,
+    starts_s: f64,
+    started: usize,
+    st: &[batch::IndentStatus],
+    before: &[batch::IndentStatus],
+    before_s: f64,
+) -> Value {
+    let (conv, its) = summary(st);
+    let (worst, mean) = shifts(before, st);
+    let total = seconds + starts_s;
+    json!({
+        "case": name,
+        "batch_s": seconds,
+        "starts_s": starts_s,
+        "started": started,
+        "seconds": total,
+        "per_s": st.len() as f64 / total,
+        "throughput_ratio": before_s / total,
+        "converged": conv,
+        "iterations": its,
         "max_shift_sigma": worst,
-        "mean_shift_sigma": if count > 0 { mean / count as f64 } else { f64::NAN },
+        "mean_shift_sigma": mean,
+    })
+}
+
+/// `--batch`: before and after on `jobs` threads, a map of `n x n` indents: every indent
+/// from the base start (before), from its Oliver-Pharr first guess where the analysis
+/// gives one (run only if some row has one), from its Lee-Radok pre-fit.
+pub fn measure(jobs: usize, n: usize) -> Result<Value> {
+    let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
+    let _ = std::fs::remove_dir_all(&dir);
+    let map = make_map(
+        &dir,
+        &MapOptions {
+            n,
+            ..Default::default()
+        },
+    )?;
+    let clock = Instant::now();
+    let (op_manifest, guessed) = start_manifest(&map, &dir.join("manifest-op-start.csv"))?;
+    let guess_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let (lr_manifest, lr_started) =
+        lee_radok_manifest(&map, &dir.join("manifest-lee-radok-start.csv"))?;
+    let lr_s = clock.elapsed().as_secs_f64();
+    let (tb, before) = run_batch(&map, &map.manifest, &dir.join("out-before"), jobs)?;
+    let mut cases = vec![case_row("base start", tb, 0.0, 0, &before, &before, tb)];
+    if guessed > 0 {
+        let (ta, after) = run_batch(&map, &op_manifest, &dir.join("out-op"), jobs)?;
+        cases.push(case_row(
+            "O&P first guess",
+            ta,
+            guess_s,
+            guessed,
+            &after,
+            &before,
+            tb,
+        ));
+    } else {
+        eprintln!("no row has an O&P first guess: that batch would repeat the base one");
+    }
+    let (tl, after) = run_batch(&map, &lr_manifest, &dir.join("out-lee-radok"), jobs)?;
+    cases.push(case_row(
+        "Lee-Radok pre-fit",
+        tl,
+        lr_s,
+        lr_started,
+        &after,
+        &before,
+        tb,
+    ));
+    Ok(json!({
+        "indents": map.indents.len(),
+        "jobs": jobs,
+        "op_guessed": guessed,
+        "op_guess_s": guess_s,
+        "cases": cases,
     }))
+}
+
+/// `--batch --profile`: one indent of each phase of an `n x n` map, stage by stage, from
+/// the base start and from its Lee-Radok pre-fit.
+pub fn profile(n: usize) -> Result<Value> {
+    let dir = std::env::temp_dir().join("indentify-fit-cost-batch-profile");
+    let _ = std::fs::remove_dir_all(&dir);
+    let map = make_map(
+        &dir,
+        &MapOptions {
+            n,
+            ..Default::default()
+        },
+    )?;
+    let cal = calibrate(&map)?;
+    eprintln!(
+        "Lee-Radok calibration: one forward run, {:.3} s",
+        cal.seconds
+    );
+    let starts = |id: &str| {
+        let clock = Instant::now();
+        let s = lee_radok_starts(&map, id, &cal).ok().flatten();
+        if let Some((_, p)) = &s {
+            eprintln!(
+                "{id}: Lee-Radok pre-fit E = {:.2}, eta = {:.2} (rms {:.4} of F_max, {} samples) in {:.3} s",
+                p.e,
+                p.eta,
+                p.rms_rel,
+                p.samples,
+                clock.elapsed().as_secs_f64()
+            );
+        }
+        s.map(|(s, _)| s).unwrap_or_default()
+    };
+    let mut m = super::profile::measure(&map, &dir, &starts)?;
+    m["calibration_s"] = json!(cal.seconds);
+    Ok(m)
 }
 
 /// The table of [`measure`]'s result.
 pub fn table(m: &Value) -> String {
-    let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
-    format!(
-        "| indents | jobs | before (s) | after (s, guesses included) | indents/s before | after | throughput after / before | converged before | after | LM iterations before | after | max abs(shift) / sigma | mean |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {} | {} | {:.1} | {:.1} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.3} | {:.3} |\n\
-         ({} of the rows start from their O&P guess, computed in {:.2} s)\n",
-        m["indents"],
-        m["jobs"],
-        f("before_s"),
-        f("after_s"),
-        f("before_per_s"),
-        f("after_per_s"),
-        f("throughput_ratio"),
-        m["converged_before"],
-        m["converged_after"],
-        m["iterations_before"],
-        m["iterations_after"],
-        f("max_shift_sigma"),
-        f("mean_shift_sigma"),
-        m["guessed"],
-        f("guess_s"),
-    )
+    let mut s = format!(
+        "{} indents on {} threads\n\n| start | seconds (starts included) | starts (s) | rows started | indents/s | throughput / base | converged | LM iterations | max abs(shift) / sigma | mean |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        m["indents"], m["jobs"]
+    );
+    let empty = Vec::new();
+    for c in m["cases"].as_array().unwrap_or(&empty) {
+        let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+        s.push_str(&format!(
+            "| {} | {:.1} | {:.2} | {} | {:.3} | {:.2} | {} | {} | {:.3} | {:.3} |\n",
+            c["case"].as_str().unwrap_or(""),
+            f("seconds"),
+            f("starts_s"),
+            c["started"],
+            f("per_s"),
+            f("throughput_ratio"),
+            c["converged"],
+            c["iterations"],
+            f("max_shift_sigma"),
+            f("mean_shift_sigma"),
+        ));
+    }
+    s
 }
