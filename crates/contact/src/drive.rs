@@ -49,6 +49,16 @@ impl Load {
         }
     }
 
+    /// The rounding floor of [`Load::target`] at `depth` (N): `(H - h) / Cf` is known to
+    /// `4 eps (|H| + |h|) / Cf` only, which a stiff frame (small `Cf`) makes larger than a
+    /// tight residual tolerance; the step's residual does not count below it (0 under a
+    /// plain load).
+    pub fn floor(&self, depth: f64) -> f64 {
+        self.spring.map_or(0.0, |s| {
+            4.0 * f64::EPSILON * (s.prescribed.abs() + depth.abs()) * s.stiffness
+        })
+    }
+
     /// `-d target / d depth` (N/mm): the spring's stiffness, 0 under a plain load.
     pub fn stiffness(&self) -> f64 {
         self.spring.map_or(0.0, |s| s.stiffness)

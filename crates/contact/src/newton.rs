@@ -606,9 +606,11 @@ impl<'m> Newton<'m> {
         res = res.max(self.constraint.residual(&it.set, &view));
         if let Some(load) = spec.load {
             // the drive's row: the punch force meets the prescribed one
-            // (through the frame's spring: the force the spring carries at this depth)
+            // (through the frame's spring: the force the spring carries at this depth,
+            // less its rounding floor, `Load::floor`)
             let target = load.target(it.depth);
-            res = res.max((punch_force(model, &it.set, view.f_int) - target).abs());
+            let off = (punch_force(model, &it.set, view.f_int) - target).abs();
+            res = res.max((off - load.floor(it.depth)).max(0.0));
         }
         let scale = fmax.max(spec.state.f_scale);
         let rel = if scale > 0.0 { res / scale } else { res };
