@@ -60,7 +60,11 @@ fn cost(
         .run_compliant(mat, &p[..nl], schedule, &frame, &opts(false))
         .unwrap();
     assert_eq!(t.steps.len(), n, "a cut changed the steps");
-    t.steps.iter().zip(weights(n)).map(|(s, w)| w * s.force).sum()
+    t.steps
+        .iter()
+        .zip(weights(n))
+        .map(|(s, w)| w * s.force)
+        .sum()
 }
 
 /// Adjoint vs differences of `J = sum w_i F_i` for the law's parameters `c` and the
@@ -105,7 +109,11 @@ fn check(
         }
     };
     let big = (0..p.len()).fold(0.0f64, |a, k| a.max((grad[k] * scale(k)).abs()));
-    assert!(big > 0.0, "{}: a zero gradient cannot be checked", mat.name());
+    assert!(
+        big > 0.0,
+        "{}: a zero gradient cannot be checked",
+        mat.name()
+    );
     let mut worst: f64 = 0.0;
     for k in 0..p.len() {
         let fd = if k == nl && p[k] == 0.0 {
@@ -243,9 +251,66 @@ fn coulomb_friction_is_refused_with_the_reason() {
     let n = traj.steps.len();
     let mut adj = Adjoint::new(&m).unwrap();
     let err = adj
-        .gradient_compliant(&mx, &MAXWELL_SPHERE, &traj, (&schedule, &frame), &vec![1.0; n])
+        .gradient_compliant(
+            &mx,
+            &MAXWELL_SPHERE,
+            &traj,
+            (&schedule, &frame),
+            &vec![1.0; n],
+        )
         .unwrap_err()
         .to_string();
     assert!(err.contains("Coulomb friction"), "{err}");
 }
 
+/// Back-to-back cost (printed, not asserted: no timed assertions): on the cone's model,
+/// the depth-controlled forward, the compliant forward of the same machine depths
+/// (`Cf = 1e-4` mm/N) and its adjoint, for Maxwell and Norton-Hoff, alternated over five
+/// rounds (best of each).
+#[test]
+fn compliant_cost_back_to_back() {
+    use indentify_laws::NortonHoff;
+    let m = small_model(cone(), ContactKind::Vertical);
+    let schedule = lhu(0.06, 20);
+    let frame = Frame {
+        compliance: 1e-4,
+        ..Frame::default()
+    };
+    let r2 = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    for (name, mat, c) in [
+        ("maxwell", LawMaterial(&Maxwell), &R1[..]),
+        ("norton-hoff", LawMaterial(&NortonHoff), &r2[..]),
+    ] {
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let mut best = [f64::INFINITY; 3];
+        let mut iters = (0, 0);
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            let d = solver.run(&mat, c, &schedule, &opts(true)).unwrap();
+            best[0] = best[0].min(t.elapsed().as_secs_f64());
+            let t = std::time::Instant::now();
+            let traj = solver
+                .run_compliant(&mat, c, &schedule, &frame, &opts(true))
+                .unwrap();
+            best[1] = best[1].min(t.elapsed().as_secs_f64());
+            let t = std::time::Instant::now();
+            let w = weights(traj.steps.len());
+            adj.gradient_compliant(&mat, c, &traj, (&schedule, &frame), &w)
+                .unwrap();
+            best[2] = best[2].min(t.elapsed().as_secs_f64());
+            iters = (d.total_iterations(), traj.total_iterations());
+        }
+        println!(
+            "{name}: depth forward {:.1} ms, compliant forward {:.1} ms ({:.2}x), its adjoint \
+             {:.1} ms ({:.2}x the compliant forward); Newton iterations {} / {}",
+            1e3 * best[0],
+            1e3 * best[1],
+            best[1] / best[0],
+            1e3 * best[2],
+            best[2] / best[1],
+            iters.0,
+            iters.1
+        );
+    }
+}

@@ -787,7 +787,11 @@ fn check_material(_model: &Model, mat: &dyn Material, c: &[f64]) -> Result<(), C
 /// [`ContactError::Input`] naming the field.
 fn check_frame(frame: &Frame) -> Result<(), ContactError> {
     let fields = [
-        ("frame.compliance", frame.compliance, "a finite compliance Cf >= 0 (mm/N)"),
+        (
+            "frame.compliance",
+            frame.compliance,
+            "a finite compliance Cf >= 0 (mm/N)",
+        ),
         ("frame.drift", frame.drift, "a finite drift rate (mm/s)"),
         ("frame.offset", frame.offset, "a finite depth offset (mm)"),
     ];

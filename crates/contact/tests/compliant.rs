@@ -8,8 +8,8 @@
 //! contact kinds and kinematics; a bad frame names its field.
 
 use indentify_contact::{
-    ContactError, ContactKind, DirectSolver, Frame, Kinematics, Model, Punch, Schedule,
-    Segment, SolverOptions, Trajectory,
+    ContactError, ContactKind, DirectSolver, Frame, Kinematics, Model, Punch, Schedule, Segment,
+    SolverOptions, Trajectory,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
@@ -119,11 +119,7 @@ fn round_trip(model: &Model, law: &dyn Law, c: &[f64], frame: &Frame) -> (Trajec
         )
         .unwrap();
     assert_eq!(by_depth.steps.len(), by_spring.steps.len());
-    let f_max = by_spring
-        .steps
-        .iter()
-        .map(|s| s.force)
-        .fold(0.0, f64::max);
+    let f_max = by_spring.steps.iter().map(|s| s.force).fold(0.0, f64::max);
     let worst = by_spring
         .steps
         .iter()
@@ -145,7 +141,13 @@ fn zero_compliance_gives_the_depth_controlled_bits() {
             .unwrap();
         let b = DirectSolver::new(&m)
             .unwrap()
-            .run_compliant(&LawMaterial(law), c, &schedule(), &Frame::default(), &opts())
+            .run_compliant(
+                &LawMaterial(law),
+                c,
+                &schedule(),
+                &Frame::default(),
+                &opts(),
+            )
             .unwrap();
         assert_eq!(a.steps, b.steps, "{}", law.name());
         assert!(a.fields == b.fields, "{}", law.name());

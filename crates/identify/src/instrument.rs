@@ -326,7 +326,10 @@ impl Applied {
     /// test `k` into `g` (the other entries untouched).
     pub fn frame_gradient(&self, k: usize, dj_dframe: [f64; 3], g: &mut [f64]) {
         let at = self.frame_index(k);
-        for (i, d) in [at.compliance, at.drift, at.offset].into_iter().zip(dj_dframe) {
+        for (i, d) in [at.compliance, at.drift, at.offset]
+            .into_iter()
+            .zip(dj_dframe)
+        {
             if let Some(i) = i {
                 g[i] = d;
             }
@@ -443,13 +446,7 @@ pub(crate) fn compliant_jacobian(
     })?;
     let sens = w
         .adjoint
-        .sensitivities_compliant(
-            &*p.law,
-            c,
-            traj,
-            (&t.schedule, &frame),
-            a.frame_index(k),
-        )
+        .sensitivities_compliant(&*p.law, c, traj, (&t.schedule, &frame), a.frame_index(k))
         .map_err(|source| IdentifyError::Adjoint {
             params: c.to_vec(),
             source,

@@ -639,7 +639,11 @@ fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEnt
         (Some(h), _) => w.solver.run_history(law, cl, h, &t.solver_options),
         // depth control through the instrument's frame (docs/theory.md §13.7)
         (None, _) if p.applied.is_some() => {
-            let frame = p.applied.as_ref().map(|a| a.frame(k, c)).unwrap_or_default();
+            let frame = p
+                .applied
+                .as_ref()
+                .map(|a| a.frame(k, c))
+                .unwrap_or_default();
             w.solver
                 .run_compliant(law, cl, &t.schedule, &frame, &t.solver_options)
         }

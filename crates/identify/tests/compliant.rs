@@ -18,8 +18,8 @@
 
 use indentify_contact::{DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions};
 use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Instrument, Method, ParamSpec,
-    Problem, Scaling, SplitMix64, Test, identify,
+    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Instrument, Method, ParamSpec, Problem,
+    Scaling, SplitMix64, Test, identify,
 };
 use indentify_laws::{Elastic, LawMaterial, Material, Maxwell};
 use indentify_mesh::CylinderMesher;
@@ -159,7 +159,12 @@ fn gradient_and_jacobian_of_a_depth_controlled_test_match_differences() {
             rel(g[k], fd),
             rel(jt_r, g[k])
         );
-        assert!(rel(g[k], fd) < 1e-6, "{}: adjoint {} vs FD {fd}", names[k], g[k]);
+        assert!(
+            rel(g[k], fd) < 1e-6,
+            "{}: adjoint {} vs FD {fd}",
+            names[k],
+            g[k]
+        );
         assert!(
             rel(jt_r, g[k]) < 1e-8,
             "{}: J^T r {jt_r} vs adjoint {}",
