@@ -86,8 +86,12 @@ impl Adjoint<'_> {
         };
         let mut dj_dh = vec![0.0; n];
         let mut which = match law {
-            Some(law) => Which::Law(law, Sweep::new(law, c)),
-            None => Which::Material(MatSweep::new(mat, c.len(), self.model.disc.n_qp())),
+            Some(law) => Which::Law(law, Box::new(Sweep::new(law, c))),
+            None => Which::Material(Box::new(MatSweep::new(
+                mat,
+                c.len(),
+                self.model.disc.n_qp(),
+            ))),
         };
         self.field_a.fill(Vec4::ZERO);
         for i in (0..n).rev() {
@@ -153,8 +157,8 @@ impl Adjoint<'_> {
 
 /// The sweep of a stress-only law, or of a material with internal variables.
 enum Which<'a> {
-    Law(&'a dyn Law, Sweep),
-    Material(MatSweep),
+    Law(&'a dyn Law, Box<Sweep>),
+    Material(Box<MatSweep>),
 }
 
 /// Where the frame's parameters sit in the parameter vector of
