@@ -32,10 +32,12 @@
 //! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
 
 pub mod check;
+mod compliant;
 mod finite;
 mod load;
 mod material;
 
+pub use compliant::{FrameGradient, FrameIndex};
 pub use load::{LoadReplay, LoadSensitivities};
 
 use indentify_contact::{

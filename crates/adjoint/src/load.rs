@@ -345,8 +345,8 @@ fn replayed_load_steps_rev(
 /// `rho_of(a, s)`, the cotangent from `a = g . du_U` (the right-hand side `g` before the
 /// step's own cotangent) and the Schur complement `s = dF_i/dU_i`.
 pub(crate) struct BorderedRho<'a> {
-    col: &'a mut Column,
-    rho_of: &'a mut dyn FnMut(f64, f64) -> f64,
+    pub(crate) col: &'a mut Column,
+    pub(crate) rho_of: &'a mut dyn FnMut(f64, f64) -> f64,
 }
 
 impl Adjoint<'_> {
@@ -398,7 +398,7 @@ impl Adjoint<'_> {
 /// The depth column of a step and `K v` (scratch of [`Adjoint::bordered_step`]).
 pub(crate) struct Column {
     pub(crate) col: Vec<f64>,
-    kv: Vec<f64>,
+    pub(crate) kv: Vec<f64>,
 }
 
 /// The index of the segment of `history` a step ending at `t` (s) belongs to.
@@ -415,7 +415,7 @@ impl Adjoint<'_> {
     ///
     /// # Errors
     /// As [`Adjoint::gradient_load`].
-    fn bordered_step(
+    pub(crate) fn bordered_step(
         &mut self,
         law: &dyn Law,
         c: &[f64],

@@ -23,7 +23,7 @@
 use indentify_laws::{Material, Regime, Vec4};
 
 use crate::ContactError;
-use crate::drive::{DepthDrive, Drive, ForceDrive};
+use crate::drive::{CompliantDrive, DepthDrive, Drive, ForceDrive, Frame};
 use crate::friction::Status;
 use crate::history::{LoadHistory, Schedule};
 use crate::model::Model;
@@ -431,6 +431,78 @@ impl<'m> DirectSolver<'m> {
         Ok(traj)
     }
 
+    /// Runs a schedule of machine depths through the instrument's frame ([`Frame`]):
+    /// the recorded depth is `h + Cf F + vd (t - t0) + h0`, so each step solves
+    /// `h + Cf F(h) = H(t)` with `H(t) = depth(t) - vd (t - t0) - h0` prescribed (the
+    /// frame's spring in series with the contact, a bordered update on the same
+    /// factorization, docs/theory.md §13.7). The trajectory records the punch depths `h`
+    /// and the forces. With `Cf = 0` every step prescribes `H(t)` as [`DirectSolver::run`]
+    /// does (its bits when `vd = h0 = 0`).
+    ///
+    /// # Errors
+    /// As [`DirectSolver::run`]; [`ContactError::Input`] for a negative or non-finite
+    /// compliance or a non-finite drift or offset.
+    pub fn run_compliant(
+        &mut self,
+        law: &dyn Material,
+        c: &[f64],
+        schedule: &Schedule,
+        frame: &Frame,
+        opts: &SolverOptions,
+    ) -> Result<Trajectory, ContactError> {
+        check_frame(frame)?;
+        check_material(self.model, law, c)?;
+        let mut traj = Trajectory {
+            params: c.to_vec(),
+            ..Default::default()
+        };
+        let t0 = schedule.t[0];
+        let state = State::initial(self.model, law, t0, frame.prescribed(schedule, t0));
+        let run = Run {
+            law,
+            c,
+            schedule,
+            drive: &CompliantDrive {
+                schedule,
+                frame: *frame,
+            },
+            opts,
+            guess: None,
+        };
+        let stretch = Stretch {
+            j0: 0,
+            j1: schedule.t.len() - 1,
+            record: opts.record_fields,
+            every: opts.checkpoint_every,
+        };
+        self.advance(&run, state, &stretch, &mut traj)?;
+        Ok(traj)
+    }
+
+    /// Replays a run of [`DirectSolver::run_compliant`] from `checkpoint` up to schedule
+    /// index `j_end` as [`DirectSolver::replay`] does (the same drive: the same bits).
+    ///
+    /// # Errors
+    /// As [`DirectSolver::replay`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn replay_compliant(
+        &mut self,
+        law: &dyn Material,
+        c: &[f64],
+        schedule: &Schedule,
+        frame: &Frame,
+        opts: &SolverOptions,
+        checkpoint: &Checkpoint,
+        j_end: usize,
+    ) -> Result<Trajectory, ContactError> {
+        check_frame(frame)?;
+        let drive = CompliantDrive {
+            schedule,
+            frame: *frame,
+        };
+        self.replay_with(law, c, (schedule, &drive), opts, checkpoint, j_end)
+    }
+
     /// Replays the run from `checkpoint` up to schedule index `j_end`, recording fields:
     /// the returned trajectory's `fields[0]` is the checkpoint's state and its steps are
     /// those of the original run from `checkpoint.steps_done` on (the computation is
@@ -706,6 +778,32 @@ fn guessed_step<'g>(
 /// [`ContactError::Parameters`] for inadmissible parameters.
 fn check_material(_model: &Model, mat: &dyn Material, c: &[f64]) -> Result<(), ContactError> {
     mat.check_params(c)?;
+    Ok(())
+}
+
+/// The checks of a frame: `Cf >= 0` and finite, `vd` and `h0` finite.
+///
+/// # Errors
+/// [`ContactError::Input`] naming the field.
+fn check_frame(frame: &Frame) -> Result<(), ContactError> {
+    let fields = [
+        (
+            "frame.compliance",
+            frame.compliance,
+            "a finite compliance Cf >= 0 (mm/N)",
+        ),
+        ("frame.drift", frame.drift, "a finite drift rate (mm/s)"),
+        ("frame.offset", frame.offset, "a finite depth offset (mm)"),
+    ];
+    for (k, (field, value, allowed)) in fields.into_iter().enumerate() {
+        if !value.is_finite() || (k == 0 && value < 0.0) {
+            return Err(ContactError::Input {
+                field,
+                value: value.to_string(),
+                allowed: allowed.into(),
+            });
+        }
+    }
     Ok(())
 }
 

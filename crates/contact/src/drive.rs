@@ -7,16 +7,67 @@
 //! driver's bordered update on the same factorization (`newton.rs`, `Newton::border`;
 //! docs/theory.md §13). The constraints never read the drive: they take the iterate's
 //! depth (`constraint::Iterate::depth`), so a depth that changes between Newton
-//! iterations needs no change in them (docs/solver.md).
+//! iterations needs no change in them (docs/solver.md). [`CompliantDrive`] prescribes
+//! the depth through the instrument's frame: the recorded depth is the machine's, `h_meas
+//! = h + Cf F + vd (t - t0) + h0`, so the punch is driven through a spring of compliance
+//! `Cf` towards `H(t) = h_meas(t) - vd (t - t0) - h0`, each step solving `h + Cf F(h) = H`
+//! by the same bordered update with the spring's stiffness `1 / Cf` on its diagonal
+//! (docs/theory.md §13.7); `Cf = 0` is plain depth control.
 
 use crate::history::{LoadHistory, Schedule, Target};
 use crate::newton::State;
 
-/// What a load-controlled step prescribes: the punch force at its end (N). (The time
+/// What a load-controlled step prescribes: the punch force at its end (N), or through
+/// the instrument's spring a force that falls with the punch depth. (The time
 /// extrapolation of nonlinear laws keys on the step's force rate, `newton.rs`.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Load {
+    /// The prescribed force (N); under a [`Spring`], the force the last step carried
+    /// (informative only).
     pub force: f64,
+    /// The instrument's spring: the force is `(H - h) / Cf` at the punch depth `h`.
+    pub spring: Option<Spring>,
+}
+
+/// The frame's spring of a compliant depth-controlled step: `h + Cf F = H`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Spring {
+    /// The prescribed machine depth `H` at the step's end, drift and offset removed (mm).
+    pub prescribed: f64,
+    /// The spring's stiffness `1 / Cf` (N/mm).
+    pub stiffness: f64,
+    /// The step's rate of `H` (mm/s): keys the time extrapolation as a depth rate does.
+    pub rate: f64,
+}
+
+impl Load {
+    /// The force (N) the step prescribes at the punch depth `depth` (mm).
+    pub fn target(&self, depth: f64) -> f64 {
+        match self.spring {
+            None => self.force,
+            Some(s) => (s.prescribed - depth) * s.stiffness,
+        }
+    }
+
+    /// The rounding floor of [`Load::target`] at `depth` (N): `(H - h) / Cf` is known to
+    /// `4 eps (|H| + |h|) / Cf` only, which a stiff frame (small `Cf`) makes larger than a
+    /// tight residual tolerance; the step's residual does not count below it (0 under a
+    /// plain load).
+    pub fn floor(&self, depth: f64) -> f64 {
+        self.spring.map_or(0.0, |s| {
+            4.0 * f64::EPSILON * (s.prescribed.abs() + depth.abs()) * s.stiffness
+        })
+    }
+
+    /// `-d target / d depth` (N/mm): the spring's stiffness, 0 under a plain load.
+    pub fn stiffness(&self) -> f64 {
+        self.spring.map_or(0.0, |s| s.stiffness)
+    }
+
+    /// Whether the force itself is prescribed (load control proper).
+    pub fn is_force(&self) -> bool {
+        self.spring.is_none()
+    }
 }
 
 /// The drive of a run: what sets the punch of each step.
@@ -66,8 +117,72 @@ impl Drive for ForceDrive<'_> {
                 } else {
                     state.depth
                 };
-                (depth, Some(Load { force }))
+                (
+                    depth,
+                    Some(Load {
+                        force,
+                        spring: None,
+                    }),
+                )
             }
         }
+    }
+}
+
+/// The instrument's frame between the recorded depth and the punch (docs/theory.md
+/// §13.6, §13.7): the recorded (machine) depth is `h + Cf F + vd (t - t0) + h0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Frame {
+    /// Frame compliance `Cf` (mm/N, >= 0).
+    pub compliance: f64,
+    /// Thermal drift rate `vd` (mm/s), from the schedule's first time `t0`.
+    pub drift: f64,
+    /// Depth offset `h0` (mm).
+    pub offset: f64,
+}
+
+impl Frame {
+    /// The prescribed punch-side depth `H(t) = h_meas(t) - vd (t - t0) - h0` (mm) of the
+    /// machine depth `schedule` at time `t` (s).
+    pub fn prescribed(&self, schedule: &Schedule, t: f64) -> f64 {
+        schedule.depth_at(t) - self.drift * (t - schedule.t[0]) - self.offset
+    }
+}
+
+/// The punch driven through the frame's spring by a schedule of machine depths
+/// ([`Frame`]): each step solves `h + Cf F(h) = H(t1)` (bordered, `newton.rs`); with
+/// `Cf = 0` the step prescribes `H(t1)` as [`DepthDrive`] does.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CompliantDrive<'a> {
+    pub schedule: &'a Schedule,
+    pub frame: Frame,
+}
+
+impl Drive for CompliantDrive<'_> {
+    fn step(&self, t1: f64, state: &State) -> (f64, Option<Load>) {
+        let h = self.frame.prescribed(self.schedule, t1);
+        let cf = self.frame.compliance;
+        if cf == 0.0 {
+            return (h, None);
+        }
+        let rate = if t1 > state.t {
+            (h - self.frame.prescribed(self.schedule, state.t)) / (t1 - state.t)
+        } else {
+            0.0
+        };
+        // Newton starts where the spring keeps the last step's force
+        let depth = h - cf * state.force;
+        let spring = Spring {
+            prescribed: h,
+            stiffness: 1.0 / cf,
+            rate,
+        };
+        (
+            depth,
+            Some(Load {
+                force: state.force,
+                spring: Some(spring),
+            }),
+        )
     }
 }

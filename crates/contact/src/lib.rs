@@ -24,6 +24,7 @@ pub use direct::{
     Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
     nodal_pressures,
 };
+pub use drive::Frame;
 pub use history::{
     HistorySegment, LoadHistory, MAX_SUBSTEPS, Schedule, Segment, Target, trapezoid,
 };

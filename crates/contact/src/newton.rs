@@ -395,7 +395,10 @@ impl<'m> Newton<'m> {
         let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
         self.constraint
             .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
-        let triggered = spec.load.is_some() && !it.set.active.contains(&true);
+        // a force prescribed out of contact needs the trigger; the frame's spring
+        // (a compliant depth drive) carries the step from anywhere
+        let force_prescribed = spec.load.is_some_and(|l| l.is_force());
+        let triggered = force_prescribed && !it.set.active.contains(&true);
         if triggered {
             // load control out of contact: the trigger moves the punch to where its first
             // candidate touches (a hair beyond), where the contact stiffness is positive
@@ -422,6 +425,11 @@ impl<'m> Newton<'m> {
         // fewer per step). Affine laws converge in one solve from anywhere and keep their
         // cheap first pass.
         let rate = match spec.load {
+            // the spring's prescribed depth keys the extrapolation as a depth rate does
+            Some(Load {
+                spring: Some(spring),
+                ..
+            }) => spring.rate,
             // a hold's force change is the last step's residual: zero
             Some(load) if dt > 0.0 => {
                 let df = load.force - state.force;
@@ -439,7 +447,7 @@ impl<'m> Newton<'m> {
             dt,
             rate,
             law.affine.is_some(),
-            spec.load.is_some(),
+            force_prescribed,
             it.u.len(),
         );
         match spec.guess {
@@ -480,7 +488,7 @@ impl<'m> Newton<'m> {
                 if targets_met && (converged || r.rel <= spec.opts.active_set_check_tol) {
                     if let Check::Converged = self.check_sets(spec, &mut it, converged)? {
                         if let Some(load) = spec.load {
-                            self.depth_within_specimen(it.depth, load.force)?;
+                            self.depth_within_specimen(it.depth, load.target(it.depth))?;
                         }
                         return Ok(self.finish(spec, &law, it, r, rate, &extra));
                     }
@@ -598,7 +606,11 @@ impl<'m> Newton<'m> {
         res = res.max(self.constraint.residual(&it.set, &view));
         if let Some(load) = spec.load {
             // the drive's row: the punch force meets the prescribed one
-            res = res.max((punch_force(model, &it.set, view.f_int) - load.force).abs());
+            // (through the frame's spring: the force the spring carries at this depth,
+            // less its rounding floor, `Load::floor`)
+            let target = load.target(it.depth);
+            let off = (punch_force(model, &it.set, view.f_int) - target).abs();
+            res = res.max((off - load.floor(it.depth)).max(0.0));
         }
         let scale = fmax.max(spec.state.f_scale);
         let rel = if scale > 0.0 { res / scale } else { res };
@@ -754,7 +766,7 @@ impl<'m> Newton<'m> {
                     dt,
                     rate,
                     depth: ddepth,
-                    load: spec.load.is_some(),
+                    load: spec.load.is_some_and(|l| l.is_force()),
                 },
                 p0,
                 p1,
@@ -817,7 +829,7 @@ impl<'m> Newton<'m> {
             .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
             .map_err(|f| distortion(model, f, &it.u, depth))?;
         if let Some(load) = spec.load {
-            self.border(it, [load.force, spec.state.depth], eta)?;
+            self.border(it, load, spec.state.depth, eta)?;
         }
         for (d, &e) in model.dofs.eq.iter().enumerate() {
             if e != NO_EQ {
@@ -844,13 +856,20 @@ impl Newton<'_> {
     /// and moves the iterate's depth by `dU`, limited to three times its distance from
     /// the step's start depth `start` (or a tenth of the first element's width).
     ///
+    /// Through the frame's spring (a compliant depth drive, `drive.rs`) the row is
+    /// `F + g . du = (H - U - dU) / Cf`: the same update with `P` the spring's force at
+    /// the iterate's depth and `s + 1 / Cf` for `s` (docs/theory.md §13.7). The spring
+    /// keeps it positive out of contact (`s = 0`: the depth moves to `H`), and no limit
+    /// applies.
+    ///
     /// # Errors
     /// [`StepFailure::Load`] when `s` is not positive (no contact, or none that carries
     /// load) or the depth leaves the specimen; [`StepFailure::Linear`] from the solve.
     fn border(
         &mut self,
         it: &mut Iteration,
-        [force, start]: [f64; 2],
+        load: Load,
+        start: f64,
         eta: f64,
     ) -> Result<(), StepFailure> {
         let model = self.model;
@@ -859,6 +878,14 @@ impl Newton<'_> {
             self.v = vec![0.0; n];
             self.kv = vec![0.0; n];
             self.col = vec![0.0; n];
+        }
+        let force = load.target(it.depth);
+        if !load.is_force() && it.set.active().next().is_none() {
+            // the spring alone: out of contact the depth column and `s` vanish
+            self.col.fill(0.0);
+            let du = force / load.stiffness();
+            it.depth += du;
+            return Ok(());
         }
         self.v.fill(0.0);
         for k in it.set.active() {
@@ -914,6 +941,21 @@ impl Newton<'_> {
         let g_du1 = -dot(&self.kv, &self.rhs);
         let f = punch_force(model, &it.set, &self.body.f_int);
         let n_active = it.set.active().count();
+        if !load.is_force() {
+            let total = s + load.stiffness();
+            if !(total.is_finite() && total > 0.0) {
+                return Err(StepFailure::Load(format!(
+                    "compliant depth control: the contact and frame stiffness dF/dU + 1/Cf                      = {total:.3e} N/mm is not positive at the depth {} mm with {n_active}                      nodes in contact",
+                    it.depth
+                )));
+            }
+            let du = (force - f - g_du1) / total;
+            for (x, c) in self.rhs.iter_mut().zip(&self.col) {
+                *x += du * c;
+            }
+            it.depth += du;
+            return Ok(());
+        }
         if !(s.is_finite() && s > 1e-12 * vkv.abs()) {
             return Err(StepFailure::Load(format!(
                 "load control: the contact stiffness dF/dU = {s:.3e} N/mm is not positive \

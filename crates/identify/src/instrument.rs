@@ -22,18 +22,24 @@
 //! - `Applied` (crate-private): what a [`crate::Problem`]'s evaluator adds to a test's
 //!   observables, its adjoint gradient and its sensitivity rows.
 //!
-//! Depth-controlled tests (the force is the observable) are refused: there the instrument
-//! would change the model's input (the prescribed depth), not its output.
+//! Depth-controlled tests (the force is the observable) run through the frame instead
+//! (docs/theory.md §13.7): the recorded depth is the machine's, so the punch is driven
+//! through the frame's spring towards `H(t) = h_rec(t) - vd (t - t0) - h0_k`
+//! (`DirectSolver::run_compliant`), the observable stays the force, and the gradient and
+//! sensitivities with respect to `Cf`, `vd` and `h0_k` come from the compliant adjoint
+//! (`Adjoint::gradient_compliant`, `Adjoint::sensitivities_compliant`).
 
 use std::sync::{Arc, Mutex, OnceLock};
 
-use indentify_contact::Trajectory;
+use indentify_adjoint::FrameIndex;
+use indentify_contact::{Frame, Trajectory};
 use indentify_laws::{
     ElasticDomain, InternalInfo, Law, LawError, LocalFailure, LocalUpdate, Mat4, Material,
     MaterialUpdate, ParamInfo, Step, Vec4, material::check_param_ranges,
 };
 
-use crate::problem::Test;
+use crate::IdentifyError;
+use crate::problem::{Problem, Test, Work, in_full};
 
 /// Name of the frame compliance.
 pub const COMPLIANCE: &str = "Cf";
@@ -297,9 +303,46 @@ impl Applied {
         self.compliance.map_or(0.0, |i| c[i])
     }
 
+    /// Test `k`'s frame at `c` (each parameter not carried 0): what a depth-controlled
+    /// test's compliant run takes.
+    pub fn frame(&self, k: usize, c: &[f64]) -> Frame {
+        Frame {
+            compliance: self.compliance(c),
+            drift: self.drift.map_or(0.0, |i| c[i]),
+            offset: self.offsets[k].map_or(0.0, |i| c[i]),
+        }
+    }
+
+    /// Where test `k`'s frame parameters sit in `c`.
+    pub fn frame_index(&self, k: usize) -> FrameIndex {
+        FrameIndex {
+            compliance: self.compliance,
+            drift: self.drift,
+            offset: self.offsets[k],
+        }
+    }
+
+    /// The entries of the frame's gradient `dJ/d(Cf, vd, h0)` of a depth-controlled
+    /// test `k` into `g` (the other entries untouched).
+    pub fn frame_gradient(&self, k: usize, dj_dframe: [f64; 3], g: &mut [f64]) {
+        let at = self.frame_index(k);
+        for (i, d) in [at.compliance, at.drift, at.offset]
+            .into_iter()
+            .zip(dj_dframe)
+        {
+            if let Some(i) = i {
+                g[i] = d;
+            }
+        }
+    }
+
     /// Adds `Cf F_i + vd (t_i - t_0) + h0_k` to the observables `obs` of test `k` (one per
-    /// schedule time, index 0 the initial state).
+    /// schedule time, index 0 the initial state) under load control; a depth-controlled
+    /// test's observables are its forces, which the frame already shaped.
     pub fn observe(&self, k: usize, test: &Test, c: &[f64], traj: &Trajectory, obs: &mut [f64]) {
+        if test.load.is_none() {
+            return;
+        }
         let forces = traj.forces();
         let t0 = test.schedule.t[0];
         let (cf, vd) = (self.compliance(c), self.drift.map_or(0.0, |i| c[i]));
@@ -348,6 +391,73 @@ impl Applied {
             }
         }
     }
+}
+
+/// A depth-controlled test `k`'s gradient with the instrument (docs/theory.md §13.7):
+/// the compliant adjoint over its run through the frame (`traj`, recorded again with
+/// fields when it was checkpointed), `dJ/dF_i = w_i (F_i - F_exp,i)`; the law's entries
+/// and the frame's.
+pub(crate) fn compliant_gradient(
+    p: &Problem,
+    a: &Applied,
+    c: &[f64],
+    k: usize,
+    w: &mut Work,
+    traj: &Trajectory,
+) -> Result<Vec<f64>, IdentifyError> {
+    let t = &p.tests[k];
+    let (cl, frame) = (p.law_part(c), a.frame(k, c));
+    let mut slot = None;
+    let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
+        w.solver
+            .run_compliant(&**p.material(), cl, &t.schedule, &frame, o)
+    })?;
+    let rho = t.dj_df(traj);
+    let g = w
+        .adjoint
+        .gradient_compliant(&**p.material(), cl, traj, (&t.schedule, &frame), &rho)
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
+    let mut full = vec![0.0; c.len()];
+    full[..g.dj_dc.len()].copy_from_slice(&g.dj_dc);
+    a.frame_gradient(k, g.dj_dframe, &mut full);
+    Ok(full)
+}
+
+/// A depth-controlled test `k`'s Jacobian rows (`dF/dc` at its schedule times) with the
+/// instrument: the compliant forward sensitivities of the instrumented law (its frame
+/// columns with zero law derivatives, set by the differentiated spring).
+pub(crate) fn compliant_jacobian(
+    p: &Problem,
+    a: &Applied,
+    c: &[f64],
+    k: usize,
+    w: &mut Work,
+    traj: &Trajectory,
+) -> Result<Vec<Vec<f64>>, IdentifyError> {
+    let t = &p.tests[k];
+    let (cl, frame) = (p.law_part(c), a.frame(k, c));
+    let mut slot = None;
+    let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
+        w.solver
+            .run_compliant(&**p.material(), cl, &t.schedule, &frame, o)
+    })?;
+    let sens = w
+        .adjoint
+        .sensitivities_compliant(&*p.law, c, traj, (&t.schedule, &frame), a.frame_index(k))
+        .map_err(|source| IdentifyError::Adjoint {
+            params: c.to_vec(),
+            source,
+        })?;
+    let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
+    for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
+        if s.on_schedule {
+            jac[s.schedule_index].clone_from(row);
+        }
+    }
+    Ok(jac)
 }
 
 impl Material for Instrumented {

@@ -333,10 +333,12 @@ impl Problem {
     /// to test `k`'s depths, their derivatives to its gradient and sensitivity rows. An
     /// empty instrument is [`Problem::joint`].
     ///
+    /// A depth-controlled test (its force the observable) runs through the frame's
+    /// spring instead (docs/theory.md §13.7, `DirectSolver::run_compliant`): its recorded
+    /// depth is the machine's, `h + Cf F + vd (t - t0) + h0_k`.
+    ///
     /// # Errors
-    /// As [`Problem::joint`]; [`IdentifyError::InvalidSpec`] naming the first instrument
-    /// parameter and the test when a test is depth-controlled (its force is the observable:
-    /// the instrument would change the prescribed depth, the model's input, not its output).
+    /// As [`Problem::joint`].
     pub fn joint_instrumented(
         law: impl IntoMaterial,
         instrument: Instrument,
@@ -347,20 +349,6 @@ impl Problem {
             return Problem::joint(inner, tests);
         }
         let n = tests.len();
-        if let Some(k) = tests.iter().position(|t| t.load.is_none()) {
-            let name = instrument.names(n.max(1)).first().copied().unwrap_or("Cf");
-            return Err(IdentifyError::InvalidSpec {
-                name: name.into(),
-                why: format!(
-                    "test {} is depth-controlled (its depth history is prescribed and its force \
-                     is the observable): an instrument parameter (Cf, vd, h0) would change the \
-                     prescribed depth, the model's input, which this fit does not differentiate; \
-                     drive the test by force (`data: (..., drive: Force)` or force segments) \
-                     or hold the instrument parameters out of the fit",
-                    k + 1
-                ),
-            });
-        }
         let wrapped = Instrumented::new(inner.clone(), instrument, n);
         let applied = wrapped.applied();
         let mut p = Problem::joint(Arc::new(wrapped) as Arc<dyn Material>, tests)?;
@@ -603,9 +591,9 @@ struct Entry {
 /// The forward and adjoint workspaces of one test, and how long its last forward run,
 /// adjoint sweep and sensitivity pass took (for the scheduling of [`Prefetch`]).
 #[derive(Debug)]
-struct Work<'p> {
-    solver: DirectSolver<'p>,
-    adjoint: Adjoint<'p>,
+pub(crate) struct Work<'p> {
+    pub(crate) solver: DirectSolver<'p>,
+    pub(crate) adjoint: Adjoint<'p>,
     seconds: [Option<f64>; 3],
     /// The lowest-cost point's trajectory, the warm start of the next forward runs
     /// ([`Problem::set_warm_start`]).
@@ -649,6 +637,16 @@ fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEnt
     let (law, cl) = (&*p.material, p.law_part(c));
     let run = match (&t.load, &w.warm) {
         (Some(h), _) => w.solver.run_history(law, cl, h, &t.solver_options),
+        // depth control through the instrument's frame (docs/theory.md §13.7)
+        (None, _) if p.applied.is_some() => {
+            let frame = p
+                .applied
+                .as_ref()
+                .map(|a| a.frame(k, c))
+                .unwrap_or_default();
+            w.solver
+                .run_compliant(law, cl, &t.schedule, &frame, &t.solver_options)
+        }
         (None, Some(g)) if p.warm_start => {
             w.solver
                 .run_warm(law, cl, &t.schedule, &t.solver_options, g)
@@ -670,7 +668,7 @@ fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEnt
 
 /// `traj` if it holds every step's fields, else the run `run` makes with the fields
 /// recorded and no checkpoints (kept in `slot`): the forward sensitivities need them all.
-fn in_full<'a>(
+pub(crate) fn in_full<'a>(
     traj: &'a Trajectory,
     opts: &SolverOptions,
     c: &[f64],
@@ -704,8 +702,10 @@ fn gradient_task(
     let Some(traj) = te.traj.as_ref() else {
         return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
-    if let (Some(a), Some(h)) = (&p.applied, &t.load) {
-        return instrumented_gradient(p, a, c, k, w, te, h);
+    match (&p.applied, &t.load) {
+        (Some(a), Some(h)) => return instrumented_gradient(p, a, c, k, w, te, h),
+        (Some(a), None) => return crate::instrument::compliant_gradient(p, a, c, k, w, traj),
+        _ => {}
     }
     let rho = t.dj_df(traj);
     let g = if let Some(h) = &t.load {
@@ -857,6 +857,9 @@ fn jacobian_task(
     };
     // the forward sensitivities need every step's fields: a checkpointed trajectory is
     // recorded again in full for them (the memory of one unbounded run)
+    if let (Some(a), None) = (&p.applied, &t.load) {
+        return crate::instrument::compliant_jacobian(p, a, c, k, w, traj);
+    }
     if let Some(h) = &t.load {
         let cl = p.law_part(c);
         let mut slot = None;

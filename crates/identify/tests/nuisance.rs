@@ -310,9 +310,9 @@ fn compliance_and_modulus_of_a_flat_punch_cannot_be_told_apart() {
     );
 }
 
-/// Bad input: a depth-controlled test with an instrument is refused naming the test and
-/// the reason; a negative lower bound of Cf, a non-finite start of vd and a log scaling
-/// of an offset starting at 0 are refused naming the parameter.
+/// Bad input: a negative lower bound of Cf, a non-finite start of vd and a log scaling
+/// of an offset starting at 0 are refused naming the parameter. (A depth-controlled test
+/// with an instrument runs through the frame, `tests/compliant.rs`.)
 #[test]
 fn refusals_name_the_test_and_the_field() {
     let m = model(cone());
@@ -322,13 +322,8 @@ fn refusals_name_the_test_and_the_field() {
     .unwrap();
     let rec = ForceRecord::new(vec![0.0, 3.0], vec![0.0, 0.0]).unwrap();
     let depth_test = Test::new(m, sched, &rec, None, opts(), 1.0).unwrap();
-    let e = Problem::joint_instrumented(&Maxwell, all(), vec![depth_test]).unwrap_err();
-    let msg = e.to_string();
-    println!("{msg}");
-    assert!(
-        msg.contains("test 1 is depth-controlled") && msg.contains("`Cf`"),
-        "{msg}"
-    );
+    let p = Problem::joint_instrumented(&Maxwell, all(), vec![depth_test]).unwrap();
+    assert!(p.has_instrument());
 
     let m = model(cone());
     let h = lhu(60.0);

@@ -4,7 +4,8 @@
 //! configuration) exist when `identify.params`, `--free`, `--fixed` or `--start` name them;
 //! the law is then an [`indentify_identify::Instrumented`] one (its parameters followed by
 //! theirs, each 0 unless set) and the problem adds them to each load-controlled test's
-//! depths. A depth-controlled test is refused, naming it.
+//! depths; a depth-controlled test runs through the frame (its recorded depth is the
+//! machine's: the punch is driven through the frame's spring, docs/theory.md §13.7).
 
 use std::sync::Arc;
 
@@ -34,11 +35,10 @@ pub(crate) fn with_instrument(
 /// instrument.
 ///
 /// # Errors
-/// [`ErrorKind::Config`]: a depth-controlled test with instrument parameters (naming the
-/// test and the reason), or the problem's own errors.
+/// [`ErrorKind::Config`]: the problem's own errors.
 pub(crate) fn problem(
     cfg: &Config,
-    name: &str,
+    _name: &str,
     law: &Arc<dyn Material>,
     tests: Vec<Test>,
     overrides: &Overrides,
@@ -48,23 +48,6 @@ pub(crate) fn problem(
     if instrument.is_empty() {
         return Problem::joint(law.clone(), tests)
             .map_err(|e| Error::new(ErrorKind::Config, anyhow!(e)));
-    }
-    if let Some(k) = tests.iter().position(|t| t.load.is_none()) {
-        let label = match &cfg.tests {
-            Some(_) => format!("tests[{k}] (`{}`) of `{name}`", cfg.test_name(k)),
-            None => format!("`{name}`"),
-        };
-        return Err(Error::msg(
-            ErrorKind::Config,
-            format!(
-                "{label} is driven by depth (its force is the observable): the instrument \
-                 parameters (Cf, vd, h0) are fitted under load control only, where they add to \
-                 the observed depth; under depth control they would change the prescribed \
-                 depth, the model's input. Drive the test by force (`data: (..., drive: \
-                 Force)` or `force` segments in its history) or remove Cf, vd and h0 from \
-                 the identification"
-            ),
-        ));
     }
     // the solver runs the law itself: rebuild it (the configuration's, without the
     // instrument)

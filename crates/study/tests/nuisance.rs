@@ -171,8 +171,9 @@ fn joint_fit_recovers_each_tests_offset() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Bad input names the field or the test: a negative lower bound of Cf, a depth-driven
-/// test with an instrument parameter, an offset of a test the configuration lacks.
+/// Bad input names the field or the test: a negative lower bound of Cf, an offset of a
+/// test the configuration lacks. (A depth-driven test with instrument parameters runs
+/// through the frame: `tests/compliant.rs`.)
 #[test]
 fn refusals_name_the_field_or_the_test() {
     let cfg = format!(
@@ -184,19 +185,6 @@ fn refusals_name_the_field_or_the_test() {
     let m = format!("{e:?}");
     assert!(
         m.contains("identify.params.Cf") && m.contains("[0, inf)"),
-        "{m}"
-    );
-
-    let depth = "(segments: [(duration: 0.5, depth: 0.03, steps: 4), (duration: 1.0, depth: \
-                 0.03, steps: 4)])";
-    let cfg = format!(
-        "({MODEL} history: {depth}, {})",
-        id(", \"vd\": Free(start: 0.0)")
-    );
-    let e = identify::run(&options(text("depth-vd", cfg)), &mut ()).unwrap_err();
-    let m = format!("{e:?}");
-    assert!(
-        m.contains("`depth-vd` is driven by depth") && m.contains("load control"),
         "{m}"
     );
 

@@ -1,0 +1,303 @@
+//! The exact gradient of depth control through the instrument's frame (docs/theory.md
+//! §13.7): a run of [`indentify_contact::DirectSolver::run_compliant`], whose steps solve
+//! `h_i + Cf F_i(h_1..h_i, c) = H_i` with `H_i = h_meas(t_i) - vd (t_i - t0) - h0`
+//! prescribed, and a cost on the forces, `dJ/dF_i = g_i`.
+//!
+//! With the multipliers `mu_i` of the step equations `F_i - (H_i - h_i) / Cf = 0` and
+//! `rho_i = g_i + mu_i`, stationarity in `h_i` reads `rho_i s_i + a_i + mu_i / Cf = 0`,
+//! `s_i = dF_i/dh_i` the step's Schur complement and `a_i = sum_{j > i} rho_j dF_j/dh_i`
+//! what the later steps make of its depth (the sweep's right-hand side against the step's
+//! depth column, as under load control, `load.rs`). Hence one scalar per step:
+//!
+//! ```text
+//!   rho_i = (g_i - Cf a_i) / (1 + Cf s_i),    dJ/dH_i = (a_i + s_i g_i) / (1 + Cf s_i)
+//! ```
+//!
+//! `dJ/dc = sum_i rho_i dF_i/dc|_h` is the depth-controlled sweep with the cotangents
+//! `rho_i`; the frame's parameters move the prescribed `H_i` (`dH_i/dvd = -(t_i - t0)`,
+//! `dH_i/dh0 = -1`) or the spring (`dJ/dCf = -sum_i F_i dJ/dH_i`). `Cf = 0` is plain depth
+//! control (`rho_i = g_i`), where `dJ/dH_i = a_i + s_i g_i` is the force's sensitivity
+//! to the prescribed depth history the frame's derivatives need.
+
+use indentify_contact::{Frame, Schedule, Trajectory};
+use indentify_laws::{Law, Material, Vec4};
+
+use crate::load::{BorderedRho, Column};
+use crate::material::MatSweep;
+use crate::{Adjoint, AdjointError, Recorded, Sweep, check_inputs};
+
+/// The gradient of a cost on the forces of a compliant depth-controlled run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameGradient {
+    /// `dJ/dc_k` in the material's parameter order.
+    pub dj_dc: Vec<f64>,
+    /// `dJ/dCf` (per mm/N), `dJ/dvd` (per mm/s), `dJ/dh0` (per mm).
+    pub dj_dframe: [f64; 3],
+    /// `dJ/dH_i`: the cost's sensitivity to each step's prescribed punch-side depth
+    /// (per mm).
+    pub dj_dh: Vec<f64>,
+    /// Wall time of the sweep (s).
+    pub seconds: f64,
+    /// Numeric factorizations the sweep needed.
+    pub factorizations: usize,
+}
+
+impl Adjoint<'_> {
+    /// The adjoint gradient of a cost with `dJ/dF_i = dj_df[i]` at each step of `traj`,
+    /// a run of [`indentify_contact::DirectSolver::run_compliant`] over the machine
+    /// depths `schedule` through `frame` (recorded with fields): with respect to the
+    /// material's parameters and the frame's `Cf`, `vd`, `h0`. A stress-only law sweeps
+    /// as [`Adjoint::gradient`] does, a material with internal variables through its
+    /// blocks (`material.rs`), each step bordered by its depth column.
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient`]; [`AdjointError::Step`] for Coulomb friction (its
+    /// sticking ties read the punch depth; refused with the reason) or a step whose
+    /// stiffness `1 + Cf s` is not positive.
+    pub fn gradient_compliant(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        (schedule, frame): (&Schedule, &Frame),
+        dj_df: &[f64],
+    ) -> Result<FrameGradient, AdjointError> {
+        let start = std::time::Instant::now();
+        let f0 = self.contact.factorizations();
+        let law = mat.as_law();
+        match law {
+            Some(law) => check_inputs(law, c, traj, dj_df.len())?,
+            None => self.check_material(mat, c, traj, dj_df.len(), true)?,
+        }
+        let cf = frame.compliance;
+        if !(cf.is_finite() && cf >= 0.0) {
+            return Err(AdjointError::Step {
+                step: 0,
+                t: schedule.t[0],
+                reason: format!("the frame compliance Cf = {cf} must be finite and >= 0"),
+            });
+        }
+        self.contact.begin();
+        let n = traj.steps.len();
+        let n_eq = self.model.dofs.n_eq;
+        let mut col = Column {
+            col: vec![0.0; n_eq],
+            kv: vec![0.0; n_eq],
+        };
+        let mut dj_dh = vec![0.0; n];
+        let mut which = match law {
+            Some(law) => Which::Law(law, Box::new(Sweep::new(law, c))),
+            None => Which::Material(Box::new(MatSweep::new(
+                mat,
+                c.len(),
+                self.model.disc.n_qp(),
+            ))),
+        };
+        self.field_a.fill(Vec4::ZERO);
+        for i in (0..n).rev() {
+            let rec = &traj.steps[i];
+            let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
+            let g = dj_df[i];
+            let mut d = 0.0;
+            let mut rho_of = |a: f64, s: f64| {
+                let q = 1.0 + cf * s;
+                d = (a + s * g) / q;
+                (g - cf * a) / q
+            };
+            let border = BorderedRho {
+                col: &mut col,
+                rho_of: &mut rho_of,
+            };
+            match &mut which {
+                Which::Law(law, sweep) => {
+                    let step = Recorded {
+                        i,
+                        rec,
+                        f0,
+                        f1,
+                        rho: g,
+                    };
+                    self.bordered_step(*law, c, sweep, &step, border)?;
+                }
+                Which::Material(sw) => {
+                    self.material_step(mat, c, sw, i, rec, (f0, f1), g, Some(border))?;
+                }
+            }
+            if !d.is_finite() {
+                return Err(AdjointError::Step {
+                    step: i,
+                    t: rec.t,
+                    reason: "compliant depth control: the stiffness 1 + Cf dF/dh of the \
+                             recorded step is not positive"
+                        .into(),
+                });
+            }
+            dj_dh[i] = d;
+        }
+        let dj_dc = match which {
+            Which::Law(law, sweep) => sweep.finish(law, c),
+            Which::Material(sw) => sw.grad,
+        };
+        let t0 = schedule.t[0];
+        let mut dj_dframe = [0.0; 3];
+        for (s, d) in traj.steps.iter().zip(&dj_dh) {
+            dj_dframe[0] -= s.force * d;
+            dj_dframe[1] -= (s.t - t0) * d;
+            dj_dframe[2] -= d;
+        }
+        Ok(FrameGradient {
+            dj_dc,
+            dj_dframe,
+            dj_dh,
+            seconds: start.elapsed().as_secs_f64(),
+            factorizations: self.contact.factorizations() - f0,
+        })
+    }
+}
+
+/// The sweep of a stress-only law, or of a material with internal variables.
+enum Which<'a> {
+    Law(&'a dyn Law, Box<Sweep>),
+    Material(Box<MatSweep>),
+}
+
+/// Where the frame's parameters sit in the parameter vector of
+/// [`Adjoint::sensitivities_compliant`] (the material's derivatives with respect to them
+/// are zero: an instrumented law, identify's `Instrumented`); `None`: not a parameter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameIndex {
+    /// The index of `Cf`.
+    pub compliance: Option<usize>,
+    /// The index of `vd`.
+    pub drift: Option<usize>,
+    /// The index of `h0`.
+    pub offset: Option<usize>,
+}
+
+impl Adjoint<'_> {
+    /// Forward sensitivities `dF_i/dc_k` and `dh_i/dc_k` of a run of
+    /// [`indentify_contact::DirectSolver::run_compliant`] (`traj` recorded with fields),
+    /// for a stress-only law whose parameter vector `c` holds the frame's parameters at
+    /// `at` (their law derivatives zero). Each step's depth variation solves the
+    /// differentiated spring `dh_i (1 + Cf s_i) = dH_i - F_i dCf - Cf dF_i^h` (`dF_i^h` the
+    /// force variation at the depth held; `dH_i = -(t_i - t0) dvd - dh0`), by the load
+    /// control's bordered column (`load.rs`) with `s_i + 1 / Cf` for `s_i`; at `Cf = 0`
+    /// the depth variation is `dH_i - F_i dCf`, prescribed.
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient_compliant`]; [`AdjointError::Step`] for a material with
+    /// internal variables (not available: fit with a gradient method, whose adjoint is).
+    pub fn sensitivities_compliant(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        (schedule, frame): (&Schedule, &Frame),
+        at: FrameIndex,
+    ) -> Result<crate::LoadSensitivities, AdjointError> {
+        let model = self.model;
+        let start = std::time::Instant::now();
+        let Some(law) = mat.as_law() else {
+            return Err(AdjointError::Step {
+                step: 0,
+                t: schedule.t[0],
+                reason: format!(
+                    "compliant depth control: the forward sensitivities of {} (internal \
+                     variables) are not available; its adjoint gradient is",
+                    mat.name()
+                ),
+            });
+        };
+        let n = traj.steps.len();
+        check_inputs(law, c, traj, n)?;
+        let cf = frame.compliance;
+        self.contact.begin();
+        let s_mat = law.compliance(c);
+        let np = c.len();
+        let nq = model.disc.n_qp();
+        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let mut df = vec![vec![0.0; np]; n];
+        let mut dh = vec![vec![0.0; np]; n];
+        let mut r_field = vec![Vec4::ZERO; nq * np];
+        let mut work: Vec<crate::ParamWork> = (0..np)
+            .map(|_| crate::ParamWork::new(model, &self.contact))
+            .collect();
+        let n_eq = model.dofs.n_eq;
+        let mut col = Column {
+            col: vec![0.0; n_eq],
+            kv: vec![0.0; n_eq],
+        };
+        let mut given = vec![0.0; np];
+        let t0 = schedule.t[0];
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let f1 = &traj.fields[i + 1];
+            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
+            crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
+            if self.contact.force_cotangent() == indentify_contact::ForceCotangent::Shifted {
+                return Err(AdjointError::Step {
+                    step: i,
+                    t: rec.t,
+                    reason: "compliant depth control: the exact sensitivities with Coulomb \
+                             friction are not available (its sticking ties read the punch \
+                             depth)"
+                        .into(),
+                });
+            }
+            let s = self.contact.depth_column(rec, &mut col.col, &mut col.kv);
+            // dH_i - F_i dCf per parameter
+            given.fill(0.0);
+            if let Some(k) = at.compliance {
+                given[k] = -rec.force;
+            }
+            if let Some(k) = at.drift {
+                given[k] = -(rec.t - t0);
+            }
+            if let Some(k) = at.offset {
+                given[k] = -1.0;
+            }
+            let (s_border, load) = if cf > 0.0 {
+                given.iter_mut().for_each(|g| *g /= cf);
+                (s + 1.0 / cf, true)
+            } else {
+                (s, false)
+            };
+            let step = crate::ParamStep {
+                model,
+                tangents: &self.tangents,
+                contact: &self.contact,
+                finite: self.finite.as_ref(),
+                s: &s_mat,
+                r_field: &r_field,
+                np,
+                rec,
+                border: Some(crate::load::Border {
+                    col: &col.col,
+                    s: s_border,
+                    load,
+                    given: &given,
+                }),
+            };
+            for (k, ((yk, dfk), w)) in y
+                .iter_mut()
+                .zip(df[i].iter_mut())
+                .zip(work.iter_mut())
+                .enumerate()
+            {
+                w.du_depth = 0.0;
+                step.solve(k, yk, dfk, w);
+                dh[i][k] = w.du_depth;
+            }
+        }
+        Ok(crate::LoadSensitivities {
+            dh_dc: dh,
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}
