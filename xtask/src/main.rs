@@ -35,7 +35,7 @@ fn main() -> Result<()> {
         Some("dao") => xtask::dao::run(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049,r2-j2-linear,r2-j2-power] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin|hencky-umat] [--ccx PATH] [--load-substeps N]   (CalculiX referee of normal contact, friction and finite strain; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)\n       cargo xtask fit-cost [--only r1-map,r2,r2-noisy,ht-nh,anon-nh,ht-nh-joint] [--quick] [--rounds 3] [--json FILE] [--compare FILE] [--batch [--jobs 2] [--map-n 10]]   (a whole fit's wall time over one forward run's, one thread, back to back; --compare: before/after and |shift| / sigma; --batch: the 100-indent map through the batch path)\n       cargo xtask newcomer-walk [--skip SUBSTRING,...] [--timeout SECONDS] [--keep] [--list]   (every README and docs/tutorial*.md command, in order, in a fresh clone of HEAD: exit status and time of each)\n       cargo xtask doc-numbers [--cheap]   (every number the docs quote from the tool, the long runs included, against a release build's output: crates/cli/tests/doc_numbers.rs)\n       cargo xtask tidy   (the repository's rules: layers, unused dependencies, //! lines, no outside references, function lengths)\n       cargo xtask real-laws [--only CASES] [--out DIR] [--refine] [--jobs N] [--table]   (Plastic and Prony on the real records, the mystical sY-n pairs, design of hardening tests: docs/tutorial-real-data.md)\n       cargo xtask dao [--ratios 50,200,1000] [--n 0,0.2,0.4] [--meshes 12,24] [--load-steps 30] [--friction 0.15] [--jobs N]   (J2 with power-law hardening under a 70.3-degree cone against Dao et al.'s dimensionless functions: docs/validation-laws.md §9)"
+                "usage: cargo xtask paper-tables [--only I,II,III] [--rows 1,2,..] [--threads N] [--max-iter-r2 N] [--method-r2 bfgs|lbfgs|lbfgsb|lm] [--coarse] [--print]\n       cargo xtask compare-methods   (R1 from the paper's four starts with each method)\n       cargo xtask fuzz-readers [--cases N] [--seed S]   (records readers and preprocessing on random and mutated files)\n       cargo xtask make-map [DIR] [--n 10] [--noise 0.02] [--seed 1] [--coarse] [--run] [--jobs N]   (a synthetic two-phase Maxwell map for indentify batch)\n       cargo xtask fuzz-configs [--cases N] [--seed S]   (mutated configurations and --set values through check and simulate)\n       cargo xtask slurm-check [--keep] [--array N] [--timeout SECONDS] [--indentify PATH]   (indentify batch slurm on a real one-node Slurm started here, as root)\n       cargo xtask calculix [--out DIR] [--cases r0,r1,r2,r2-sy0,r0-nu049,r2-j2-linear,r2-j2-power] [--friction 0,0.1,0.2] [--kinematics small,nlgeom] [--penalty K] [--contact node-to-surface|surface-to-surface] [--decks-only] [--reuse] [--no-ccx] [--split-load] [--elastic neo-hooke|mooney-rivlin|hencky-umat] [--ccx PATH] [--load-substeps N] [--drive depth|force]   (CalculiX referee of normal contact, friction and finite strain; --drive force: the punch under a concentrated force, STEM-load.csv; needs ccx)\n       cargo xtask mesh-study [--configs A.ron,B.ron] [--levels 1|2|3] [--set path=value ...] [--auto N:K:G[:C],...] [--no-candidate-fine-steps] [--additive-reference] [--steps-only] [--reference F1,F2,F3,F4]   (force vs meshes and steps refined 2x, 4x; Auto() candidates)\n       cargo xtask multi-rate [--max-iter 25] [--seeds 20] [--noise 0.02] [--methods lm,bfgs] [--starts 1,..,8] [--jobs N] [--coarse] [--no-coverage] [--no-starts]   (joint fit of examples/r2-multi-rate.ron from Table III's starts; 2-sigma coverage with noise; --sigma relative|residual, --first-seed S)\n       cargo xtask joint-cost [--rounds 5] [--threads 2] [--config FILE] [--set K=V]   (one joint cost + gradient vs the slowest single test, back to back)\n       cargo xtask fit-cost [--only r1-map,r2,r2-noisy,ht-nh,anon-nh,ht-nh-joint] [--quick] [--rounds 3] [--json FILE] [--compare FILE] [--batch [--jobs 2] [--map-n 10]]   (a whole fit's wall time over one forward run's, one thread, back to back; --compare: before/after and |shift| / sigma; --batch: the 100-indent map through the batch path)\n       cargo xtask newcomer-walk [--skip SUBSTRING,...] [--timeout SECONDS] [--keep] [--list]   (every README and docs/tutorial*.md command, in order, in a fresh clone of HEAD: exit status and time of each)\n       cargo xtask doc-numbers [--cheap]   (every number the docs quote from the tool, the long runs included, against a release build's output: crates/cli/tests/doc_numbers.rs)\n       cargo xtask tidy   (the repository's rules: layers, unused dependencies, //! lines, no outside references, function lengths)\n       cargo xtask real-laws [--only CASES] [--out DIR] [--refine] [--jobs N] [--table]   (Plastic and Prony on the real records, the mystical sY-n pairs, design of hardening tests: docs/tutorial-real-data.md)\n       cargo xtask dao [--ratios 50,200,1000] [--n 0,0.2,0.4] [--meshes 12,24] [--load-steps 30] [--friction 0.15] [--jobs N]   (J2 with power-law hardening under a 70.3-degree cone against Dao et al.'s dimensionless functions: docs/validation-laws.md §9)"
             );
             bail!("unknown or missing command")
         }
@@ -249,6 +249,7 @@ fn calculix(args: &[String]) -> Result<()> {
         no_ccx: false,
         ccx: "ccx".into(),
     };
+    let mut force = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -318,10 +319,21 @@ fn calculix(args: &[String]) -> Result<()> {
                         anyhow::anyhow!("--load-substeps: `{v}` is not a count >= 1")
                     })?;
             }
+            "--drive" => {
+                force = match val().as_str() {
+                    "depth" => false,
+                    "force" => true,
+                    other => bail!("--drive: `{other}` is not depth or force"),
+                };
+            }
             other => bail!("unknown option {other}"),
         }
     }
-    let table = xtask::calculix::run(&o)?;
+    let table = if force {
+        xtask::calculix::force::run(&o)?
+    } else {
+        xtask::calculix::run(&o)?
+    };
     println!("{table}");
     Ok(())
 }
