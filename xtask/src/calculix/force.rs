@@ -236,6 +236,9 @@ pub fn deck(
     Ok(s)
 }
 
+/// A raw output time of CalculiX: `(t, h, F_spring)` (s, mm, N).
+pub type Raw = (f64, f64, f64);
+
 /// One output time of a load-controlled CalculiX run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Point {
@@ -626,7 +629,7 @@ pub fn run_ccx(
     out: &std::path::Path,
     stem: &str,
     deck: &str,
-) -> Result<(Vec<(f64, f64, f64)>, Option<String>)> {
+) -> Result<(Vec<Raw>, Option<String>)> {
     let work = out.join(format!(".work-{stem}"));
     std::fs::create_dir_all(&work)?;
     std::fs::write(work.join(format!("{stem}.inp")), deck)?;
