@@ -121,6 +121,31 @@ impl NoiseModel {
     }
 }
 
+/// What the rows of the sensitivity matrix observe, as the reasons of undetermined
+/// parameters name it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Observed {
+    /// The punch force of depth-controlled tests.
+    #[default]
+    Force,
+    /// The punch depth of load-controlled tests (docs/theory.md §13).
+    Depth,
+    /// A joint fit of depth- and load-controlled tests: forces and depths.
+    ForceAndDepth,
+}
+
+impl Observed {
+    /// The observable in words: "the force", "the depth under load control", "the force
+    /// (depth control) or the depth (load control)".
+    pub fn noun(self) -> &'static str {
+        match self {
+            Observed::Force => "the force",
+            Observed::Depth => "the depth under load control",
+            Observed::ForceAndDepth => "the force (depth control) or the depth (load control)",
+        }
+    }
+}
+
 /// The fitted and measured forces (all tests end to end, as the weights), which the
 /// noise models other than [`NoiseModel::Residual`] need.
 #[derive(Clone, Copy, Debug)]
@@ -345,6 +370,33 @@ impl Identifiability {
         noise: NoiseModel,
         forces: Option<Forces<'_>>,
     ) -> Identifiability {
+        Identifiability::with_noise_observed(
+            jac,
+            weights,
+            cost,
+            c,
+            columns,
+            noise,
+            forces,
+            Observed::Force,
+        )
+    }
+
+    /// [`Identifiability::with_noise`] for data whose rows are `observed` (the depth under
+    /// load control, or both in a joint fit of mixed drives): the reasons of undetermined
+    /// parameters name it ("no effect on the depth under load control").
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_noise_observed(
+        jac: &[Vec<f64>],
+        weights: &[f64],
+        cost: f64,
+        c: &[f64],
+        columns: &[Column],
+        noise: NoiseModel,
+        forces: Option<Forces<'_>>,
+        observed: Observed,
+    ) -> Identifiability {
+        let what = observed.noun();
         let noise = if forces.is_none() {
             NoiseModel::Residual
         } else {
@@ -395,7 +447,7 @@ impl Identifiability {
             if !(norm[k].is_finite() && norm[k] > INSENSITIVE * largest) {
                 undetermined.push(k);
                 reasons.push(format!(
-                    "no effect on the force (sensitivity {:.1e} of the largest)",
+                    "no effect on {what} (sensitivity {:.1e} of the largest)",
                     if largest > 0.0 {
                         norm[k] / largest
                     } else {
@@ -448,7 +500,7 @@ impl Identifiability {
                         )
                     } else {
                         format!(
-                            "numerically no effect on the force (singular value {:.1e} of the \
+                            "numerically no effect on {what} (singular value {:.1e} of the \
                              largest)",
                             if smax > 0.0 { sj / smax } else { 0.0 }
                         )

@@ -80,7 +80,7 @@ mod lm;
 mod tasks;
 
 pub use data::ForceRecord;
-pub use identifiability::{Identifiability, NoiseModel};
+pub use identifiability::{Identifiability, NoiseModel, Observed};
 pub use instrument::{Instrument, Instrumented};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{

@@ -980,7 +980,7 @@ fn run(
                 .iter()
                 .map(|f| Column::of(f, last.params[f.index]))
                 .collect();
-            Identifiability::with_noise(
+            Identifiability::with_noise_observed(
                 &jac,
                 &problem.weights,
                 last.cost,
@@ -991,6 +991,7 @@ fn run(
                     fitted: f,
                     measured: &problem.target,
                 }),
+                problem.observed(),
             )
         })
     } else {

@@ -371,6 +371,18 @@ impl Problem {
         }
     }
 
+    /// What the data observe: the force (every test depth-controlled), the depth (every
+    /// test load-controlled) or both (a joint fit of mixed drives).
+    pub fn observed(&self) -> crate::identifiability::Observed {
+        use crate::identifiability::Observed;
+        let load = self.tests.iter().filter(|t| t.load.is_some()).count();
+        match load {
+            0 => Observed::Force,
+            n if n == self.tests.len() => Observed::Depth,
+            _ => Observed::ForceAndDepth,
+        }
+    }
+
     /// Whether the problem carries instrument parameters ([`Problem::joint_instrumented`]).
     pub fn has_instrument(&self) -> bool {
         self.applied.is_some()

@@ -384,7 +384,7 @@ fn evaluate(
     // every row's own stated deviation s_i: `Relative(1)` on `s_i` in place of the fitted
     // observable is the row variance `w_i s_i^2` (the sandwich of `Identifiability`)
     let sd = row_deviations(&problem, &forces, noise);
-    let id = Identifiability::with_noise(
+    let id = Identifiability::with_noise_observed(
         &jac,
         &problem.weights,
         problem.cost_of(&forces),
@@ -395,6 +395,7 @@ fn evaluate(
             fitted: &sd,
             measured: &problem.target,
         }),
+        problem.observed(),
     );
     let params: Vec<ParamSigma> = id
         .names
