@@ -16,8 +16,12 @@
 //! in standard deviations, `|after - before| / sigma`. `--batch` times the
 //! 100-indent map through the batch path (`batch.rs`: throughput before and after starting
 //! every indent from its Oliver-Pharr first guess, `--jobs N` threads, 2 by default).
+//! `--no-chi2` turns the chi-square stop of fits with an undetermined parameter off
+//! (`StopCriteria::chi2_stop`), for before/after counts; `--columns` times a sensitivity
+//! pass of every parameter against one of the free ones (`columns.rs`).
 
 mod batch;
+mod columns;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -39,7 +43,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--batch [--jobs N] [--map-n N]]`.
+/// [--compare FILE] [--cold] [--no-chi2] [--columns] [--batch [--jobs N] [--map-n N]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -47,6 +51,8 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut json_out: Option<PathBuf> = None;
     let mut compare: Option<PathBuf> = None;
     let mut cold = false;
+    let mut chi2 = true;
+    let mut columns_mode = false;
     let mut batch_mode = false;
     let mut jobs = 2usize;
     let mut map_n = 10usize;
@@ -60,6 +66,8 @@ pub fn run(args: &[String]) -> Result<()> {
             "--json" => json_out = Some(PathBuf::from(val())),
             "--compare" => compare = Some(PathBuf::from(val())),
             "--cold" => cold = true,
+            "--no-chi2" => chi2 = false,
+            "--columns" => columns_mode = true,
             "--batch" => batch_mode = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
             "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
@@ -104,13 +112,34 @@ pub fn run(args: &[String]) -> Result<()> {
         println!("{}", batch::table(&m));
         return write_json(json_out.as_deref(), &m);
     }
+    if columns_mode {
+        println!(
+            "| case | free / parameters | forward (s) | all columns / forward | free columns / forward | free / all |"
+        );
+        println!("|---|---|---|---|---|---|");
+        let mut results = Vec::new();
+        for case in cases {
+            let m = columns::measure(&root, case, rounds)?;
+            println!(
+                "| {case} | {} / {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                m["free"],
+                m["params"],
+                m["forward_s"].as_f64().unwrap_or(f64::NAN),
+                m["all_over_forward"].as_f64().unwrap_or(f64::NAN),
+                m["free_over_forward"].as_f64().unwrap_or(f64::NAN),
+                m["free_over_all"].as_f64().unwrap_or(f64::NAN)
+            );
+            results.push(m);
+        }
+        return write_json(json_out.as_deref(), &Value::Array(results));
+    }
     let mut results = Vec::new();
     println!(
         "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | stop |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold)?;
+        let m = measure(&root, case, rounds, cold, chi2)?;
         println!(
             "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
@@ -214,10 +243,11 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// One case: forward runs, the fit, forward runs again.
-fn measure(root: &Path, case: &str, rounds: usize, cold: bool) -> Result<Value> {
+fn measure(root: &Path, case: &str, rounds: usize, cold: bool, chi2: bool) -> Result<Value> {
     let opts = options(root, case)?;
     let resolved = identify::resolve(&opts)?;
     let mut s = identify::setup(resolved, &opts)?;
+    s.id_cfg.stop.chi2_stop = chi2;
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
     // from the last one's solution)
