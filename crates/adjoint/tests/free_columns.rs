@@ -169,5 +169,14 @@ fn a_column_beyond_the_parameters_is_refused() {
         .unwrap()
         .sensitivities_of(&law, &NH, &t, &[0, 5])
         .unwrap_err();
-    assert!(matches!(e, AdjointError::Length { expected: 5, got: 6 }), "{e}");
+    assert!(
+        matches!(
+            e,
+            AdjointError::Length {
+                expected: 5,
+                got: 6
+            }
+        ),
+        "{e}"
+    );
 }

@@ -139,9 +139,7 @@ mod tests {
                 [1.0 + t, t * t - 0.3 * t]
             })
             .collect();
-        let d: Vec<f64> = (0..9)
-            .map(|i| (f64::from(i) * 0.7).sin() + 0.2)
-            .collect();
+        let d: Vec<f64> = (0..9).map(|i| (f64::from(i) * 0.7).sin() + 0.2).collect();
         let w: Vec<f64> = (0..9).map(|i| 1.0 + 0.25 * f64::from(i % 3)).collect();
         let c = [0.4, -0.8, 0.3];
         for repeated in [false, true] {
@@ -150,7 +148,11 @@ mod tests {
                 .iter()
                 .enumerate()
                 .map(|(i, r)| {
-                    let third = if repeated { r[0] } else { (f64::from(i as u32) * 0.37).cos() };
+                    let third = if repeated {
+                        r[0]
+                    } else {
+                        (f64::from(i as u32) * 0.37).cos()
+                    };
                     [r[0], r[1], third]
                 })
                 .collect();
@@ -161,17 +163,13 @@ mod tests {
                 .collect();
             let columns: Vec<Column> = (0..3).map(column).collect();
             let j = cost(&m, &w, &d, &c);
-            let id = Identifiability::with_noise(
-                &jac,
-                &w,
-                j,
-                &c,
-                &columns,
-                NoiseModel::Residual,
-                None,
-            );
+            let id =
+                Identifiability::with_noise(&jac, &w, j, &c, &columns, NoiseModel::Residual, None);
             if repeated {
-                assert!(!id.undetermined.is_empty(), "a repeated column is undetermined");
+                assert!(
+                    !id.undetermined.is_empty(),
+                    "a repeated column is undetermined"
+                );
             }
             let var = noise_variance(&id).unwrap();
             assert!((var - 2.0 * j / 6.0).abs() < 1e-14 * var);
@@ -189,7 +187,13 @@ mod tests {
                     })
                     .collect();
                 let atb: Vec<f64> = (0..3)
-                    .map(|a| m.iter().zip(&w).zip(&d).map(|((r, w), d)| w * r[a] * d).sum())
+                    .map(|a| {
+                        m.iter()
+                            .zip(&w)
+                            .zip(&d)
+                            .map(|((r, w), d)| w * r[a] * d)
+                            .sum()
+                    })
                     .collect();
                 let x = crate::linalg::solve_spd(&ata, &atb).unwrap();
                 cost(&m, &w, &d, &[x[0], x[1], x[2]])

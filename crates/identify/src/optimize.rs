@@ -688,7 +688,9 @@ impl<'a, 'p> Monitor<'a, 'p> {
             self.step_sigma
                 .filter(|_| iter > 0 && !repeated)
                 .filter(|&fr| {
-                    previous.as_ref().is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
+                    previous
+                        .as_ref()
+                        .is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
                 })
         {
             Some(StopReason::StepBelowSigma { fraction })
@@ -696,7 +698,9 @@ impl<'a, 'p> Monitor<'a, 'p> {
             .step_sigma
             .filter(|_| s.chi2_stop && iter > 0 && !repeated)
             .filter(|&fr| {
-                previous.as_ref().is_some_and(|p| self.chi2_below(fr * fr, p.cost, cost, &rec.params))
+                previous
+                    .as_ref()
+                    .is_some_and(|p| self.chi2_below(fr * fr, p.cost, cost, &rec.params))
             })
         {
             Some(StopReason::Chi2BelowSigma { fraction })
@@ -984,8 +988,7 @@ fn run(
         Method::LevenbergMarquardt => Prefetch::Jacobian,
         _ => Prefetch::Gradient,
     });
-    // the Jacobian serves the free parameters only (LM, the statistical stop, the
-    // identifiability summary): the fixed ones' sensitivity systems are never solved
+    // every Jacobian of a run serves the free parameters only: the fixed ones' never formed
     eval.set_jacobian_columns(Some(param.free.iter().map(|f| f.index).collect()));
     let objective = Objective::new(eval, param, config.stop.max_line_search_evaluations);
     let y0 = objective.param.to_scaled(&objective.param.base);

@@ -899,9 +899,9 @@ fn jacobian_task(
         None => w.adjoint.sensitivities(&*p.law, c, traj),
     }
     .map_err(|source| IdentifyError::Adjoint {
-            params: c.to_vec(),
-            source,
-        })?;
+        params: c.to_vec(),
+        source,
+    })?;
     let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
     for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
         if s.on_schedule {

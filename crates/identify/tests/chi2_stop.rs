@@ -116,7 +116,10 @@ fn chi2_stop_ends_an_undetermined_fit_within_a_tenth_of_sigma() {
     let n = stat.history.len();
     let sigma2 = stat.identifiability.as_ref().unwrap().sigma2;
     let last = 2.0 * (stat.history[n - 2].cost - stat.history[n - 1].cost) / sigma2;
-    assert!((0.0..0.01).contains(&last), "last step's chi-square change {last}");
+    assert!(
+        (0.0..0.01).contains(&last),
+        "last step's chi-square change {last}"
+    );
 }
 
 /// Every parameter determined (eta = 30000 MPa s relaxes during the hold): the rule does
