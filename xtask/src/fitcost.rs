@@ -16,10 +16,13 @@
 //! in standard deviations, `|after - before| / sigma`. `--batch` times the
 //! 100-indent map through the batch path (`batch.rs`: throughput from the base start, from
 //! each row's Oliver-Pharr first guess and from its Lee-Radok pre-fit, `--jobs N` threads,
-//! 2 by default;
-//! `--profile`: one indent's stages timed, `profile.rs`).
+//! 2 by default; `--profile`: one indent's stages timed, `profile.rs`).
+//! `--no-chi2` turns the chi-square stop of fits with an undetermined parameter off
+//! (`StopCriteria::chi2_stop`), for before/after counts; `--columns` times a sensitivity
+//! pass of every parameter against one of the free ones (`columns.rs`).
 
 mod batch;
+mod columns;
 mod profile;
 
 use std::path::{Path, PathBuf};
@@ -42,7 +45,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--batch [--jobs N] [--map-n N] [--profile]]`.
+/// [--compare FILE] [--cold] [--no-chi2] [--columns] [--batch [--jobs N] [--map-n N] [--profile]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -50,6 +53,8 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut json_out: Option<PathBuf> = None;
     let mut compare: Option<PathBuf> = None;
     let mut cold = false;
+    let mut chi2 = true;
+    let mut columns_mode = false;
     let mut batch_mode = false;
     let mut jobs = 2usize;
     let mut map_n = 10usize;
@@ -64,6 +69,8 @@ pub fn run(args: &[String]) -> Result<()> {
             "--json" => json_out = Some(PathBuf::from(val())),
             "--compare" => compare = Some(PathBuf::from(val())),
             "--cold" => cold = true,
+            "--no-chi2" => chi2 = false,
+            "--columns" => columns_mode = true,
             "--batch" => batch_mode = true,
             "--profile" => profile = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
@@ -114,13 +121,34 @@ pub fn run(args: &[String]) -> Result<()> {
         println!("{}", batch::table(&m));
         return write_json(json_out.as_deref(), &m);
     }
+    if columns_mode {
+        println!(
+            "| case | free / parameters | forward (s) | all columns / forward | free columns / forward | free / all |"
+        );
+        println!("|---|---|---|---|---|---|");
+        let mut results = Vec::new();
+        for case in cases {
+            let m = columns::measure(&root, case, rounds)?;
+            println!(
+                "| {case} | {} / {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                m["free"],
+                m["params"],
+                m["forward_s"].as_f64().unwrap_or(f64::NAN),
+                m["all_over_forward"].as_f64().unwrap_or(f64::NAN),
+                m["free_over_forward"].as_f64().unwrap_or(f64::NAN),
+                m["free_over_all"].as_f64().unwrap_or(f64::NAN)
+            );
+            results.push(m);
+        }
+        return write_json(json_out.as_deref(), &Value::Array(results));
+    }
     let mut results = Vec::new();
     println!(
         "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | stop |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold)?;
+        let m = measure(&root, case, rounds, cold, chi2)?;
         println!(
             "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
@@ -224,10 +252,11 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// One case: forward runs, the fit, forward runs again.
-fn measure(root: &Path, case: &str, rounds: usize, cold: bool) -> Result<Value> {
+fn measure(root: &Path, case: &str, rounds: usize, cold: bool, chi2: bool) -> Result<Value> {
     let opts = options(root, case)?;
     let resolved = identify::resolve(&opts)?;
     let mut s = identify::setup(resolved, &opts)?;
+    s.id_cfg.stop.chi2_stop = chi2;
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
     // from the last one's solution)

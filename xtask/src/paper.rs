@@ -741,6 +741,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         TargetCost => "target",
         RoundOff => "round-off",
         StepBelowSigma { .. } => "step < sigma",
+        Chi2BelowSigma { .. } => "chi2 < sigma^2",
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",

@@ -153,6 +153,9 @@ pub struct Adjoint<'m> {
     e_a: Vec<f64>,
     /// The step's finite-strain operators (`Kinematics::Finite` only).
     finite: Option<finite::FiniteStep>,
+    /// The parameters a sensitivity pass skips (`true`: its column is never formed and
+    /// stays zero); empty outside [`Adjoint::sensitivities_of`].
+    skip: Vec<bool>,
 }
 
 impl<'m> Adjoint<'m> {
@@ -175,6 +178,7 @@ impl<'m> Adjoint<'m> {
             eq: vec![0.0; model.dofs.n_eq],
             e_a: Vec::new(),
             finite,
+            skip: Vec::new(),
         })
     }
 
@@ -499,6 +503,49 @@ impl<'m> Adjoint<'m> {
         c: &[f64],
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
+        self.skip.clear();
+        self.sensitivities_masked(mat, c, traj)
+    }
+
+    /// [`Adjoint::sensitivities`] of the parameters `columns` only (indices into `c`, in
+    /// any order): the other parameters' systems are never solved and their columns of
+    /// [`Sensitivities::df_dc`] stay zero. Each parameter's sensitivity is its own
+    /// recursion on the step's factorized system, so the columns computed are the same
+    /// bits as those of [`Adjoint::sensitivities`] (an identification differentiates its
+    /// free parameters only: 4 of R2's 5).
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient`]; [`AdjointError::Length`] for an index beyond `c`.
+    pub fn sensitivities_of(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        columns: &[usize],
+    ) -> Result<Sensitivities, AdjointError> {
+        if let Some(&k) = columns.iter().find(|&&k| k >= c.len()) {
+            return Err(AdjointError::Length {
+                expected: c.len(),
+                got: k + 1,
+            });
+        }
+        self.skip = (0..c.len()).map(|k| !columns.contains(&k)).collect();
+        let out = self.sensitivities_masked(mat, c, traj);
+        self.skip.clear();
+        out
+    }
+
+    /// Whether the running sensitivity pass skips parameter `k`.
+    fn skips(&self, k: usize) -> bool {
+        self.skip.get(k).copied().unwrap_or(false)
+    }
+
+    fn sensitivities_masked(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+    ) -> Result<Sensitivities, AdjointError> {
         let Some(law) = mat.as_law() else {
             return self.sensitivities_material(mat, c, traj);
         };
@@ -540,9 +587,12 @@ impl<'m> Adjoint<'m> {
                 rec,
                 border: None,
             };
+            let skip = &self.skip;
             let one =
                 |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
-                    step.solve(k, yk, dfk, w)
+                    if !skip.get(k).copied().unwrap_or(false) {
+                        step.solve(k, yk, dfk, w);
+                    }
                 };
             // in parallel on a pool's worker (an identification's tasks, or a caller's
             // `ThreadPool::install`); from any other thread the parameters' solves are too

@@ -381,6 +381,9 @@ impl Adjoint<'_> {
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
             for k in 0..np {
+                if self.skips(k) {
+                    continue;
+                }
                 let (dyk, bduk) = (&mut dy[k], &mut bdu[k]);
                 for q in 0..nq {
                     let (d, e) = (&dblk[q * m * m..], &eblk[q * m * 4..]);

@@ -76,6 +76,7 @@ pub mod problem;
 pub mod profile;
 
 mod argmin_glue;
+mod chi2_stop;
 mod lm;
 mod tasks;
 

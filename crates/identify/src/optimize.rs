@@ -139,6 +139,14 @@ pub struct StopCriteria {
     /// status as before. `None`: off (the default here; configurations
     /// default to [`DEFAULT_STEP_SIGMA`]).
     pub step_sigma: Option<f64>,
+    /// With [`StopCriteria::step_sigma`] `= Some(f)`, where the data leave a parameter
+    /// undetermined at the iterate (the rule above does not apply there): stop when the
+    /// last accepted step and the undamped Gauss-Newton step from the new iterate both
+    /// change the fit's chi-square (`2 J / sigma^2`, `sigma^2` the noise model's variance)
+    /// by less than `f^2`, the chi-square of `f` standard deviations of a determined
+    /// parameter ([`StopReason::Chi2BelowSigma`]; the run still ends with the undetermined
+    /// status). `true` by default; off, such a run ends by the relative decrease.
+    pub chi2_stop: bool,
 }
 
 /// The fraction of a standard deviation of [`StopCriteria::step_sigma`] that
@@ -156,6 +164,7 @@ impl Default for StopCriteria {
             max_line_search_evaluations: 30,
             roundoff_cost: 1e-16,
             step_sigma: None,
+            chi2_stop: true,
         }
     }
 }
@@ -326,6 +335,13 @@ pub enum StopReason {
         /// The fraction of a standard deviation.
         fraction: f64,
     },
+    /// With a parameter undetermined, Levenberg-Marquardt's last step and the
+    /// Gauss-Newton step from where it ended changed the chi-square by less than
+    /// `fraction^2` ([`StopCriteria::chi2_stop`]).
+    Chi2BelowSigma {
+        /// The fraction of a standard deviation (the chi-square threshold is its square).
+        fraction: f64,
+    },
     /// The iteration limit.
     MaxIterations,
     /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
@@ -362,6 +378,7 @@ impl StopReason {
                 | StopReason::TargetCost
                 | StopReason::RoundOff
                 | StopReason::StepBelowSigma { .. }
+                | StopReason::Chi2BelowSigma { .. }
         )
     }
 }
@@ -376,6 +393,14 @@ impl std::fmt::Display for StopReason {
             StopReason::StepBelowSigma { fraction } => {
                 write!(f, "last step < {fraction} \u{3c3} for every parameter")
             }
+            StopReason::Chi2BelowSigma { fraction } => write!(
+                f,
+                "chi-square change of the last step and the next < {} (the chi-square of {fraction} \u{3c3})",
+                // 0.1^2 shown as 0.01, not 0.010000000000000002
+                format!("{:.6e}", fraction * fraction)
+                    .parse::<f64>()
+                    .unwrap_or(fraction * fraction)
+            ),
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
             StopReason::Stalled(why) => write!(f, "stalled: {why}"),
@@ -663,10 +688,22 @@ impl<'a, 'p> Monitor<'a, 'p> {
             self.step_sigma
                 .filter(|_| iter > 0 && !repeated)
                 .filter(|&fr| {
-                    previous.is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
+                    previous
+                        .as_ref()
+                        .is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
                 })
         {
             Some(StopReason::StepBelowSigma { fraction })
+        } else if let Some(fraction) = self
+            .step_sigma
+            .filter(|_| s.chi2_stop && iter > 0 && !repeated)
+            .filter(|&fr| {
+                previous
+                    .as_ref()
+                    .is_some_and(|p| self.chi2_below(fr * fr, p.cost, cost, &rec.params))
+            })
+        {
+            Some(StopReason::Chi2BelowSigma { fraction })
         } else if rec.iteration >= s.max_iterations {
             Some(StopReason::MaxIterations)
         } else if self.cancel.is_raised() {
@@ -741,6 +778,56 @@ impl<'a, 'p> Monitor<'a, 'p> {
                 && (next - c[k]).abs() < fraction * sd
                 && !(at_bound && (dy * col.dc_dy).abs() >= fraction * sd)
         })
+    }
+
+    /// Whether, with a parameter undetermined at `c` (physical parameters, cost `cost`),
+    /// the last step's chi-square decrease (from `prev_cost`) and the one the Gauss-Newton
+    /// model predicts for the next step are both below `threshold`
+    /// ([`StopCriteria::chi2_stop`], `crate::chi2_stop`); false when every parameter is
+    /// determined (the step rule serves then) or anything cannot be computed.
+    fn chi2_below(&self, threshold: f64, prev_cost: f64, cost: f64, c: &[f64]) -> bool {
+        let o = self.objective;
+        let p = o.eval.borrow().problem();
+        let (forces, jac) = {
+            let mut ev = o.eval.borrow_mut();
+            match (ev.forces(c), ev.jacobian(c)) {
+                (Ok(f), Ok(j)) => (f, j),
+                _ => return false,
+            }
+        };
+        let columns: Vec<Column> = o
+            .param
+            .free
+            .iter()
+            .map(|f| Column::of(f, c[f.index]))
+            .collect();
+        let id = Identifiability::with_noise(
+            &jac,
+            &p.weights,
+            p.cost_of(&forces),
+            c,
+            &columns,
+            self.noise,
+            Some(Forces {
+                fitted: &forces,
+                measured: &p.target,
+            }),
+        );
+        if id.undetermined.is_empty() {
+            return false;
+        }
+        let Some(var) = crate::chi2_stop::noise_variance(&id) else {
+            return false;
+        };
+        let last = 2.0 * (prev_cost - cost) / var;
+        let next = crate::chi2_stop::predicted_chi2_decrease(
+            &jac,
+            &forces,
+            (&p.weights, &p.target),
+            &columns,
+            &id,
+        );
+        last.is_finite() && last < threshold && next.is_some_and(|n| n < threshold)
     }
 
     /// The stopping rules.
@@ -901,6 +988,8 @@ fn run(
         Method::LevenbergMarquardt => Prefetch::Jacobian,
         _ => Prefetch::Gradient,
     });
+    // every Jacobian of a run serves the free parameters only: the fixed ones' never formed
+    eval.set_jacobian_columns(Some(param.free.iter().map(|f| f.index).collect()));
     let objective = Objective::new(eval, param, config.stop.max_line_search_evaluations);
     let y0 = objective.param.to_scaled(&objective.param.base);
     // kappa from the start's gradient: one forward + one adjoint, cached for the optimizer;

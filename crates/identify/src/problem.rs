@@ -610,6 +610,9 @@ pub(crate) struct Work<'p> {
     /// The lowest-cost point's trajectory, the warm start of the next forward runs
     /// ([`Problem::set_warm_start`]).
     warm: Option<Trajectory>,
+    /// The parameters whose sensitivities the Jacobian forms
+    /// ([`Evaluator::set_jacobian_columns`]; `None`: all).
+    columns: Option<Vec<usize>>,
 }
 
 /// The cost/gradient oracle of one [`Problem`]: owns each test's forward and adjoint
@@ -906,13 +909,14 @@ fn jacobian_task(
     let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
         w.solver.run(&*p.law, c, &t.schedule, o)
     })?;
-    let sens = w
-        .adjoint
-        .sensitivities(&*p.law, c, traj)
-        .map_err(|source| IdentifyError::Adjoint {
-            params: c.to_vec(),
-            source,
-        })?;
+    let sens = match &w.columns {
+        Some(cols) => w.adjoint.sensitivities_of(&*p.law, c, traj, cols),
+        None => w.adjoint.sensitivities(&*p.law, c, traj),
+    }
+    .map_err(|source| IdentifyError::Adjoint {
+        params: c.to_vec(),
+        source,
+    })?;
     let mut jac = vec![vec![0.0; c.len()]; t.schedule.t.len()];
     for (s, row) in traj.steps.iter().zip(&sens.df_dc) {
         if s.on_schedule {
@@ -1007,6 +1011,7 @@ impl<'p> Evaluator<'p> {
                 adjoint,
                 seconds: [None; 3],
                 warm: None,
+                columns: None,
             });
         }
         Ok(Evaluator {
@@ -1025,6 +1030,28 @@ impl<'p> Evaluator<'p> {
     /// optimizers of [`crate::optimize`] set it for their method).
     pub fn set_prefetch(&mut self, prefetch: Prefetch) {
         self.prefetch = prefetch;
+    }
+
+    /// Restricts the Jacobian ([`Evaluator::jacobian`]) of depth-controlled tests to the
+    /// parameters `columns` (indices in law order; `None`: all): the other parameters'
+    /// sensitivity systems are never solved and their columns are zero. The columns
+    /// formed are the same bits as the full Jacobian's. An identification passes its free
+    /// parameters (the fixed ones' columns serve nothing there). A cached Jacobian formed
+    /// with other columns is dropped. Load-controlled tests form every column.
+    pub fn set_jacobian_columns(&mut self, columns: Option<Vec<usize>>) {
+        if self.work.first().is_some_and(|w| w.columns == columns) {
+            return;
+        }
+        for w in &mut self.work {
+            w.columns.clone_from(&columns);
+        }
+        if let Some(e) = self.entry.as_mut() {
+            e.jacobian = None;
+            for t in &mut e.tests {
+                t.jacobian = None;
+                t.jacobian_error = None;
+            }
+        }
     }
 
     /// The problem.

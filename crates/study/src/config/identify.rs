@@ -333,6 +333,7 @@ impl StopSection {
             max_line_search_evaluations: self.max_line_search_evaluations,
             roundoff_cost: self.roundoff_cost,
             step_sigma: self.step_sigma,
+            ..StopCriteria::default()
         }
     }
 }
