@@ -31,6 +31,7 @@
 //! (material and geometric parts), and `dF_i` by the variation of the internal force
 //! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
 
+mod affine;
 pub mod check;
 mod finite;
 mod load;
@@ -151,6 +152,10 @@ pub struct Adjoint<'m> {
     e_a: Vec<f64>,
     /// The step's finite-strain operators (`Kinematics::Finite` only).
     finite: Option<finite::FiniteStep>,
+    /// The one-pass sweep step of a law with one tangent ([`affine`]).
+    fused: affine::Fused,
+    /// Whether sweeps use it ([`Adjoint::set_fused`]).
+    fuse: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -173,7 +178,23 @@ impl<'m> Adjoint<'m> {
             eq: vec![0.0; model.dofs.n_eq],
             e_a: Vec::new(),
             finite,
+            fused: affine::Fused::default(),
+            fuse: true,
         })
+    }
+
+    /// Whether the sweeps of a law with one tangent at every Gauss point (elasticity,
+    /// Maxwell) under small strain visit the points once per step (`true`, the default)
+    /// or twice, in the general form every law takes (for comparisons and measurements:
+    /// the gradients agree to round-off).
+    pub fn set_fused(&mut self, on: bool) {
+        self.fuse = on;
+    }
+
+    /// Starts a reversed-time sweep: `mu = 0`, nothing kept from an earlier one.
+    fn begin_sweep(&mut self) {
+        self.field_a.fill(Vec4::ZERO);
+        self.fused.begin();
     }
 
     /// Forms `C_i` at every Gauss point and sets the system of step `i` (tangent, active
@@ -278,7 +299,7 @@ impl<'m> Adjoint<'m> {
         // the gradient depends on its inputs alone, not on what ran before on this workspace
         self.contact.begin();
         let mut sweep = Sweep::new(law, c);
-        self.field_a.fill(Vec4::ZERO);
+        self.begin_sweep();
         for i in (0..traj.steps.len()).rev() {
             let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
             let step = Recorded {
@@ -287,6 +308,7 @@ impl<'m> Adjoint<'m> {
                 f0: s0,
                 f1: s1,
                 rho: dj_df[i],
+                prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
             };
             self.sweep_step(law, c, &mut sweep, &step)?;
         }
@@ -351,7 +373,7 @@ impl<'m> Adjoint<'m> {
             });
         }
         let mut sweep = Sweep::new(law, c);
-        self.field_a.fill(Vec4::ZERO);
+        self.begin_sweep();
         replayed_steps_rev(solver, mat, c, schedule, opts, traj, |g, rec, s0, s1| {
             let step = Recorded {
                 i: g,
@@ -359,6 +381,7 @@ impl<'m> Adjoint<'m> {
                 f0: s0,
                 f1: s1,
                 rho: dj_df[g],
+                prev_dt: g.checked_sub(1).map(|p| traj.steps[p].dt),
             };
             self.sweep_step(law, c, &mut sweep, &step)
         })?;
@@ -384,6 +407,7 @@ impl<'m> Adjoint<'m> {
             f0,
             f1,
             rho,
+            prev_dt,
         } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data, no contact and nothing carried, mu_i = 0
@@ -393,7 +417,10 @@ impl<'m> Adjoint<'m> {
         sweep.mu_zero = false;
         self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
-        self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
+        let fuse = !shifted && self.fuse && self.fusable(law);
+        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+            self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
+        }
         self.restrict();
         // the constraint's part and the transposed solve: V in self.eq
         let mut eq = std::mem::take(&mut self.eq);
@@ -406,7 +433,12 @@ impl<'m> Adjoint<'m> {
                 self.full[d] += rho;
             }
         }
-        self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
+        if fuse {
+            let next = Self::next_of(law, c, i, prev_dt);
+            self.back_substitute_fused(law, c, sweep, (rec.dt, sig0, sig1), next);
+        } else {
+            self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
+        }
         Ok(())
     }
 
@@ -685,6 +717,8 @@ struct Recorded<'a> {
     f0: &'a StepFields,
     f1: &'a StepFields,
     rho: f64,
+    /// The length (s) of the step swept after this one (step `i - 1`), when known.
+    prev_dt: Option<f64>,
 }
 
 /// Accumulators of one reversed-time sweep.

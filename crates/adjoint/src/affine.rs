@@ -1,0 +1,209 @@
+//! The sweep of a law with one tangent at every Gauss point (elasticity, Maxwell:
+//! [`Law::is_linear`]) under small strain, in one pass over the Gauss points per step.
+//!
+//! A sweep step visits every point twice in its general form (`lib.rs`): the right-hand
+//! side `g_i = sum_g w B^T (C_i S - I) mu_{i+1}` before the solve, and the
+//! back-substitution `mu_i = C_i (S mu_{i+1} - B V_i)` with the gradient's sums after it.
+//! The right-hand side of the step swept next, `g_{i-1}`, needs only `mu_i` and that
+//! step's tangent, which for such a law is `C(c, dt_{i-1})` at every point: the
+//! back-substitution of step `i` forms it in the same pass, element by element
+//! (`B V_i`, `mu_i`, the sums, `B^T (C_{i-1} S - I) mu_i`), and step `i-1` starts from
+//! it. The arithmetic of every point is the general form's, so `mu_i` and `g_{i-1}` are
+//! the same bits; only the gradient's sums are added in fixed chunks of elements (the
+//! same chunks on any number of threads, so the same bits on any number of threads).
+
+use indentify_fe::QP_PER_ELEMENT;
+use indentify_laws::{Law, Mat4, Vec4};
+use rayon::prelude::*;
+
+use crate::{Adjoint, Sweep};
+
+/// Elements per chunk of the fused pass (fixed: the sums' order does not depend on the
+/// thread count).
+const CHUNK: usize = 8;
+
+/// The fused pass's work space and the right-hand side it leaves for the next step.
+#[derive(Debug, Default)]
+pub(crate) struct Fused {
+    /// The body's right-hand side `g` (all dofs) of the step `next` names.
+    g: Vec<f64>,
+    /// The step whose right-hand side `g` holds (its index and step length's bits).
+    next: Option<(usize, u64)>,
+    /// Each element's part of `g`.
+    forces: Vec<[f64; 16]>,
+    /// Per chunk: `sum w mu (x) (s1 - s0)`.
+    m_part: Vec<Mat4>,
+    /// Per chunk and parameter: `-dt sum w mu . dg/dc_k(s1)`.
+    g_part: Vec<f64>,
+    /// Per chunk and parameter: scratch for `dg/dc_k`.
+    dflow: Vec<Vec4>,
+    /// Steps whose right-hand side came from the previous step's pass (a count).
+    pub(crate) reused: usize,
+}
+
+/// The step swept next, for the fused pass: its index, step length (s) and tangent.
+#[derive(Clone, Copy)]
+pub(crate) struct Next {
+    pub(crate) i: usize,
+    pub(crate) dt: f64,
+    pub(crate) tangent: Mat4,
+}
+
+impl Fused {
+    /// Forgets any right-hand side kept from an earlier sweep.
+    pub(crate) fn begin(&mut self) {
+        self.next = None;
+        self.reused = 0;
+    }
+
+    /// Moves the right-hand side formed for step `i` (step length `dt`) into `full` and
+    /// returns `true`, or returns `false` (nothing written) when the last pass formed none
+    /// for that step.
+    pub(crate) fn take_source(&mut self, i: usize, dt: f64, full: &mut Vec<f64>) -> bool {
+        if self.next != Some((i, dt.to_bits())) || self.g.len() != full.len() {
+            self.next = None;
+            return false;
+        }
+        self.next = None;
+        self.reused += 1;
+        std::mem::swap(&mut self.g, full);
+        true
+    }
+}
+
+impl Adjoint<'_> {
+    /// Whether a sweep step of `law` may use the fused pass: small strain and one tangent
+    /// at every point.
+    pub(crate) fn fusable(&self, law: &dyn Law) -> bool {
+        self.finite.is_none() && law.is_linear()
+    }
+
+    /// The tangent of the step swept after step `i`, whose length is `prev_dt`, or `None`
+    /// (no such step, or its tangent fails: that step then forms its own right-hand side).
+    pub(crate) fn next_of(
+        law: &dyn Law,
+        c: &[f64],
+        i: usize,
+        prev_dt: Option<f64>,
+    ) -> Option<Next> {
+        let (i, dt) = (i.checked_sub(1)?, prev_dt?);
+        let tangent = law.tangent(c, &Vec4::ZERO, dt).ok()?;
+        Some(Next { i, dt, tangent })
+    }
+
+    /// The back-substitution of a prepared step of a fusable law (`self.tangents` all
+    /// `C_i`, the adjoint displacement `V` in `self.full`, `mu_{i+1}` in `self.field_a`):
+    /// `mu_i` into `self.field_a`, the gradient's sums into `sweep`, and with `next` the
+    /// right-hand side of that step, kept for [`Fused::take_source`].
+    pub(crate) fn back_substitute_fused(
+        &mut self,
+        law: &dyn Law,
+        c: &[f64],
+        sweep: &mut Sweep,
+        (dt, sig0, sig1): (f64, &[Vec4], &[Vec4]),
+        next: Option<Next>,
+    ) {
+        let model = self.model;
+        let disc = &model.disc;
+        let np = c.len();
+        let ne = disc.elements.len();
+        let n_chunks = ne.div_ceil(CHUNK);
+        let f = &mut self.fused;
+        f.forces.resize(ne, [0.0; 16]);
+        f.m_part.resize(n_chunks, Mat4::ZERO);
+        // (every law has a parameter; `npc` keeps the chunks non-empty regardless)
+        let npc = np.max(1);
+        f.g_part.resize(n_chunks * npc, 0.0);
+        f.dflow.resize(n_chunks * npc, Vec4::ZERO);
+        let (s, ct) = (sweep.s, self.tangents[0]);
+        let next_c = next.map(|n| n.tangent);
+        let (v, mu_in) = (&self.full, &self.field_a);
+        let chunk_qp = CHUNK * QP_PER_ELEMENT;
+        let work = |(k, ((((fes, mu_out), m), gp), dflow)): (
+            usize,
+            (
+                (((&mut [[f64; 16]], &mut [Vec4]), &mut Mat4), &mut [f64]),
+                &mut [Vec4],
+            ),
+        )| {
+            *m = Mat4::ZERO;
+            gp.fill(0.0);
+            for (j, fe) in fes.iter_mut().enumerate() {
+                let e = k * CHUNK + j;
+                let ve = disc.gather(e, v);
+                *fe = [0.0; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let qp = &disc.qp[q];
+                    let bv = Vec4(qp.strain(&ve));
+                    let sm = s.mul_vec(&mu_in[q]);
+                    let mu = ct.mul_vec(&(sm - bv));
+                    mu_out[QP_PER_ELEMENT * j + g] = mu;
+                    let wmu = mu * qp.w;
+                    let ds = sig1[q] - sig0[q];
+                    for a in 0..4 {
+                        for b in 0..4 {
+                            m.0[a][b] += wmu[a] * ds[b];
+                        }
+                    }
+                    if sig1[q].max_abs() > 0.0 {
+                        law.flow_param_derivatives(c, &sig1[q], &mut dflow[..np]);
+                        for (gk, d) in gp.iter_mut().zip(dflow.iter()) {
+                            *gk -= dt * wmu.dot(d);
+                        }
+                    }
+                    if let Some(cn) = &next_c {
+                        // the next step's source, as `Adjoint::adjoint_source` forms it
+                        let src = cn.mul_vec(&s.mul_vec(&mu)) - mu;
+                        qp.add_bt(&src.0, qp.w, fe);
+                    }
+                }
+            }
+        };
+        let nq = QP_PER_ELEMENT * ne;
+        // on one thread in place (handing a pass to a pool of one costs more than it does)
+        if rayon::current_num_threads() > 1 {
+            f.forces
+                .par_chunks_mut(CHUNK)
+                .zip(self.field_b[..nq].par_chunks_mut(chunk_qp))
+                .zip(f.m_part.par_iter_mut())
+                .zip(f.g_part.par_chunks_mut(npc))
+                .zip(f.dflow.par_chunks_mut(npc))
+                .enumerate()
+                .for_each(work);
+        } else {
+            f.forces
+                .chunks_mut(CHUNK)
+                .zip(self.field_b[..nq].chunks_mut(chunk_qp))
+                .zip(f.m_part.iter_mut())
+                .zip(f.g_part.chunks_mut(npc))
+                .zip(f.dflow.chunks_mut(npc))
+                .enumerate()
+                .for_each(work);
+        }
+        // the chunks' sums in chunk order
+        for (m, gp) in f.m_part.iter().zip(f.g_part.chunks(npc)) {
+            for a in 0..4 {
+                for b in 0..4 {
+                    sweep.m_acc.0[a][b] += m.0[a][b];
+                }
+            }
+            for (g, p) in sweep.grad.iter_mut().zip(gp) {
+                *g += p;
+            }
+        }
+        f.next = None;
+        if let Some(n) = next {
+            // the elements' parts summed in element order, as `internal_force` does
+            f.g.resize(v.len(), 0.0);
+            f.g.fill(0.0);
+            for (e, fe) in f.forces.iter().enumerate() {
+                for (d, x) in disc.element_dofs(e).iter().zip(fe) {
+                    f.g[*d] += x;
+                }
+            }
+            f.next = Some((n.i, n.dt.to_bits()));
+        }
+        std::mem::swap(&mut self.field_a, &mut self.field_b);
+    }
+}
