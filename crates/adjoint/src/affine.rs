@@ -39,6 +39,94 @@ pub(crate) struct Fused {
     dflow: Vec<Vec4>,
     /// Steps whose right-hand side came from the previous step's pass (a count).
     pub(crate) reused: usize,
+    /// The isotropic form of the law's parameter derivatives, found at a sweep's first
+    /// pass (`None` inside: not looked for yet; `Some(None)`: not isotropic).
+    iso: Option<Option<IsoParams>>,
+    /// Per chunk: the isotropic sums `[w mu . s1, w mu . s0, w tr mu tr s1, w tr mu tr s0]`.
+    sums: Vec<[f64; 4]>,
+}
+
+/// `M = p I + q J` with `J = 1 (x) 1 / 3` (Mandel; `J x = tr(x) / 3 1`): an isotropic
+/// fourth-order operator by its two coefficients.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Iso {
+    p: f64,
+    q: f64,
+}
+
+impl Iso {
+    /// `M` as `p I + q J` when it is that to 1e-13 of its largest entry.
+    pub(crate) fn of(m: &Mat4) -> Option<Iso> {
+        let (p, q) = (m.0[3][3], 3.0 * m.0[0][1]);
+        let scale = m.max_abs();
+        let iso = Iso { p, q };
+        let ok = (0..4).all(|a| {
+            (0..4).all(|b| {
+                let j = if a < 3 && b < 3 { q / 3.0 } else { 0.0 };
+                let want = if a == b { p + j } else { j };
+                (m.0[a][b] - want).abs() <= 1e-13 * scale
+            })
+        });
+        (ok && scale.is_finite()).then_some(iso)
+    }
+
+    #[inline]
+    fn apply(self, x: &Vec4) -> Vec4 {
+        let t = (x.0[0] + x.0[1] + x.0[2]) * (self.q / 3.0);
+        Vec4([
+            self.p * x.0[0] + t,
+            self.p * x.0[1] + t,
+            self.p * x.0[2] + t,
+            self.p * x.0[3],
+        ])
+    }
+}
+
+/// The parameter derivatives of a law whose compliance derivatives `dS/dc_k` and flow
+/// derivatives `dg/dc_k = D_k sigma` (the flow linear in the stress) are isotropic: then
+/// `sum w mu . R_i` needs four sums per step instead of `mu (x) (s1 - s0)` and the flow's
+/// derivatives at every point.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct IsoParams {
+    ds: Vec<Iso>,
+    dg: Vec<Iso>,
+}
+
+impl IsoParams {
+    /// The isotropic forms of `law`'s `dS/dc_k` and `D_k`, or `None` when one is not
+    /// isotropic or the flow's derivative is not linear in the stress (checked at a
+    /// stress).
+    fn of(law: &dyn Law, c: &[f64]) -> Option<IsoParams> {
+        let np = c.len();
+        let ds = (0..np)
+            .map(|k| Iso::of(&law.compliance_derivative(c, k)))
+            .collect::<Option<Vec<_>>>()?;
+        // D_k column by column from unit stresses
+        let mut d = vec![Mat4::ZERO; np];
+        let mut out = vec![Vec4::ZERO; np];
+        for j in 0..4 {
+            let mut e = Vec4::ZERO;
+            e.0[j] = 1.0;
+            law.flow_param_derivatives(c, &e, &mut out);
+            for (dk, o) in d.iter_mut().zip(&out) {
+                for a in 0..4 {
+                    dk.0[a][j] = o.0[a];
+                }
+            }
+        }
+        let dg = d.iter().map(Iso::of).collect::<Option<Vec<_>>>()?;
+        // linear: D_k sigma is the law's own derivative at a stress
+        let sigma = Vec4([1.0, -2.0, 0.5, 3.0]);
+        law.flow_param_derivatives(c, &sigma, &mut out);
+        for (dk, o) in d.iter().zip(&out) {
+            let lin = dk.mul_vec(&sigma);
+            let scale = o.max_abs().max(dk.max_abs());
+            if (lin - *o).max_abs() > 1e-12 * scale {
+                return None;
+            }
+        }
+        Some(IsoParams { ds, dg })
+    }
 }
 
 /// The step swept next, for the fused pass: its index, step length (s) and tangent.
@@ -54,6 +142,7 @@ impl Fused {
     pub(crate) fn begin(&mut self) {
         self.next = None;
         self.reused = 0;
+        self.iso = None;
     }
 
     /// Moves the right-hand side formed for step `i` (step length `dt`) into `full` and
@@ -103,6 +192,24 @@ impl Adjoint<'_> {
         (dt, sig0, sig1): (f64, &[Vec4], &[Vec4]),
         next: Option<Next>,
     ) {
+        let params = self
+            .fused
+            .iso
+            .take()
+            .unwrap_or_else(|| IsoParams::of(law, c));
+        let forms = params.as_ref().and_then(|_| {
+            let cn = match next {
+                Some(n) => Some(Iso::of(&n.tangent)?),
+                None => None,
+            };
+            Some((Iso::of(&sweep.s)?, Iso::of(&self.tangents[0])?, cn))
+        });
+        if let (Some(ip), Some(forms)) = (&params, forms) {
+            self.back_substitute_iso(ip, sweep, (dt, sig0, sig1), forms, next);
+            self.fused.iso = Some(params);
+            return;
+        }
+        self.fused.iso = Some(params);
         let model = self.model;
         let disc = &model.disc;
         let np = c.len();
@@ -195,6 +302,100 @@ impl Adjoint<'_> {
         f.next = None;
         if let Some(n) = next {
             // the elements' parts summed in element order, as `internal_force` does
+            f.g.resize(v.len(), 0.0);
+            f.g.fill(0.0);
+            for (e, fe) in f.forces.iter().enumerate() {
+                for (d, x) in disc.element_dofs(e).iter().zip(fe) {
+                    f.g[*d] += x;
+                }
+            }
+            f.next = Some((n.i, n.dt.to_bits()));
+        }
+        std::mem::swap(&mut self.field_a, &mut self.field_b);
+    }
+}
+
+impl Adjoint<'_> {
+    /// [`Adjoint::back_substitute_fused`] of a law whose operators are isotropic
+    /// (`S`, `C_i`, the next step's `C`, `dS/dc_k`, `D_k`: [`Iso`]): each 4x4 product is
+    /// two coefficients, and the gradient's part of the step is, with `M = p I + q J`,
+    /// `sum w mu . M x = p sum w mu . x + q/3 sum w tr(mu) tr(x)` for `x = s1, s0`.
+    fn back_substitute_iso(
+        &mut self,
+        ip: &IsoParams,
+        sweep: &mut Sweep,
+        (dt, sig0, sig1): (f64, &[Vec4], &[Vec4]),
+        (s, ct, cn): (Iso, Iso, Option<Iso>),
+        next: Option<Next>,
+    ) {
+        let model = self.model;
+        let disc = &model.disc;
+        let ne = disc.elements.len();
+        let n_chunks = ne.div_ceil(CHUNK);
+        let f = &mut self.fused;
+        f.forces.resize(ne, [0.0; 16]);
+        f.sums.resize(n_chunks, [0.0; 4]);
+        let (v, mu_in) = (&self.full, &self.field_a);
+        let chunk_qp = CHUNK * QP_PER_ELEMENT;
+        let tr = |x: &Vec4| x.0[0] + x.0[1] + x.0[2];
+        let work = |(k, ((fes, mu_out), sums)): (
+            usize,
+            ((&mut [[f64; 16]], &mut [Vec4]), &mut [f64; 4]),
+        )| {
+            let mut acc = [0.0; 4];
+            for (j, fe) in fes.iter_mut().enumerate() {
+                let e = k * CHUNK + j;
+                let ve = disc.gather(e, v);
+                *fe = [0.0; 16];
+                for g in 0..QP_PER_ELEMENT {
+                    let q = QP_PER_ELEMENT * e + g;
+                    let qp = &disc.qp[q];
+                    let bv = Vec4(qp.strain(&ve));
+                    let mu = ct.apply(&(s.apply(&mu_in[q]) - bv));
+                    mu_out[QP_PER_ELEMENT * j + g] = mu;
+                    let wmu = mu * qp.w;
+                    let tw = tr(&wmu);
+                    let (s1, s0) = (&sig1[q], &sig0[q]);
+                    acc[0] += wmu.dot(s1);
+                    acc[1] += wmu.dot(s0);
+                    acc[2] += tw * tr(s1);
+                    acc[3] += tw * tr(s0);
+                    if let Some(cn) = cn {
+                        let src = cn.apply(&s.apply(&mu)) - mu;
+                        qp.add_bt(&src.0, qp.w, fe);
+                    }
+                }
+            }
+            *sums = acc;
+        };
+        let nq = QP_PER_ELEMENT * ne;
+        if rayon::current_num_threads() > 1 {
+            f.forces
+                .par_chunks_mut(CHUNK)
+                .zip(self.field_b[..nq].par_chunks_mut(chunk_qp))
+                .zip(f.sums.par_iter_mut())
+                .enumerate()
+                .for_each(work);
+        } else {
+            f.forces
+                .chunks_mut(CHUNK)
+                .zip(self.field_b[..nq].chunks_mut(chunk_qp))
+                .zip(f.sums.iter_mut())
+                .enumerate()
+                .for_each(work);
+        }
+        let mut t = [0.0; 4];
+        for p in &f.sums {
+            for (a, b) in t.iter_mut().zip(p) {
+                *a += b;
+            }
+        }
+        let [d1, d0, e1, e0] = t;
+        for ((g, a), b) in sweep.grad.iter_mut().zip(&ip.ds).zip(&ip.dg) {
+            *g -= a.p * (d1 - d0) + a.q / 3.0 * (e1 - e0) + dt * (b.p * d1 + b.q / 3.0 * e1);
+        }
+        f.next = None;
+        if let Some(n) = next {
             f.g.resize(v.len(), 0.0);
             f.g.fill(0.0);
             for (e, fe) in f.forces.iter().enumerate() {

@@ -198,15 +198,17 @@ impl<'m> Adjoint<'m> {
     }
 
     /// Forms `C_i` at every Gauss point and sets the system of step `i` (tangent, active
-    /// set, the constraint's frames from the step's displacement `u1`), factorized.
+    /// set, the constraint's frames from the step's displacement `u1`), factorized. With
+    /// `one` and a law with one tangent, only `self.tangents[0]` is set (the fused pass
+    /// reads no other).
     fn prepare_step(
         &mut self,
         law: &dyn Law,
         c: &[f64],
         rec: &StepRecord,
-        sigma1: &[Vec4],
-        u1: &[f64],
+        (sigma1, u1): (&[Vec4], &[f64]),
         i: usize,
+        one: bool,
     ) -> Result<(), AdjointError> {
         let model = self.model;
         let fail = |reason: String| AdjointError::Step {
@@ -220,7 +222,11 @@ impl<'m> Adjoint<'m> {
             let ct = law
                 .tangent(c, &Vec4::ZERO, rec.dt)
                 .map_err(|f| fail(f.reason))?;
-            self.tangents.fill(ct);
+            if one {
+                self.tangents[0] = ct;
+            } else {
+                self.tangents.fill(ct);
+            }
         } else {
             for (t, s) in self.tangents.iter_mut().zip(sigma1) {
                 *t = law
@@ -415,10 +421,14 @@ impl<'m> Adjoint<'m> {
             return Ok(());
         }
         sweep.mu_zero = false;
-        self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
         let fuse = !shifted && self.fuse && self.fusable(law);
+        self.prepare_step(law, c, rec, (sig1, &f1.u), i, fuse)?;
         if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+            if fuse {
+                let t0 = self.tangents[0];
+                self.tangents.fill(t0);
+            }
             self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
         }
         self.restrict();
@@ -551,7 +561,7 @@ impl<'m> Adjoint<'m> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
             // the prescribed values tied to the previous step (friction's sticking nodes)
             let prev = i
                 .checked_sub(1)

@@ -427,9 +427,13 @@ impl Adjoint<'_> {
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
             return Err(coulomb_refused(i, rec.t));
         }
-        self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
         let fuse = self.fuse && self.fusable(law);
+        self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, fuse)?;
         if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+            if fuse {
+                let t0 = self.tangents[0];
+                self.tangents.fill(t0);
+            }
             self.adjoint_source(sweep.s, rec, None);
         }
         self.restrict();
@@ -560,7 +564,7 @@ impl Adjoint<'_> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
             let prev = i
                 .checked_sub(1)
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
