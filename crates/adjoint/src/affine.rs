@@ -1,5 +1,6 @@
 //! The sweep of a law with one tangent at every Gauss point (elasticity, Maxwell:
-//! [`Law::is_linear`]) under small strain, in one pass over the Gauss points per step.
+//! [`Law::is_linear`]) under small strain, in one pass over the Gauss points per step
+//! (docs/validation-load-control.md §6, "One pass per step").
 //!
 //! A sweep step visits every point twice in its general form (`lib.rs`): the right-hand
 //! side `g_i = sum_g w B^T (C_i S - I) mu_{i+1}` before the solve, and the
@@ -8,9 +9,17 @@
 //! step's tangent, which for such a law is `C(c, dt_{i-1})` at every point: the
 //! back-substitution of step `i` forms it in the same pass, element by element
 //! (`B V_i`, `mu_i`, the sums, `B^T (C_{i-1} S - I) mu_i`), and step `i-1` starts from
-//! it. The arithmetic of every point is the general form's, so `mu_i` and `g_{i-1}` are
-//! the same bits; only the gradient's sums are added in fixed chunks of elements (the
-//! same chunks on any number of threads, so the same bits on any number of threads).
+//! it ([`Fused::take_source`]).
+//!
+//! When `S`, `C`, `dS/dc_k` and the flow's `dg/dc_k = D_k sigma` are isotropic (`p I + q J`,
+//! [`Iso`]; checked numerically once per sweep, with the flow's linearity), each 4x4
+//! product is two coefficients and the gradient's part of a step is four sums
+//! (`w mu . s1`, `w mu . s0`, `w tr(mu) tr(s1)`, `w tr(mu) tr(s0)`) instead of an outer
+//! product and the flow's derivatives at every point. Otherwise the general form's
+//! per-point arithmetic is kept (the same `mu_i` and `g_{i-1}` bits). The sums are added
+//! in fixed chunks of elements, the same chunks on any number of threads: the same bits
+//! on any number of threads, and the general sweep's gradient to round-off
+//! (`tests/fused_sweep.rs`).
 
 use indentify_fe::QP_PER_ELEMENT;
 use indentify_laws::{Law, Mat4, Vec4};
@@ -21,6 +30,26 @@ use crate::{Adjoint, Sweep};
 /// Elements per chunk of the fused pass (fixed: the sums' order does not depend on the
 /// thread count).
 const CHUNK: usize = 8;
+
+/// One chunk of the general fused pass: its index, its elements' forces, its points'
+/// `mu_i`, and its sums (`mu (x) (s1 - s0)`, the flow's part, scratch).
+type GeneralChunk<'a> = (
+    usize,
+    (
+        (
+            ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut Mat4),
+            &'a mut [f64],
+        ),
+        &'a mut [Vec4],
+    ),
+);
+
+/// One chunk of the isotropic fused pass: its index, its elements' forces, its points'
+/// `mu_i` and its four sums.
+type IsoChunk<'a> = (
+    usize,
+    ((&'a mut [[f64; 16]], &'a mut [Vec4]), &'a mut [f64; 4]),
+);
 
 /// The fused pass's work space and the right-hand side it leaves for the next step.
 #[derive(Debug, Default)]
@@ -226,13 +255,7 @@ impl Adjoint<'_> {
         let next_c = next.map(|n| n.tangent);
         let (v, mu_in) = (&self.full, &self.field_a);
         let chunk_qp = CHUNK * QP_PER_ELEMENT;
-        let work = |(k, ((((fes, mu_out), m), gp), dflow)): (
-            usize,
-            (
-                (((&mut [[f64; 16]], &mut [Vec4]), &mut Mat4), &mut [f64]),
-                &mut [Vec4],
-            ),
-        )| {
+        let work = |(k, ((((fes, mu_out), m), gp), dflow)): GeneralChunk<'_>| {
             *m = Mat4::ZERO;
             gp.fill(0.0);
             for (j, fe) in fes.iter_mut().enumerate() {
@@ -338,10 +361,7 @@ impl Adjoint<'_> {
         let (v, mu_in) = (&self.full, &self.field_a);
         let chunk_qp = CHUNK * QP_PER_ELEMENT;
         let tr = |x: &Vec4| x.0[0] + x.0[1] + x.0[2];
-        let work = |(k, ((fes, mu_out), sums)): (
-            usize,
-            ((&mut [[f64; 16]], &mut [Vec4]), &mut [f64; 4]),
-        )| {
+        let work = |(k, ((fes, mu_out), sums)): IsoChunk<'_>| {
             let mut acc = [0.0; 4];
             for (j, fe) in fes.iter_mut().enumerate() {
                 let e = k * CHUNK + j;
