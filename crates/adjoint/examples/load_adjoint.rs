@@ -94,6 +94,8 @@ fn main() {
     // fastest of `repeat` alternated runs: [forward, gradient (one pass), gradient (two
     // passes), sensitivities] under load control, then the same under depth control
     let mut best = [[0.0; 4]; 2];
+    // numeric factorizations of the last sweeps: one pass, two passes
+    let mut facts = [0; 2];
     let time = |slot: &mut f64, t0: Clock| *slot += t0.elapsed() / repeat as f64;
     for _ in 0..repeat {
         let t0 = Clock::now();
@@ -112,6 +114,7 @@ fn main() {
                 .gradient_load(&mat, &params, &traj, &history, &dj_dh, &zero)
                 .expect("gradient");
             time(&mut best[0][k], t0);
+            facts[usize::from(k == 2)] = g.factorizations;
             std::hint::black_box(g);
         }
         adjoint.set_fused(true);
@@ -135,6 +138,7 @@ fn main() {
                 .gradient(&mat, &params, &traj, &rho)
                 .expect("gradient");
             time(&mut best[1][k], t0);
+            facts[usize::from(k == 2)] = g.factorizations;
             std::hint::black_box(g);
         }
         adjoint.set_fused(true);
@@ -145,6 +149,7 @@ fn main() {
         time(&mut best[1][3], t0);
         std::hint::black_box(s);
     }
+    println!("{case}: factorizations per sweep (one pass, two passes) {facts:?}");
     for (name, b, g, s) in [
         ("load", best[0], "gradient_load", "sensitivities_load"),
         ("depth", best[1], "gradient", "sensitivities"),
