@@ -71,6 +71,9 @@ pub(crate) struct Fused {
     /// The isotropic form of the law's parameter derivatives, found at a sweep's first
     /// pass (`None` inside: not looked for yet; `Some(None)`: not isotropic).
     iso: Option<Option<IsoParams>>,
+    /// Tests only: keep the general per-point form even for an isotropic law.
+    #[cfg(test)]
+    general_form: bool,
     /// Per chunk: the isotropic sums `[w mu . s1, w mu . s0, w tr mu tr s1, w tr mu tr s0]`.
     sums: Vec<[f64; 4]>,
 }
@@ -226,6 +229,8 @@ impl Adjoint<'_> {
             .iso
             .take()
             .unwrap_or_else(|| IsoParams::of(law, c));
+        #[cfg(test)]
+        let params = params.filter(|_| !self.fused.general_form);
         let forms = params.as_ref().and_then(|_| {
             let cn = match next {
                 Some(n) => Some(Iso::of(&n.tangent)?),
@@ -426,5 +431,92 @@ impl Adjoint<'_> {
             f.next = Some((n.i, n.dt.to_bits()));
         }
         std::mem::swap(&mut self.field_a, &mut self.field_b);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indentify_contact::{
+        ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions,
+    };
+    use indentify_laws::{LawMaterial, Maxwell};
+    use indentify_mesh::CylinderMesher;
+
+    /// The fused pass in its general per-point form (for a linear law that is not
+    /// isotropic; none exists yet, so Maxwell with the isotropic form switched off) gives
+    /// the general two-pass sweep's gradient to 1e-12, under load control with depth and
+    /// force costs.
+    #[test]
+    fn general_form_of_the_fused_pass_equals_the_two_pass_sweep() {
+        let mesh = CylinderMesher {
+            radius: 4.0,
+            height: 4.0,
+            nr: 6,
+            nz: 6,
+            grading_r: 1.45,
+            grading_z: 1.45,
+        }
+        .build()
+        .unwrap();
+        let cone = Punch::Cone {
+            half_angle_deg: 68.0,
+        };
+        let m = Model::with_contact(mesh, cone, ContactKind::Vertical).unwrap();
+        let seg = |depth: Option<f64>, force: Option<f64>| HistorySegment {
+            duration: 1.0,
+            depth,
+            force,
+            steps: 5,
+        };
+        let h = LoadHistory::from_segments(&[
+            seg(Some(0.02), None),
+            seg(None, Some(40.0)),
+            seg(None, Some(40.0)),
+            seg(Some(0.01), None),
+        ])
+        .unwrap();
+        let (mat, c) = (LawMaterial(&Maxwell), [21000.0, 0.3, 25000.0]);
+        let opts = SolverOptions {
+            record_fields: true,
+            ..SolverOptions::default()
+        };
+        let traj = DirectSolver::new(&m)
+            .unwrap()
+            .run_history(&mat, &c, &h, &opts)
+            .unwrap();
+        let n = traj.steps.len();
+        let dj_dh: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let dj_df: Vec<f64> = (0..n).map(|i| 1e-3 * (i % 3) as f64).collect();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let grad = |adj: &mut Adjoint, fused: bool, general_form: bool| {
+            adj.set_fused(fused);
+            adj.fused.general_form = general_form;
+            adj.gradient_load(&mat, &c, &traj, &h, &dj_dh, &dj_df)
+                .unwrap()
+                .dj_dc
+        };
+        let two = grad(&mut adj, false, false);
+        let general = grad(&mut adj, true, true);
+        let iso = grad(&mut adj, true, false);
+        assert!(adj.fused.reused > 0);
+        let scale = two.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+        for ((a, b), d) in two.iter().zip(&general).zip(&iso) {
+            assert!((a - b).abs() <= 1e-12 * scale, "{two:?} vs {general:?}");
+            assert!((a - d).abs() <= 1e-12 * scale, "{two:?} vs {iso:?}");
+        }
+    }
+
+    #[test]
+    fn isotropic_forms_are_recognized_and_others_refused() {
+        let c = [20000.0, 0.3, 30000.0];
+        let t = Maxwell.tangent(&c, &Vec4::ZERO, 0.1).unwrap();
+        let iso = Iso::of(&t).unwrap();
+        let x = Vec4([1.0, -2.0, 0.5, 3.0]);
+        assert!((iso.apply(&x) - t.mul_vec(&x)).max_abs() <= 1e-12 * t.max_abs());
+        let mut skew = t;
+        skew.0[0][3] = 1.0;
+        assert!(Iso::of(&skew).is_none());
+        assert!(IsoParams::of(&Maxwell, &c).is_some());
     }
 }
