@@ -2,10 +2,42 @@
 //! (docs/validation-load-control.md §4): R1 or R2 (docs/theory.md §11) on the reference
 //! mesh, vertical contact; the load-controlled load and hold of the force history of the
 //! depth-controlled trapezoid's first two segments; the forward run recording its fields,
-//! then `Adjoint::gradient_load` of the depth cost and `Adjoint::sensitivities_load`.
-//! Prints the fastest of REPEAT alternated runs of each and their ratios:
+//! then `Adjoint::gradient_load` of the depth cost (with the one-pass sweep of an affine
+//! law and with the general two-pass one, `Adjoint::set_fused`) and
+//! `Adjoint::sensitivities_load`; then the same under depth control (the trapezoid's load
+//! and hold, `Adjoint::gradient` of a force cost). Prints the fastest of REPEAT
+//! alternated runs of each and their ratios to the forward:
 //! `cargo run --release -p indentify-adjoint --example load_adjoint -- r1 [REPEAT]`.
 use std::time::Instant;
+
+/// The time the calling thread spent on a CPU (`/proc/thread-self/schedstat`, Linux;
+/// nanoseconds), or the wall time where that file cannot be read: on a shared machine
+/// the on-CPU time of a one-thread run is far less noisy than its wall time.
+#[derive(Clone, Copy)]
+struct Clock {
+    cpu: Option<u64>,
+    wall: Instant,
+}
+
+impl Clock {
+    fn cpu_ns() -> Option<u64> {
+        let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+        s.split_whitespace().next()?.parse().ok()
+    }
+    fn now() -> Clock {
+        Clock {
+            cpu: Clock::cpu_ns(),
+            wall: Instant::now(),
+        }
+    }
+    /// Seconds since `self`.
+    fn elapsed(self) -> f64 {
+        match (self.cpu, Clock::cpu_ns()) {
+            (Some(a), Some(b)) => (b - a) as f64 * 1e-9,
+            _ => self.wall.elapsed().as_secs_f64(),
+        }
+    }
+}
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
@@ -58,41 +90,80 @@ fn main() {
     let history =
         LoadHistory::from_force_record(&schedule.t, &by_depth.forces()).expect("force history");
     let mut adjoint = Adjoint::new(&model).expect("adjoint");
-    let (mut best_f, mut best_g, mut best_s) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let mat = indentify_laws::LawMaterial(law);
+    // fastest of `repeat` alternated runs: [forward, gradient (one pass), gradient (two
+    // passes), sensitivities] under load control, then the same under depth control
+    let mut best = [[0.0; 4]; 2];
+    // numeric factorizations of the last sweeps: one pass, two passes
+    let mut facts = [0; 2];
+    let time = |slot: &mut f64, t0: Clock| *slot += t0.elapsed() / repeat as f64;
     for _ in 0..repeat {
-        let t0 = Instant::now();
+        let t0 = Clock::now();
         let traj = solver
-            .run_history(&indentify_laws::LawMaterial(law), &params, &history, &opts)
+            .run_history(&mat, &params, &history, &opts)
             .expect("load run");
-        best_f = best_f.min(t0.elapsed().as_secs_f64());
+        time(&mut best[0][0], t0);
+
         let n = traj.steps.len();
         let dj_dh: Vec<f64> = traj.steps.iter().map(|s| s.depth).collect();
-        let t0 = Instant::now();
-        let g = adjoint
-            .gradient_load(
-                &indentify_laws::LawMaterial(law),
-                &params,
-                &traj,
-                &history,
-                &dj_dh,
-                &vec![0.0; n],
-            )
-            .expect("gradient");
-        best_g = best_g.min(t0.elapsed().as_secs_f64());
-        let t0 = Instant::now();
+        let zero = vec![0.0; n];
+        for (k, fused) in [(1, true), (2, false)] {
+            adjoint.set_fused(fused);
+            let t0 = Clock::now();
+            let g = adjoint
+                .gradient_load(&mat, &params, &traj, &history, &dj_dh, &zero)
+                .expect("gradient");
+            time(&mut best[0][k], t0);
+            facts[usize::from(k == 2)] = g.factorizations;
+            std::hint::black_box(g);
+        }
+        adjoint.set_fused(true);
+        let t0 = Clock::now();
         let s = adjoint
-            .sensitivities_load(&indentify_laws::LawMaterial(law), &params, &traj, &history)
+            .sensitivities_load(&mat, &params, &traj, &history)
             .expect("sensitivities");
-        best_s = best_s.min(t0.elapsed().as_secs_f64());
-        std::hint::black_box((g, s));
+        time(&mut best[0][3], t0);
+        std::hint::black_box(s);
+        // depth control: the trapezoid's load and hold
+        let t0 = Clock::now();
+        let traj = solver
+            .run(&mat, &params, &schedule, &opts)
+            .expect("depth run");
+        time(&mut best[1][0], t0);
+        let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
+        for (k, fused) in [(1, true), (2, false)] {
+            adjoint.set_fused(fused);
+            let t0 = Clock::now();
+            let g = adjoint
+                .gradient(&mat, &params, &traj, &rho)
+                .expect("gradient");
+            time(&mut best[1][k], t0);
+            facts[usize::from(k == 2)] = g.factorizations;
+            std::hint::black_box(g);
+        }
+        adjoint.set_fused(true);
+        let t0 = Clock::now();
+        let s = adjoint
+            .sensitivities(&mat, &params, &traj)
+            .expect("sensitivities");
+        time(&mut best[1][3], t0);
+        std::hint::black_box(s);
     }
-    println!(
-        "{case}: load-controlled forward (fields recorded) {:.1} ms, gradient_load {:.1} ms \
-         ({:.2}x), sensitivities_load {:.1} ms ({:.2}x)",
-        best_f * 1e3,
-        best_g * 1e3,
-        best_g / best_f,
-        best_s * 1e3,
-        best_s / best_f
-    );
+    println!("{case}: factorizations per sweep (one pass, two passes) {facts:?}");
+    for (name, b, g, s) in [
+        ("load", best[0], "gradient_load", "sensitivities_load"),
+        ("depth", best[1], "gradient", "sensitivities"),
+    ] {
+        println!(
+            "{case} {name} control: forward (fields recorded) {:.1} ms, {g} {:.1} ms ({:.2}x; \
+             two passes per step {:.1} ms, {:.2}x), {s} {:.1} ms ({:.2}x)",
+            b[0] * 1e3,
+            b[1] * 1e3,
+            b[1] / b[0],
+            b[2] * 1e3,
+            b[2] / b[0],
+            b[3] * 1e3,
+            b[3] / b[0]
+        );
+    }
 }

@@ -78,6 +78,17 @@ impl Adjoint<'_> {
             });
         }
         self.contact.begin();
+        if self.contact.force_cotangent() == indentify_contact::ForceCotangent::Shifted {
+            // the later sticking ties read this step's depth (docs/theory.md §13, Coulomb
+            // friction under load control): that term is written for load control only
+            return Err(AdjointError::Step {
+                step: traj.steps.len().saturating_sub(1),
+                t: traj.steps.last().map_or(0.0, |s| s.t),
+                reason: "compliant depth control: the exact gradient with Coulomb friction \
+                         is not available (its sticking ties read the punch depth)"
+                    .into(),
+            });
+        }
         let n = traj.steps.len();
         let n_eq = self.model.dofs.n_eq;
         let mut col = Column {
@@ -93,7 +104,7 @@ impl Adjoint<'_> {
                 self.model.disc.n_qp(),
             ))),
         };
-        self.field_a.fill(Vec4::ZERO);
+        self.begin_sweep();
         for i in (0..n).rev() {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -116,6 +127,7 @@ impl Adjoint<'_> {
                         f0,
                         f1,
                         rho: g,
+                        prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
                     };
                     self.bordered_step(*law, c, sweep, &step, border)?;
                 }
@@ -232,7 +244,7 @@ impl Adjoint<'_> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
             let prev = i
                 .checked_sub(1)
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));

@@ -31,6 +31,7 @@
 //! (material and geometric parts), and `dF_i` by the variation of the internal force
 //! `K_i du_i + sum_g w0 G_i^T C_i q_i` (`finite.rs`, docs/validation-finite-strain.md).
 
+mod affine;
 pub mod check;
 mod compliant;
 mod finite;
@@ -156,6 +157,10 @@ pub struct Adjoint<'m> {
     /// The parameters a sensitivity pass skips (`true`: its column is never formed and
     /// stays zero); empty outside [`Adjoint::sensitivities_of`].
     skip: Vec<bool>,
+    /// The one-pass sweep step of a law with one tangent ([`affine`]).
+    fused: affine::Fused,
+    /// Whether sweeps use it ([`Adjoint::set_fused`]).
+    fuse: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -179,19 +184,37 @@ impl<'m> Adjoint<'m> {
             e_a: Vec::new(),
             finite,
             skip: Vec::new(),
+            fused: affine::Fused::default(),
+            fuse: true,
         })
     }
 
+    /// Whether the sweeps of a law with one tangent at every Gauss point (elasticity,
+    /// Maxwell) under small strain visit the points once per step (`true`, the default)
+    /// or twice, in the general form every law takes (for comparisons and measurements:
+    /// the gradients agree to round-off).
+    pub fn set_fused(&mut self, on: bool) {
+        self.fuse = on;
+    }
+
+    /// Starts a reversed-time sweep: `mu = 0`, nothing kept from an earlier one.
+    fn begin_sweep(&mut self) {
+        self.field_a.fill(Vec4::ZERO);
+        self.fused.begin();
+    }
+
     /// Forms `C_i` at every Gauss point and sets the system of step `i` (tangent, active
-    /// set, the constraint's frames from the step's displacement `u1`), factorized.
+    /// set, the constraint's frames from the step's displacement `u1`), factorized. With
+    /// `one` and a law with one tangent, only `self.tangents[0]` is set (the fused pass
+    /// reads no other).
     fn prepare_step(
         &mut self,
         law: &dyn Law,
         c: &[f64],
         rec: &StepRecord,
-        sigma1: &[Vec4],
-        u1: &[f64],
+        (sigma1, u1): (&[Vec4], &[f64]),
         i: usize,
+        one: bool,
     ) -> Result<(), AdjointError> {
         let model = self.model;
         let fail = |reason: String| AdjointError::Step {
@@ -205,7 +228,11 @@ impl<'m> Adjoint<'m> {
             let ct = law
                 .tangent(c, &Vec4::ZERO, rec.dt)
                 .map_err(|f| fail(f.reason))?;
-            self.tangents.fill(ct);
+            if one {
+                self.tangents[0] = ct;
+            } else {
+                self.tangents.fill(ct);
+            }
         } else {
             for (t, s) in self.tangents.iter_mut().zip(sigma1) {
                 *t = law
@@ -284,7 +311,7 @@ impl<'m> Adjoint<'m> {
         // the gradient depends on its inputs alone, not on what ran before on this workspace
         self.contact.begin();
         let mut sweep = Sweep::new(law, c);
-        self.field_a.fill(Vec4::ZERO);
+        self.begin_sweep();
         for i in (0..traj.steps.len()).rev() {
             let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
             let step = Recorded {
@@ -293,6 +320,7 @@ impl<'m> Adjoint<'m> {
                 f0: s0,
                 f1: s1,
                 rho: dj_df[i],
+                prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
             };
             self.sweep_step(law, c, &mut sweep, &step)?;
         }
@@ -357,7 +385,7 @@ impl<'m> Adjoint<'m> {
             });
         }
         let mut sweep = Sweep::new(law, c);
-        self.field_a.fill(Vec4::ZERO);
+        self.begin_sweep();
         replayed_steps_rev(solver, mat, c, schedule, opts, traj, |g, rec, s0, s1| {
             let step = Recorded {
                 i: g,
@@ -365,6 +393,7 @@ impl<'m> Adjoint<'m> {
                 f0: s0,
                 f1: s1,
                 rho: dj_df[g],
+                prev_dt: g.checked_sub(1).map(|p| traj.steps[p].dt),
             };
             self.sweep_step(law, c, &mut sweep, &step)
         })?;
@@ -390,6 +419,7 @@ impl<'m> Adjoint<'m> {
             f0,
             f1,
             rho,
+            prev_dt,
         } = *step;
         let (sig0, sig1) = (&f0.sigma, &f1.sigma);
         // with mu_{i+1} = 0, no data, no contact and nothing carried, mu_i = 0
@@ -397,9 +427,16 @@ impl<'m> Adjoint<'m> {
             return Ok(());
         }
         sweep.mu_zero = false;
-        self.prepare_step(law, c, rec, sig1, &f1.u, i)?;
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
-        self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
+        let fuse = !shifted && self.fuse && self.fusable(law);
+        self.prepare_step(law, c, rec, (sig1, &f1.u), i, fuse)?;
+        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+            if fuse {
+                let t0 = self.tangents[0];
+                self.tangents.fill(t0);
+            }
+            self.adjoint_source(sweep.s, rec, shifted.then_some(rho));
+        }
         self.restrict();
         // the constraint's part and the transposed solve: V in self.eq
         let mut eq = std::mem::take(&mut self.eq);
@@ -412,7 +449,12 @@ impl<'m> Adjoint<'m> {
                 self.full[d] += rho;
             }
         }
-        self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
+        if fuse {
+            let next = Self::next_of(law, c, i, prev_dt);
+            self.back_substitute_fused(law, c, sweep, (rec.dt, sig0, sig1), next);
+        } else {
+            self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
+        }
         Ok(())
     }
 
@@ -568,7 +610,7 @@ impl<'m> Adjoint<'m> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
             // the prescribed values tied to the previous step (friction's sticking nodes)
             let prev = i
                 .checked_sub(1)
@@ -740,6 +782,8 @@ struct Recorded<'a> {
     f0: &'a StepFields,
     f1: &'a StepFields,
     rho: f64,
+    /// The length (s) of the step swept after this one (step `i - 1`), when known.
+    prev_dt: Option<f64>,
 }
 
 /// Accumulators of one reversed-time sweep.

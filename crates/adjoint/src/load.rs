@@ -141,7 +141,7 @@ impl Adjoint<'_> {
         };
         let dj_dc = if let Some(law) = law {
             let mut sweep = Sweep::new(law, c);
-            self.field_a.fill(Vec4::ZERO);
+            self.begin_sweep();
             self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| match border {
                 Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
                 None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
@@ -156,6 +156,7 @@ impl Adjoint<'_> {
                     f0,
                     f1,
                     rho,
+                    ..
                 } = *step;
                 adj.material_step(mat, c, &mut sw, i, rec, (f0, f1), rho, border)
             })?;
@@ -216,6 +217,7 @@ impl Adjoint<'_> {
                 f0: s0,
                 f1: s1,
                 rho: if load { 0.0 } else { dj_df[i] + carried },
+                prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
             };
             // the segment's start (time) and whether its prescribed values start from the
             // state of a step of the other kind (whose value then varies with c)
@@ -423,10 +425,27 @@ impl Adjoint<'_> {
         step: &Recorded<'_>,
         border: BorderedRho<'_>,
     ) -> Result<f64, AdjointError> {
-        let Recorded { i, rec, f0, f1, .. } = *step;
-        self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
-        // (a shifted cotangent's part of the source is added by `bordered_rho`)
-        self.adjoint_source(sweep.s, rec, None);
+        let Recorded {
+            i,
+            rec,
+            f0,
+            f1,
+            prev_dt,
+            ..
+        } = *step;
+        // (a shifted cotangent's part of the source is added by `bordered_rho`; Coulomb
+        // friction's shifted cotangent takes the two-pass sweep)
+        let fuse = self.fuse
+            && self.fusable(law)
+            && self.contact.force_cotangent() != ForceCotangent::Shifted;
+        self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, fuse)?;
+        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+            if fuse {
+                let t0 = self.tangents[0];
+                self.tangents.fill(t0);
+            }
+            self.adjoint_source(sweep.s, rec, None);
+        }
         self.restrict();
         let rho = self.bordered_rho(i, rec, &f1.u, border)?;
         sweep.mu_zero = false;
@@ -440,7 +459,13 @@ impl Adjoint<'_> {
                 self.full[d] += rho;
             }
         }
-        self.back_substitute(law, c, sweep, rec.dt, &f0.sigma, &f1.sigma);
+        if fuse {
+            let next = Self::next_of(law, c, i, prev_dt);
+            let fields = (rec.dt, f0.sigma.as_slice(), f1.sigma.as_slice());
+            self.back_substitute_fused(law, c, sweep, fields, next);
+        } else {
+            self.back_substitute(law, c, sweep, rec.dt, &f0.sigma, &f1.sigma);
+        }
         Ok(rho)
     }
 }
@@ -555,7 +580,7 @@ impl Adjoint<'_> {
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
-            self.prepare_step(law, c, rec, &f1.sigma, &f1.u, i)?;
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
             let prev = i
                 .checked_sub(1)
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));

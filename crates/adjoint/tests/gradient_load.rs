@@ -13,7 +13,7 @@ use indentify_adjoint::check::{central_difference, relative_difference};
 use indentify_contact::{
     ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions,
 };
-use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
+use indentify_laws::{Elastic, Law, LawMaterial, Material, Maxwell, NortonHoff, Prony};
 
 fn opts(record: bool) -> SolverOptions {
     SolverOptions {
@@ -255,6 +255,123 @@ fn sensitivities_agree_with_the_adjoint_and_differences() {
                 r < 1e-5,
                 "param {k}: {} vs {fd} ({r:.2e})",
                 sens.dh_dc[n - 1][k]
+            );
+        }
+    }
+}
+
+/// A cost on the forces of the depth-controlled steps of a mixed history (depth, load,
+/// hold, depth: the last segment starts from the depth the load reached, so its forces
+/// depend on the parameters through it as well), with a cost on the depths beside it:
+/// the adjoint against the forward sensitivities (`J^T w`, every depth-controlled step
+/// one at a time and all together, 1e-8) and against central differences of the direct
+/// solver's own runs (1e-6, the differences' own accuracy), for Maxwell, Norton-Hoff and
+/// a two-term Prony solid, under vertical contact (cone) and normal contact (sphere).
+#[test]
+fn force_cost_on_depth_steps_after_a_load_segment() {
+    for (punch, kind) in [
+        (cone(), ContactKind::Vertical),
+        (sphere(), ContactKind::Normal),
+    ] {
+        force_cost_after_load(&small_model(punch, kind));
+    }
+}
+
+fn force_cost_after_load(m: &Model) {
+    let h = LoadHistory::from_segments(&[
+        depth(1.0, 0.02, 4),
+        force(1.0, 40.0, 6),
+        force(1.0, 40.0, 6),
+        depth(1.0, 0.005, 5),
+    ])
+    .unwrap();
+    let (maxwell, norton) = (LawMaterial(&Maxwell), LawMaterial(&NortonHoff));
+    let prony = Prony::new(2).unwrap();
+    let cases: [(&dyn Material, Vec<f64>); 3] = [
+        (&maxwell, vec![21000.0, 0.3, 25000.0]),
+        (&norton, vec![1.1e5, 0.3, 1400.0, 5.5, 450.0]),
+        (&prony, vec![2.1e4, 0.3, 0.3, 0.2, 0.2, 2.0]),
+    ];
+    for (law, c) in cases {
+        let mut solver = DirectSolver::new(m).unwrap();
+        let traj = solver.run_history(law, &c, &h, &opts(true)).unwrap();
+        let n = traj.steps.len();
+        let mut adj = Adjoint::new(m).unwrap();
+        let sens = adj.sensitivities_load(law, &c, &traj, &h).unwrap();
+        let depth_step: Vec<bool> = traj.steps.iter().map(|s| s.t <= 1.0 || s.t > 3.0).collect();
+        let scale = |g: &[f64]| {
+            g.iter()
+                .zip(&c)
+                .fold(0.0f64, |m, (g, c)| m.max((g * c).abs()))
+        };
+        // each depth-controlled step alone, then all with weights and a depth cost
+        let mut cases: Vec<(Vec<f64>, Vec<f64>)> = (0..n)
+            .filter(|&i| depth_step[i])
+            .map(|i| {
+                let mut f = vec![0.0; n];
+                f[i] = 1.0;
+                (vec![0.0; n], f)
+            })
+            .collect();
+        let dj_df: Vec<f64> = (0..n)
+            .map(|i| if depth_step[i] { 1.0 + i as f64 } else { 0.0 })
+            .collect();
+        let dj_dh: Vec<f64> = (0..n).map(|i| 100.0 * (i % 4) as f64).collect();
+        cases.push((dj_dh.clone(), dj_df.clone()));
+        for (dh, df) in &cases {
+            let g = adj.gradient_load(law, &c, &traj, &h, dh, df).unwrap().dj_dc;
+            let jt: Vec<f64> = (0..c.len())
+                .map(|k| {
+                    (0..n)
+                        .map(|i| sens.df_dc[i][k] * df[i] + sens.dh_dc[i][k] * dh[i])
+                        .sum()
+                })
+                .collect();
+            // (steps out of contact: both zero)
+            let s = scale(&jt).max(f64::MIN_POSITIVE);
+            for k in 0..c.len() {
+                let r = (g[k] - jt[k]).abs() * c[k].abs() / s;
+                assert!(
+                    r < 1e-8,
+                    "{} param {k}: adjoint {} J^T w {} ({r:.2e})",
+                    law.name(),
+                    g[k],
+                    jt[k]
+                );
+            }
+        }
+        // central differences of J = sum w_F F_i + sum w_h U_i
+        let g = adj
+            .gradient_load(law, &c, &traj, &h, &dj_dh, &dj_df)
+            .unwrap()
+            .dj_dc;
+        let mut cost = |p: &[f64]| -> Result<f64, String> {
+            let t = solver
+                .run_history(law, p, &h, &opts(false))
+                .map_err(|e| e.to_string())?;
+            if t.steps.len() != n {
+                return Err("another number of steps".into());
+            }
+            Ok(t.steps
+                .iter()
+                .enumerate()
+                .map(|(i, s)| dj_df[i] * s.force + dj_dh[i] * s.depth)
+                .sum())
+        };
+        let s = scale(&g);
+        for k in 0..c.len() {
+            let fd = central_difference(&mut cost, &c, k, 1e-6).unwrap();
+            let r = (g[k] - fd).abs() * c[k].abs() / s;
+            println!(
+                "{} param {k}: adjoint {:.10e} fd {fd:.10e} ({r:.2e})",
+                law.name(),
+                g[k]
+            );
+            assert!(
+                r < 1e-6,
+                "{} param {k}: adjoint {} fd {fd} ({r:.2e})",
+                law.name(),
+                g[k]
             );
         }
     }

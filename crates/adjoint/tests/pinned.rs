@@ -3,7 +3,10 @@
 //! vertical, normal and Coulomb contact, small and finite strain, hash to the values
 //! recorded before the contact solver was split into a Newton driver and constraint
 //! pieces (at cbe5990). A change of these bits must be deliberate and come with its own
-//! comparison against finite differences (`gradient_fd*.rs`).
+//! comparison against finite differences (`gradient_fd*.rs`). The sweeps run the general
+//! two-pass form (`Adjoint::set_fused(false)`); the one-pass sweep of Maxwell under small
+//! strain, the default, is compared with it in `fused_sweep.rs` and with central
+//! differences in `gradient_fd*.rs` and `gradient_load.rs`.
 //!
 //! Reference: this code's own results at cbe5990, which `gradient_fd*.rs` checked against
 //! central differences. Model: the 4 x 4 mm cylinder (8 x 8 Q8) under a cone,
@@ -45,6 +48,9 @@ fn hashes(model: &Model, law: &dyn Law, c: &[f64]) -> [u64; 4] {
         .unwrap();
     let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
     let mut adj = Adjoint::new(model).unwrap();
+    // the general sweep's arithmetic (the one-pass sweep of an affine law, on by default,
+    // adds its sums in another order: `fused_sweep.rs` compares the two to 1e-12)
+    adj.set_fused(false);
     let g = adj
         .gradient(&indentify_laws::LawMaterial(law), c, &traj, &rho)
         .unwrap();

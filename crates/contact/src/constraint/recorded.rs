@@ -212,9 +212,9 @@ impl<'m> RecordedContact<'m> {
     /// variation `du_U = w - v` (equations) of the step's displacement per unit depth
     /// increment with everything before the step held, the forward's own bordered column
     /// (`v`: 1 on the active candidates' vertical equations, `K w = K v` with the
-    /// constrained equations held at zero), into `col`; `kv` (equations) is scratch and
-    /// holds `K v` on exit. Returns the Schur complement `s = dF/dU = -(K v) . du_U`
-    /// (N/mm), the step's contact stiffness.
+    /// constrained equations held at zero), into `col`; `kv` (equations) is scratch.
+    /// Returns the Schur complement `s = dF/dU = -(K v) . du_U` (N/mm), the step's
+    /// contact stiffness.
     pub fn depth_column(&mut self, rec: &StepRecord, col: &mut [f64], kv: &mut [f64]) -> f64 {
         let model = self.model;
         // `v` in `col`
@@ -224,13 +224,14 @@ impl<'m> RecordedContact<'m> {
                 col[e] = 1.0;
             }
         }
-        kv.fill(0.0);
-        model.pattern.sym_mul_add(self.system.k_values(), col, kv);
-        // an affine law's capacitance system gives the column without a solve
+        // an affine law's capacitance system gives the column without a solve (and
+        // without `K v`)
         self.w.copy_from_slice(col);
         if let Some(s) = self.system.depth_column_capacitance(&self.w, col) {
             return s;
         }
+        kv.fill(0.0);
+        model.pattern.sym_mul_add(self.system.k_values(), col, kv);
         self.w.copy_from_slice(kv);
         // `v_p` is zero between solves: the constrained equations held at zero
         self.system.solve_dirichlet(model, &mut self.w, &self.v_p);
