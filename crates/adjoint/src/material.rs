@@ -9,6 +9,10 @@
 //! 3. `dJ/dc -= sum_g w <mu_i, P_i>`; `z <- D_i^T mu_i`, `e <- E_i^T mu_i`.
 //!
 //! The tangent of the step's system is `C_i = -Pi A_i^-1 E_i` from the same blocks.
+//! A nonlinear material is asked for a point's four blocks in one
+//! [`Material::jac_blocks`] call in the first pass (before the step's solve); `D`, `E`
+//! and `P` are kept per point for the second (after it). A linear material's blocks are
+//! formed once per step and the later step's folded in (`MatSweep::d_next`).
 //! Every model: small and finite strain (`B` becomes the step's `G_i`, the stiffness the
 //! forward's consistent tangent with its geometric part, `finite.rs`), vertical,
 //! frictionless normal and Coulomb contact (whose `dJ/dF` enters as the shift
@@ -78,11 +82,18 @@ pub(crate) struct MatSweep {
     qm: Vec<f64>,
     sm: Vec<f64>,
     eg: Mat4,
+    /// A nonlinear material's blocks `D`, `E`, `P` of every point, from the one
+    /// [`Material::jac_blocks`] call of the first pass, read by the second
+    /// (`m x m`, `m x 4`, `m x n_c` per point; empty for a linear material).
+    dblk: Vec<f64>,
+    eblk: Vec<f64>,
+    pblk: Vec<f64>,
 }
 
 impl MatSweep {
     pub(crate) fn new(mat: &dyn Material, np: usize, nq: usize) -> MatSweep {
         let m = mat.state_len();
+        let per_point = if mat.is_linear() { 0 } else { nq };
         MatSweep {
             m,
             z: vec![0.0; nq * m],
@@ -110,6 +121,9 @@ impl MatSweep {
             qm: vec![0.0; m * m],
             sm: vec![0.0; m * 4],
             eg: Mat4::ZERO,
+            dblk: vec![0.0; per_point * m * m],
+            eblk: vec![0.0; per_point * m * 4],
+            pblk: vec![0.0; per_point * m * np],
         }
     }
 
@@ -341,10 +355,14 @@ impl Adjoint<'_> {
                     dt: rec.dt,
                     regime: f1.regime[q],
                 };
-                mat.jac_state(c, &step, &mut sw.a);
-                mat.jac_previous(c, &step, &mut dblk[q * m * m..(q + 1) * m * m]);
-                mat.jac_strain(c, &step, &mut eblk[q * m * 4..(q + 1) * m * 4]);
-                mat.jac_params(c, &step, &mut pblk[q * m * np..(q + 1) * m * np]);
+                mat.jac_blocks(
+                    c,
+                    &step,
+                    &mut sw.a,
+                    &mut dblk[q * m * m..(q + 1) * m * m],
+                    &mut eblk[q * m * 4..(q + 1) * m * 4],
+                    &mut pblk[q * m * np..(q + 1) * m * np],
+                );
                 // A^-1 in one elimination with m right-hand sides
                 let inv = &mut ainv[q * m * m..(q + 1) * m * m];
                 inv.fill(0.0);
@@ -586,8 +604,18 @@ impl Adjoint<'_> {
                 dt: rec.dt,
                 regime: f1.regime[q],
             };
-            mat.jac_state(c, &step, &mut sw.a);
-            mat.jac_strain(c, &step, &mut sw.ej);
+            // every block of the point in one call; `D`, `E`, `P` kept for the second pass
+            let np = sw.grad.len();
+            let ej = &mut sw.eblk[q * m * 4..(q + 1) * m * 4];
+            mat.jac_blocks(
+                c,
+                &step,
+                &mut sw.a,
+                &mut sw.dblk[q * m * m..(q + 1) * m * m],
+                ej,
+                &mut sw.pblk[q * m * np..(q + 1) * m * np],
+            );
+            let ej = &sw.eblk[q * m * 4..(q + 1) * m * 4];
             for r in 0..m {
                 for k in 0..m {
                     sw.at[k * m + r] = sw.a[r * m + k];
@@ -613,9 +641,7 @@ impl Adjoint<'_> {
             let mut ct = Mat4::ZERO;
             for a in 0..4 {
                 for b in 0..4 {
-                    ct.0[a][b] = -(0..m)
-                        .map(|k| gq[k * 4 + a] * sw.ej[k * 4 + b])
-                        .sum::<f64>();
+                    ct.0[a][b] = -(0..m).map(|k| gq[k * 4 + a] * ej[k * 4 + b]).sum::<f64>();
                 }
             }
             self.tangents[q] = ct;
@@ -629,7 +655,7 @@ impl Adjoint<'_> {
             }
             let mut src = sw.e[q];
             for b in 0..4 {
-                src.0[b] += (0..m).map(|k| sw.ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                src.0[b] += (0..m).map(|k| ej[k * 4 + b] * sw.x[k]).sum::<f64>();
             }
             self.field_b[q] = src;
         }
@@ -669,9 +695,7 @@ impl Adjoint<'_> {
         self.strains_of_full();
         // mu = -(A^-T z + G B V); gradient; carries for the step before
         for q in 0..nq {
-            sw.load(f0, f1, q);
             let bv = self.strain[q];
-            let deps = sw.deps[q];
             let gq = if linear {
                 &sw.glin[..]
             } else {
@@ -680,17 +704,19 @@ impl Adjoint<'_> {
             for k in 0..m {
                 sw.x[k] = -(sw.az[q * m + k] + dot(&gq[k * 4..k * 4 + 4], &bv));
             }
-            let step = Step {
-                y0: &sw.y0,
-                y1: &sw.y1,
-                deps: &deps,
-                dt: rec.dt,
-                regime: f1.regime[q],
-            };
             let w = model.disc.qp[q].w;
-            // dJ/dc -= w mu^T P (the material's contraction: a closed form, or its block)
-            mat.jac_params_transpose(c, &step, &sw.x, -w, &mut sw.p, &mut sw.grad);
             if linear {
+                sw.load(f0, f1, q);
+                let deps = sw.deps[q];
+                let step = Step {
+                    y0: &sw.y0,
+                    y1: &sw.y1,
+                    deps: &deps,
+                    dt: rec.dt,
+                    regime: f1.regime[q],
+                };
+                // dJ/dc -= w mu^T P (the material's contraction: a closed form, or its block)
+                mat.jac_params_transpose(c, &step, &sw.x, -w, &mut sw.p, &mut sw.grad);
                 // the carry is `mu_i` itself (folded into the step before)
                 #[allow(clippy::manual_memcpy)] // (no `memmove` call per point)
                 for k in 0..m {
@@ -698,13 +724,27 @@ impl Adjoint<'_> {
                 }
                 continue;
             }
-            mat.jac_previous(c, &step, &mut sw.d);
-            mat.jac_strain(c, &step, &mut sw.ej);
+            // the blocks of the first pass: dJ/dc -= w mu^T P (the trait default's sums),
+            // the carries D^T mu and E^T mu
+            let np = sw.grad.len();
+            let (d, ej) = (
+                &sw.dblk[q * m * m..(q + 1) * m * m],
+                &sw.eblk[q * m * 4..(q + 1) * m * 4],
+            );
+            let p = &sw.pblk[q * m * np..(q + 1) * m * np];
+            for (k, o) in sw.grad.iter_mut().enumerate() {
+                *o += -w
+                    * sw.x
+                        .iter()
+                        .enumerate()
+                        .map(|(r, mu)| mu * p[r * np + k])
+                        .sum::<f64>();
+            }
             for k in 0..m {
-                sw.z[q * m + k] = (0..m).map(|r| sw.d[r * m + k] * sw.x[r]).sum();
+                sw.z[q * m + k] = (0..m).map(|r| d[r * m + k] * sw.x[r]).sum();
             }
             for b in 0..4 {
-                sw.e[q].0[b] = (0..m).map(|r| sw.ej[r * 4 + b] * sw.x[r]).sum();
+                sw.e[q].0[b] = (0..m).map(|r| ej[r * 4 + b] * sw.x[r]).sum();
             }
         }
         if linear {

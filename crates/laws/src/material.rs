@@ -165,6 +165,29 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// `P = dR/dc` (`m x n_c`, row-major) into `out`.
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]);
 
+    /// Every block of one step at once: `A` into `a` (`m x m`), `D` into `d` (`m x m`),
+    /// `E` into `e` (`m x 4`) and `P` into `p` (`m x n_c`), what an adjoint sweep (and a
+    /// sensitivity step) asks of a nonlinear material at every Gauss point and step. The
+    /// default calls [`Material::jac_state`], [`Material::jac_previous`],
+    /// [`Material::jac_strain`] and [`Material::jac_params`]; a law whose blocks share
+    /// work (J2's `s_eq` and normal, the hardening curve, the Norton rate) overrides it and
+    /// does that work once per point (`Plastic`). `testing::check_material` checks it
+    /// against the four.
+    fn jac_blocks(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        a: &mut [f64],
+        d: &mut [f64],
+        e: &mut [f64],
+        p: &mut [f64],
+    ) {
+        self.jac_state(c, step, a);
+        self.jac_previous(c, step, d);
+        self.jac_strain(c, step, e);
+        self.jac_params(c, step, p);
+    }
+
     /// `out[k] += weight * sum_r mu[r] P[r][k]`: the parameter block transposed applied
     /// to a cotangent `mu` (length `m`), what an adjoint sweep asks of `P` at every Gauss
     /// point and step (`dJ/dc -= w mu^T P`). The default forms `P` with

@@ -215,6 +215,29 @@ pub fn check_material(mat: &dyn Material, pt: &Point<'_>, tol: f64) -> Result<Fd
     });
     push(&mut checks, "P = dR/dc", row_error(&p, &fd_p, m, &tc));
 
+    // every block at once (what a sweep calls) against the four methods
+    let (mut a2, mut d2, mut e2, mut p2) = (vec![0.0; m * m], d.clone(), e.clone(), p.clone());
+    for v in [&mut d2, &mut e2, &mut p2] {
+        v.fill(f64::NAN);
+    }
+    a2.fill(f64::NAN);
+    step(pt.y0, &y1, &pt.deps, &mut |s| {
+        mat.jac_blocks(c, s, &mut a2, &mut d2, &mut e2, &mut p2)
+    });
+    let together = row_error(&a2, &a, m, &ty)
+        .max(row_error(&d2, &d, m, &ty))
+        .max(row_error(&e2, &e, m, &te))
+        .max(row_error(&p2, &p, m, &tc));
+    push(
+        &mut checks,
+        "jac_blocks vs the four blocks",
+        if together.is_nan() {
+            f64::INFINITY
+        } else {
+            together
+        },
+    );
+
     // the adjoint's contraction `mu^T P` (a law's closed form, or the default) against
     // the block, with a cotangent of mixed signs scaled by the state's sizes, added to
     // a nonzero `out`
