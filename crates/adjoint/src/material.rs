@@ -217,6 +217,31 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// `sum_r blk[r * cols + k] x[r]` (column `k` of a row-major block with `cols`
+/// columns against `x`) in row order, as a plain loop: the bits of the iterator sum it
+/// replaces (which starts from `-0.0`), without the adapters the `dev` profile leaves as
+/// calls.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn dot_column(blk: &[f64], cols: usize, k: usize, x: &[f64]) -> f64 {
+    let mut s = -0.0;
+    for r in 0..x.len() {
+        s += blk[r * cols + k] * x[r];
+    }
+    s
+}
+
+/// `sum_k g[k * 4 + a] e[k * 4 + b]` over `k < m` (two columns of `m x 4` blocks), as
+/// [`dot_column`].
+#[inline(always)]
+fn dot_strided(g: &[f64], a: usize, e: &[f64], b: usize, m: usize) -> f64 {
+    let mut s = -0.0;
+    for k in 0..m {
+        s += g[k * 4 + a] * e[k * 4 + b];
+    }
+    s
+}
+
 impl Adjoint<'_> {
     /// [`Adjoint::gradient`] for a material without [`Material::as_law`].
     pub(crate) fn gradient_material(
@@ -641,7 +666,7 @@ impl Adjoint<'_> {
             let mut ct = Mat4::ZERO;
             for a in 0..4 {
                 for b in 0..4 {
-                    ct.0[a][b] = -(0..m).map(|k| gq[k * 4 + a] * ej[k * 4 + b]).sum::<f64>();
+                    ct.0[a][b] = -dot_strided(gq, a, ej, b, m);
                 }
             }
             self.tangents[q] = ct;
@@ -655,7 +680,7 @@ impl Adjoint<'_> {
             }
             let mut src = sw.e[q];
             for b in 0..4 {
-                src.0[b] += (0..m).map(|k| ej[k * 4 + b] * sw.x[k]).sum::<f64>();
+                src.0[b] += dot_column(ej, 4, b, &sw.x);
             }
             self.field_b[q] = src;
         }
@@ -732,19 +757,14 @@ impl Adjoint<'_> {
                 &sw.eblk[q * m * 4..(q + 1) * m * 4],
             );
             let p = &sw.pblk[q * m * np..(q + 1) * m * np];
-            for (k, o) in sw.grad.iter_mut().enumerate() {
-                *o += -w
-                    * sw.x
-                        .iter()
-                        .enumerate()
-                        .map(|(r, mu)| mu * p[r * np + k])
-                        .sum::<f64>();
+            for k in 0..np {
+                sw.grad[k] += -w * dot_column(p, np, k, &sw.x);
             }
             for k in 0..m {
-                sw.z[q * m + k] = (0..m).map(|r| d[r * m + k] * sw.x[r]).sum();
+                sw.z[q * m + k] = dot_column(d, m, k, &sw.x);
             }
             for b in 0..4 {
-                sw.e[q].0[b] = (0..m).map(|r| ej[r * 4 + b] * sw.x[r]).sum();
+                sw.e[q].0[b] = dot_column(ej, 4, b, &sw.x);
             }
         }
         if linear {

@@ -263,7 +263,9 @@ impl Plastic {
     /// Rate-independent return: `Delta p` with `q_tr - 3G Delta p = sigma_y(p0 + Delta p)`,
     /// in closed form for `Linear`, else Newton from `Delta p = 0` kept inside the
     /// bracket `[0, (q_tr - sigma_y(p0)) / 3G]` (bisection when a step leaves it; the
-    /// function is decreasing since `sigma_y` never softens).
+    /// function is decreasing since `sigma_y` never softens). Returns `Delta p`, the
+    /// iterations and `(sigma_y, H')` at `p0 + Delta p` (evaluated once, not again by the
+    /// caller).
     fn return_independent(
         &self,
         c: &[f64],
@@ -271,9 +273,10 @@ impl Plastic {
         p0: f64,
         q_tr: f64,
         d: f64,
-    ) -> Result<(f64, u32), LocalFailure> {
+    ) -> Result<(f64, u32, (f64, f64)), LocalFailure> {
         if let Some(h) = self.hardening.linear_modulus(c) {
-            return Ok((d / (g3 + h), 0));
+            let dp = d / (g3 + h);
+            return Ok((dp, 0, self.hardening.value(c, p0 + dp)));
         }
         let (mut lo, mut hi) = (0.0, d / g3);
         let mut dp = 0.0;
@@ -281,7 +284,8 @@ impl Plastic {
             let (sy, h) = self.hardening.value(c, p0 + dp);
             let f = q_tr - g3 * dp - sy;
             if f.abs() <= 1e-14 * q_tr || hi - lo <= 1e-16 * hi {
-                return Ok((dp, it));
+                // (the curve at the accepted point: the caller's tangent needs it)
+                return Ok((dp, it, (sy, h)));
             }
             if f > 0.0 {
                 lo = dp;
@@ -473,8 +477,7 @@ impl Material for Plastic {
         }
         let (dp, q, qprime, iterations, regime) = match self.rate {
             Rate::Independent => {
-                let (dp, it) = self.return_independent(c, g3, p0, q_tr, d)?;
-                let (sy, h) = self.hardening.value(c, p0 + dp);
+                let (dp, it, (sy, h)) = self.return_independent(c, g3, p0, q_tr, d)?;
                 (dp, sy, h / (h + g3), it, Regime::Plastic)
             }
             Rate::Norton => {
