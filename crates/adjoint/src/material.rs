@@ -641,12 +641,8 @@ impl Adjoint<'_> {
                 &mut sw.pblk[q * m * np..(q + 1) * m * np],
             );
             let ej = &sw.eblk[q * m * 4..(q + 1) * m * 4];
-            for r in 0..m {
-                for k in 0..m {
-                    sw.at[k * m + r] = sw.a[r * m + k];
-                }
-            }
-            // one elimination with A^T for [Pi^T | z]: G and A^-T z
+            // one solve with A^T for [Pi^T | z]: G and A^-T z (the material's closed
+            // form, or an elimination)
             sw.rhs5.fill(0.0);
             for k in 0..m {
                 if k < 4 {
@@ -654,7 +650,7 @@ impl Adjoint<'_> {
                 }
                 sw.rhs5[k * 5 + 4] = sw.z[q * m + k];
             }
-            if !dense_solve_many(&mut sw.at, m, &mut sw.rhs5, 5) {
+            if !mat.solve_state_transpose(c, &step, &sw.a, &mut sw.rhs5, 5, &mut sw.at) {
                 return Err(fail(q, "tangent and adjoint"));
             }
             for k in 0..m {

@@ -188,6 +188,32 @@ pub trait Material: Send + Sync + std::fmt::Debug {
         self.jac_params(c, step, p);
     }
 
+    /// Solves `A^T X = B` in place for `nrhs` right-hand sides (`b` is `m x nrhs`,
+    /// row-major, and becomes `X`), `a` the step's `A` as [`Material::jac_state`] (or
+    /// [`Material::jac_blocks`]) wrote it: what an adjoint sweep does at every Gauss point
+    /// and step. The default transposes `a` into `work` (length `m x m`) and eliminates
+    /// ([`dense_solve_many`]); a law whose `A` has a structure solves in closed form
+    /// (`Plastic`: an isotropic operator plus `n (x) n` and a bordered row, so one Schur
+    /// complement). `false` when `A` is singular. `testing::check_material` checks it
+    /// against the elimination.
+    fn solve_state_transpose(
+        &self,
+        _c: &[f64],
+        _step: &Step<'_>,
+        a: &[f64],
+        b: &mut [f64],
+        nrhs: usize,
+        work: &mut [f64],
+    ) -> bool {
+        let m = self.state_len();
+        for r in 0..m {
+            for k in 0..m {
+                work[k * m + r] = a[r * m + k];
+            }
+        }
+        dense_solve_many(work, m, b, nrhs)
+    }
+
     /// `out[k] += weight * sum_r mu[r] P[r][k]`: the parameter block transposed applied
     /// to a cotangent `mu` (length `m`), what an adjoint sweep asks of `P` at every Gauss
     /// point and step (`dJ/dc -= w mu^T P`). The default forms `P` with

@@ -238,6 +238,57 @@ pub fn check_material(mat: &dyn Material, pt: &Point<'_>, tol: f64) -> Result<Fd
         },
     );
 
+    // the sweep's solve with `A^T` (a law's closed form, or the default elimination)
+    // against the elimination, for the four unit vectors and a cotangent of mixed signs
+    {
+        let nrhs = 5;
+        let mut rhs = vec![0.0; m * nrhs];
+        for r in 0..m {
+            if r < 4 {
+                rhs[r * nrhs + r] = 1.0;
+            }
+            rhs[r * nrhs + 4] = (1.1 + 0.9 * r as f64).cos() * ty[r];
+        }
+        let mut want = rhs.clone();
+        let mut at = vec![0.0; m * m];
+        for r in 0..m {
+            for k in 0..m {
+                at[k * m + r] = a[r * m + k];
+            }
+        }
+        let solved = crate::material::dense_solve_many(&mut at, m, &mut want, nrhs);
+        let mut got = rhs.clone();
+        let mut work = vec![0.0; m * m];
+        let mut ok = false;
+        step(pt.y0, &y1, &pt.deps, &mut |s| {
+            ok = mat.solve_state_transpose(c, s, &a, &mut got, nrhs, &mut work)
+        });
+        let err = if solved && ok {
+            // the backward error of each equation `(A^T x)_i = b_i`, relative to the
+            // size of its terms (scale free; the elimination's own is ~1e-16)
+            let mut worst = 0.0f64;
+            for k in 0..nrhs {
+                for i in 0..m {
+                    let (mut ax, mut size) = (0.0, rhs[i * nrhs + k].abs());
+                    for r in 0..m {
+                        let t = a[r * m + i] * got[r * nrhs + k];
+                        ax += t;
+                        size += t.abs();
+                    }
+                    let d = (ax - rhs[i * nrhs + k]).abs();
+                    worst = worst.max(if size > 0.0 { d / size } else { d });
+                }
+            }
+            let _ = &want;
+            worst
+        } else if solved == ok {
+            0.0
+        } else {
+            f64::INFINITY
+        };
+        push(&mut checks, "A^T solve (backward error)", err);
+    }
+
     // the adjoint's contraction `mu^T P` (a law's closed form, or the default) against
     // the block, with a cotangent of mixed signs scaled by the state's sizes, added to
     // a nonzero `out`
