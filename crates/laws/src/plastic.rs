@@ -262,7 +262,8 @@ impl Plastic {
 
     /// Rate-independent return: `Delta p` with `q_tr - 3G Delta p = sigma_y(p0 + Delta p)`,
     /// in closed form for `Linear`, else Newton from `Delta p = 0` kept inside the
-    /// bracket `[0, (q_tr - sigma_y(p0)) / 3G]` (bisection when a step leaves it; the
+    /// bracket `[0, (q_tr - sigma_y(p0)) / 3G]` (widened by 1e-12 for the saturated
+    /// curve, whose root is that end; bisection when a step leaves it; the
     /// function is decreasing since `sigma_y` never softens). Returns `Delta p`, the
     /// iterations and `(sigma_y, H')` at `p0 + Delta p` (evaluated once, not again by the
     /// caller).
@@ -278,7 +279,10 @@ impl Plastic {
             let dp = d / (g3 + h);
             return Ok((dp, 0, self.hardening.value(c, p0 + dp)));
         }
-        let (mut lo, mut hi) = (0.0, d / g3);
+        // (the bracket widened by 1e-12: where the curve has saturated, `H' ~ 0`, the root
+        // is `d / 3G` itself, and a Newton step landing on the bracket's end by rounding
+        // would be refused and bisection take ~50 halvings to get there)
+        let (mut lo, mut hi) = (0.0, d / g3 * (1.0 + 1e-12));
         let mut dp = 0.0;
         for it in 1..=200u32 {
             let (sy, h) = self.hardening.value(c, p0 + dp);
@@ -863,6 +867,56 @@ pub(crate) mod tests {
                 );
             }
         }
+    }
+
+    /// Voce's consistent tangent near and at saturation: at previous plastic strains from
+    /// 0 to 50 / b (R2's bench parameters, `Q = 300 MPa, b = 20`, and the validation's
+    /// `Q = 150, b = 40`), for plastic steps of 0.3 to 30 times the yield strain, the
+    /// update's tangent equals finite differences of the update and `-A^-1 E` to 1e-6
+    /// (the checks of `check_material`), and the return map converges in a handful of
+    /// iterations.
+    #[test]
+    fn voce_tangent_is_consistent_near_saturation() {
+        let law = Plastic::new(Hardening::Voce, Rate::Independent);
+        let mut rng = Rng(31);
+        let (mut worst, mut most) = (0.0f64, 0u32);
+        for (e, sy, q, b) in [(1e5, 500.0, 300.0, 20.0), (7e4, 300.0, 150.0, 40.0)] {
+            let c = [e, 0.3, sy, q, b];
+            for p0 in [0.0, 0.1, 0.5, 1.0, 2.0, 5.0, 50.0].map(|x: f64| x / b) {
+                // a previous state on the current yield surface, uniaxial-like
+                let sig = sy + q * (1.0 - (-b * p0).exp());
+                let s0 = Vec4([-sig / 3.0, 2.0 * sig / 3.0, -sig / 3.0, 0.0]);
+                let y0 = [s0[0], s0[1], s0[2], s0[3], p0];
+                for scale in [0.3, 3.0, 30.0] {
+                    let deps = (Vec4([-0.5, 1.0, -0.5, 0.0]) + rng.vec4() * 0.2) * (scale * sy / e);
+                    let pt = Point {
+                        c: &c,
+                        y0: &y0,
+                        deps,
+                        dt: 0.01,
+                    };
+                    let rep = check_material(&law, &pt, 1e-6)
+                        .unwrap_or_else(|m| panic!("p0 {p0}, scale {scale}: {m}"));
+                    assert_eq!(rep.regime, Regime::Plastic, "p0 {p0}, scale {scale}");
+                    for c in rep.checks.iter().filter(|c| c.block.starts_with("tangent")) {
+                        worst = worst.max(c.error.unwrap_or(0.0));
+                    }
+                    let mut y1 = [0.0; 5];
+                    let up = law.update(&c, &y0, &deps, 0.01, &mut y1).unwrap();
+                    if up.iterations > 8 {
+                        eprintln!(
+                            "slow: b {b}, p0 {p0}, scale {scale}: {} iterations",
+                            up.iterations
+                        );
+                    }
+                    most = most.max(up.iterations);
+                }
+            }
+        }
+        assert!(most <= 8, "{most} return-map iterations");
+        eprintln!(
+            "voce tangent against finite differences: worst {worst:e}, at most {most} iterations"
+        );
     }
 
     /// The system shall reproduce Norton-Hoff with `Plastic(Linear(H: 0), Norton)` at the
