@@ -6,6 +6,7 @@
 //! `cargo bench -p indentify-adjoint --bench laws_cost` (docs/performance.md);
 //! `LAWS_COST=prony` keeps the cases whose name contains `prony`.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
@@ -14,9 +15,79 @@ use indentify_contact::{
     ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
 };
 use indentify_laws::{
-    Elastic, Hardening, LawMaterial, Material, Maxwell, NortonHoff, Plastic, Prony, Rate,
+    Elastic, Hardening, InternalInfo, Law, LawMaterial, LocalFailure, Material, MaterialUpdate,
+    Maxwell, NortonHoff, ParamInfo, Plastic, Prony, Rate, Step, Vec4,
 };
 use indentify_mesh::CylinderMesher;
+
+/// A material that forwards to `inner` and counts its updates and their local
+/// iterations (the counts printed before each case's benchmarks).
+#[derive(Debug)]
+struct Counted<'a> {
+    inner: &'a dyn Material,
+    calls: AtomicUsize,
+    iterations: AtomicUsize,
+}
+
+impl<'a> Counted<'a> {
+    fn new(inner: &'a dyn Material) -> Counted<'a> {
+        Counted {
+            inner,
+            calls: AtomicUsize::new(0),
+            iterations: AtomicUsize::new(0),
+        }
+    }
+    fn take(&self) -> (usize, usize) {
+        (
+            self.calls.swap(0, Ordering::Relaxed),
+            self.iterations.swap(0, Ordering::Relaxed),
+        )
+    }
+}
+
+impl Material for Counted<'_> {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn params(&self) -> &[ParamInfo] {
+        self.inner.params()
+    }
+    fn internal(&self) -> &[InternalInfo] {
+        self.inner.internal()
+    }
+    fn is_linear(&self) -> bool {
+        self.inner.is_linear()
+    }
+    fn as_law(&self) -> Option<&dyn Law> {
+        self.inner.as_law()
+    }
+    fn residual(&self, c: &[f64], step: &Step<'_>, r: &mut [f64]) {
+        self.inner.residual(c, step, r)
+    }
+    fn jac_state(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
+        self.inner.jac_state(c, step, out)
+    }
+    fn jac_previous(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
+        self.inner.jac_previous(c, step, out)
+    }
+    fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
+        self.inner.jac_params(c, step, out)
+    }
+    fn update(
+        &self,
+        c: &[f64],
+        y0: &[f64],
+        deps: &Vec4,
+        dt: f64,
+        y1: &mut [f64],
+    ) -> Result<MaterialUpdate, LocalFailure> {
+        let up = self.inner.update(c, y0, deps, dt, y1)?;
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        self.iterations
+            .fetch_add(up.iterations as usize, Ordering::Relaxed);
+        Ok(up)
+    }
+}
 
 /// Every case: name, material, parameters.
 fn cases() -> Vec<(&'static str, Box<dyn Material>, Vec<f64>)> {
@@ -100,15 +171,25 @@ fn bench_laws(c: &mut Criterion) {
     let only = std::env::var("LAWS_COST").unwrap_or_default();
     for (name, mat, params) in cases().into_iter().filter(|c| c.0.contains(&only)) {
         let mat = &*mat;
-        let traj = solver.run(mat, &params, &schedule, &opts).expect("run");
+        // the counts first (local updates and their iterations through a counting
+        // wrapper, then the run criterion times without it)
+        let counted = Counted::new(mat);
+        let traj = solver
+            .run(&counted, &params, &schedule, &opts)
+            .expect("run");
+        let (calls, local) = counted.take();
+        let traj_plain = solver.run(mat, &params, &schedule, &opts).expect("run");
+        assert_eq!(traj.steps.len(), traj_plain.steps.len());
+        let traj = traj_plain;
         // a cost with rho_i = F_i (data = 0): every step contributes
         let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
         let g = adj.gradient(mat, &params, &traj, &rho).expect("gradient");
         eprintln!(
-            "{name}: {} steps, {} Newton iterations; forward {:.1} ms, gradient {:.1} ms (ratio {:.2})",
+            "{name}: {} steps, {} Newton iterations, {calls} local updates, {local} local \
+             iterations ({}); gradient {:.1} ms (ratio {:.2})",
             traj.steps.len(),
             traj.total_iterations(),
-            1e3 * traj.timing.total,
+            traj.timing,
             1e3 * g.seconds,
             g.seconds / traj.timing.total
         );

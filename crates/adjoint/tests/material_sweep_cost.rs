@@ -1,8 +1,9 @@
 //! The adjoint sweep of a material with internal variables asks its blocks a counted
 //! number of times (a linear material such as `Prony`: `A`, `D`, `E` once per step and
 //! the contraction `mu^T P` once per Gauss point and step, no `P` block; a nonlinear one
-//! such as `Plastic`: every block per point); `Prony`'s closed-form contraction gives the
-//! gradient of the block path to 1e-12; the sweep gives the same bits on 1 and 2 threads.
+//! such as `Plastic`: every block once per point, in one call); `Prony`'s closed-form
+//! contraction gives the gradient of the block path to 1e-12, J2's joint blocks the
+//! separate blocks' bits; the sweep gives the same bits on 1 and 2 threads.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -159,9 +160,10 @@ const PRONY2: [f64; 6] = [1e5, 0.3, 0.3, 0.2, 0.2, 2.0];
 
 /// Counts per sweep (the profile of docs/performance.md "The Prony adjoint sweep"):
 /// a linear material asks `A`, `D`, `E` once per step and `mu^T P` once per Gauss point
-/// and step, never the block `P`; a nonlinear material (rate-independent J2) asks per
-/// Gauss point and step `A` and `D` once, `E` twice (tangent, carry) and `mu^T P` once,
-/// which its default forms through `P`.
+/// and step, never the block `P`; a nonlinear material (rate-independent J2) asks every
+/// block once per Gauss point and step, in one `jac_blocks` call (here the trait's
+/// default, which calls the four methods), and never `mu^T P` (the sweep contracts the
+/// `P` it kept).
 #[test]
 fn the_sweep_asks_each_block_a_counted_number_of_times() {
     let m = model(ContactKind::Vertical, Kinematics::Small);
@@ -195,9 +197,62 @@ fn the_sweep_asks_each_block_a_counted_number_of_times() {
     let [a, d, e, p, pt] = counted.take();
     assert_eq!(
         (a, d, e, p, pt),
-        (n * nq, n * nq, 2 * n * nq, n * nq, n * nq),
+        (n * nq, n * nq, n * nq, n * nq, 0),
         "{n} steps, {nq} points"
     );
+}
+
+/// J2's `jac_blocks` (every block of a point from one evaluation of `s_eq`, the
+/// hardening and the Norton rate) and its closed-form solve with `A^T` give the gradient
+/// of the four separate methods and the elimination (the trait's defaults, through the
+/// forwarding material) to 1e-11 relative: each hardening form, rate-independent and
+/// Norton, small and finite strain.
+#[test]
+fn plastic_joint_blocks_and_solve_give_the_separate_blocks_gradient() {
+    let (e, nu, sy, k, mm) = (1e5, 0.3, 500.0, 1500.0, 5.0);
+    let forms = [
+        (Hardening::Linear, vec![1000.0]),
+        (Hardening::Power, vec![0.2]),
+        (Hardening::Voce, vec![300.0, 20.0]),
+    ];
+    let mut worst = 0.0f64;
+    for kin in [Kinematics::Small, Kinematics::Finite] {
+        let m = model(ContactKind::Normal, kin);
+        for (h, hp) in &forms {
+            for rate in [Rate::Independent, Rate::Norton] {
+                let pl = Plastic::new(h.clone(), rate);
+                let mut c = vec![e, nu, sy];
+                c.extend(hp);
+                if rate == Rate::Norton {
+                    c.extend([k, mm]);
+                }
+                let (t, rho) = run(&m, &pl, &c);
+                let mut adj = Adjoint::new(&m).unwrap();
+                let joint = adj.gradient(&pl, &c, &t, &rho).unwrap().dj_dc;
+                let separate = Counting::new(&pl, false);
+                let apart = adj.gradient(&separate, &c, &t, &rho).unwrap().dj_dc;
+                assert!(separate.take()[Block::State as usize] > 0);
+                // (the separate path also solves with A^T by elimination, the joint one
+                // in J2's closed form: round-off apart)
+                let big = joint
+                    .iter()
+                    .zip(&c)
+                    .fold(0.0f64, |a, (g, c)| a.max((g * c).abs()));
+                for k in 0..c.len() {
+                    let d = (joint[k] - apart[k]).abs() * c[k] / big;
+                    assert!(
+                        d <= 1e-11,
+                        "{h:?} {rate:?} {kin:?} {k}: {} vs {} ({d:e})",
+                        joint[k],
+                        apart[k]
+                    );
+                    worst = worst.max(d);
+                }
+                assert!(joint.iter().all(|g| g.is_finite() && *g != 0.0));
+            }
+        }
+    }
+    eprintln!("joint blocks and closed-form solve against the separate path: {worst:e}");
 }
 
 /// Prony's closed-form `mu^T P` gives the gradient of the block path (`P` formed per

@@ -460,6 +460,18 @@ pub(crate) fn compliant_jacobian(
     Ok(jac)
 }
 
+/// Spreads the law's `m x n` parameter block at the head of `out` in place to `m x nc`
+/// (zero columns for the instrument's parameters; rows from the last: a row's
+/// destination never precedes the sources still to be read).
+fn spread_params(out: &mut [f64], m: usize, n: usize, nc: usize) {
+    for i in (0..m).rev() {
+        for k in (0..n).rev() {
+            out[i * nc + k] = out[i * n + k];
+        }
+        out[i * nc + n..(i + 1) * nc].fill(0.0);
+    }
+}
+
 impl Material for Instrumented {
     fn name(&self) -> &'static str {
         self.inner.name()
@@ -503,16 +515,38 @@ impl Material for Instrumented {
         self.inner.jac_strain(&c[..self.n_law], step, out);
     }
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
-        // the law's m x n_law block, then spread in place to m x n_all (rows from the
-        // last: a row's destination never precedes the sources still to be read)
-        let (n, nc, m) = (self.n_law, c.len(), self.inner.state_len());
+        let (n, m) = (self.n_law, self.inner.state_len());
         self.inner.jac_params(&c[..n], step, &mut out[..m * n]);
-        for i in (0..m).rev() {
-            for k in (0..n).rev() {
-                out[i * nc + k] = out[i * n + k];
-            }
-            out[i * nc + n..(i + 1) * nc].fill(0.0);
-        }
+        spread_params(out, m, n, c.len());
+    }
+    fn jac_blocks(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        a: &mut [f64],
+        d: &mut [f64],
+        e: &mut [f64],
+        p: &mut [f64],
+    ) {
+        let (n, m) = (self.n_law, self.inner.state_len());
+        self.inner
+            .jac_blocks(&c[..n], step, a, d, e, &mut p[..m * n]);
+        spread_params(p, m, n, c.len());
+    }
+    /// The law's own contraction (its closed form, if it has one): the instrument's
+    /// parameters do not enter the residual, so their entries gain nothing.
+    fn jac_params_transpose(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        mu: &[f64],
+        weight: f64,
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let n = self.n_law;
+        self.inner
+            .jac_params_transpose(&c[..n], step, mu, weight, scratch, &mut out[..n]);
     }
     fn update(
         &self,

@@ -165,6 +165,55 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// `P = dR/dc` (`m x n_c`, row-major) into `out`.
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]);
 
+    /// Every block of one step at once: `A` into `a` (`m x m`), `D` into `d` (`m x m`),
+    /// `E` into `e` (`m x 4`) and `P` into `p` (`m x n_c`), what an adjoint sweep (and a
+    /// sensitivity step) asks of a nonlinear material at every Gauss point and step. The
+    /// default calls [`Material::jac_state`], [`Material::jac_previous`],
+    /// [`Material::jac_strain`] and [`Material::jac_params`]; a law whose blocks share
+    /// work (J2's `s_eq` and normal, the hardening curve, the Norton rate) overrides it and
+    /// does that work once per point (`Plastic`). `testing::check_material` checks it
+    /// against the four.
+    fn jac_blocks(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        a: &mut [f64],
+        d: &mut [f64],
+        e: &mut [f64],
+        p: &mut [f64],
+    ) {
+        self.jac_state(c, step, a);
+        self.jac_previous(c, step, d);
+        self.jac_strain(c, step, e);
+        self.jac_params(c, step, p);
+    }
+
+    /// Solves `A^T X = B` in place for `nrhs` right-hand sides (`b` is `m x nrhs`,
+    /// row-major, and becomes `X`), `a` the step's `A` as [`Material::jac_state`] (or
+    /// [`Material::jac_blocks`]) wrote it: what an adjoint sweep does at every Gauss point
+    /// and step. The default transposes `a` into `work` (length `m x m`) and eliminates
+    /// ([`dense_solve_many`]); a law whose `A` has a structure solves in closed form
+    /// (`Plastic`: an isotropic operator plus `n (x) n` and a bordered row, so one Schur
+    /// complement). `false` when `A` is singular. `testing::check_material` checks it
+    /// against the elimination.
+    fn solve_state_transpose(
+        &self,
+        _c: &[f64],
+        _step: &Step<'_>,
+        a: &[f64],
+        b: &mut [f64],
+        nrhs: usize,
+        work: &mut [f64],
+    ) -> bool {
+        let m = self.state_len();
+        for r in 0..m {
+            for k in 0..m {
+                work[k * m + r] = a[r * m + k];
+            }
+        }
+        dense_solve_many(work, m, b, nrhs)
+    }
+
     /// `out[k] += weight * sum_r mu[r] P[r][k]`: the parameter block transposed applied
     /// to a cotangent `mu` (length `m`), what an adjoint sweep asks of `P` at every Gauss
     /// point and step (`dJ/dc -= w mu^T P`). The default forms `P` with

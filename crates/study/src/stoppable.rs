@@ -92,6 +92,17 @@ impl Material for Stoppable<'_> {
     fn jac_params(&self, c: &[f64], step: &Step<'_>, out: &mut [f64]) {
         self.inner.jac_params(c, step, out);
     }
+    fn jac_blocks(
+        &self,
+        c: &[f64],
+        step: &Step<'_>,
+        a: &mut [f64],
+        d: &mut [f64],
+        e: &mut [f64],
+        p: &mut [f64],
+    ) {
+        self.inner.jac_blocks(c, step, a, d, e, p);
+    }
     fn jac_params_transpose(
         &self,
         c: &[f64],

@@ -117,6 +117,96 @@ fn push(checks: &mut Vec<BlockCheck>, block: &'static str, error: f64) {
     });
 }
 
+/// The checks of what an adjoint sweep calls instead of the single blocks: `jac_blocks`
+/// against the four methods' `blocks = [A, D, E, P]`, and `solve_state_transpose` by its
+/// backward error (`scales` = the state's, the strain's and the parameters' sizes).
+fn sweep_checks(
+    mat: &dyn Material,
+    pt: &Point<'_>,
+    y1: &[f64],
+    regime: Regime,
+    [a, d, e, p]: [&[f64]; 4],
+    [ty, te, tc]: [&[f64]; 3],
+    checks: &mut Vec<BlockCheck>,
+) {
+    let (c, m) = (pt.c, mat.state_len());
+    let st = Step {
+        y0: pt.y0,
+        y1,
+        deps: &pt.deps,
+        dt: pt.dt,
+        regime,
+    };
+    // every block at once (what a sweep calls) against the four methods
+    let (mut a2, mut d2, mut e2, mut p2) = (vec![0.0; m * m], d.to_vec(), e.to_vec(), p.to_vec());
+    for v in [&mut d2, &mut e2, &mut p2] {
+        v.fill(f64::NAN);
+    }
+    a2.fill(f64::NAN);
+    mat.jac_blocks(c, &st, &mut a2, &mut d2, &mut e2, &mut p2);
+    let together = row_error(&a2, a, m, ty)
+        .max(row_error(&d2, d, m, ty))
+        .max(row_error(&e2, e, m, te))
+        .max(row_error(&p2, p, m, tc));
+    push(
+        checks,
+        "jac_blocks vs the four blocks",
+        if together.is_nan() {
+            f64::INFINITY
+        } else {
+            together
+        },
+    );
+
+    // the sweep's solve with `A^T` (a law's closed form, or the default elimination)
+    // against the elimination, for the four unit vectors and a cotangent of mixed signs
+    {
+        let nrhs = 5;
+        let mut rhs = vec![0.0; m * nrhs];
+        for r in 0..m {
+            if r < 4 {
+                rhs[r * nrhs + r] = 1.0;
+            }
+            rhs[r * nrhs + 4] = (1.1 + 0.9 * r as f64).cos() * ty[r];
+        }
+        let mut want = rhs.clone();
+        let mut at = vec![0.0; m * m];
+        for r in 0..m {
+            for k in 0..m {
+                at[k * m + r] = a[r * m + k];
+            }
+        }
+        let solved = crate::material::dense_solve_many(&mut at, m, &mut want, nrhs);
+        let mut got = rhs.clone();
+        let mut work = vec![0.0; m * m];
+        let ok = mat.solve_state_transpose(c, &st, a, &mut got, nrhs, &mut work);
+        let err = if solved && ok {
+            // the backward error of each equation `(A^T x)_i = b_i`, relative to the
+            // size of its terms (scale free; the elimination's own is ~1e-16)
+            let mut worst = 0.0f64;
+            for k in 0..nrhs {
+                for i in 0..m {
+                    let (mut ax, mut size) = (0.0, rhs[i * nrhs + k].abs());
+                    for r in 0..m {
+                        let t = a[r * m + i] * got[r * nrhs + k];
+                        ax += t;
+                        size += t.abs();
+                    }
+                    let d = (ax - rhs[i * nrhs + k]).abs();
+                    worst = worst.max(if size > 0.0 { d / size } else { d });
+                }
+            }
+            let _ = &want;
+            worst
+        } else if solved == ok {
+            0.0
+        } else {
+            f64::INFINITY
+        };
+        push(checks, "A^T solve (backward error)", err);
+    }
+}
+
 /// Runs every check at `pt` and fails when one exceeds `tol` (1e-6 is the level this
 /// crate's laws meet).
 ///
@@ -214,6 +304,16 @@ pub fn check_material(mat: &dyn Material, pt: &Point<'_>, tol: f64) -> Result<Fd
         resid(&cc, pt.y0, &y1, &pt.deps)
     });
     push(&mut checks, "P = dR/dc", row_error(&p, &fd_p, m, &tc));
+
+    sweep_checks(
+        mat,
+        pt,
+        &y1,
+        regime,
+        [&a, &d, &e, &p],
+        [&ty, &te, &tc],
+        &mut checks,
+    );
 
     // the adjoint's contraction `mu^T P` (a law's closed form, or the default) against
     // the block, with a cotangent of mixed signs scaled by the state's sizes, added to
