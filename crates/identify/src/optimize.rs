@@ -927,6 +927,39 @@ pub fn with_starts(config: &IdentifyConfig, starts: &[f64]) -> IdentifyConfig {
     cfg
 }
 
+/// The identifiability summary at the last iterate (`None` when its forces or Jacobian
+/// cannot be computed).
+fn final_identifiability(
+    objective: &Objective<'_>,
+    problem: &Problem,
+    config: &IdentifyConfig,
+    last: &IterationRecord,
+) -> Option<Identifiability> {
+    let param = &objective.param;
+    let mut ev = objective.eval.borrow_mut();
+    let fitted = ev.forces(&last.params).ok();
+    ev.jacobian(&last.params).ok().map(|jac| {
+        let columns: Vec<Column> = param
+            .free
+            .iter()
+            .map(|f| Column::of(f, last.params[f.index]))
+            .collect();
+        Identifiability::with_noise_observed(
+            &jac,
+            &problem.weights,
+            last.cost,
+            &last.params,
+            &columns,
+            config.noise,
+            fitted.as_deref().map(|f| Forces {
+                fitted: f,
+                measured: &problem.target,
+            }),
+            problem.observed(),
+        )
+    })
+}
+
 fn run(
     problem: &Problem,
     config: &IdentifyConfig,
@@ -1061,28 +1094,7 @@ fn run(
     let history = monitor.history.into_inner();
     let param = &objective.param;
     let identifiability = if config.identifiability {
-        let mut ev = objective.eval.borrow_mut();
-        let fitted = ev.forces(&last.params).ok();
-        ev.jacobian(&last.params).ok().map(|jac| {
-            let columns: Vec<Column> = param
-                .free
-                .iter()
-                .map(|f| Column::of(f, last.params[f.index]))
-                .collect();
-            Identifiability::with_noise_observed(
-                &jac,
-                &problem.weights,
-                last.cost,
-                &last.params,
-                &columns,
-                config.noise,
-                fitted.as_deref().map(|f| Forces {
-                    fitted: f,
-                    measured: &problem.target,
-                }),
-                problem.observed(),
-            )
-        })
+        final_identifiability(&objective, problem, config, &last)
     } else {
         None
     };
