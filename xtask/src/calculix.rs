@@ -1079,6 +1079,22 @@ pub fn run_ccx(
     stem: &str,
     deck: &str,
 ) -> Result<(Curve, Option<String>)> {
+    run_ccx_reading(ccx, (out, stem), deck, "force", parse_dat)
+}
+
+/// Runs `ccx` on `deck` in the scratch folder `out/.work-STEM`, reads its `.dat` with
+/// `parse` (`what`: the quantity named when it holds none) and says why `ccx` stopped
+/// early, if it did (its last error line); the folder is removed after a complete run.
+///
+/// # Errors
+/// `ccx` missing, a `.dat` file without the quantity.
+pub fn run_ccx_reading<T>(
+    ccx: &std::path::Path,
+    (out, stem): (&std::path::Path, &str),
+    deck: &str,
+    what: &str,
+    parse: impl Fn(&str) -> Result<Vec<T>>,
+) -> Result<(Vec<T>, Option<String>)> {
     let work = out.join(format!(".work-{stem}"));
     std::fs::create_dir_all(&work)?;
     std::fs::write(work.join(format!("{stem}.inp")), deck)?;
@@ -1097,7 +1113,7 @@ pub fn run_ccx(
             )
         })?;
     let dat = std::fs::read_to_string(work.join(format!("{stem}.dat"))).unwrap_or_default();
-    let curve = parse_dat(&dat)?;
+    let points = parse(&dat)?;
     let log = std::fs::read_to_string(work.join("ccx.log")).unwrap_or_default();
     let error = log
         .lines()
@@ -1109,9 +1125,9 @@ pub fn run_ccx(
         .map(str::trim)
         .rfind(|l| l.contains("ERROR") || l.contains("singular"))
         .map(str::to_string);
-    if curve.is_empty() {
+    if points.is_empty() {
         bail!(
-            "ccx wrote no force on {stem} ({status}{}); see {}",
+            "ccx wrote no {what} on {stem} ({status}{}); see {}",
             error.map(|e| format!(": {e}")).unwrap_or_default(),
             work.join("ccx.log").display()
         );
@@ -1124,7 +1140,7 @@ pub fn run_ccx(
     if stopped.is_none() {
         std::fs::remove_dir_all(&work)?;
     }
-    Ok((curve, stopped))
+    Ok((points, stopped))
 }
 
 /// Our force curve of `case` for a run (friction coefficient, finite strain or not).

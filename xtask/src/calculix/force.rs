@@ -630,45 +630,5 @@ pub fn run_ccx(
     stem: &str,
     deck: &str,
 ) -> Result<(Vec<Raw>, Option<String>)> {
-    let work = out.join(format!(".work-{stem}"));
-    std::fs::create_dir_all(&work)?;
-    std::fs::write(work.join(format!("{stem}.inp")), deck)?;
-    let status = std::process::Command::new(ccx)
-        .arg("-i")
-        .arg(stem)
-        .current_dir(&work)
-        .env("OMP_NUM_THREADS", "1")
-        .env("CCX_NPROC_EQUATION_SOLVER", "1")
-        .stdout(std::fs::File::create(work.join("ccx.log"))?)
-        .status()
-        .map_err(|e| {
-            anyhow::anyhow!(
-                "cannot start `{}` ({e}): install ccx with `apt-get install calculix-ccx`",
-                ccx.display()
-            )
-        })?;
-    let dat = std::fs::read_to_string(work.join(format!("{stem}.dat"))).unwrap_or_default();
-    let raw = parse_dat(&dat)?;
-    let log = std::fs::read_to_string(work.join("ccx.log")).unwrap_or_default();
-    let error = log
-        .lines()
-        .map(str::trim)
-        .rfind(|l| l.contains("ERROR") || l.contains("singular"))
-        .map(str::to_string);
-    if raw.is_empty() {
-        bail!(
-            "ccx wrote no depth on {stem} ({status}{}); see {}",
-            error.map(|e| format!(": {e}")).unwrap_or_default(),
-            work.join("ccx.log").display()
-        );
-    }
-    let stopped = if status.success() && error.is_none() {
-        None
-    } else {
-        Some(error.unwrap_or_else(|| format!("ccx exited with {status}")))
-    };
-    if stopped.is_none() {
-        std::fs::remove_dir_all(&work)?;
-    }
-    Ok((raw, stopped))
+    super::run_ccx_reading(ccx, (out, stem), deck, "depth", parse_dat)
 }
