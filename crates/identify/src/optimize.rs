@@ -625,6 +625,14 @@ impl<'p> Objective<'p> {
 }
 
 /// History, observer and stopping rules, consulted after every iteration.
+/// A linearization at an iterate, for the stopping rules ([`Monitor::linearize`]).
+struct Linearized {
+    forces: Vec<f64>,
+    jac: Vec<Vec<f64>>,
+    columns: Vec<Column>,
+    id: Identifiability,
+}
+
 pub(crate) struct Monitor<'a, 'p> {
     pub objective: &'a Objective<'p>,
     stop: StopCriteria,
@@ -717,20 +725,14 @@ impl<'a, 'p> Monitor<'a, 'p> {
         reason
     }
 
-    /// Whether the step from `prev` to `c` (physical parameters) and the undamped
-    /// Gauss-Newton step from `c` move every free parameter by less than `fraction` of its
-    /// standard deviation at `c` ([`StopCriteria::step_sigma`]); false when a parameter is
-    /// undetermined at `c` or anything cannot be computed. The forces and the Jacobian at
-    /// `c` come from the evaluator's cache (Levenberg-Marquardt has just linearized there).
-    fn steps_below_sigma(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
+    /// The forces, Jacobian, free columns and identifiability at `c` (physical
+    /// parameters), the first two from the evaluator's cache (Levenberg-Marquardt has just
+    /// linearized there); `None` when either cannot be computed.
+    fn linearize(&self, p: &Problem, c: &[f64]) -> Option<Linearized> {
         let o = self.objective;
-        let p = o.eval.borrow().problem();
         let (forces, jac) = {
             let mut ev = o.eval.borrow_mut();
-            match (ev.forces(c), ev.jacobian(c)) {
-                (Ok(f), Ok(j)) => (f, j),
-                _ => return false,
-            }
+            (ev.forces(c).ok()?, ev.jacobian(c).ok()?)
         };
         let columns: Vec<Column> = o
             .param
@@ -750,6 +752,30 @@ impl<'a, 'p> Monitor<'a, 'p> {
                 measured: &p.target,
             }),
         );
+        Some(Linearized {
+            forces,
+            jac,
+            columns,
+            id,
+        })
+    }
+
+    /// Whether the step from `prev` to `c` (physical parameters) and the undamped
+    /// Gauss-Newton step from `c` move every free parameter by less than `fraction` of its
+    /// standard deviation at `c` ([`StopCriteria::step_sigma`]); false when a parameter is
+    /// undetermined at `c` or anything cannot be computed. The forces and the Jacobian at
+    /// `c` come from the evaluator's cache (Levenberg-Marquardt has just linearized there).
+    fn steps_below_sigma(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
+        let p = self.objective.eval.borrow().problem();
+        let Some(Linearized {
+            forces,
+            jac,
+            columns,
+            id,
+        }) = self.linearize(p, c)
+        else {
+            return false;
+        };
         // with a parameter undetermined the others' deviations are conditional on it
         // (held), while a valley lets them move with it: never stop this way then (on
         // anon-nh, with sY undetermined, stopping on the others' steps left m 1 sigma away)
@@ -786,33 +812,16 @@ impl<'a, 'p> Monitor<'a, 'p> {
     /// ([`StopCriteria::chi2_stop`], `crate::chi2_stop`); false when every parameter is
     /// determined (the step rule serves then) or anything cannot be computed.
     fn chi2_below(&self, threshold: f64, prev_cost: f64, cost: f64, c: &[f64]) -> bool {
-        let o = self.objective;
-        let p = o.eval.borrow().problem();
-        let (forces, jac) = {
-            let mut ev = o.eval.borrow_mut();
-            match (ev.forces(c), ev.jacobian(c)) {
-                (Ok(f), Ok(j)) => (f, j),
-                _ => return false,
-            }
+        let p = self.objective.eval.borrow().problem();
+        let Some(Linearized {
+            forces,
+            jac,
+            columns,
+            id,
+        }) = self.linearize(p, c)
+        else {
+            return false;
         };
-        let columns: Vec<Column> = o
-            .param
-            .free
-            .iter()
-            .map(|f| Column::of(f, c[f.index]))
-            .collect();
-        let id = Identifiability::with_noise(
-            &jac,
-            &p.weights,
-            p.cost_of(&forces),
-            c,
-            &columns,
-            self.noise,
-            Some(Forces {
-                fitted: &forces,
-                measured: &p.target,
-            }),
-        );
         if id.undetermined.is_empty() {
             return false;
         }
