@@ -588,8 +588,9 @@ impl Adjoint<'_> {
         Ok((df, dh))
     }
 
-    /// The inputs' checks: recorded fields (unless replayed), lengths, parameters, and
-    /// a model this sweep takes (small strain, no friction).
+    /// The inputs' checks: recorded fields (unless replayed), lengths, the parameters'
+    /// ranges and the law's differentiability there (every model, small and finite strain,
+    /// with or without friction, is one this sweep takes).
     pub(crate) fn check_material(
         &self,
         mat: &dyn Material,
