@@ -481,7 +481,7 @@ impl Material for Plastic {
         true
     }
     /// The four blocks from one evaluation of `s_eq`, the normal, the hardening curve
-    /// and the Norton rate at the point ([`Plastic::point`]): the same numbers as the
+    /// and the Norton rate at the point (`Plastic::point`): the same numbers as the
     /// four methods, without repeating that work per block.
     fn jac_blocks(
         &self,
