@@ -163,17 +163,36 @@ fn base64(s: &str) -> Vec<u8> {
     out
 }
 
+/// A chromedriver with a chromium session. A start that fails (chromedriver resetting the
+/// session request, or another process taking its port between our probe and its bind,
+/// both seen on a loaded 2-core machine) is retried with a new chromedriver, at most three
+/// times; the third failure fails the test.
 fn start_driver(
     driver: &std::path::Path,
     chromium: &std::path::Path,
     profile: &std::path::Path,
 ) -> Driver {
+    for attempt in 1..=3 {
+        match try_start_driver(driver, chromium, profile) {
+            Ok(d) => return d,
+            Err(why) if attempt < 3 => eprintln!("chromedriver start {attempt} failed: {why}"),
+            Err(why) => panic!("chromedriver did not start a session three times: {why}"),
+        }
+    }
+    unreachable!("the loop returns or panics")
+}
+
+fn try_start_driver(
+    driver: &std::path::Path,
+    chromium: &std::path::Path,
+    profile: &std::path::Path,
+) -> Result<Driver, String> {
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
         .unwrap()
         .port();
-    let child = Command::new(driver)
+    let mut child = Command::new(driver)
         .arg(format!("--port={port}"))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -182,7 +201,11 @@ fn start_driver(
     let addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
     let t0 = Instant::now();
     while std::net::TcpStream::connect(addr).is_err() {
-        assert!(t0.elapsed().as_secs() < 30, "chromedriver did not start");
+        if t0.elapsed().as_secs() >= 30 {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err("chromedriver did not listen within 30 s".into());
+        }
         std::thread::sleep(Duration::from_millis(50));
     }
     let args = [
@@ -202,19 +225,36 @@ fn start_driver(
         "browserName": "chrome",
         "goog:chromeOptions": {"binary": chromium, "args": args}
     }}});
-    let r = request(
-        addr,
-        "POST",
-        "/session",
-        &[("Content-Type", "application/json")],
-        caps.to_string().as_bytes(),
-    );
-    let v = r.json();
-    assert_eq!(r.status, 200, "new session: {v}");
-    Driver {
-        child,
-        addr,
-        session: v["value"]["sessionId"].as_str().unwrap().to_string(),
+    // `request` panics on a broken connection: caught here so the start can be retried
+    let body = caps.to_string();
+    let r = std::panic::catch_unwind(|| {
+        request(
+            addr,
+            "POST",
+            "/session",
+            &[("Content-Type", "application/json")],
+            body.as_bytes(),
+        )
+    });
+    let session = match r {
+        Ok(r) if r.status == 200 => r.json()["value"]["sessionId"]
+            .as_str()
+            .map(str::to_string)
+            .ok_or_else(|| format!("new session without an id: {}", r.json())),
+        Ok(r) => Err(format!("new session: {} {}", r.status, r.json())),
+        Err(_) => Err("the session request's connection broke".to_string()),
+    };
+    match session {
+        Ok(session) => Ok(Driver {
+            child,
+            addr,
+            session,
+        }),
+        Err(why) => {
+            let _ = child.kill();
+            let _ = child.wait();
+            Err(why)
+        }
     }
 }
 
