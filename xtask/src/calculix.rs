@@ -718,32 +718,69 @@ fn write_ids(w: &mut String, ids: impl Iterator<Item = usize>) -> std::fmt::Resu
 /// # Errors
 /// A total-force block without its values.
 pub fn parse_dat(text: &str) -> Result<Vec<(f64, f64)>> {
+    dat_blocks(text, |l| {
+        l.starts_with("total force") && l.contains("PUNCH")
+    })?
+    .into_iter()
+    .map(|b| {
+        if b.values.len() < 2 {
+            bail!(
+                "cannot read the total force `{}` after `{}`",
+                b.raw,
+                b.header
+            );
+        }
+        Ok((b.t, -180.0 * b.values[1]))
+    })
+    .collect()
+}
+
+/// One block of a `.dat` file: its header line, the time the header ends with, and the
+/// first non-empty line after it (as written and as numbers).
+pub struct DatBlock<'a> {
+    /// The header line, trimmed.
+    pub header: &'a str,
+    /// The time at its end (s).
+    pub t: f64,
+    /// The first non-empty line after it, trimmed.
+    pub raw: &'a str,
+    /// The numbers of that line.
+    pub values: Vec<f64>,
+}
+
+/// The blocks of a `.dat` file whose (trimmed) header line `wanted` accepts, in order.
+///
+/// # Errors
+/// A header without its time or its values.
+pub fn dat_blocks<'a>(text: &'a str, wanted: impl Fn(&str) -> bool) -> Result<Vec<DatBlock<'a>>> {
     let mut out = Vec::new();
     let mut lines = text.lines();
     while let Some(line) = lines.next() {
-        let l = line.trim();
-        if !(l.starts_with("total force") && l.contains("PUNCH")) {
+        let header = line.trim();
+        if !wanted(header) {
             continue;
         }
-        let t: f64 = l
+        let t: f64 = header
             .rsplit("time")
             .next()
             .map(str::trim)
             .and_then(|s| s.parse().ok())
-            .ok_or_else(|| anyhow::anyhow!("no time in `{l}`"))?;
-        let values = lines
+            .ok_or_else(|| anyhow::anyhow!("no time in `{header}`"))?;
+        let raw = lines
             .by_ref()
             .map(str::trim)
             .find(|s| !s.is_empty())
-            .ok_or_else(|| anyhow::anyhow!("no values after `{l}`"))?;
-        let v: Vec<f64> = values
+            .ok_or_else(|| anyhow::anyhow!("no values after `{header}`"))?;
+        let values = raw
             .split_whitespace()
             .filter_map(|x| x.parse().ok())
             .collect();
-        if v.len() < 2 {
-            bail!("cannot read the total force `{values}` after `{l}`");
-        }
-        out.push((t, -180.0 * v[1]));
+        out.push(DatBlock {
+            header,
+            t,
+            raw,
+            values,
+        });
     }
     Ok(out)
 }

@@ -261,40 +261,21 @@ pub struct Point {
 pub fn parse_dat(text: &str) -> Result<Vec<(f64, f64, f64)>> {
     let mut h: Vec<(f64, f64)> = Vec::new();
     let mut f: Vec<(f64, f64)> = Vec::new();
-    let mut lines = text.lines();
-    while let Some(line) = lines.next() {
-        let l = line.trim();
-        let displacement = l.starts_with("displacements") && l.contains("set REF");
-        let spring = l.starts_with("total force") && l.contains("set SPRTOP");
-        if !(displacement || spring) {
-            continue;
-        }
-        let t: f64 = l
-            .rsplit("time")
-            .next()
-            .map(str::trim)
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| anyhow::anyhow!("no time in `{l}`"))?;
-        let values = lines
-            .by_ref()
-            .map(str::trim)
-            .find(|s| !s.is_empty())
-            .ok_or_else(|| anyhow::anyhow!("no values after `{l}`"))?;
-        let v: Vec<f64> = values
-            .split_whitespace()
-            .filter_map(|x| x.parse().ok())
-            .collect();
-        if displacement {
+    let displacement = |l: &str| l.starts_with("displacements") && l.contains("set REF");
+    let spring = |l: &str| l.starts_with("total force") && l.contains("set SPRTOP");
+    for b in super::dat_blocks(text, |l| displacement(l) || spring(l))? {
+        let (l, values, v) = (b.header, b.raw, &b.values);
+        if displacement(l) {
             // node, ux, uy, uz
             if v.len() < 3 {
                 bail!("cannot read the displacement `{values}` after `{l}`");
             }
-            h.push((t, -v[2]));
+            h.push((b.t, -v[2]));
         } else {
             if v.len() < 2 {
                 bail!("cannot read the total force `{values}` after `{l}`");
             }
-            f.push((t, 180.0 * v[1]));
+            f.push((b.t, 180.0 * v[1]));
         }
     }
     if h.len() != f.len() {
