@@ -19,8 +19,9 @@
 //! control (`rho_i = g_i`), where `dJ/dH_i = a_i + s_i g_i` is the force's sensitivity
 //! to the prescribed depth history the frame's derivatives need.
 
+use crate::SensBuffers;
 use indentify_contact::{Frame, Schedule, Trajectory};
-use indentify_laws::{Law, Material, Vec4};
+use indentify_laws::{Law, Material};
 
 use crate::load::{BorderedRho, Column};
 use crate::material::MatSweep;
@@ -226,14 +227,13 @@ impl Adjoint<'_> {
         self.contact.begin();
         let s_mat = law.compliance(c);
         let np = c.len();
-        let nq = model.disc.n_qp();
-        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let SensBuffers {
+            mut y,
+            mut r_field,
+            mut work,
+        } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];
-        let mut r_field = vec![Vec4::ZERO; nq * np];
-        let mut work: Vec<crate::ParamWork> = (0..np)
-            .map(|_| crate::ParamWork::new(model, &self.contact))
-            .collect();
         let n_eq = model.dofs.n_eq;
         let mut col = Column {
             col: vec![0.0; n_eq],

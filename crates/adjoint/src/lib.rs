@@ -598,15 +598,12 @@ impl<'m> Adjoint<'m> {
         self.contact.begin();
         let s = law.compliance(c);
         let np = c.len();
-        let nq = model.disc.n_qp();
-        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let SensBuffers {
+            mut y,
+            mut r_field,
+            mut work,
+        } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
-        let mut r_field = vec![Vec4::ZERO; nq * np];
-        // given a step's factorized system, the parameters' solves are independent: each
-        // has its own work space (the same arithmetic on any thread, so the same bits)
-        let mut work: Vec<ParamWork> = (0..np)
-            .map(|_| ParamWork::new(model, &self.contact))
-            .collect();
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -680,6 +677,31 @@ struct ParamWork {
     /// Load control: the step's depth variation `dU_i/dc_k` (mm per unit parameter).
     du_depth: f64,
     solve: indentify_fe::SolveScratch,
+}
+
+/// A sensitivity pass's buffers for `np` parameters ([`Adjoint::sens_buffers`]).
+pub(crate) struct SensBuffers {
+    /// Each parameter's stress sensitivity at every Gauss point.
+    pub y: Vec<Vec<Vec4>>,
+    /// The local residual's parameter derivatives, `nq x np`.
+    pub r_field: Vec<Vec4>,
+    /// One work space per parameter: given a step's factorized system, the parameters'
+    /// solves are independent (the same arithmetic on any thread, so the same bits).
+    pub work: Vec<ParamWork>,
+}
+
+impl Adjoint<'_> {
+    /// The buffers of a sensitivity pass for `np` parameters.
+    pub(crate) fn sens_buffers(&self, np: usize) -> SensBuffers {
+        let nq = self.model.disc.n_qp();
+        SensBuffers {
+            y: vec![vec![Vec4::ZERO; nq]; np],
+            r_field: vec![Vec4::ZERO; nq * np],
+            work: (0..np)
+                .map(|_| ParamWork::new(self.model, &self.contact))
+                .collect(),
+        }
+    }
 }
 
 impl ParamWork {

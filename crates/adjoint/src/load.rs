@@ -20,6 +20,7 @@
 //! the forward sensitivities keep each step's relative motion `du + dU e_z` for the
 //! next step's ties ([`relative_to_punch`]).
 
+use crate::SensBuffers;
 use indentify_contact::{
     DirectSolver, ForceCotangent, LoadHistory, Model, RecordedContact, SolverOptions, StepFields,
     StepRecord, Target, Trajectory,
@@ -568,14 +569,13 @@ impl Adjoint<'_> {
         self.contact.begin();
         let s_mat = law.compliance(c);
         let np = c.len();
-        let nq = model.disc.n_qp();
-        let mut y = vec![vec![Vec4::ZERO; nq]; np];
+        let SensBuffers {
+            mut y,
+            mut r_field,
+            mut work,
+        } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];
-        let mut r_field = vec![Vec4::ZERO; nq * np];
-        let mut work: Vec<crate::ParamWork> = (0..np)
-            .map(|_| crate::ParamWork::new(model, &self.contact))
-            .collect();
         let mut carry = SegmentCarry::new(np, model.dofs.n_eq);
         for i in 0..n {
             let rec = &traj.steps[i];
