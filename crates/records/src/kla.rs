@@ -309,6 +309,22 @@ pub(crate) fn read(
     bytes: &[u8],
     test: Option<usize>,
 ) -> Result<Vec<Record>, ReadError> {
+    // the workbook parser (calamine) can panic on a malformed file (an arithmetic overflow
+    // in its cell references, found by `tests/fuzz.rs`): a bad file is an error, never a
+    // panic of the caller
+    std::panic::catch_unwind(|| read_workbook(file, bytes, test)).unwrap_or_else(|_| {
+        Err(ReadError::new(
+            file,
+            None,
+            K::Format,
+            "not a readable workbook (the workbook parser failed on a malformed part)",
+            "an .xlsx or .xls workbook as KLA/Agilent/Keysight software writes it",
+        ))
+    })
+}
+
+/// [`read`] without its guard against the parser's panics.
+fn read_workbook(file: &str, bytes: &[u8], test: Option<usize>) -> Result<Vec<Record>, ReadError> {
     let mut wb: Sheets<Cursor<&[u8]>> =
         open_workbook_auto_from_rs(Cursor::new(bytes)).map_err(|e| {
             ReadError::new(
