@@ -1,7 +1,9 @@
 //! Fuzzing the readers and the preprocessing with proptest: random bytes, mutated real files
 //! (byte flips, truncations, duplicated or deleted lines, inserted NaN/inf/huge numbers,
 //! swapped columns) and random records must give a value or an error, never a panic.
-//! A few thousand cases here; `cargo xtask fuzz-readers` runs 100 000+ in release.
+//! A few thousand cases here; `cargo xtask fuzz-readers` runs 100 000+ in release. A failing
+//! case is kept by proptest's default file persistence beside this file, to be committed so
+//! every later run tries it first.
 
 use indentify_records::fuzzing::{FORMATS, Mutation, mutate};
 use indentify_records::{
@@ -121,7 +123,7 @@ fn check_record(r: &Record) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 1000, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
 
     #[test]
     fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400), f in 0..6usize, p in options()) {
@@ -154,7 +156,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 3000, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
 
     #[test]
     fn mutated_real_files_never_panic(
@@ -193,7 +195,7 @@ fn workbooks() -> Vec<Vec<u8>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 2000, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
 
     #[test]
     fn mutated_workbooks_never_panic(

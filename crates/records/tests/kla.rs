@@ -135,3 +135,20 @@ fn bad_workbooks_say_what_is_wrong() {
     .unwrap_err();
     assert_eq!(e.kind, ReadErrorKind::Format);
 }
+
+/// Two workbooks whose first data cell has an impossible reference (`A` then 23 letters:
+/// a column past any integer; a 24-digit row): the parser may fail or panic on them (an
+/// overflow in its cell references, as the fuzz test once found), and either way the reader
+/// returns a format error naming the file.
+#[test]
+fn impossible_cell_references_are_a_format_error_not_a_panic() {
+    for (bytes, name) in [
+        (&include_bytes!("data/overflow-column.xlsx")[..], "col.xlsx"),
+        (&include_bytes!("data/overflow-row.xlsx")[..], "row.xlsx"),
+    ] {
+        let e = read(bytes, name, &ReadOptions::default()).unwrap_err();
+        eprintln!("{name}: {e}");
+        assert_eq!(e.kind, ReadErrorKind::Format, "{e}");
+        assert!(e.to_string().contains(name), "{e}");
+    }
+}
