@@ -358,3 +358,80 @@ fn without_the_ties_depth_term_the_adjoint_is_wrong() {
     println!("switched off: adjoint vs differences {:.2e}", o.adjoint);
     assert!(o.adjoint > 1e-4, "{:.2e}", o.adjoint);
 }
+
+/// A checkpointed compliant run (every 4 schedule steps), its stretches replayed with the
+/// frame's drive (`DirectSolver::replay_compliant`), gives the fields the recorded run
+/// (the same checkpoints, every field kept) has, bit for bit, and so the same adjoint
+/// gradient and forward sensitivities: Coulomb friction (mu 0.2) with Maxwell and with J2
+/// power + Norton (internal variables replayed).
+#[test]
+fn checkpointed_equals_recorded() {
+    let m = small_model(sphere(), friction(0.2));
+    let s = lhu(0.04, 6);
+    let fr = frame(1.5e-5);
+    let pl = Plastic::new(Hardening::Power, Rate::Norton);
+    let maxwell = LawMaterial(&Maxwell);
+    let cases: [(&dyn Material, &[f64]); 2] = [(&maxwell, &MAXWELL), (&pl, &POWER_NORTON)];
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (mat, c) in cases {
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let ck = |record| SolverOptions {
+            record_fields: record,
+            checkpoint_every: 4,
+            ..opts(record)
+        };
+        let recorded = solver.run_compliant(mat, c, &s, &fr, &ck(true)).unwrap();
+        let stored = solver.run_compliant(mat, c, &s, &fr, &ck(false)).unwrap();
+        assert!(stored.fields.is_empty() && stored.checkpoints.len() > 1);
+        // the replayed stretches, in order, as one trajectory with every field
+        let mut replayed = Trajectory {
+            steps: stored.steps.clone(),
+            ..Trajectory::default()
+        };
+        let last = s.t.len() - 1;
+        for (j, cp) in stored.checkpoints.iter().enumerate() {
+            let j_end = stored
+                .checkpoints
+                .get(j + 1)
+                .map_or(last, |next| next.schedule_index);
+            let seg = solver
+                .replay_compliant(mat, c, &s, &fr, &ck(false), cp, j_end)
+                .unwrap();
+            let skip = usize::from(j > 0);
+            replayed.fields.extend(seg.fields.into_iter().skip(skip));
+        }
+        assert_eq!(replayed.fields.len(), recorded.fields.len());
+        for (a, b) in replayed.fields.iter().zip(&recorded.fields) {
+            assert!(a == b, "{}: a replayed field differs", mat.name());
+        }
+        let n = recorded.steps.len();
+        let w = weights(n);
+        let mut adj = Adjoint::new(&m).unwrap();
+        let at = FrameIndex::default();
+        let g1 = adj
+            .gradient_compliant(mat, c, &recorded, (&s, &fr), &w)
+            .unwrap();
+        let s1 = adj
+            .sensitivities_compliant(mat, c, &recorded, (&s, &fr), at)
+            .unwrap();
+        let g2 = adj
+            .gradient_compliant(mat, c, &replayed, (&s, &fr), &w)
+            .unwrap();
+        let s2 = adj
+            .sensitivities_compliant(mat, c, &replayed, (&s, &fr), at)
+            .unwrap();
+        assert_eq!(bits(&g1.dj_dc), bits(&g2.dj_dc), "{}", mat.name());
+        assert_eq!(bits(&g1.dj_dframe), bits(&g2.dj_dframe), "{}", mat.name());
+        for (a, b) in s1.df_dc.iter().zip(&s2.df_dc) {
+            assert_eq!(bits(a), bits(b), "{}", mat.name());
+        }
+        for (a, b) in s1.dh_dc.iter().zip(&s2.dh_dc) {
+            assert_eq!(bits(a), bits(b), "{}", mat.name());
+        }
+        println!(
+            "{}: {} stretches replayed, gradient and sensitivities bit for bit",
+            mat.name(),
+            stored.checkpoints.len()
+        );
+    }
+}
