@@ -435,3 +435,74 @@ fn checkpointed_equals_recorded() {
         );
     }
 }
+
+/// The cost, measured back to back (`cargo test --test compliant_frame -- --ignored
+/// --nocapture`; printed, no timed assertion): on the sphere's model, the compliant forward
+/// (fields recorded), its adjoint and its forward sensitivities (the law's parameters), best
+/// of 5 alternated rounds, against the plain depth-controlled sensitivities of the same
+/// law on the same machine depths: J2 power + Norton frictionless, Maxwell and J2 with
+/// Coulomb friction (mu 0.2).
+#[test]
+#[ignore = "a measurement: run it on an idle machine"]
+fn cost_back_to_back() {
+    let s = lhu(0.04, 20);
+    let fr = frame(1.5e-5);
+    let pl = Plastic::new(Hardening::Power, Rate::Norton);
+    let maxwell = LawMaterial(&Maxwell);
+    let cases: [(&str, Model, &dyn Material, &[f64]); 3] = [
+        (
+            "plastic frictionless",
+            small_model(sphere(), ContactKind::Normal),
+            &pl,
+            &POWER_NORTON,
+        ),
+        (
+            "maxwell mu 0.2",
+            small_model(sphere(), friction(0.2)),
+            &maxwell,
+            &MAXWELL,
+        ),
+        (
+            "plastic mu 0.2",
+            small_model(sphere(), friction(0.2)),
+            &pl,
+            &POWER_NORTON,
+        ),
+    ];
+    for (name, m, mat, c) in cases {
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let mut best = [f64::INFINITY; 4];
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            let traj = run(&mut solver, mat, c, &s, &fr, true);
+            best[0] = best[0].min(t.elapsed().as_secs_f64());
+            let w = weights(traj.steps.len());
+            let t = std::time::Instant::now();
+            adj.gradient_compliant(mat, c, &traj, (&s, &fr), &w)
+                .unwrap();
+            best[1] = best[1].min(t.elapsed().as_secs_f64());
+            let t = std::time::Instant::now();
+            adj.sensitivities_compliant(mat, c, &traj, (&s, &fr), FrameIndex::default())
+                .unwrap();
+            best[2] = best[2].min(t.elapsed().as_secs_f64());
+            let d = solver.run(mat, c, &s, &opts(true)).unwrap();
+            let t = std::time::Instant::now();
+            adj.sensitivities(mat, c, &d).unwrap();
+            best[3] = best[3].min(t.elapsed().as_secs_f64());
+        }
+        println!(
+            "{name}: compliant forward {:.1} ms, adjoint {:.1} ms ({:.2}x), sensitivities \
+             ({} parameters) {:.1} ms ({:.2}x); depth-controlled sensitivities {:.1} ms \
+             (through the frame / plain {:.2}x)",
+            1e3 * best[0],
+            1e3 * best[1],
+            best[1] / best[0],
+            c.len(),
+            1e3 * best[2],
+            best[2] / best[0],
+            1e3 * best[3],
+            best[2] / best[3]
+        );
+    }
+}
