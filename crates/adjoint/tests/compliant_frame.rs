@@ -439,7 +439,7 @@ fn checkpointed_equals_recorded() {
 /// The cost, measured back to back (`cargo test --test compliant_frame -- --ignored
 /// --nocapture`; printed, no timed assertion): on the sphere's model, the compliant forward
 /// (fields recorded), its adjoint and its forward sensitivities (the law's parameters), best
-/// of 5 alternated rounds, against the plain depth-controlled sensitivities of the same
+/// of 15 alternated rounds, against the plain depth-controlled sensitivities of the same
 /// law on the same machine depths: J2 power + Norton frictionless, Maxwell and J2 with
 /// Coulomb friction (mu 0.2).
 #[test]
@@ -473,7 +473,7 @@ fn cost_back_to_back() {
         let mut solver = DirectSolver::new(&m).unwrap();
         let mut adj = Adjoint::new(&m).unwrap();
         let mut best = [f64::INFINITY; 4];
-        for _ in 0..5 {
+        for _ in 0..15 {
             let t = std::time::Instant::now();
             let traj = run(&mut solver, mat, c, &s, &fr, true);
             best[0] = best[0].min(t.elapsed().as_secs_f64());
