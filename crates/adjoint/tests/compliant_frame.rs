@@ -282,13 +282,16 @@ fn internal_variables_sensitivities_through_the_frame() {
     assert_outcome("prony finite", &o);
 }
 
+/// A named case: its model, material and parameters.
+type Case = (&'static str, Model, Box<dyn Material>, &'static [f64]);
+
 /// Coulomb friction through the frame: Maxwell (mu 0.2, small and finite strain), a
 /// two-term Prony solid (mu 0.1) and J2 power + Norton (mu 0.15), each with at least 3
 /// sticking and 3 slipping node-steps.
 #[test]
 fn coulomb_friction_through_the_frame() {
     let fr = frame(1.5e-5);
-    let cases: Vec<(&str, Model, Box<dyn Material>, &[f64])> = vec![
+    let cases: Vec<Case> = vec![
         (
             "maxwell small mu 0.2",
             small_model(sphere(), friction(0.2)),
