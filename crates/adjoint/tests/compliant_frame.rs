@@ -264,8 +264,8 @@ fn assert_outcome(name: &str, o: &Outcome) {
 }
 
 /// Laws with internal variables through their blocks, frictionless normal contact:
-/// J2 with power hardening and Norton overstress (small strain, `Cf` 1.5e-5 and 0) and a
-/// two-term Prony solid (small and finite strain).
+/// J2 with power hardening and Norton overstress (small strain, `Cf` 1.5e-5 and 0; finite
+/// strain) and a two-term Prony solid (small and finite strain).
 #[test]
 fn internal_variables_sensitivities_through_the_frame() {
     let m = small_model(sphere(), ContactKind::Normal);
@@ -280,6 +280,8 @@ fn internal_variables_sensitivities_through_the_frame() {
     let m = finite_model(sphere());
     let o = check(&m, &pr, &PRONY, &frame(1.5e-5), &lhu(0.04, 6), true);
     assert_outcome("prony finite", &o);
+    let o = check(&m, &pl, &POWER_NORTON, &frame(1.5e-5), &lhu(0.04, 6), true);
+    assert_outcome("plastic finite", &o);
 }
 
 /// A named case: its model, material and parameters.
