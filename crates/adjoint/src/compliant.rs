@@ -199,7 +199,7 @@ impl Adjoint<'_> {
     /// differentiated spring `dh_i (1 + Cf s_i) = dH_i - F_i dCf - Cf dF_i^h` (`dF_i^h` the
     /// force variation at the depth held; `dH_i = -(t_i - t0) dvd - dh0`), by the load
     /// control's bordered column (`load.rs`) with `s_i + 1 / Cf` for `s_i`; at `Cf = 0`
-    /// the depth variation is `dH_i - F_i dCf`, prescribed ([`FrameDrive::step`]). A
+    /// the depth variation is `dH_i - F_i dCf`, prescribed (`FrameDrive::step`). A
     /// stress-only law steps as [`Adjoint::sensitivities`] does; a material with internal
     /// variables through its blocks (`material.rs`). With Coulomb friction each step keeps
     /// its motion relative to the punch, `du + dh e_z`, for the next step's sticking ties
