@@ -68,8 +68,9 @@ fn sphere_config(law: &str, contact: &str, law_id: &str) -> ConfigSource {
 
 /// Runs `gradient-check` on `src` with the relative step `rel_step` and asserts every
 /// parameter passes (adjoint against central differences and against the forward
-/// sensitivities through the frame).
-fn passes(src: ConfigSource, rel_step: f64, expected: &[&str]) {
+/// sensitivities through the frame); with `friction`, that every stencil's runs held the
+/// check point's contact sets and stick/slip statuses.
+fn passes(src: ConfigSource, rel_step: f64, friction: bool, expected: &[&str]) {
     let opts = CheckOptions {
         rel_step,
         ..CheckOptions::new(src)
@@ -80,12 +81,18 @@ fn passes(src: ConfigSource, rel_step: f64, expected: &[&str]) {
     };
     for c in &report.checks {
         println!(
-            "{}: adjoint {:.6e} fd {:.6e} (rel {:.1e}) sens rel {:.1e}",
-            c.name, c.adjoint, c.fd, c.rel_diff_fd, c.rel_diff_sensitivity
+            "{}: adjoint {:.6e} fd {:.6e} (rel {:.1e}) sens rel {:.1e} statuses held {:?}",
+            c.name, c.adjoint, c.fd, c.rel_diff_fd, c.rel_diff_sensitivity, c.statuses_held
         );
     }
     let names: Vec<&str> = report.checks.iter().map(|c| c.name).collect();
     assert_eq!(names, expected);
+    // with friction every stencil held the check point's contact sets and statuses
+    if friction {
+        assert!(report.checks.iter().all(|c| c.statuses_held == Some(true)));
+    } else {
+        assert!(report.checks.iter().all(|c| c.statuses_held.is_none()));
+    }
     assert!(report.passed, "{:?}", report.failures);
     let n = expected.len();
     assert!(report.checks[n - 3..].iter().all(|c| c.adjoint != 0.0));
@@ -106,6 +113,7 @@ fn gradient_check_covers_a_plastic_law_through_the_frame() {
     passes(
         sphere_config(law, "Normal", id),
         1e-4,
+        false,
         &["E", "nu", "sY", "n", "K", "m", "Cf", "vd", "h0"],
     );
 }
@@ -119,6 +127,7 @@ fn gradient_check_covers_coulomb_friction_through_the_frame() {
     passes(
         sphere_config(law, "Normal(friction: 0.2)", id),
         1e-5,
+        true,
         &["E", "nu", "eta", "Cf", "vd", "h0"],
     );
 }
