@@ -18,12 +18,18 @@
 //! `dH_i/dh0 = -1`) or the spring (`dJ/dCf = -sum_i F_i dJ/dH_i`). `Cf = 0` is plain depth
 //! control (`rho_i = g_i`), where `dJ/dH_i = a_i + s_i g_i` is the force's sensitivity
 //! to the prescribed depth history the frame's derivatives need.
+//!
+//! Coulomb friction: the punch depth `h_i` is an unknown here as under load control, and
+//! the next step's sticking ties read it, so `a_i` gains their term
+//! ([`indentify_contact::RecordedContact::adjoint_depth`]) and `rho_i` enters as friction's
+//! shifted cotangent (`Adjoint::bordered_rho`, `load.rs`); the forward sensitivities keep
+//! each step's motion relative to the punch for the next step's ties.
 
 use crate::SensBuffers;
-use indentify_contact::{Frame, Schedule, Trajectory};
+use indentify_contact::{Frame, RecordedContact, Schedule, StepRecord, Trajectory};
 use indentify_laws::{Law, Material};
 
-use crate::load::{BorderedRho, Column};
+use crate::load::{BorderedRho, Column, SegmentCarry};
 use crate::material::MatSweep;
 use crate::{Adjoint, AdjointError, Recorded, Sweep, check_inputs};
 
@@ -49,12 +55,12 @@ impl Adjoint<'_> {
     /// depths `schedule` through `frame` (recorded with fields): with respect to the
     /// material's parameters and the frame's `Cf`, `vd`, `h0`. A stress-only law sweeps
     /// as [`Adjoint::gradient`] does, a material with internal variables through its
-    /// blocks (`material.rs`), each step bordered by its depth column.
+    /// blocks (`material.rs`), each step bordered by its depth column; every contact
+    /// kind, Coulomb friction included (the later ties' depth term, docs/theory.md §13.7).
     ///
     /// # Errors
-    /// As [`Adjoint::gradient`]; [`AdjointError::Step`] for Coulomb friction (its
-    /// sticking ties read the punch depth; refused with the reason) or a step whose
-    /// stiffness `1 + Cf s` is not positive.
+    /// As [`Adjoint::gradient`]; [`AdjointError::Step`] for a step whose stiffness
+    /// `1 + Cf s` is not positive.
     pub fn gradient_compliant(
         &mut self,
         mat: &dyn Material,
@@ -79,17 +85,6 @@ impl Adjoint<'_> {
             });
         }
         self.contact.begin();
-        if self.contact.force_cotangent() == indentify_contact::ForceCotangent::Shifted {
-            // the later sticking ties read this step's depth (docs/theory.md §13, Coulomb
-            // friction under load control): that term is written for load control only
-            return Err(AdjointError::Step {
-                step: traj.steps.len().saturating_sub(1),
-                t: traj.steps.last().map_or(0.0, |s| s.t),
-                reason: "compliant depth control: the exact gradient with Coulomb friction \
-                         is not available (its sticking ties read the punch depth)"
-                    .into(),
-            });
-        }
         let n = traj.steps.len();
         let n_eq = self.model.dofs.n_eq;
         let mut col = Column {
@@ -158,6 +153,15 @@ impl Adjoint<'_> {
             dj_dframe[1] -= (s.t - t0) * d;
             dj_dframe[2] -= d;
         }
+        // Coulomb friction: the first step's sticking ties read the initial depth H(t0),
+        // which moves with -h0 (the carry the sweep left is the first step's)
+        if self.depth_ties && self.contact.adjoint_pending() {
+            col.col.fill(0.0);
+            let init = initial_record(schedule, frame);
+            dj_dframe[2] -= self
+                .contact
+                .adjoint_depth(&init, &traj.fields[0].u, &col.col);
+        }
         Ok(FrameGradient {
             dj_dc,
             dj_dframe,
@@ -190,16 +194,19 @@ pub struct FrameIndex {
 impl Adjoint<'_> {
     /// Forward sensitivities `dF_i/dc_k` and `dh_i/dc_k` of a run of
     /// [`indentify_contact::DirectSolver::run_compliant`] (`traj` recorded with fields),
-    /// for a stress-only law whose parameter vector `c` holds the frame's parameters at
-    /// `at` (their law derivatives zero). Each step's depth variation solves the
+    /// for a material whose parameter vector `c` holds the frame's parameters at `at`
+    /// (their law derivatives zero). Each step's depth variation solves the
     /// differentiated spring `dh_i (1 + Cf s_i) = dH_i - F_i dCf - Cf dF_i^h` (`dF_i^h` the
     /// force variation at the depth held; `dH_i = -(t_i - t0) dvd - dh0`), by the load
     /// control's bordered column (`load.rs`) with `s_i + 1 / Cf` for `s_i`; at `Cf = 0`
-    /// the depth variation is `dH_i - F_i dCf`, prescribed.
+    /// the depth variation is `dH_i - F_i dCf`, prescribed (`FrameDrive::step`). A
+    /// stress-only law steps as [`Adjoint::sensitivities`] does; a material with internal
+    /// variables through its blocks (`material.rs`). With Coulomb friction each step keeps
+    /// its motion relative to the punch, `du + dh e_z`, for the next step's sticking ties
+    /// (docs/theory.md §13.7).
     ///
     /// # Errors
-    /// As [`Adjoint::gradient_compliant`]; [`AdjointError::Step`] for a material with
-    /// internal variables (not available: fit with a gradient method, whose adjoint is).
+    /// As [`Adjoint::gradient_compliant`].
     pub fn sensitivities_compliant(
         &mut self,
         mat: &dyn Material,
@@ -210,20 +217,32 @@ impl Adjoint<'_> {
     ) -> Result<crate::LoadSensitivities, AdjointError> {
         let model = self.model;
         let start = std::time::Instant::now();
-        let Some(law) = mat.as_law() else {
+        let drive = FrameDrive::new(schedule, frame, at);
+        if !(drive.cf.is_finite() && drive.cf >= 0.0) {
             return Err(AdjointError::Step {
                 step: 0,
-                t: schedule.t[0],
+                t: drive.t0,
                 reason: format!(
-                    "compliant depth control: the forward sensitivities of {} (internal \
-                     variables) are not available; its adjoint gradient is",
-                    mat.name()
+                    "the frame compliance Cf = {} must be finite and >= 0",
+                    drive.cf
                 ),
+            });
+        }
+        let Some(law) = mat.as_law() else {
+            let (df, dh) = self.material_sensitivities(
+                mat,
+                c,
+                traj,
+                crate::material::SensDrive::Frame(&drive),
+            )?;
+            return Ok(crate::LoadSensitivities {
+                dh_dc: dh,
+                df_dc: df,
+                seconds: start.elapsed().as_secs_f64(),
             });
         };
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
-        let cf = frame.compliance;
         self.contact.begin();
         let s_mat = law.compliance(c);
         let np = c.len();
@@ -234,51 +253,22 @@ impl Adjoint<'_> {
         } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];
-        let n_eq = model.dofs.n_eq;
-        let mut col = Column {
-            col: vec![0.0; n_eq],
-            kv: vec![0.0; n_eq],
-        };
-        let mut given = vec![0.0; np];
-        let t0 = schedule.t[0];
+        let mut carry = SegmentCarry::new(np, model.dofs.n_eq);
+        for (k, w) in work.iter_mut().enumerate() {
+            drive.seed(model, k, &mut w.du_prev);
+        }
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
-            let prev = i
-                .checked_sub(1)
-                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
-            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let prev = match i.checked_sub(1) {
+                Some(p) => (&traj.steps[p], traj.fields[i].u.as_slice()),
+                None => (drive.initial(), traj.fields[0].u.as_slice()),
+            };
+            self.contact.prepare_sensitivities(rec, &f1.u, Some(prev));
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
-            if self.contact.force_cotangent() == indentify_contact::ForceCotangent::Shifted {
-                return Err(AdjointError::Step {
-                    step: i,
-                    t: rec.t,
-                    reason: "compliant depth control: the exact sensitivities with Coulomb \
-                             friction are not available (its sticking ties read the punch \
-                             depth)"
-                        .into(),
-                });
-            }
-            let s = self.contact.depth_column(rec, &mut col.col, &mut col.kv);
-            // dH_i - F_i dCf per parameter
-            given.fill(0.0);
-            if let Some(k) = at.compliance {
-                given[k] = -rec.force;
-            }
-            if let Some(k) = at.drift {
-                given[k] = -(rec.t - t0);
-            }
-            if let Some(k) = at.offset {
-                given[k] = -1.0;
-            }
-            let (s_border, load) = if cf > 0.0 {
-                given.iter_mut().for_each(|g| *g /= cf);
-                (s + 1.0 / cf, true)
-            } else {
-                (s, false)
-            };
+            let load = drive.step(&mut self.contact, rec, &mut carry);
             let step = crate::ParamStep {
                 model,
                 tangents: &self.tangents,
@@ -289,10 +279,10 @@ impl Adjoint<'_> {
                 np,
                 rec,
                 border: Some(crate::load::Border {
-                    col: &col.col,
-                    s: s_border,
+                    col: &carry.col.col,
+                    s: carry.s,
                     load,
-                    given: &given,
+                    given: &carry.given,
                 }),
             };
             for (k, ((yk, dfk), w)) in y
@@ -311,5 +301,95 @@ impl Adjoint<'_> {
             df_dc: df,
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+}
+
+/// A compliant run's steps as its forward sensitivities see them: the frame's compliance,
+/// the test's first time, where the frame's parameters sit in the parameter vector, and
+/// the initial state's record (the punch at `H(t0) = h_meas(t0) - h0`, out of contact).
+pub(crate) struct FrameDrive {
+    cf: f64,
+    t0: f64,
+    at: FrameIndex,
+    init: StepRecord,
+}
+
+impl FrameDrive {
+    pub(crate) fn new(schedule: &Schedule, frame: &Frame, at: FrameIndex) -> FrameDrive {
+        let t0 = schedule.t[0];
+        FrameDrive {
+            cf: frame.compliance,
+            t0,
+            at,
+            init: initial_record(schedule, frame),
+        }
+    }
+
+    /// The record of the initial state, the "previous step" of the first step's sticking
+    /// ties (Coulomb friction: a node touching down in the first step sticks where it
+    /// projected at the initial depth, which moves with `h0`).
+    pub(crate) fn initial(&self) -> &StepRecord {
+        &self.init
+    }
+
+    /// Parameter `k`'s displacement variation of the initial state relative to the punch
+    /// into `du_prev` (all dofs, zero on entry; empty without ties): `-e_z` on every
+    /// candidate for `h0` (the initial depth is `H(t0)`), zero for the others.
+    pub(crate) fn seed(&self, model: &indentify_contact::Model, k: usize, du_prev: &mut [f64]) {
+        if self.at.offset == Some(k) {
+            crate::load::relative_to_punch(model, du_prev, -1.0);
+        }
+    }
+
+    /// The bordered column of the prepared step `rec` into `carry` (its depth column, the
+    /// pivot and each parameter's given value) and whether the depth variation solves the
+    /// spring (`true`, `Cf > 0`: `dh (s + 1/Cf) = (dH - F dCf) / Cf - dF^h`, the load
+    /// control's form) or is prescribed (`false`, `Cf = 0`: `dh = dH - F dCf`).
+    pub(crate) fn step(
+        &self,
+        contact: &mut RecordedContact<'_>,
+        rec: &StepRecord,
+        carry: &mut SegmentCarry,
+    ) -> bool {
+        let s = contact.depth_column(rec, &mut carry.col.col, &mut carry.col.kv);
+        // dH_i - F_i dCf per parameter
+        let given = &mut carry.given;
+        given.fill(0.0);
+        if let Some(k) = self.at.compliance {
+            given[k] = -rec.force;
+        }
+        if let Some(k) = self.at.drift {
+            given[k] = -(rec.t - self.t0);
+        }
+        if let Some(k) = self.at.offset {
+            given[k] = -1.0;
+        }
+        if self.cf > 0.0 {
+            given.iter_mut().for_each(|g| *g /= self.cf);
+            carry.s = s + 1.0 / self.cf;
+            true
+        } else {
+            carry.s = s;
+            false
+        }
+    }
+}
+
+/// The record of a compliant run's initial state: time `t0`, the punch at `H(t0)`
+/// (`DirectSolver::run_compliant` starts there), no contact, no force.
+fn initial_record(schedule: &Schedule, frame: &Frame) -> StepRecord {
+    StepRecord {
+        t: schedule.t[0],
+        dt: 0.0,
+        depth: frame.prescribed(schedule, schedule.t[0]),
+        force: 0.0,
+        contact_radius: 0.0,
+        active: Vec::new(),
+        lambda: Vec::new(),
+        slip: Vec::new(),
+        iterations: 0,
+        active_set_changes: 0,
+        on_schedule: true,
+        schedule_index: 0,
     }
 }

@@ -161,6 +161,9 @@ pub struct Adjoint<'m> {
     fused: affine::Fused,
     /// Whether sweeps use it ([`Adjoint::set_fused`]).
     fuse: bool,
+    /// Whether a bordered step's scalar takes the later sticking ties' depth term
+    /// ([`Adjoint::set_friction_depth_term`]; always, outside tests).
+    depth_ties: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -186,6 +189,7 @@ impl<'m> Adjoint<'m> {
             skip: Vec::new(),
             fused: affine::Fused::default(),
             fuse: true,
+            depth_ties: true,
         })
     }
 
@@ -195,6 +199,14 @@ impl<'m> Adjoint<'m> {
     /// the gradients agree to round-off).
     pub fn set_fused(&mut self, on: bool) {
         self.fuse = on;
+    }
+
+    /// Drops (`false`) the later sticking ties' depth term from the bordered steps' scalar
+    /// (Coulomb friction under load control or through the frame; docs/theory.md §13):
+    /// only so that a test can show the gradient is wrong without it.
+    #[doc(hidden)]
+    pub fn set_friction_depth_term(&mut self, on: bool) {
+        self.depth_ties = on;
     }
 
     /// Starts a reversed-time sweep: `mu = 0`, nothing kept from an earlier one.

@@ -376,7 +376,11 @@ impl Adjoint<'_> {
             .zip(&b.col.col)
             .map(|(g, d)| g * d)
             .sum::<f64>()
-            + self.contact.adjoint_depth(rec, u, &b.col.col);
+            + if self.depth_ties {
+                self.contact.adjoint_depth(rec, u, &b.col.col)
+            } else {
+                0.0
+            };
         let rho = (b.rho_of)(a, s);
         if !rho.is_finite() {
             return Err(AdjointError::Step {
@@ -557,7 +561,12 @@ impl Adjoint<'_> {
         let model = self.model;
         let start = std::time::Instant::now();
         let Some(law) = mat.as_law() else {
-            let (df, dh) = self.material_sensitivities(mat, c, traj, Some(history))?;
+            let (df, dh) = self.material_sensitivities(
+                mat,
+                c,
+                traj,
+                crate::material::SensDrive::Load(history),
+            )?;
             return Ok(LoadSensitivities {
                 dh_dc: dh,
                 df_dc: df,

@@ -398,7 +398,7 @@ impl Adjoint<'_> {
         traj: &Trajectory,
     ) -> Result<Sensitivities, AdjointError> {
         let start = std::time::Instant::now();
-        let (df_dc, _) = self.material_sensitivities(mat, c, traj, None)?;
+        let (df_dc, _) = self.material_sensitivities(mat, c, traj, SensDrive::Depth)?;
         Ok(Sensitivities {
             df_dc,
             seconds: start.elapsed().as_secs_f64(),
@@ -406,14 +406,14 @@ impl Adjoint<'_> {
     }
 
     /// The forward sensitivities of [`Adjoint::sensitivities_material`], under load
-    /// control (`history`) with the bordered step of `load.rs`: `dF_i/dc` and
-    /// `dU_i/dc` per step (the latter zero without a history).
+    /// control or through the instrument's frame (`drive`) with the bordered step of
+    /// `load.rs`: `dF_i/dc` and `dU_i/dc` per step (the latter zero under depth control).
     pub(crate) fn material_sensitivities(
         &mut self,
         mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
-        history: Option<&LoadHistory>,
+        drive: SensDrive<'_>,
     ) -> Result<(Rows, Rows), AdjointError> {
         let model = self.model;
         let n = traj.steps.len();
@@ -439,6 +439,11 @@ impl Adjoint<'_> {
         let mut works: Vec<crate::ParamWork> = (0..np)
             .map(|_| crate::ParamWork::new(model, &self.contact))
             .collect();
+        if let SensDrive::Frame(f) = drive {
+            for (k, w) in works.iter_mut().enumerate() {
+                f.seed(model, k, &mut w.du_prev);
+            }
+        }
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -492,14 +497,18 @@ impl Adjoint<'_> {
                 self.tangents[q] = ct;
             }
             self.prepare_material_step(rec, f1, None).map_err(fail)?;
-            let border = match history {
-                Some(h) => carry.step(&mut self.contact, h, traj, i, (&df, &dh))?,
-                None => None,
+            let border = match drive {
+                SensDrive::Depth => None,
+                SensDrive::Load(h) => carry.step(&mut self.contact, h, traj, i, (&df, &dh))?,
+                SensDrive::Frame(f) => Some(f.step(&mut self.contact, rec, &mut carry)),
             };
             let finite = self.finite.as_ref();
-            let prev = i
-                .checked_sub(1)
-                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            let prev = match (i.checked_sub(1), drive) {
+                (Some(p), _) => Some((&traj.steps[p], traj.fields[i].u.as_slice())),
+                // the first step's ties read the initial depth, a parameter's through h0
+                (None, SensDrive::Frame(f)) => Some((f.initial(), traj.fields[0].u.as_slice())),
+                (None, _) => None,
+            };
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
             for k in 0..np {
                 if self.skips(k) {
@@ -988,4 +997,13 @@ mod tests {
         }
         eprintln!("isotropic Q mu against the dense product: {worst:e}");
     }
+}
+
+/// How a sensitivity pass of a material drives its steps: by depth, under load control
+/// (`load.rs`), or by depth through the instrument's frame (`compliant.rs`).
+#[derive(Clone, Copy)]
+pub(crate) enum SensDrive<'a> {
+    Depth,
+    Load(&'a LoadHistory),
+    Frame(&'a crate::compliant::FrameDrive),
 }

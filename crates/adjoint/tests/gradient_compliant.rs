@@ -6,8 +6,8 @@
 //! under a cone with vertical contact, Maxwell and J2 with power-law hardening and Norton
 //! overstress (internal variables) under a sphere with frictionless normal contact, small
 //! and finite strain; at `Cf = 0` (plain depth control) the frame's derivatives are the
-//! force's sensitivity to the prescribed depth history; Coulomb friction is refused with
-//! the reason.
+//! force's sensitivity to the prescribed depth history. Coulomb friction, and the forward
+//! sensitivities of laws with internal variables: `compliant_frame.rs`.
 
 mod common;
 
@@ -231,36 +231,6 @@ fn zero_compliance_frame_derivatives() {
         1e-4,
     );
     assert!(w < 1e-7, "normal {w:.2e}");
-}
-
-/// Coulomb friction: refused with the reason, never a wrong number.
-#[test]
-fn coulomb_friction_is_refused_with_the_reason() {
-    let kind = ContactKind::normal_with_friction(0.2).unwrap();
-    let m = small_model(sphere(), kind);
-    let schedule = lhu(0.04, 4);
-    let frame = Frame {
-        compliance: 1.5e-5,
-        ..Frame::default()
-    };
-    let mx = LawMaterial(&Maxwell);
-    let mut solver = DirectSolver::new(&m).unwrap();
-    let traj = solver
-        .run_compliant(&mx, &MAXWELL_SPHERE, &schedule, &frame, &opts(true))
-        .unwrap();
-    let n = traj.steps.len();
-    let mut adj = Adjoint::new(&m).unwrap();
-    let err = adj
-        .gradient_compliant(
-            &mx,
-            &MAXWELL_SPHERE,
-            &traj,
-            (&schedule, &frame),
-            &vec![1.0; n],
-        )
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("Coulomb friction"), "{err}");
 }
 
 /// Back-to-back cost (printed, not asserted: no timed assertions): on the cone's model,

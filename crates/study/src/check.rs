@@ -654,6 +654,16 @@ fn at_point_evaluated(problem: &Problem, point: &[f64]) -> Result<AtPoint> {
     let observed = ev.forces(point).map_err(solver_error)?;
     let jac = ev.jacobian(point).map_err(solver_error)?;
     let sensitivity_seconds = start.elapsed().as_secs_f64() - forward_seconds - adjoint_seconds;
+    // with friction, each test's contact sets and stick/slip statuses, which the +-h runs
+    // of the differences must hold
+    let mut held = Vec::with_capacity(problem.tests.len());
+    for (k, test) in problem.tests.iter().enumerate() {
+        held.push(if test.model.contact.friction() > 0.0 {
+            Some(statuses(ev.trajectory_of(k, point).map_err(solver_error)?))
+        } else {
+            None
+        });
+    }
     let mut jt_rho = vec![0.0; point.len()];
     for ((row, h), (d, w)) in jac
         .iter()
@@ -668,7 +678,7 @@ fn at_point_evaluated(problem: &Problem, point: &[f64]) -> Result<AtPoint> {
         j,
         gradient,
         jt_rho,
-        statuses: vec![None; problem.tests.len()],
+        statuses: held,
         forward_seconds,
         adjoint_seconds,
         sensitivity_seconds,
@@ -697,7 +707,17 @@ fn compare(
     let mut cost = |c: &[f64]| -> Result<f64> {
         solves += problem.tests.len();
         if problem.has_instrument() {
-            return evaluator(problem)?.cost(c).map_err(solver_error);
+            let mut ev = evaluator(problem)?;
+            let j = ev.cost(c).map_err(solver_error)?;
+            // with friction, whether every test's run held the check point's statuses
+            for (k, held) in at.statuses.iter().enumerate() {
+                if let Some(b) = held
+                    && *b != statuses(ev.trajectory_of(k, c).map_err(solver_error)?)
+                {
+                    flipped.set(true);
+                }
+            }
+            return Ok(j);
         }
         let runs = each_test(problem, solvers, |k, test, solver| {
             let t = run_test(
