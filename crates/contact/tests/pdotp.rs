@@ -10,6 +10,7 @@ use indentify_contact::{
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
+use std::time::Instant;
 
 /// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3, under the 68 deg cone.
 fn model() -> Model {
@@ -117,5 +118,24 @@ fn pdotp_run_carries_the_exponential_and_its_depths_give_it_back() {
             by_depth.total_iterations()
         );
         assert!(worst < 1e-7, "{}: {worst:e}", law.name());
+        // the cost, back to back (the fastest of 3 alternated runs; printed, not asserted)
+        let schedule = Schedule::from_record(&t, &h).unwrap();
+        let (mut t_load, mut t_depth) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..3 {
+            let clock = Instant::now();
+            solver.run_history(&mat, c, &history, &opts()).unwrap();
+            t_load = t_load.min(clock.elapsed().as_secs_f64());
+            let clock = Instant::now();
+            solver.run(&mat, c, &schedule, &opts()).unwrap();
+            t_depth = t_depth.min(clock.elapsed().as_secs_f64());
+        }
+        println!(
+            "{}: Pdot/P forward {:.2} ms, the depth-controlled forward of its depths {:.2} ms \
+             (ratio {:.2})",
+            law.name(),
+            1e3 * t_load,
+            1e3 * t_depth,
+            t_load / t_depth
+        );
     }
 }
