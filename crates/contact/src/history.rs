@@ -18,6 +18,38 @@ pub struct Segment {
     pub steps: usize,
 }
 
+impl Segment {
+    /// Checks segment `i` of a history (the errors name `history.segments[]` and `i`).
+    ///
+    /// # Errors
+    /// As [`Schedule::from_segments`].
+    pub(crate) fn check(&self, i: usize) -> Result<(), ContactError> {
+        let s = self;
+        if !(s.duration.is_finite() && s.duration > 0.0) {
+            return Err(ContactError::Input {
+                field: "history.segments[].duration",
+                value: format!("{} (segment {i})", s.duration),
+                allowed: "a duration > 0 s (time must increase)".into(),
+            });
+        }
+        if !s.depth.is_finite() {
+            return Err(ContactError::Input {
+                field: "history.segments[].depth",
+                value: format!("{} (segment {i})", s.depth),
+                allowed: "a finite depth (mm)".into(),
+            });
+        }
+        if !(1..=1_000_000).contains(&s.steps) {
+            return Err(ContactError::Input {
+                field: "history.segments[].steps",
+                value: format!("{} (segment {i})", s.steps),
+                allowed: "an integer in [1, 1000000]".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
 /// The largest number of sub-steps of one schedule step ([`Schedule::with_substeps`]).
 pub const MAX_SUBSTEPS: usize = 1000;
 
@@ -57,27 +89,7 @@ impl Schedule {
         let mut t = vec![0.0];
         let mut depth = vec![0.0];
         for (i, s) in segments.iter().enumerate() {
-            if !(s.duration.is_finite() && s.duration > 0.0) {
-                return Err(ContactError::Input {
-                    field: "history.segments[].duration",
-                    value: format!("{} (segment {i})", s.duration),
-                    allowed: "a duration > 0 s (time must increase)".into(),
-                });
-            }
-            if !s.depth.is_finite() {
-                return Err(ContactError::Input {
-                    field: "history.segments[].depth",
-                    value: format!("{} (segment {i})", s.depth),
-                    allowed: "a finite depth (mm)".into(),
-                });
-            }
-            if !(1..=1_000_000).contains(&s.steps) {
-                return Err(ContactError::Input {
-                    field: "history.segments[].steps",
-                    value: format!("{} (segment {i})", s.steps),
-                    allowed: "an integer in [1, 1000000]".into(),
-                });
-            }
+            s.check(i)?;
             let (t0, d0) = (*t.last().unwrap_or(&0.0), *depth.last().unwrap_or(&0.0));
             for k in 1..=s.steps {
                 let f = k as f64 / s.steps as f64;
@@ -267,6 +279,60 @@ impl From<Segment> for HistorySegment {
     }
 }
 
+impl HistorySegment {
+    /// What segment `i` prescribes at its end.
+    ///
+    /// # Errors
+    /// [`ContactError::Input`] naming `history.segments[].depth` / `.force` for both or
+    /// neither, or a force that is not finite and > 0.
+    pub(crate) fn target(&self, i: usize) -> Result<Target, ContactError> {
+        let s = self;
+        match (s.depth, s.force) {
+            (Some(d), None) => Ok(Target::Depth(d)),
+            (None, Some(f)) => {
+                if !(f.is_finite() && f > 0.0) {
+                    return Err(ContactError::Input {
+                        field: "history.segments[].force",
+                        value: format!("{f} (segment {i})"),
+                        allowed: "a finite force > 0 N (a force of 0 leaves the depth \
+                                  undetermined: end an unloading in depth control, \
+                                  `depth: 0.0`)"
+                            .into(),
+                    });
+                }
+                Ok(Target::Force(f))
+            }
+            (d, f) => Err(ContactError::Input {
+                field: "history.segments[].depth",
+                value: format!(
+                    "{} (segment {i})",
+                    if d.is_some() && f.is_some() {
+                        "both depth and force"
+                    } else {
+                        "neither depth nor force"
+                    }
+                ),
+                allowed: "exactly one of `depth` (mm, depth control) and `force` \
+                              (N, load control) per segment"
+                    .into(),
+            }),
+        }
+    }
+
+    /// The checks of [`Schedule::from_segments`] of segment `i` (duration, depth, steps).
+    ///
+    /// # Errors
+    /// As [`Schedule::from_segments`].
+    pub(crate) fn check_plain(&self, i: usize) -> Result<(), ContactError> {
+        Segment {
+            duration: self.duration,
+            depth: self.depth.unwrap_or(0.0),
+            steps: self.steps,
+        }
+        .check(i)
+    }
+}
+
 /// What a segment of a [`LoadHistory`] prescribes at its end.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Target {
@@ -301,38 +367,7 @@ impl LoadHistory {
         let mut ends = Vec::with_capacity(segments.len());
         let (mut t, mut last_depth) = (0.0, 0.0);
         for (i, s) in segments.iter().enumerate() {
-            let target = match (s.depth, s.force) {
-                (Some(d), None) => Target::Depth(d),
-                (None, Some(f)) => {
-                    if !(f.is_finite() && f > 0.0) {
-                        return Err(ContactError::Input {
-                            field: "history.segments[].force",
-                            value: format!("{f} (segment {i})"),
-                            allowed: "a finite force > 0 N (a force of 0 leaves the depth \
-                                      undetermined: end an unloading in depth control, \
-                                      `depth: 0.0`)"
-                                .into(),
-                        });
-                    }
-                    Target::Force(f)
-                }
-                (d, f) => {
-                    return Err(ContactError::Input {
-                        field: "history.segments[].depth",
-                        value: format!(
-                            "{} (segment {i})",
-                            if d.is_some() && f.is_some() {
-                                "both depth and force"
-                            } else {
-                                "neither depth nor force"
-                            }
-                        ),
-                        allowed: "exactly one of `depth` (mm, depth control) and `force` \
-                                  (N, load control) per segment"
-                            .into(),
-                    });
-                }
-            };
+            let target = s.target(i)?;
             if let Target::Depth(d) = target {
                 last_depth = d;
             }

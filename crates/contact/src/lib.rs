@@ -16,6 +16,7 @@ pub mod kinematics;
 pub mod model;
 mod newton;
 pub mod normal;
+pub mod pdotp;
 pub mod punch;
 pub mod system;
 
@@ -31,6 +32,7 @@ pub use history::{
 pub use kinematics::Kinematics;
 pub use model::Model;
 pub use normal::ContactKind;
+pub use pdotp::{Leg, PdotP, SegmentSpec};
 pub use punch::Punch;
 pub use system::{ConstrainedSystem, NodeFrame};
 

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_contact::punch::{AutoOptions, Rim, auto_specimen, treat_rim};
 use indentify_contact::{
-    ContactKind, HistorySegment, Kinematics, LoadHistory, Model, Punch, Schedule, SolverOptions,
+    ContactKind, Kinematics, LoadHistory, Model, Punch, Schedule, SegmentSpec, SolverOptions,
 };
 use indentify_mesh::{CylinderMesher, Mesh, ZonedCylinderMesher};
 use indentify_records::{Applied, Format, Preprocessing, ReadOptions, Record};
@@ -545,14 +545,14 @@ impl Mesher {
     }
 }
 
-/// The punch's history: consecutive piecewise-linear segments from `t = 0`, `h = 0`,
-/// each prescribing the depth `(duration, depth, steps)` or the force `(duration, force,
-/// steps)` (load control, docs/theory.md §13; `simulate` only for now).
+/// The punch's history: consecutive segments from `t = 0`, `h = 0`, each prescribing the
+/// depth `(duration, depth, steps)` or the force, linearly `(duration, force, steps)` or
+/// at a constant `Pdot/P` `(force, pdot_over_p, steps)` (load control, docs/theory.md §13).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename = "history")]
 pub struct History {
     /// Segments (the contact crate's own type).
-    pub segments: Vec<HistorySegment>,
+    pub segments: Vec<SegmentSpec>,
 }
 
 /// What a measured record prescribes (`data.drive`): its depth (the force is the
@@ -1088,7 +1088,7 @@ impl Config {
         let h = self.history.as_ref().ok_or_else(|| {
             anyhow!("the configuration has no `history`: its depth comes from `data`")
         })?;
-        Ok(LoadHistory::from_segments(&h.segments)?)
+        Ok(LoadHistory::from_specs(&h.segments)?)
     }
 
     /// The schedule (from `history`, or from the preprocessed record of `data`), the

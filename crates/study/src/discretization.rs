@@ -29,9 +29,7 @@
 use std::time::Instant;
 
 use anyhow::{Context as _, Result, anyhow, bail};
-use indentify_contact::{
-    DirectSolver, HistorySegment, LoadHistory, Model, Schedule, SolverOptions,
-};
+use indentify_contact::{DirectSolver, LoadHistory, Model, Schedule, SegmentSpec, SolverOptions};
 use indentify_identify::{Evaluator, Problem, identifiability::INSENSITIVE};
 
 use crate::config::{Config, History, Mesher};
@@ -198,15 +196,15 @@ pub fn refine_schedule(
 ) -> Result<(Schedule, String)> {
     let n = schedule.n_steps();
     if let Some(h) = history {
-        let segments: Vec<HistorySegment> = h
+        let segments: Vec<SegmentSpec> = h
             .segments
             .iter()
-            .map(|s| HistorySegment {
+            .map(|s| SegmentSpec {
                 steps: 2 * s.steps,
                 ..*s
             })
             .collect();
-        let s = LoadHistory::from_segments(&segments)?.schedule;
+        let s = LoadHistory::from_specs(&segments)?.schedule;
         let text = format!(
             "every segment's steps doubled ({} steps, was {n})",
             s.n_steps()

@@ -535,15 +535,26 @@ fn history_block(out: &mut String, history: &crate::config::History) {
             if key == "depth" {
                 previous = value;
             }
-            (
-                format!(
+            let text = match (seg.pdot_over_p, seg.duration) {
+                (Some(r), _) => format!(
+                    "(force: {}, pdot_over_p: {}, steps: {}),",
+                    num(value),
+                    num(r),
+                    seg.steps
+                ),
+                (None, d) => format!(
                     "(duration: {}, {key}: {}, steps: {}),",
-                    num(seg.duration),
+                    num(d.unwrap_or(f64::NAN)),
                     num(value),
                     seg.steps
                 ),
-                what.into(),
-            )
+            };
+            let what = if seg.pdot_over_p.is_some() {
+                "load control at constant Pdot/P (1/s)"
+            } else {
+                what
+            };
+            (text, what.into())
         })
         .collect();
     block(out, "            ", &lines);
