@@ -143,6 +143,9 @@ impl Adjoint<'_> {
         let dj_dc = if let Some(law) = law {
             let mut sweep = Sweep::new(law, c);
             self.begin_sweep();
+            if source.replay.is_none() {
+                self.begin_nodal(law, c, traj);
+            }
             self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| match border {
                 Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
                 None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
@@ -440,7 +443,9 @@ impl Adjoint<'_> {
             && self.fusable(law)
             && self.contact.force_cotangent() != ForceCotangent::Shifted;
         self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, fuse)?;
-        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+        if !(fuse
+            && (self.nodal_source(i, rec) || self.fused.take_source(i, rec.dt, &mut self.full)))
+        {
             if fuse {
                 let t0 = self.tangents[0];
                 self.tangents.fill(t0);
@@ -461,9 +466,11 @@ impl Adjoint<'_> {
             }
         }
         if fuse {
-            let next = Self::next_of(law, c, i, prev_dt);
-            let fields = (rec.dt, f0.sigma.as_slice(), f1.sigma.as_slice());
-            self.back_substitute_fused(law, c, sweep, fields, next);
+            if !self.nodal_back_substitute(sweep, rec.dt) {
+                let next = Self::next_of(law, c, i, prev_dt);
+                let fields = (rec.dt, f0.sigma.as_slice(), f1.sigma.as_slice());
+                self.back_substitute_fused(law, c, sweep, fields, next);
+            }
         } else {
             self.back_substitute(law, c, sweep, rec.dt, &f0.sigma, &f1.sigma);
         }

@@ -125,6 +125,13 @@ impl<'m> RecordedContact<'m> {
         self.system.factorizations()
     }
 
+    /// The prepared step's tangent `K = sum w B^T C B` without its constraints (the
+    /// values of the model's pattern): the adjoint's all-nodal sweep of an affine law
+    /// reads the reactions `(K V)_c` of its constrained rows from it.
+    pub fn tangent_values(&self) -> &[f64] {
+        self.system.k_values()
+    }
+
     /// Whether [`RecordedContact::prepare`] needs the step's internal force (Coulomb
     /// friction: the reactions and the slipping nodes' curvature stiffness come from it).
     pub fn needs_internal_force(&self) -> bool {
