@@ -382,14 +382,7 @@ impl Adjoint<'_> {
             + self.contact.adjoint_depth(rec, u, &b.col.col);
         let rho = (b.rho_of)(a, s);
         if !rho.is_finite() {
-            return Err(AdjointError::Step {
-                step: i,
-                t: rec.t,
-                reason: format!(
-                    "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the \
-                     recorded step is not positive: its depth is not determined by its force"
-                ),
-            });
+            return Err(not_positive(i, rec, s));
         }
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
             // the shift's part of the right-hand side: `K e_A` is the depth column's `K v`
@@ -398,6 +391,19 @@ impl Adjoint<'_> {
             }
         }
         Ok(rho)
+    }
+}
+
+/// The error of a load-controlled step `i` whose contact stiffness `s` (N/mm) gives no
+/// finite cotangent.
+fn not_positive(i: usize, rec: &StepRecord, s: f64) -> AdjointError {
+    AdjointError::Step {
+        step: i,
+        t: rec.t,
+        reason: format!(
+            "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the recorded step \
+             is not positive: its depth is not determined by its force"
+        ),
     }
 }
 
@@ -453,11 +459,27 @@ impl Adjoint<'_> {
             self.adjoint_source(sweep.s, rec, None);
         }
         self.restrict();
-        let rho = self.bordered_rho(i, rec, &f1.u, border)?;
-        sweep.mu_zero = false;
+        // an affine law's capacitance system: the depth column, the cotangent and the
+        // transposed solve in one solve (`RecordedContact::adjoint_solve_bordered`)
         let mut eq = std::mem::take(&mut self.eq);
-        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        let one = if fuse {
+            (self.contact).adjoint_solve_bordered(rec, &f1.u, &mut eq, &mut *border.rho_of)
+        } else {
+            None
+        };
         self.eq = eq;
+        let rho = match one {
+            Some((rho, _)) if rho.is_finite() => rho,
+            Some((_, s)) => return Err(not_positive(i, rec, s)),
+            None => {
+                let rho = self.bordered_rho(i, rec, &f1.u, border)?;
+                let mut eq = std::mem::take(&mut self.eq);
+                self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+                self.eq = eq;
+                rho
+            }
+        };
+        sweep.mu_zero = false;
         self.expand();
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
             // V' = V + rho e_A
