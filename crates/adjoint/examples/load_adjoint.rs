@@ -5,9 +5,12 @@
 //! then `Adjoint::gradient_load` of the depth cost (with the one-pass sweep of an affine
 //! law and with the general two-pass one, `Adjoint::set_fused`) and
 //! `Adjoint::sensitivities_load`; then the same under depth control (the trapezoid's load
-//! and hold, `Adjoint::gradient` of a force cost). Prints the fastest of REPEAT
-//! alternated runs of each and their ratios to the forward:
-//! `cargo run --release -p indentify-adjoint --example load_adjoint -- r1 [REPEAT]`.
+//! and hold, `Adjoint::gradient` of a force cost), and through the instrument's frame
+//! (`DirectSolver::run_compliant` of the same machine depths with `Cf = 1e-4` mm/N,
+//! `Adjoint::gradient_compliant` of a force cost). Prints the mean of REPEAT alternated
+//! runs of each (on-CPU time) and their ratios to the forward:
+//! `cargo run --release -p indentify-adjoint --example load_adjoint -- r1 [REPEAT] [NR]`
+//! (`NR`: elements along the radius and the height, 20 the reference mesh).
 use std::time::Instant;
 
 /// The time the calling thread spent on a CPU (`/proc/thread-self/schedstat`, Linux;
@@ -41,7 +44,7 @@ impl Clock {
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
-    DirectSolver, LoadHistory, Model, Punch, Schedule, Segment, SolverOptions,
+    DirectSolver, Frame, LoadHistory, Model, Punch, Schedule, Segment, SolverOptions,
 };
 use indentify_laws::{Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
@@ -56,7 +59,17 @@ fn main() {
         "r1" => (&Maxwell, vec![2e4, 0.3, 3e4]),
         _ => (&NortonHoff, vec![1e5, 0.3, 1500.0, 5.0, 500.0]),
     };
-    let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
+    let nr: usize = std::env::args()
+        .nth(3)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20);
+    let mesh = CylinderMesher {
+        nr,
+        nz: nr,
+        ..CylinderMesher::REFERENCE
+    }
+    .build()
+    .expect("reference mesh");
     let model = Model::new(
         mesh,
         Punch::Cone {
@@ -91,9 +104,13 @@ fn main() {
         LoadHistory::from_force_record(&schedule.t, &by_depth.forces()).expect("force history");
     let mut adjoint = Adjoint::new(&model).expect("adjoint");
     let mat = indentify_laws::LawMaterial(law);
-    // fastest of `repeat` alternated runs: [forward, gradient (one pass), gradient (two
+    // mean of `repeat` alternated runs: [forward, gradient (one pass), gradient (two
     // passes), sensitivities] under load control, then the same under depth control
-    let mut best = [[0.0; 4]; 2];
+    let mut best = [[0.0; 4]; 3];
+    let frame = Frame {
+        compliance: 1e-4,
+        ..Frame::default()
+    };
     // numeric factorizations of the last sweeps: one pass, two passes
     let mut facts = [0; 2];
     let time = |slot: &mut f64, t0: Clock| *slot += t0.elapsed() / repeat as f64;
@@ -148,11 +165,29 @@ fn main() {
             .expect("sensitivities");
         time(&mut best[1][3], t0);
         std::hint::black_box(s);
+        // through the frame: the same machine depths, a force cost
+        let t0 = Clock::now();
+        let traj = solver
+            .run_compliant(&mat, &params, &schedule, &frame, &opts)
+            .expect("compliant run");
+        time(&mut best[2][0], t0);
+        let rho: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
+        for (k, fused) in [(1, true), (2, false)] {
+            adjoint.set_fused(fused);
+            let t0 = Clock::now();
+            let g = adjoint
+                .gradient_compliant(&mat, &params, &traj, (&schedule, &frame), &rho)
+                .expect("compliant gradient");
+            time(&mut best[2][k], t0);
+            std::hint::black_box(g);
+        }
+        adjoint.set_fused(true);
     }
     println!("{case}: factorizations per sweep (one pass, two passes) {facts:?}");
     for (name, b, g, s) in [
         ("load", best[0], "gradient_load", "sensitivities_load"),
         ("depth", best[1], "gradient", "sensitivities"),
+        ("compliant", best[2], "gradient_compliant", "(not timed)"),
     ] {
         println!(
             "{case} {name} control: forward (fields recorded) {:.1} ms, {g} {:.1} ms ({:.2}x; \

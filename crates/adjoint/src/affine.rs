@@ -21,6 +21,8 @@
 //! on any number of threads, and the general sweep's gradient to round-off
 //! (`tests/fused_sweep.rs`).
 
+use std::f64::consts::FRAC_1_SQRT_2;
+
 use indentify_fe::QP_PER_ELEMENT;
 use indentify_laws::{Law, Mat4, Vec4};
 use rayon::prelude::*;
@@ -73,17 +75,22 @@ pub(crate) struct Fused {
     iso: Option<Option<IsoParams>>,
     /// Tests only: keep the general per-point form even for an isotropic law.
     #[cfg(test)]
-    general_form: bool,
+    pub(crate) general_form: bool,
+    /// Tests only: keep the Gauss-point pass where the all-nodal sweep applies.
+    #[cfg(test)]
+    pub(crate) per_point: bool,
     /// Per chunk: the isotropic sums `[w mu . s1, w mu . s0, w tr mu tr s1, w tr mu tr s0]`.
     sums: Vec<[f64; 4]>,
+    /// The all-nodal sweep (`nodal.rs`).
+    pub(crate) nodal: crate::nodal::Nodal,
 }
 
 /// `M = p I + q J` with `J = 1 (x) 1 / 3` (Mandel; `J x = tr(x) / 3 1`): an isotropic
 /// fourth-order operator by its two coefficients.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Iso {
-    p: f64,
-    q: f64,
+    pub(crate) p: f64,
+    pub(crate) q: f64,
 }
 
 impl Iso {
@@ -102,7 +109,7 @@ impl Iso {
         (ok && scale.is_finite()).then_some(iso)
     }
 
-    #[inline]
+    #[cfg(test)]
     fn apply(self, x: &Vec4) -> Vec4 {
         let t = (x.0[0] + x.0[1] + x.0[2]) * (self.q / 3.0);
         Vec4([
@@ -111,6 +118,77 @@ impl Iso {
             self.p * x.0[2] + t,
             self.p * x.0[3],
         ])
+    }
+}
+
+impl Iso {
+    /// `self * o` (apply `o` first): `(p1 I + q1 J)(p2 I + q2 J) = p1 p2 I + (p1 q2 + q1 p2
+    /// + q1 q2) J`, since `J J = J`.
+    pub(crate) fn then(self, o: Iso) -> Iso {
+        Iso {
+            p: self.p * o.p,
+            q: self.p * o.q + self.q * o.p + self.q * o.q,
+        }
+    }
+
+    /// `self - I`.
+    pub(crate) fn minus_identity(self) -> Iso {
+        Iso {
+            p: self.p - 1.0,
+            q: self.q,
+        }
+    }
+}
+
+/// An [`Iso`] with `q / 3` at hand, for the fused pass's inner loop.
+#[derive(Clone, Copy)]
+struct Iso3 {
+    p: f64,
+    q3: f64,
+}
+
+impl Iso3 {
+    fn of(m: Iso) -> Iso3 {
+        Iso3 {
+            p: m.p,
+            q3: m.q / 3.0,
+        }
+    }
+
+    #[inline]
+    fn apply(self, x: &Vec4) -> Vec4 {
+        let t = (x.0[0] + x.0[1] + x.0[2]) * self.q3;
+        Vec4([
+            self.p * x.0[0] + t,
+            self.p * x.0[1] + t,
+            self.p * x.0[2] + t,
+            self.p * x.0[3],
+        ])
+    }
+}
+
+/// `B u_e` at a Gauss point from its compact B operator (`QuadPoint::dn`), as
+/// `QuadPoint::strain` with the shear scaled by a product instead of a quotient.
+#[inline]
+fn strain(dn: &[[f64; 3]; 8], ue: &[f64; 16]) -> [f64; 4] {
+    let (mut rr, mut zz, mut tt, mut rz) = (0.0, 0.0, 0.0, 0.0);
+    for (a, [dr, dz, nr]) in dn.iter().enumerate() {
+        let (ur, uz) = (ue[2 * a], ue[2 * a + 1]);
+        rr += dr * ur;
+        zz += dz * uz;
+        tt += nr * ur;
+        rz += dz * ur + dr * uz;
+    }
+    [rr, zz, tt, rz * FRAC_1_SQRT_2]
+}
+
+/// `fe += B^T s` at a Gauss point (the weight already in `s`), as `QuadPoint::add_bt`.
+#[inline]
+fn add_bt(dn: &[[f64; 3]; 8], s: &Vec4, fe: &mut [f64; 16]) {
+    let (s0, s1, s2, s3) = (s.0[0], s.0[1], s.0[2], s.0[3] * FRAC_1_SQRT_2);
+    for (a, [dr, dz, nr]) in dn.iter().enumerate() {
+        fe[2 * a] += dr * s0 + nr * s2 + dz * s3;
+        fe[2 * a + 1] += dz * s1 + dr * s3;
     }
 }
 
@@ -128,7 +206,7 @@ impl IsoParams {
     /// The isotropic forms of `law`'s `dS/dc_k` and `D_k`, or `None` when one is not
     /// isotropic or the flow's derivative is not linear in the stress (checked at a
     /// stress).
-    fn of(law: &dyn Law, c: &[f64]) -> Option<IsoParams> {
+    pub(crate) fn of(law: &dyn Law, c: &[f64]) -> Option<IsoParams> {
         let np = c.len();
         let ds = (0..np)
             .map(|k| Iso::of(&law.compliance_derivative(c, k)))
@@ -161,6 +239,17 @@ impl IsoParams {
     }
 }
 
+impl IsoParams {
+    /// `gradient -= sum w mu . R_i` of a step of length `dt` (s) from its four sums
+    /// `[w mu . s1, w mu . s0, w tr(mu) tr(s1), w tr(mu) tr(s0)]`: with `M = p I + q J`,
+    /// `sum w mu . M x = p sum w mu . x + q/3 sum w tr(mu) tr(x)`.
+    pub(crate) fn subtract(&self, sweep: &mut Sweep, dt: f64, [d1, d0, e1, e0]: [f64; 4]) {
+        for ((g, a), b) in sweep.grad.iter_mut().zip(&self.ds).zip(&self.dg) {
+            *g -= a.p * (d1 - d0) + a.q / 3.0 * (e1 - e0) + dt * (b.p * d1 + b.q / 3.0 * e1);
+        }
+    }
+}
+
 /// The step swept next, for the fused pass: its index, step length (s) and tangent.
 #[derive(Clone, Copy)]
 pub(crate) struct Next {
@@ -175,6 +264,7 @@ impl Fused {
         self.next = None;
         self.reused = 0;
         self.iso = None;
+        self.nodal.on = false;
     }
 
     /// Moves the right-hand side formed for step `i` (step length `dt`) into `full` and
@@ -365,7 +455,11 @@ impl Adjoint<'_> {
         f.sums.resize(n_chunks, [0.0; 4]);
         let (v, mu_in) = (&self.full, &self.field_a);
         let chunk_qp = CHUNK * QP_PER_ELEMENT;
-        let tr = |x: &Vec4| x.0[0] + x.0[1] + x.0[2];
+        // the operators composed once: `mu = C S mu_{i+1} - C B V` and the next step's
+        // source `(C' S - I) mu` (each a `p I + q J` applied with `q / 3` precomputed)
+        let cs = Iso3::of(ct.then(s));
+        let ct = Iso3::of(ct);
+        let tn = cn.map(|cn| Iso3::of(cn.then(s).minus_identity()));
         let work = |(k, ((fes, mu_out), sums)): IsoChunk<'_>| {
             let mut acc = [0.0; 4];
             for (j, fe) in fes.iter_mut().enumerate() {
@@ -375,19 +469,25 @@ impl Adjoint<'_> {
                 for g in 0..QP_PER_ELEMENT {
                     let q = QP_PER_ELEMENT * e + g;
                     let qp = &disc.qp[q];
-                    let bv = Vec4(qp.strain(&ve));
-                    let mu = ct.apply(&(s.apply(&mu_in[q]) - bv));
+                    let bv = strain(&qp.dn, &ve);
+                    let m = &mu_in[q];
+                    let t = (m.0[0] + m.0[1] + m.0[2]) * cs.q3 - (bv[0] + bv[1] + bv[2]) * ct.q3;
+                    let mu = Vec4([
+                        cs.p * m.0[0] - ct.p * bv[0] + t,
+                        cs.p * m.0[1] - ct.p * bv[1] + t,
+                        cs.p * m.0[2] - ct.p * bv[2] + t,
+                        cs.p * m.0[3] - ct.p * bv[3],
+                    ]);
                     mu_out[QP_PER_ELEMENT * j + g] = mu;
                     let wmu = mu * qp.w;
-                    let tw = tr(&wmu);
+                    let tw = wmu.0[0] + wmu.0[1] + wmu.0[2];
                     let (s1, s0) = (&sig1[q], &sig0[q]);
                     acc[0] += wmu.dot(s1);
                     acc[1] += wmu.dot(s0);
-                    acc[2] += tw * tr(s1);
-                    acc[3] += tw * tr(s0);
-                    if let Some(cn) = cn {
-                        let src = cn.apply(&s.apply(&mu)) - mu;
-                        qp.add_bt(&src.0, qp.w, fe);
+                    acc[2] += tw * (s1.0[0] + s1.0[1] + s1.0[2]);
+                    acc[3] += tw * (s0.0[0] + s0.0[1] + s0.0[2]);
+                    if let Some(tn) = tn {
+                        add_bt(&qp.dn, &tn.apply(&wmu), fe);
                     }
                 }
             }
@@ -415,10 +515,7 @@ impl Adjoint<'_> {
                 *a += b;
             }
         }
-        let [d1, d0, e1, e0] = t;
-        for ((g, a), b) in sweep.grad.iter_mut().zip(&ip.ds).zip(&ip.dg) {
-            *g -= a.p * (d1 - d0) + a.q / 3.0 * (e1 - e0) + dt * (b.p * d1 + b.q / 3.0 * e1);
-        }
+        ip.subtract(sweep, dt, t);
         f.next = None;
         if let Some(n) = next {
             f.g.resize(v.len(), 0.0);
@@ -444,9 +541,9 @@ mod tests {
     use indentify_mesh::CylinderMesher;
 
     /// The fused pass in its general per-point form (for a linear law that is not
-    /// isotropic; none exists yet, so Maxwell with the isotropic form switched off) gives
-    /// the general two-pass sweep's gradient to 1e-12, under load control with depth and
-    /// force costs.
+    /// isotropic; none exists yet, so Maxwell with the isotropic form switched off), in
+    /// its isotropic per-point form, and the all-nodal sweep (`nodal.rs`) give the general
+    /// two-pass sweep's gradient to 1e-12, under load control with depth and force costs.
     #[test]
     fn general_form_of_the_fused_pass_equals_the_two_pass_sweep() {
         let mesh = CylinderMesher {
@@ -489,21 +586,25 @@ mod tests {
         let dj_dh: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
         let dj_df: Vec<f64> = (0..n).map(|i| 1e-3 * (i % 3) as f64).collect();
         let mut adj = Adjoint::new(&m).unwrap();
-        let grad = |adj: &mut Adjoint, fused: bool, general_form: bool| {
+        let grad = |adj: &mut Adjoint, fused: bool, general_form: bool, per_point: bool| {
             adj.set_fused(fused);
             adj.fused.general_form = general_form;
+            adj.fused.per_point = per_point;
             adj.gradient_load(&mat, &c, &traj, &h, &dj_dh, &dj_df)
                 .unwrap()
                 .dj_dc
         };
-        let two = grad(&mut adj, false, false);
-        let general = grad(&mut adj, true, true);
-        let iso = grad(&mut adj, true, false);
+        let two = grad(&mut adj, false, false, false);
+        let general = grad(&mut adj, true, true, true);
+        let iso = grad(&mut adj, true, false, true);
         assert!(adj.fused.reused > 0);
+        let nodal = grad(&mut adj, true, false, false);
+        assert!(adj.fused.nodal.on && adj.fused.reused == 0);
         let scale = two.iter().fold(0.0f64, |m, g| m.max(g.abs()));
-        for ((a, b), d) in two.iter().zip(&general).zip(&iso) {
+        for (((a, b), d), e) in two.iter().zip(&general).zip(&iso).zip(&nodal) {
             assert!((a - b).abs() <= 1e-12 * scale, "{two:?} vs {general:?}");
             assert!((a - d).abs() <= 1e-12 * scale, "{two:?} vs {iso:?}");
+            assert!((a - e).abs() <= 1e-12 * scale, "{two:?} vs {nodal:?}");
         }
     }
 

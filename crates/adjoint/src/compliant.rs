@@ -101,6 +101,9 @@ impl Adjoint<'_> {
             ))),
         };
         self.begin_sweep();
+        if let Some(law) = law {
+            self.begin_nodal(law, c, traj);
+        }
         for i in (0..n).rev() {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);

@@ -37,6 +37,7 @@ mod compliant;
 mod finite;
 mod load;
 mod material;
+mod nodal;
 
 pub use compliant::{FrameGradient, FrameIndex};
 pub use load::{LoadReplay, LoadSensitivities};
@@ -324,6 +325,7 @@ impl<'m> Adjoint<'m> {
         self.contact.begin();
         let mut sweep = Sweep::new(law, c);
         self.begin_sweep();
+        self.begin_nodal(law, c, traj);
         for i in (0..traj.steps.len()).rev() {
             let (rec, s0, s1) = (&traj.steps[i], &traj.fields[i], &traj.fields[i + 1]);
             let step = Recorded {
@@ -442,7 +444,9 @@ impl<'m> Adjoint<'m> {
         let shifted = self.contact.force_cotangent() == ForceCotangent::Shifted;
         let fuse = !shifted && self.fuse && self.fusable(law);
         self.prepare_step(law, c, rec, (sig1, &f1.u), i, fuse)?;
-        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+        if !(fuse
+            && (self.nodal_source(i, rec) || self.fused.take_source(i, rec.dt, &mut self.full)))
+        {
             if fuse {
                 let t0 = self.tangents[0];
                 self.tangents.fill(t0);
@@ -462,8 +466,10 @@ impl<'m> Adjoint<'m> {
             }
         }
         if fuse {
-            let next = Self::next_of(law, c, i, prev_dt);
-            self.back_substitute_fused(law, c, sweep, (rec.dt, sig0, sig1), next);
+            if !self.nodal_back_substitute(sweep, rec.dt) {
+                let next = Self::next_of(law, c, i, prev_dt);
+                self.back_substitute_fused(law, c, sweep, (rec.dt, sig0, sig1), next);
+            }
         } else {
             self.back_substitute(law, c, sweep, rec.dt, sig0, sig1);
         }

@@ -143,6 +143,9 @@ impl Adjoint<'_> {
         let dj_dc = if let Some(law) = law {
             let mut sweep = Sweep::new(law, c);
             self.begin_sweep();
+            if source.replay.is_none() {
+                self.begin_nodal(law, c, traj);
+            }
             self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| match border {
                 Some(b) => adj.bordered_step(law, c, &mut sweep, step, b),
                 None => adj.sweep_step(law, c, &mut sweep, step).map(|()| step.rho),
@@ -383,14 +386,7 @@ impl Adjoint<'_> {
             };
         let rho = (b.rho_of)(a, s);
         if !rho.is_finite() {
-            return Err(AdjointError::Step {
-                step: i,
-                t: rec.t,
-                reason: format!(
-                    "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the \
-                     recorded step is not positive: its depth is not determined by its force"
-                ),
-            });
+            return Err(not_positive(i, rec, s));
         }
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
             // the shift's part of the right-hand side: `K e_A` is the depth column's `K v`
@@ -399,6 +395,19 @@ impl Adjoint<'_> {
             }
         }
         Ok(rho)
+    }
+}
+
+/// The error of a load-controlled step `i` whose contact stiffness `s` (N/mm) gives no
+/// finite cotangent.
+fn not_positive(i: usize, rec: &StepRecord, s: f64) -> AdjointError {
+    AdjointError::Step {
+        step: i,
+        t: rec.t,
+        reason: format!(
+            "load control: the contact stiffness dF/dU = {s:.3e} N/mm of the recorded step \
+             is not positive: its depth is not determined by its force"
+        ),
     }
 }
 
@@ -444,7 +453,9 @@ impl Adjoint<'_> {
             && self.fusable(law)
             && self.contact.force_cotangent() != ForceCotangent::Shifted;
         self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, fuse)?;
-        if !(fuse && self.fused.take_source(i, rec.dt, &mut self.full)) {
+        if !(fuse
+            && (self.nodal_source(i, rec) || self.fused.take_source(i, rec.dt, &mut self.full)))
+        {
             if fuse {
                 let t0 = self.tangents[0];
                 self.tangents.fill(t0);
@@ -452,11 +463,27 @@ impl Adjoint<'_> {
             self.adjoint_source(sweep.s, rec, None);
         }
         self.restrict();
-        let rho = self.bordered_rho(i, rec, &f1.u, border)?;
-        sweep.mu_zero = false;
+        // an affine law's capacitance system: the depth column, the cotangent and the
+        // transposed solve in one solve (`RecordedContact::adjoint_solve_bordered`)
         let mut eq = std::mem::take(&mut self.eq);
-        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        let one = if fuse {
+            (self.contact).adjoint_solve_bordered(rec, &f1.u, &mut eq, &mut *border.rho_of)
+        } else {
+            None
+        };
         self.eq = eq;
+        let rho = match one {
+            Some((rho, _)) if rho.is_finite() => rho,
+            Some((_, s)) => return Err(not_positive(i, rec, s)),
+            None => {
+                let rho = self.bordered_rho(i, rec, &f1.u, border)?;
+                let mut eq = std::mem::take(&mut self.eq);
+                self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+                self.eq = eq;
+                rho
+            }
+        };
+        sweep.mu_zero = false;
         self.expand();
         if self.contact.force_cotangent() == ForceCotangent::Shifted {
             // V' = V + rho e_A
@@ -465,9 +492,11 @@ impl Adjoint<'_> {
             }
         }
         if fuse {
-            let next = Self::next_of(law, c, i, prev_dt);
-            let fields = (rec.dt, f0.sigma.as_slice(), f1.sigma.as_slice());
-            self.back_substitute_fused(law, c, sweep, fields, next);
+            if !self.nodal_back_substitute(sweep, rec.dt) {
+                let next = Self::next_of(law, c, i, prev_dt);
+                let fields = (rec.dt, f0.sigma.as_slice(), f1.sigma.as_slice());
+                self.back_substitute_fused(law, c, sweep, fields, next);
+            }
         } else {
             self.back_substitute(law, c, sweep, rec.dt, &f0.sigma, &f1.sigma);
         }

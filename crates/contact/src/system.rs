@@ -94,6 +94,8 @@ pub struct ConstrainedSystem {
     scratch: SolveScratch,
     /// Load control's multipliers `S^-1 1` of the capacitance depth column (work space).
     depth_mu: Vec<f64>,
+    /// The bordered transposed solve's multipliers `S^-1 y_C` (work space).
+    bordered_nu: Vec<f64>,
 }
 
 /// The local frame of an active node under normal contact: its equations, the unit
@@ -160,6 +162,7 @@ impl ConstrainedSystem {
             slip_piv: Vec::new(),
             scratch: SolveScratch::default(),
             depth_mu: Vec::new(),
+            bordered_nu: Vec::new(),
         })
     }
 
@@ -1089,6 +1092,72 @@ impl ConstrainedSystem {
             col[c] = -1.0;
         }
         Some(mu.iter().sum())
+    }
+}
+
+impl ConstrainedSystem {
+    /// The adjoint's bordered step in the capacitance mode (a reusable tangent, vertical
+    /// contact, no friction; the prescribed equations exactly those marked 1 in `v`),
+    /// with one solve and one set of column updates: with `y = K^-1 g~` (`g~` = `b` with
+    /// the prescribed equations zeroed) and `S mu1 = 1`, the depth column `du_U =
+    /// -sum_c mu1_c z_c` (`-1` on the prescribed equations) meets the right-hand side in
+    /// `a = b . du_U = -mu1 . y_C - sum_C b`, and the Schur complement is `s = 1 . mu1`
+    /// (as [`ConstrainedSystem::depth_column_capacitance`]); `rho = rho_of(a, s)`, and the
+    /// transposed solve with the values `rho` on the prescribed equations is
+    /// `x = y - sum_c (nu_c - rho mu1_c) z_c` with `S nu = y_C`. `b` (equations) holds the
+    /// right-hand side on entry and the solution on exit. Returns `(rho, s)`, or `None`
+    /// (nothing changed) when the current system is not in that mode.
+    pub(crate) fn solve_transposed_bordered(
+        &mut self,
+        v: &[f64],
+        b: &mut [f64],
+        rho_of: &mut dyn FnMut(f64, f64) -> f64,
+    ) -> Option<(f64, f64)> {
+        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+            return None;
+        }
+        let m = self.schur_set.len();
+        let marked = v.iter().filter(|&&x| x != 0.0).count();
+        if m == 0
+            || marked != m
+            || !(self.schur_set.iter())
+                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
+        {
+            return None;
+        }
+        let t0 = std::time::Instant::now();
+        let mut g_c = 0.0;
+        for &c in &self.schur_set {
+            g_c += b[c];
+            b[c] = 0.0;
+        }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.chol.solve_with(b, &mut scratch);
+        self.scratch = scratch;
+        self.chol.n_solves += 1;
+        let (mu1, nu) = (&mut self.depth_mu, &mut self.bordered_nu);
+        mu1.clear();
+        mu1.resize(m, 1.0);
+        dense_cholesky_solve(&self.schur, m, mu1);
+        nu.clear();
+        nu.extend(self.schur_set.iter().map(|&c| b[c]));
+        let a = -nu.iter().zip(mu1.iter()).map(|(y, u)| y * u).sum::<f64>() - g_c;
+        dense_cholesky_solve(&self.schur, m, nu);
+        let s: f64 = mu1.iter().sum();
+        let rho = rho_of(a, s);
+        for ((c, n), u) in self.schur_set.iter().zip(nu.iter()).zip(mu1.iter()) {
+            let f = n - rho * u;
+            if let Some(z) = self.columns.get(c) {
+                for (x, zi) in b.iter_mut().zip(z) {
+                    *x -= f * zi;
+                }
+            }
+        }
+        for &c in &self.schur_set {
+            b[c] = rho;
+        }
+        self.seconds[2] += t0.elapsed().as_secs_f64();
+        Some((rho, s))
     }
 }
 

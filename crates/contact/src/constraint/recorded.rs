@@ -125,6 +125,13 @@ impl<'m> RecordedContact<'m> {
         self.system.factorizations()
     }
 
+    /// The prepared step's tangent `K = sum w B^T C B` without its constraints (the
+    /// values of the model's pattern): the adjoint's all-nodal sweep of an affine law
+    /// reads the reactions `(K V)_c` of its constrained rows from it.
+    pub fn tangent_values(&self) -> &[f64] {
+        self.system.k_values()
+    }
+
     /// Whether [`RecordedContact::prepare`] needs the step's internal force (Coulomb
     /// friction: the reactions and the slipping nodes' curvature stiffness come from it).
     pub fn needs_internal_force(&self) -> bool {
@@ -206,6 +213,43 @@ impl<'m> RecordedContact<'m> {
             .solve_transposed(self.model, g, &self.v_p, &mut self.stick);
         self.v_p.fill(0.0);
         self.constraint.adjoint_carry(&step, &self.stick);
+    }
+
+    /// [`RecordedContact::depth_column`], the cotangent and
+    /// [`RecordedContact::adjoint_solve`] of a prepared step under vertical contact in one
+    /// solve, where its system is in the capacitance mode (an affine law): `g` (equations)
+    /// holds the body's right-hand side on entry and the adjoint displacement on exit,
+    /// `rho = rho_of(a, s)` with `a = g . du_U` and `s` the step's Schur complement.
+    /// Returns `(rho, s)`, or `None` (nothing changed) elsewhere: the caller then takes
+    /// the three steps.
+    pub fn adjoint_solve_bordered(
+        &mut self,
+        rec: &StepRecord,
+        u: &[f64],
+        g: &mut [f64],
+        rho_of: &mut dyn FnMut(f64, f64) -> f64,
+    ) -> Option<(f64, f64)> {
+        let model = self.model;
+        if model.contact != crate::ContactKind::Vertical
+            || self.force_cotangent() != ForceCotangent::Prescribed
+        {
+            return None;
+        }
+        self.w.fill(0.0);
+        for &k in &rec.active {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k as usize] + 1) {
+                self.w[e] = 1.0;
+            }
+        }
+        let out = self.system.solve_transposed_bordered(&self.w, g, rho_of)?;
+        let step = Step {
+            rec,
+            u,
+            frames: &self.frames,
+        };
+        self.stick.clear();
+        self.constraint.adjoint_carry(&step, &self.stick);
+        Some(out)
     }
 
     /// Load control's depth column of the prepared step `rec` (docs/theory.md §13): the
