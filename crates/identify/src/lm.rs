@@ -9,6 +9,10 @@
 //! in `IdentifyResult::rejected_trials`). [`Rule::TrustRegion`] (Nielsen's update inside a
 //! trust region of the scaled variables) removes the rejected trials but, measured on the
 //! fit-cost cases, takes more iterations; fits keep [`Rule::Classic`].
+//! [`LmStrategy`] (carried by `StopCriteria::lm`) changes the classic run's start and
+//! trials: the first damping from the scaled Gauss-Newton step's length (configurations'
+//! default, `identify.stop.lm_radius`), rejected trials shortened by a quadratic line
+//! model, geodesic acceleration; docs/performance.md measures each.
 
 use crate::IdentifyError;
 use nalgebra::{DMatrix, DVector};
@@ -319,7 +323,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// (`f_t` infinite) or the model has no minimum.
 pub(crate) fn line_model_factor(f: f64, gs: f64, ft: f64) -> f64 {
     let c = ft - f - gs;
-    if !ft.is_finite() || !(c > 0.0) || !(gs < 0.0) {
+    if !ft.is_finite() || c.is_nan() || c <= 0.0 || gs.is_nan() || gs >= 0.0 {
         return 0.25;
     }
     (-gs / (2.0 * c)).clamp(0.1, 0.5)
