@@ -19,7 +19,15 @@
 //! 2 by default; `--profile`: one indent's stages timed, `profile.rs`).
 //! `--no-chi2` turns the chi-square stop of fits with an undetermined parameter off
 //! (`StopCriteria::chi2_stop`), for before/after counts; `--columns` times a sensitivity
-//! pass of every parameter against one of the free ones (`columns.rs`).
+//! pass of every parameter against one of the free ones (`columns.rs`). `--lm-radius R`,
+//! `--line-model` and `--geodesic` set the Levenberg-Marquardt strategy of the fits
+//! (`StopCriteria::lm`: the first damping from the Gauss-Newton step's length, rejected
+//! trials shortened by the quadratic line model, geodesic acceleration), for before/after
+//! counts; `--lm-radius 0` turns the first radius off where the configuration sets one.
+//! `--c2f N` runs each fit coarse to fine (`study::coarse_to_fine`: at most N iterations
+//! on the 2x coarser model, then the full-fidelity fit from its optimum); the fit's time
+//! then includes the coarse phase, and the coarse phase's iterations and solves are
+//! printed beside the fine ones.
 
 mod batch;
 mod columns;
@@ -29,7 +37,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_identify::{Evaluator, IdentifyResult};
+use indentify_identify::{Evaluator, IdentifyResult, LmStrategy};
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
@@ -45,7 +53,8 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--no-chi2] [--columns] [--batch [--jobs N] [--map-n N] [--profile]]`.
+/// [--compare FILE] [--cold] [--no-chi2] [--lm-radius R] [--line-model] [--geodesic] [--c2f N]
+/// [--columns] [--batch [--jobs N] [--map-n N] [--profile]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -59,6 +68,8 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut jobs = 2usize;
     let mut map_n = 10usize;
     let mut profile = false;
+    let mut lm: Option<LmStrategy> = None;
+    let mut c2f: Option<usize> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -75,6 +86,18 @@ pub fn run(args: &[String]) -> Result<()> {
             "--profile" => profile = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
             "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
+            "--lm-radius" => {
+                let r: f64 = val()
+                    .parse()
+                    .context("--lm-radius: a length > 0 in the scaled variables, 0 off")?;
+                if !(r >= 0.0 && r.is_finite()) {
+                    bail!("--lm-radius: a length > 0 in the scaled variables, 0 off (got {r})");
+                }
+                lm.get_or_insert_with(LmStrategy::default).first_radius = (r > 0.0).then_some(r);
+            }
+            "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
+            "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
+            "--c2f" => c2f = Some(val().parse().context("--c2f: coarse iterations, >= 1")?),
             other => bail!("unknown option {other}"),
         }
     }
@@ -148,7 +171,7 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold, chi2)?;
+        let m = measure(&root, case, rounds, cold, chi2, lm, c2f)?;
         println!(
             "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
@@ -163,6 +186,9 @@ pub fn run(args: &[String]) -> Result<()> {
             m["factorizations"],
             m["stop"].as_str().unwrap_or("")
         );
+        if !m["coarse"].is_null() {
+            println!("  coarse phase of {case}: {}", m["coarse"]);
+        }
         results.push(m);
     }
     if let Some(b) = &before {
@@ -252,11 +278,22 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// One case: forward runs, the fit, forward runs again.
-fn measure(root: &Path, case: &str, rounds: usize, cold: bool, chi2: bool) -> Result<Value> {
+fn measure(
+    root: &Path,
+    case: &str,
+    rounds: usize,
+    cold: bool,
+    chi2: bool,
+    lm: Option<LmStrategy>,
+    c2f: Option<usize>,
+) -> Result<Value> {
     let opts = options(root, case)?;
     let resolved = identify::resolve(&opts)?;
     let mut s = identify::setup(resolved, &opts)?;
     s.id_cfg.stop.chi2_stop = chi2;
+    if let Some(lm) = lm {
+        s.id_cfg.stop.lm = lm;
+    }
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
     // from the last one's solution)
@@ -270,14 +307,35 @@ fn measure(root: &Path, case: &str, rounds: usize, cold: bool, chi2: bool) -> Re
     let mut fwd = forward_times(&s.problem, &start, rounds, 0)?;
     s.problem.set_warm_start(!cold);
     let clock = Instant::now();
-    let r: IdentifyResult = s.problem.install(|| {
-        indentify_identify::identify(&s.problem, &s.id_cfg, &mut |rec| {
-            eprintln!(
-                "  {case}: iteration {} J = {:.6e} ({:.1} s)",
-                rec.iteration, rec.cost, rec.seconds
-            );
-        })
-    })?;
+    let mut observer = |rec: &indentify_identify::IterationRecord| {
+        eprintln!(
+            "  {case}: iteration {} J = {:.6e} ({:.1} s)",
+            rec.iteration, rec.cost, rec.seconds
+        );
+    };
+    let mut coarse = None;
+    let r: IdentifyResult = match c2f {
+        None => s
+            .problem
+            .install(|| indentify_identify::identify(&s.problem, &s.id_cfg, &mut observer))?,
+        Some(n) => {
+            let (r, phase) = s.problem.install(|| {
+                indentify_study::coarse_to_fine::identify(&s, &s.id_cfg, n, &mut observer)
+            })?;
+            coarse = Some(json!({
+                "model": phase.model,
+                "fallback": phase.fallback,
+                "seconds": phase.seconds,
+                "iterations": phase.result.as_ref().map(|r| r.iterations),
+                "forward_solves": phase.result.as_ref().map(|r| r.forward_solves),
+                "sensitivity_solves": phase.result.as_ref().map(|r| r.sensitivity_solves),
+                "rejected_trials": phase.result.as_ref().map(|r| r.rejected_trials),
+                "stop": phase.result.as_ref().map(|r| r.stop_reason.to_string()),
+                "c": phase.result.as_ref().map(|r| r.c.clone()),
+            }));
+            r
+        }
+    };
     let fit = clock.elapsed().as_secs_f64();
     s.problem.set_warm_start(false);
     fwd.extend(forward_times(&s.problem, &start, rounds, rounds + 1)?);
@@ -312,6 +370,7 @@ fn measure(root: &Path, case: &str, rounds: usize, cold: bool, chi2: bool) -> Re
         "converged": r.stop_reason.is_converged(),
         "cost": r.cost,
         "params": params,
+        "coarse": coarse,
     }))
 }
 

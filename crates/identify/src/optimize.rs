@@ -31,6 +31,7 @@ use crate::IdentifyError;
 use crate::argmin_glue::{ArgminObjective, Monitored};
 use crate::identifiability::{Column, Forces, Identifiability, NoiseModel};
 use crate::linalg::{norm_inf, norm2};
+pub use crate::lm::LmStrategy;
 use crate::params::{ParamSpec, Parameterization};
 use crate::problem::{Evaluator, Prefetch, Problem};
 
@@ -147,6 +148,9 @@ pub struct StopCriteria {
     /// parameter ([`StopReason::Chi2BelowSigma`]; the run still ends with the undetermined
     /// status). `true` by default; off, such a run ends by the relative decrease.
     pub chi2_stop: bool,
+    /// How [`Method::LevenbergMarquardt`] chooses its first damping and its trials after a
+    /// rejection (the other methods ignore it; default: the classic run).
+    pub lm: LmStrategy,
 }
 
 /// The fraction of a standard deviation of [`StopCriteria::step_sigma`] that
@@ -165,6 +169,7 @@ impl Default for StopCriteria {
             roundoff_cost: 1e-16,
             step_sigma: None,
             chi2_stop: true,
+            lm: LmStrategy::default(),
         }
     }
 }

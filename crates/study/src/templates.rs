@@ -741,6 +741,13 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
                 },
                 "Lm: stop when the last step moves every parameter by < this x its std. dev. (None: off)".into(),
             ),
+            (
+                match st.lm_radius {
+                    Some(r) => format!("lm_radius: {},", num(r)),
+                    None => "lm_radius: None,".into(),
+                },
+                "Lm: the first step moves no scaled parameter by more than this (1: a factor e; None: off)".into(),
+            ),
         ],
     );
     out.push_str("        ),\n");

@@ -1,0 +1,332 @@
+//! Coarse to fine: the first iterations of a fit on a model 2x coarser in space (and in
+//! time where the schedule allows it), then the fit at full fidelity from the coarse
+//! optimum (docs/performance.md, "Coarse to fine").
+//!
+//! Coarsening rules, the inverse of [`crate::discretization`]'s refinement: a `Cylinder`
+//! specimen gets `ceil(nr / 2) x ceil(nz / 2)` elements with the gradings squared (at most
+//! 3, the mesher's limit); an `Auto` specimen gets `elements_in_contact / 2` in its
+//! uniform core and its far-field grading squared (at most 3). A mesh with fewer than
+//! [`MIN_CONTACT_ELEMENTS`] elements under the contact-radius bound at the schedule's
+//! largest depth is refused, naming the field. In time, a schedule whose every step has
+//! at least two solver sub-steps (a record's `data.substeps`) keeps its times and halves
+//! the sub-steps; otherwise a schedule of an even number of steps whose every second time
+//! is the depth history's own (a history whose segments all have even `steps`) keeps every
+//! second time, its targets there and twice their weights; otherwise the time grid is kept.
+//! The coarse problem compares with the fine problem's own targets (never data synthesized
+//! again on the coarse model), so its optimum is the coarse model's fit of the same data.
+//!
+//! The fine phase is the ordinary fit from the coarse optimum: what it reports (stop
+//! reason, deviations, the discretization check) is that of the full-fidelity model. A
+//! coarse phase that cannot be built or fails falls back to the full-fidelity fit from the
+//! configuration's start, and says so.
+
+use anyhow::{Context as _, Result, anyhow, bail};
+use indentify_contact::{Model, Schedule};
+use indentify_identify::{IdentifyConfig, IdentifyResult, IterationRecord, Problem, Test};
+
+use crate::config::Mesher;
+use crate::identify::Setup;
+
+/// The fewest elements a coarse mesh may have under the contact-radius bound at the
+/// largest depth (the contact resolution: below it the contact radius moves by a large
+/// fraction of itself from one node to the next).
+pub const MIN_CONTACT_ELEMENTS: usize = 4;
+
+/// The largest grading the meshers accept.
+const MAX_GRADING: f64 = 3.0;
+
+/// The mesher 2x coarser in each direction (see the module's rules), before the contact
+/// resolution check.
+///
+/// # Errors
+/// A coarse mesher the mesh crate refuses (naming the field).
+pub fn coarsen_mesher(mesher: &Mesher) -> Result<Mesher> {
+    let coarse = match *mesher {
+        Mesher::Cylinder(mut m) => {
+            m.nr = m.nr.div_ceil(2);
+            m.nz = m.nz.div_ceil(2);
+            m.grading_r = (m.grading_r * m.grading_r).min(MAX_GRADING);
+            m.grading_z = (m.grading_z * m.grading_z).min(MAX_GRADING);
+            m.validate()
+                .context("the mesh cannot be coarsened 2x for the coarse phase")?;
+            Mesher::Cylinder(m)
+        }
+        Mesher::Zoned(mut m) => {
+            if m.core_elements / 2 < MIN_CONTACT_ELEMENTS {
+                bail!(
+                    "specimen.elements_in_contact = {}: a 2x coarser mesh would have {} \
+                     elements under the contact radius, below the contact resolution of {} \
+                     (coarse to fine needs specimen.elements_in_contact >= {})",
+                    m.core_elements,
+                    m.core_elements / 2,
+                    MIN_CONTACT_ELEMENTS,
+                    2 * MIN_CONTACT_ELEMENTS
+                );
+            }
+            m.core_elements /= 2;
+            m.grading = (m.grading * m.grading).min(MAX_GRADING);
+            m.validate()
+                .context("the mesh cannot be coarsened 2x for the coarse phase")?;
+            Mesher::Zoned(m)
+        }
+    };
+    Ok(coarse)
+}
+
+/// Elements of `mesh` whose top edge (nodes at `z = 0`) starts inside radius `a`.
+pub fn elements_under(mesh: &indentify_mesh::Mesh, a: f64) -> usize {
+    let top = mesh
+        .nodes
+        .iter()
+        .fold(f64::NEG_INFINITY, |m, p| m.max(p[1]));
+    let tol = 1e-9 * mesh.nodes.iter().fold(0.0_f64, |m, p| m.max(p[1].abs()));
+    mesh.elements
+        .iter()
+        .filter(|e| {
+            let r_min = e
+                .iter()
+                .map(|&n| mesh.nodes[n])
+                .filter(|p| (p[1] - top).abs() <= tol)
+                .map(|p| p[0])
+                .fold(f64::INFINITY, f64::min);
+            r_min < a
+        })
+        .count()
+}
+
+/// A schedule 2x coarser in time with its rows of the fine one (see the module's rules),
+/// and a description; `None` when the time grid is kept.
+fn coarsen_schedule(
+    schedule: &Schedule,
+    history: Option<&crate::config::History>,
+) -> Result<Option<(Schedule, Vec<usize>, String)>> {
+    let n = schedule.n_steps();
+    let all: Vec<usize> = (0..=n).collect();
+    if !schedule.substeps.is_empty() && (1..=n).all(|j| schedule.substeps_of(j) >= 2) {
+        let k: Vec<usize> = (1..=n).map(|j| schedule.substeps_of(j) / 2).collect();
+        let s = schedule.clone().with_substeps(k)?;
+        let text = format!(
+            "every step's sub-steps halved ({} solver steps, was {})",
+            s.n_solver_steps(),
+            schedule.n_solver_steps()
+        );
+        return Ok(Some((s, all, text)));
+    }
+    let Some(h) = history else {
+        return Ok(None);
+    };
+    if n % 2 != 0 || h.segments.iter().any(|s| s.steps % 2 != 0) || !schedule.substeps.is_empty() {
+        return Ok(None);
+    }
+    let rows: Vec<usize> = (0..=n).step_by(2).collect();
+    let t: Vec<f64> = rows.iter().map(|&i| schedule.t[i]).collect();
+    let d: Vec<f64> = rows.iter().map(|&i| schedule.depth[i]).collect();
+    let s = Schedule::from_record(&t, &d)?;
+    let text = format!("every second time ({} steps, was {n})", s.n_steps());
+    Ok(Some((s, rows, text)))
+}
+
+/// The coarse problem of a set-up fit and its description.
+///
+/// # Errors
+/// A load-controlled test, a coarse mesh below the contact resolution (naming the field),
+/// a coarse model or schedule that cannot be built.
+pub fn coarse_problem(s: &Setup) -> Result<(Problem, String)> {
+    let mut tests = Vec::with_capacity(s.problem.tests.len());
+    let mut texts = Vec::new();
+    for (test, info) in s.problem.tests.iter().zip(&s.tests) {
+        if test.load.is_some() {
+            bail!(
+                "{}: coarse to fine is for depth-controlled tests (this one is load-controlled)",
+                info.label
+            );
+        }
+        let mesher = coarsen_mesher(&info.mesher).with_context(|| info.label.clone())?;
+        let (mesh, _, _) = mesher
+            .build_for(&test.model.punch)
+            .context("cannot build the coarse mesh")?;
+        let h_max = test.schedule.depth.iter().fold(0.0_f64, |m, d| m.max(*d));
+        let a = test.model.punch.contact_radius_bound(h_max);
+        let under = elements_under(&mesh, a);
+        if under < MIN_CONTACT_ELEMENTS {
+            bail!(
+                "{}: specimen (nr, elements_in_contact): the 2x coarser mesh has {under} \
+                 elements under the contact radius bound {a:.3e} mm, below the contact \
+                 resolution of {MIN_CONTACT_ELEMENTS}",
+                info.label
+            );
+        }
+        let model = Model::with_contact(mesh, test.model.punch.clone(), info.config.contact)
+            .and_then(|m| m.with_kinematics(info.config.kinematics))
+            .context("cannot build the coarse model")?;
+        let (schedule, rows, time) =
+            match coarsen_schedule(&test.schedule, info.config.history.as_ref())? {
+                Some((sc, rows, text)) => (sc, rows, text),
+                None => (
+                    test.schedule.clone(),
+                    (0..test.schedule.t.len()).collect(),
+                    "time steps kept".to_string(),
+                ),
+            };
+        let factor = test.schedule.t.len() as f64 / rows.len() as f64;
+        texts.push(format!(
+            "{} ({under} under the contact), {time}",
+            mesher.describe()
+        ));
+        tests.push(Test {
+            model,
+            schedule,
+            solver_options: test.solver_options.clone(),
+            target: rows.iter().map(|&i| test.target[i]).collect(),
+            weights: rows.iter().map(|&i| factor * test.weights[i]).collect(),
+            weight: test.weight,
+            load: None,
+        });
+    }
+    let problem = crate::instrument::problem(
+        &s.cfg,
+        &s.name,
+        &s.law,
+        tests,
+        &crate::config::Overrides::default(),
+    )
+    .map_err(|e| anyhow!("{e}"))?;
+    Ok((problem, texts.join("; ")))
+}
+
+/// What the coarse phase did.
+#[derive(Clone, Debug)]
+pub struct CoarsePhase {
+    /// The coarse model, described (`None`: none was built).
+    pub model: Option<String>,
+    /// The coarse fit (`None`: it could not be built or failed).
+    pub result: Option<IdentifyResult>,
+    /// Why the fit fell back to full fidelity from the configuration's start, if it did.
+    pub fallback: Option<String>,
+    /// Wall time of the coarse phase (s), set-up included.
+    pub seconds: f64,
+}
+
+/// Runs the coarse phase (at most `coarse_iterations` iterations, the configuration's
+/// other stopping rules, no identifiability summary), then the full-fidelity fit from
+/// its optimum on `s.problem`; a coarse phase that cannot be built or fails is reported
+/// in [`CoarsePhase::fallback`] and the fine fit starts from the configuration's start.
+/// Both phases run on the current rayon pool: call it inside `s.problem.install` for the
+/// problem's own.
+///
+/// # Errors
+/// The full-fidelity fit's errors.
+pub fn identify(
+    s: &Setup,
+    config: &IdentifyConfig,
+    coarse_iterations: usize,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<(IdentifyResult, CoarsePhase)> {
+    let clock = std::time::Instant::now();
+    let mut phase = CoarsePhase {
+        model: None,
+        result: None,
+        fallback: None,
+        seconds: 0.0,
+    };
+    let mut fine_cfg = config.clone();
+    match coarse_problem(s) {
+        Err(e) => phase.fallback = Some(format!("no coarse model: {e:#}")),
+        Ok((coarse, text)) => {
+            phase.model = Some(text);
+            let mut cc = config.clone();
+            cc.stop.max_iterations = coarse_iterations;
+            cc.identifiability = false;
+            let r = indentify_identify::identify(&coarse, &cc, observer);
+            match r {
+                Err(e) => phase.fallback = Some(format!("the coarse phase failed: {e}")),
+                Ok(r) if !r.c.iter().all(|v| v.is_finite()) => {
+                    phase.fallback = Some("the coarse phase ended at a non-finite point".into());
+                }
+                Ok(r) => {
+                    let names = s.problem.law.params();
+                    for p in fine_cfg.params.iter_mut().filter(|p| p.free) {
+                        if let Some(k) = names.iter().position(|n| n.name == p.name) {
+                            p.value = Some(r.c[k]);
+                        }
+                    }
+                    phase.result = Some(r);
+                }
+            }
+        }
+    }
+    phase.seconds = clock.elapsed().as_secs_f64();
+    let fine = indentify_identify::identify(&s.problem, &fine_cfg, observer)?;
+    Ok((fine, phase))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indentify_mesh::{CylinderMesher, ZonedCylinderMesher};
+
+    #[test]
+    fn coarse_cylinder_halves_the_counts_and_squares_the_gradings() {
+        let m = Mesher::Cylinder(CylinderMesher {
+            radius: 10.0,
+            height: 10.0,
+            nr: 20,
+            nz: 21,
+            grading_r: 1.3,
+            grading_z: 1.9,
+        });
+        let Mesher::Cylinder(c) = coarsen_mesher(&m).expect("coarse") else {
+            panic!("a cylinder")
+        };
+        assert_eq!((c.nr, c.nz), (10, 11));
+        assert!((c.grading_r - 1.69).abs() < 1e-12);
+        assert_eq!(c.grading_z, 3.0);
+        // the refinement of the discretization check nests it back: 2x in each direction
+        let Mesher::Cylinder(f) =
+            crate::discretization::refine_mesher(&Mesher::Cylinder(c)).expect("refined")
+        else {
+            panic!("a cylinder")
+        };
+        assert_eq!(f.nr, 20);
+        assert!((f.grading_r - 1.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_coarse_mesh_below_the_contact_resolution_is_refused_naming_the_field() {
+        let zoned = |core_elements| {
+            Mesher::Zoned(ZonedCylinderMesher {
+                radius: 1.0,
+                height: 1.0,
+                core: 0.1,
+                core_elements,
+                grading: 1.5,
+            })
+        };
+        let Mesher::Zoned(c) = coarsen_mesher(&zoned(12)).expect("12 -> 6") else {
+            panic!("zoned")
+        };
+        assert_eq!(c.core_elements, 6);
+        assert!((c.grading - 2.25).abs() < 1e-12);
+        let e = coarsen_mesher(&zoned(7)).expect_err("7 -> 3 is below 4");
+        let text = format!("{e:#}");
+        assert!(text.contains("specimen.elements_in_contact = 7"), "{text}");
+        assert!(text.contains("contact resolution"), "{text}");
+    }
+
+    #[test]
+    fn elements_under_counts_the_top_edges_inside_the_radius() {
+        let mesh = indentify_mesh::CylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            nr: 10,
+            nz: 3,
+            grading_r: 1.0,
+            grading_z: 1.0,
+        }
+        .build()
+        .expect("mesh");
+        // uniform edges 0.1 wide: those starting at 0, 0.1, 0.2 lie under a = 0.25
+        assert_eq!(elements_under(&mesh, 0.25), 3);
+        assert_eq!(elements_under(&mesh, 1.5), 10);
+    }
+}
