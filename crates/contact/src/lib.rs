@@ -17,6 +17,7 @@ pub mod model;
 mod newton;
 pub mod normal;
 pub mod punch;
+pub mod refresh;
 pub mod system;
 
 pub use constraint::{ForceCotangent, RecordedContact, StepTangent};
@@ -32,6 +33,7 @@ pub use kinematics::Kinematics;
 pub use model::Model;
 pub use normal::ContactKind;
 pub use punch::Punch;
+pub use refresh::{PcgEvent, RefreshRule};
 pub use system::{ConstrainedSystem, NodeFrame};
 
 /// Errors of the direct problem.

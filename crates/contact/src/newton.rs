@@ -378,6 +378,7 @@ impl<'m> Newton<'m> {
     ) -> Result<(State, StepRecord), StepFailure> {
         let state = spec.state;
         let dt = spec.t1 - state.t;
+        self.system.begin_step();
         let mut it = Iteration {
             u: state.u.clone(),
             depth: spec.depth,
