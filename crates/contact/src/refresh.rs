@@ -65,13 +65,20 @@ pub(crate) struct Refresh {
     /// Solves of the current step in a row that factorized because CG failed (or, once
     /// [`STREAK`] is reached, because of it).
     streak: u32,
+    /// A material's run has begun and has not prepared a solve yet: its first solve
+    /// factorizes (the factor at hand may be the reusable tangent of an earlier run of a
+    /// linear law on the same system, which the run must not depend on).
+    first: bool,
     /// The log of every PCG solve, when kept.
     pub(crate) log: Option<Vec<PcgEvent>>,
 }
 
 impl Refresh {
     /// Resolves the rule for a run of a stress-only law (`law`) or another material.
+    /// A material's run (not a stress-only law's: its bits are pinned as they are) starts
+    /// with a factorization whatever ran before on the system.
     pub(crate) fn begin_run(&mut self, law: bool) {
+        self.first = !law;
         self.active = match self.rule {
             RefreshRule::Auto if law => RefreshRule::Legacy,
             RefreshRule::Auto => RefreshRule::Adaptive,
@@ -90,6 +97,9 @@ impl Refresh {
     /// the factor at hand.
     pub(crate) fn factorize_next(&mut self) -> bool {
         self.newton += 1;
+        if std::mem::take(&mut self.first) {
+            return true;
+        }
         match self.active {
             RefreshRule::Adaptive if self.streak >= STREAK => true,
             _ => self.last >= LEGACY_REFRESH,
@@ -137,6 +147,10 @@ mod tests {
             ..Refresh::default()
         };
         p.begin_run(law);
+        p.begin_step();
+        // a material's run factorizes first; a stress-only law's keeps the factor at hand
+        assert_eq!(p.factorize_next(), !law);
+        p.factorized();
         p.begin_step();
         p
     }

@@ -3,13 +3,13 @@
 //! rate-independent Voce hardening, the law whose tangent changes most: the adaptive rule
 //! falls back less and factorizes less than the legacy one, converges to the same
 //! solution (to the solver's tolerance), gives the same bits on 1 and 2 threads and in a
-//! replay from a checkpoint; `Auto` is the legacy rule for Norton-Hoff (its pinned bits)
-//! and the adaptive one for Plastic.
+//! replay from a checkpoint, and whatever ran before on the same solver; `Auto` is the
+//! legacy rule for Norton-Hoff (its pinned bits) and the adaptive one for Plastic.
 
 use indentify_contact::{
     DirectSolver, Model, Punch, RefreshRule, Schedule, SolverOptions, Trajectory, trapezoid,
 };
-use indentify_laws::{Hardening, LawMaterial, Material, NortonHoff, Plastic, Rate};
+use indentify_laws::{Hardening, LawMaterial, Material, NortonHoff, Plastic, Prony, Rate};
 use indentify_mesh::CylinderMesher;
 
 fn r2_model() -> Model {
@@ -161,4 +161,29 @@ fn adaptive_refresh_is_reproducible_across_threads_and_replays() {
         }
         assert!(!replayed.steps.is_empty());
     }
+}
+
+/// A material's run does not depend on what ran before on the solver: after a linear
+/// law's run (Prony: a reusable tangent whose factor the system keeps), Voce gives the
+/// bits of a fresh solver (its first solve factorizes instead of preconditioning CG with
+/// that factor).
+#[test]
+fn a_run_does_not_depend_on_an_earlier_linear_run() {
+    let model = r2_model();
+    let (mat, c) = voce();
+    let fresh = run(&model, &mat, &c, RefreshRule::Auto);
+    let mut solver = DirectSolver::new(&model).unwrap();
+    let prony = Prony::new(1).unwrap();
+    solver
+        .run(
+            &prony,
+            &[1e5, 0.3, 0.3, 0.2],
+            &schedule(),
+            &SolverOptions::default(),
+        )
+        .unwrap();
+    let after = solver
+        .run(&mat, &c, &schedule(), &SolverOptions::default())
+        .unwrap();
+    assert_eq!(bits(&after), bits(&fresh));
 }
