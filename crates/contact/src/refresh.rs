@@ -57,9 +57,13 @@ pub(crate) struct Refresh {
     pub(crate) rule: RefreshRule,
     /// The rule in force for the current run (`Auto` resolved).
     active: RefreshRule,
-    /// CG iterations of the last inexact solve (0 after a factorization: its factor is
-    /// fresh).
+    /// The most CG iterations a solve with the factor at hand needed on the last iterate's
+    /// systems (0 after a factorization: its factor is fresh): the Newton solve's, or
+    /// under load control the larger of it and the depth column's (which starts from the
+    /// last column and may need none).
     last: usize,
+    /// Whether a solve has run since the last preparation (the depth column's comes second).
+    solved_once: bool,
     /// The Newton solve of the current step about to be prepared (1: the first).
     newton: u32,
     /// Solves of the current step in a row that factorized because CG failed (or, once
@@ -97,6 +101,7 @@ impl Refresh {
     /// the factor at hand.
     pub(crate) fn factorize_next(&mut self) -> bool {
         self.newton += 1;
+        self.solved_once = false;
         if std::mem::take(&mut self.first) {
             return true;
         }
@@ -113,7 +118,12 @@ impl Refresh {
 
     /// A CG solve took `iterations` and converged or not (then the system was factorized).
     pub(crate) fn solved(&mut self, iterations: usize, converged: bool) {
-        self.last = if converged { iterations } else { 0 };
+        self.last = match (converged, self.solved_once) {
+            (false, _) => 0,
+            (true, false) => iterations,
+            (true, true) => self.last.max(iterations),
+        };
+        self.solved_once = true;
         self.streak = if converged { 0 } else { self.streak + 1 };
         if let Some(log) = &mut self.log {
             log.push(PcgEvent {

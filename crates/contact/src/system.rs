@@ -579,9 +579,30 @@ impl ConstrainedSystem {
             return Ok(0);
         }
         rotate_in(&self.frames, b);
-        let its = self.solve_pcg(model, b, xbar, eta);
+        let its = self.solve_pcg(model, b, xbar, eta, None);
         rotate_out(&self.frames, b);
         its
+    }
+
+    /// As [`ConstrainedSystem::solve_inexact`], CG starting from `guess` (on the free
+    /// equations) instead of the preconditioner's solution: a solution of a nearby system
+    /// (load control's depth column of the last Newton iterate). Vertical contact only
+    /// (with node frames the guess would need their rotation: it is then not used).
+    ///
+    /// # Errors
+    /// As [`ConstrainedSystem::solve_inexact`].
+    pub(crate) fn solve_inexact_from(
+        &mut self,
+        model: &Model,
+        b: &mut [f64],
+        xbar: &[f64],
+        eta: f64,
+        guess: &[f64],
+    ) -> Result<usize, FeError> {
+        if !self.pcg || !self.frames.is_empty() {
+            return self.solve_inexact(model, b, xbar, eta);
+        }
+        self.solve_pcg(model, b, xbar, eta, Some(guess))
     }
 
     /// Preconditioned CG on the constrained (rotated) matrix, `b` rotated.
@@ -591,6 +612,7 @@ impl ConstrainedSystem {
         b: &mut [f64],
         xbar: &[f64],
         eta: f64,
+        guess: Option<&[f64]>,
     ) -> Result<usize, FeError> {
         let t0 = std::time::Instant::now();
         self.dirichlet_rhs(model, b, xbar);
@@ -605,9 +627,12 @@ impl ConstrainedSystem {
                 .map(|((x, y), _)| x * y)
                 .sum()
         };
-        // x0 = M^-1 rhs on the free equations, exact on the constrained ones
+        // x0 = M^-1 rhs (or the guess) on the free equations, exact on the constrained ones
         let bnorm = free_dot(rhs, rhs).sqrt();
-        self.chol.solve_in_place(b);
+        match guess {
+            Some(g) => b.copy_from_slice(g),
+            None => self.chol.solve_in_place(b),
+        }
         impose(b, constrained, |e| xbar[e]);
         // r = rhs - A x (zero on constrained rows: A is diagonal there and x exact)
         q.fill(0.0);

@@ -187,3 +187,44 @@ fn a_run_does_not_depend_on_an_earlier_linear_run() {
         .unwrap();
     assert_eq!(bits(&after), bits(&fresh));
 }
+
+/// Load control (R2's load and hold under Norton-Hoff, the force history of the
+/// depth-controlled run): with the depth column's CG started from the last iterate's
+/// column and the refresh reading the larger of an iterate's two solves, the
+/// load-controlled run still returns to the depth-controlled depths to the solver's
+/// tolerance.
+#[test]
+fn load_control_returns_to_the_depth_controlled_depths() {
+    use indentify_contact::{LoadHistory, Segment};
+    let model = r2_model();
+    let seg = |depth| Segment {
+        duration: 1.0,
+        depth,
+        steps: 30,
+    };
+    let sched = Schedule::from_segments(&[seg(0.1), seg(0.1)]).unwrap();
+    let law = LawMaterial(&NortonHoff);
+    let nh = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    let mut solver = DirectSolver::new(&model).unwrap();
+    let opts = SolverOptions::default();
+    let by_depth = solver.run(&law, &nh, &sched, &opts).unwrap();
+    let history = LoadHistory::from_force_record(&sched.t, &by_depth.forces()).unwrap();
+    let by_force = solver.run_history(&law, &nh, &history, &opts).unwrap();
+    let tm = by_force.timing;
+    println!(
+        "load control: {} Newton iterations, {} PCG solves, {} CG iterations, {} fallbacks, \
+         {} factorizations",
+        by_force.total_iterations(),
+        tm.pcg_solves,
+        tm.cg_iterations,
+        tm.pcg_fallbacks,
+        tm.factorizations
+    );
+    let worst = by_depth
+        .schedule_steps()
+        .zip(by_force.schedule_steps())
+        .map(|(a, b)| (a.depth - b.depth).abs() / 0.1)
+        .fold(0.0, f64::max);
+    println!("largest depth difference {worst:.2e} of the largest depth");
+    assert!(worst < 1e-6, "{worst}");
+}
