@@ -386,7 +386,7 @@ impl<'m> Newton<'m> {
     ) -> Result<(State, StepRecord), StepFailure> {
         let state = spec.state;
         let dt = spec.t1 - state.t;
-        self.system.begin_step();
+        self.system.begin_step(spec.load.is_some());
         self.w_ok = false;
         let mut it = Iteration {
             u: state.u.clone(),

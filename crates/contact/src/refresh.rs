@@ -20,6 +20,9 @@ pub enum RefreshRule {
     /// factorize without trying CG first: its tangent changes too much from one iterate
     /// to the next for an earlier factor to precondition it (rate-independent plasticity
     /// where many points switch between the elastic and plastic branches, docs/solver.md).
+    /// Depth-controlled steps only: in load-controlled steps of the rate-independent laws,
+    /// whose Newton iterations often cycle until the step is cut, it was measured to cost
+    /// more (R2, power hardening: twice the factorizations) and the legacy rule applies.
     Adaptive,
 }
 
@@ -57,6 +60,8 @@ pub(crate) struct Refresh {
     pub(crate) rule: RefreshRule,
     /// The rule in force for the current run (`Auto` resolved).
     active: RefreshRule,
+    /// Whether the current step prescribes the depth (the streak rule's domain).
+    depth_step: bool,
     /// The most CG iterations a solve with the factor at hand needed on the last iterate's
     /// systems (0 after a factorization: its factor is fresh): the Newton solve's, or
     /// under load control the larger of it and the depth column's (which starts from the
@@ -91,8 +96,10 @@ impl Refresh {
         self.streak = 0;
     }
 
-    /// A new time step begins (its first Newton solve comes next).
-    pub(crate) fn begin_step(&mut self) {
+    /// A new time step begins (its first Newton solve comes next); `load`: it prescribes
+    /// the force (or the depth through the frame's spring).
+    pub(crate) fn begin_step(&mut self, load: bool) {
+        self.depth_step = !load;
         self.newton = 0;
         self.streak = 0;
     }
@@ -106,7 +113,7 @@ impl Refresh {
             return true;
         }
         match self.active {
-            RefreshRule::Adaptive if self.streak >= STREAK => true,
+            RefreshRule::Adaptive if self.depth_step && self.streak >= STREAK => true,
             _ => self.last >= LEGACY_REFRESH,
         }
     }
@@ -157,11 +164,11 @@ mod tests {
             ..Refresh::default()
         };
         p.begin_run(law);
-        p.begin_step();
+        p.begin_step(false);
         // a material's run factorizes first; a stress-only law's keeps the factor at hand
         assert_eq!(p.factorize_next(), !law);
         p.factorized();
-        p.begin_step();
+        p.begin_step(false);
         p
     }
 
@@ -216,7 +223,7 @@ mod tests {
             p.factorized();
         }
         // the next step tries CG again
-        p.begin_step();
+        p.begin_step(false);
         assert!(!p.factorize_next());
         // a converged solve between two fallbacks breaks the streak
         p.solved(LEGACY_CAP, false);
@@ -230,6 +237,12 @@ mod tests {
         // a checkpoint forgets the streak (a replay from it repeats the run)
         p.forget();
         assert!(!p.factorize_next());
+        // a load-controlled step keeps trying CG
+        p.begin_step(true);
+        for _ in 0..5 {
+            assert!(!p.factorize_next());
+            p.solved(LEGACY_CAP, false);
+        }
     }
 
     /// The log records each solve with the Newton solve of its step.

@@ -196,9 +196,10 @@ impl ConstrainedSystem {
         self.refresh.begin_run(law);
     }
 
-    /// A time step begins: its first Newton solve comes next.
-    pub(crate) fn begin_step(&mut self) {
-        self.refresh.begin_step();
+    /// A time step begins: its first Newton solve comes next; `load`: the step
+    /// prescribes the force (or the depth through the frame's spring).
+    pub(crate) fn begin_step(&mut self, load: bool) {
+        self.refresh.begin_step(load);
     }
 
     /// Numeric factorizations done so far.
