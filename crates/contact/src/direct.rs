@@ -28,6 +28,7 @@ use crate::friction::Status;
 use crate::history::{LoadHistory, Schedule};
 use crate::model::Model;
 use crate::newton::{Newton, State, StepFailure, StepSpec};
+use crate::refresh::RefreshRule;
 use crate::system::ConstrainedSystem;
 
 /// Numerical options of the direct solver.
@@ -204,18 +205,26 @@ pub struct Timing {
     /// Conjugate-gradient iterations of the inexact solves (nonlinear laws: Newton
     /// iterations reuse an earlier factorization as preconditioner).
     pub cg_iterations: usize,
+    /// Preconditioned CG solves (the inexact Newton solves that did not factorize first).
+    pub pcg_solves: usize,
+    /// Preconditioned CG solves that did not converge within their cap and factorized
+    /// instead (fallbacks).
+    pub pcg_fallbacks: usize,
 }
 
 impl std::fmt::Display for Timing {
-    /// `F factorizations, C CG iterations; local .. ms, assembly .. ms, factorization .. ms,
-    /// solve .. ms, total .. ms`.
+    /// `F factorizations, C CG iterations in S PCG solves (B fell back); local .. ms,
+    /// assembly .. ms, factorization .. ms, solve .. ms, total .. ms`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} factorizations, {} CG iterations; local {:.1} ms, assembly {:.1} ms, \
-             factorization {:.1} ms, solve {:.1} ms, total {:.1} ms",
+            "{} factorizations, {} CG iterations in {} PCG solves ({} fell back); local \
+             {:.1} ms, assembly {:.1} ms, factorization {:.1} ms, solve {:.1} ms, total \
+             {:.1} ms",
             self.factorizations,
             self.cg_iterations,
+            self.pcg_solves,
+            self.pcg_fallbacks,
             1e3 * self.local,
             1e3 * self.assembly,
             1e3 * self.factorization,
@@ -280,6 +289,18 @@ impl<'m> DirectSolver<'m> {
             model,
             newton: Newton::new(model)?,
         })
+    }
+
+    /// Sets the rule that decides when a nonlinear law's inexact Newton solves refresh
+    /// their factor (`refresh.rs`; [`RefreshRule::Auto`] by default).
+    pub fn set_refresh_rule(&mut self, rule: RefreshRule) {
+        self.newton.system.set_refresh_rule(rule);
+    }
+
+    /// Keeps (or stops keeping) a log of every preconditioned CG solve from now on
+    /// ([`ConstrainedSystem::pcg_log`], through [`DirectSolver::system`]).
+    pub fn keep_pcg_log(&mut self, keep: bool) {
+        self.newton.system.keep_pcg_log(keep);
     }
 
     /// The model this solver runs.
@@ -621,7 +642,10 @@ impl<'m> DirectSolver<'m> {
         }
         let factorizations0 = self.newton.system.factorizations();
         let cg0 = self.newton.system.pcg_iterations;
+        let solves0 = self.newton.system.pcg_solves;
+        let fallbacks0 = self.newton.system.pcg_fallbacks;
         let seconds0 = self.newton.system.seconds;
+        self.newton.system.begin_run(run.law.as_law().is_some());
         for j in j0 + 1..=j1 {
             if j == j0 + 1 || (every > 0 && (j - 1 - j0) % every == 0) {
                 // a run, and every stretch a replay may start from, begins with a fresh
@@ -718,6 +742,8 @@ impl<'m> DirectSolver<'m> {
         }
         traj.timing.factorizations += self.newton.system.factorizations() - factorizations0;
         traj.timing.cg_iterations += self.newton.system.pcg_iterations - cg0;
+        traj.timing.pcg_solves += self.newton.system.pcg_solves - solves0;
+        traj.timing.pcg_fallbacks += self.newton.system.pcg_fallbacks - fallbacks0;
         traj.timing.assembly += self.newton.system.seconds[0] - seconds0[0];
         traj.timing.factorization += self.newton.system.seconds[1] - seconds0[1];
         traj.timing.solve += self.newton.system.seconds[2] - seconds0[2];

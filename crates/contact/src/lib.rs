@@ -18,6 +18,7 @@ mod newton;
 pub mod normal;
 pub mod pdotp;
 pub mod punch;
+pub mod refresh;
 pub mod system;
 
 pub use constraint::{ForceCotangent, RecordedContact, StepTangent};
@@ -34,6 +35,7 @@ pub use model::Model;
 pub use normal::ContactKind;
 pub use pdotp::{Leg, PdotP, SegmentSpec};
 pub use punch::Punch;
+pub use refresh::{PcgEvent, RefreshRule};
 pub use system::{ConstrainedSystem, NodeFrame};
 
 /// Errors of the direct problem.

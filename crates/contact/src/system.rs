@@ -33,6 +33,7 @@ use indentify_fe::{ElementCache, FeError, Pattern, SolveScratch, SparseCholesky}
 use indentify_laws::Mat4;
 
 use crate::model::Model;
+use crate::refresh::{PcgEvent, Refresh, RefreshRule};
 
 /// `K` with Dirichlet rows/columns on a set of equations, factorized on demand.
 #[derive(Debug)]
@@ -62,12 +63,15 @@ pub struct ConstrainedSystem {
     /// The next inexact solve runs preconditioned CG on `k_constrained` with `chol` (an
     /// earlier tangent's factor) instead of factorizing it.
     pcg: bool,
-    /// CG iterations of the last inexact solve (0 after a fallback: its factor is fresh).
-    last_pcg: usize,
+    /// When the factor is refreshed (`refresh.rs`).
+    refresh: Refresh,
     /// PCG work vectors: r, z, p, q and a copy of the right-hand side.
     work: [Vec<f64>; 5],
-    /// Preconditioned CG iterations, and PCG solves that fell back to a factorization.
+    /// Preconditioned CG iterations.
     pub pcg_iterations: usize,
+    /// Preconditioned CG solves (each Newton solve of a nonlinear law that did not
+    /// factorize first, and load control's depth columns solved with the same factor).
+    pub pcg_solves: usize,
     /// Solves where PCG did not converge in time and the matrix was factorized instead.
     pub pcg_fallbacks: usize,
     /// Seconds spent assembling, factorizing and solving.
@@ -145,9 +149,10 @@ impl ConstrainedSystem {
             capacitance: false,
             factor_ok: false,
             pcg: false,
-            last_pcg: 0,
+            refresh: Refresh::default(),
             work: std::array::from_fn(|_| vec![0.0; model.dofs.n_eq]),
             pcg_iterations: 0,
+            pcg_solves: 0,
             pcg_fallbacks: 0,
             seconds: [0.0; 3],
             frames: Vec::new(),
@@ -164,6 +169,40 @@ impl ConstrainedSystem {
             depth_mu: Vec::new(),
             bordered_nu: Vec::new(),
         })
+    }
+
+    /// The rule that decides when the inexact solves refresh their factor (`refresh.rs`).
+    pub fn refresh_rule(&self) -> RefreshRule {
+        self.refresh.rule
+    }
+
+    /// Sets the refresh rule of the inexact solves (from the next run on).
+    pub fn set_refresh_rule(&mut self, rule: RefreshRule) {
+        self.refresh.rule = rule;
+    }
+
+    /// Keeps (or stops keeping) a log of every preconditioned CG solve, for the counts of
+    /// docs/performance.md; the log starts empty.
+    pub fn keep_pcg_log(&mut self, keep: bool) {
+        self.refresh.log = keep.then(Vec::new);
+    }
+
+    /// The log of the preconditioned CG solves since [`ConstrainedSystem::keep_pcg_log`]
+    /// (empty when not kept).
+    pub fn pcg_log(&self) -> &[PcgEvent] {
+        self.refresh.log.as_deref().unwrap_or(&[])
+    }
+
+    /// A run begins: resolves [`RefreshRule::Auto`] for a stress-only law (`law`) or
+    /// another material.
+    pub(crate) fn begin_run(&mut self, law: bool) {
+        self.refresh.begin_run(law);
+    }
+
+    /// A time step begins: its first Newton solve comes next; `load`: the step
+    /// prescribes the force (or the depth through the frame's spring).
+    pub(crate) fn begin_step(&mut self, load: bool) {
+        self.refresh.begin_step(load);
     }
 
     /// Numeric factorizations done so far.
@@ -480,7 +519,7 @@ impl ConstrainedSystem {
         self.capacitance = false;
         self.factor_ok = false;
         self.pcg = false;
-        self.last_pcg = 0;
+        self.refresh.forget();
         self.frames.clear();
         self.frames_factored.clear();
         self.cap_frames = None;
@@ -499,7 +538,7 @@ impl ConstrainedSystem {
     pub(crate) fn forget_preconditioner(&mut self) {
         self.forget_assembly();
         self.factor_ok = self.factor_ok && self.k_key.is_some();
-        self.last_pcg = 0;
+        self.refresh.forget();
     }
 
     /// Prepares the next [`ConstrainedSystem::solve_inexact`]. A reusable tangent (linear
@@ -512,12 +551,9 @@ impl ConstrainedSystem {
     /// # Errors
     /// As [`ConstrainedSystem::factorize`].
     pub(crate) fn prepare_inexact(&mut self, model: &Model) -> Result<(), FeError> {
-        if self.k_key.is_some()
-            || !self.factor_ok
-            || self.last_pcg >= REFRESH_PCG
-            || self.friction()
-        {
-            self.last_pcg = 0;
+        let refresh = self.refresh.factorize_next();
+        if self.k_key.is_some() || !self.factor_ok || refresh || self.friction() {
+            self.refresh.factorized();
             return self.factorize(model);
         }
         let t0 = std::time::Instant::now();
@@ -547,9 +583,30 @@ impl ConstrainedSystem {
             return Ok(0);
         }
         rotate_in(&self.frames, b);
-        let its = self.solve_pcg(model, b, xbar, eta);
+        let its = self.solve_pcg(model, b, xbar, eta, None);
         rotate_out(&self.frames, b);
         its
+    }
+
+    /// As [`ConstrainedSystem::solve_inexact`], CG starting from `guess` (on the free
+    /// equations) instead of the preconditioner's solution: a solution of a nearby system
+    /// (load control's depth column of the last Newton iterate). Vertical contact only
+    /// (with node frames the guess would need their rotation: it is then not used).
+    ///
+    /// # Errors
+    /// As [`ConstrainedSystem::solve_inexact`].
+    pub(crate) fn solve_inexact_from(
+        &mut self,
+        model: &Model,
+        b: &mut [f64],
+        xbar: &[f64],
+        eta: f64,
+        guess: &[f64],
+    ) -> Result<usize, FeError> {
+        if !self.pcg || !self.frames.is_empty() {
+            return self.solve_inexact(model, b, xbar, eta);
+        }
+        self.solve_pcg(model, b, xbar, eta, Some(guess))
     }
 
     /// Preconditioned CG on the constrained (rotated) matrix, `b` rotated.
@@ -559,6 +616,7 @@ impl ConstrainedSystem {
         b: &mut [f64],
         xbar: &[f64],
         eta: f64,
+        guess: Option<&[f64]>,
     ) -> Result<usize, FeError> {
         let t0 = std::time::Instant::now();
         self.dirichlet_rhs(model, b, xbar);
@@ -573,9 +631,12 @@ impl ConstrainedSystem {
                 .map(|((x, y), _)| x * y)
                 .sum()
         };
-        // x0 = M^-1 rhs on the free equations, exact on the constrained ones
+        // x0 = M^-1 rhs (or the guess) on the free equations, exact on the constrained ones
         let bnorm = free_dot(rhs, rhs).sqrt();
-        self.chol.solve_in_place(b);
+        match guess {
+            Some(g) => b.copy_from_slice(g),
+            None => self.chol.solve_in_place(b),
+        }
         impose(b, constrained, |e| xbar[e]);
         // r = rhs - A x (zero on constrained rows: A is diagonal there and x exact)
         q.fill(0.0);
@@ -589,7 +650,8 @@ impl ConstrainedSystem {
         // plain dot products and updates over all equations are the free ones
         let mut converged = dot(r, r).sqrt() <= tol;
         let mut rz = 0.0;
-        while !converged && iterations < MAX_PCG {
+        let cap = self.refresh.cap();
+        while !converged && iterations < cap {
             // z = M^-1 r restricted to the free equations; p = z + beta p
             z.copy_from_slice(r);
             self.chol.solve_in_place(z);
@@ -621,7 +683,8 @@ impl ConstrainedSystem {
             converged = dot(r, r).sqrt() <= tol;
         }
         self.pcg_iterations += iterations;
-        self.last_pcg = iterations;
+        self.pcg_solves += 1;
+        self.refresh.solved(iterations, converged);
         self.seconds[2] += t0.elapsed().as_secs_f64();
         if converged {
             return Ok(iterations);
@@ -634,7 +697,6 @@ impl ConstrainedSystem {
         self.chol.factorize(&self.k_constrained)?;
         self.factor_ok = true;
         // the new factor is this Newton iterate's own: the next solves precondition with it
-        self.last_pcg = 0;
         self.seconds[1] += t1.elapsed().as_secs_f64();
         let t2 = std::time::Instant::now();
         b.copy_from_slice(&self.work[4]);
@@ -1343,18 +1405,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
-
-/// Largest number of CG iterations of an inexact solve before it factorizes instead (one
-/// costs a matrix product and a triangular solve pair: about a seventh of a factorization
-/// at R2's size).
-const MAX_PCG: usize = 6;
-
-/// An inexact solve that needed this many CG iterations makes the next one factorize:
-/// the old factor has drifted too far from the tangent (R2 with the degree-2 predictor,
-/// 283 Newton iterations: 41 factorizations and 579 CG iterations; 3 gives 55 and 429, 5
-/// with at most 8 CG iterations 36 and 690, 6 30 and 844, all within the machine's noise
-/// in time).
-const REFRESH_PCG: usize = 4;
 
 /// Largest number of prescribed dofs handled by the capacitance mode.
 const MAX_CAPACITANCE: usize = 256;
