@@ -339,6 +339,76 @@ fn vtu_series_has_every_state_and_elastic_eps_p_vanishes() {
     );
 }
 
+/// A law with internal variables writes them: J2 plasticity's accumulated plastic strain `p`
+/// beside `eps_p_eq`, the equivalent of `eps - S sigma`. At small strain `eps - S sigma` is
+/// the plastic strain tensor, so `eps_p_eq <= p` everywhere (the length of a path's end
+/// against its length), with equality after the first plastic step from a stress-free
+/// state (one radial return: the plastic strain is `Delta p n`, `n` of unit equivalent).
+#[test]
+fn vtu_writes_the_accumulated_plastic_strain_of_j2() {
+    let dir = tempfile::tempdir().unwrap();
+    let vtu = dir.path().join("fields");
+    let args: Vec<String> = [
+        "simulate",
+        &examples().join("plastic-power-cone.ron").display().to_string(),
+        "--vtu",
+        &vtu.display().to_string(),
+        "--out",
+        &dir.path().join("c.csv").display().to_string(),
+        "--set",
+        "specimen.nr=8",
+        "--set",
+        "specimen.nz=8",
+        "--set",
+        "history.segments.0.steps=6",
+        "--set",
+        "history.segments.1.steps=4",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let o = Command::new(env!("CARGO_BIN_EXE_indentify"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let values = |file: &str, name: &str| -> Vec<f64> {
+        let doc = std::fs::read_to_string(vtu.join(file)).unwrap();
+        let start = doc
+            .find(&format!("Name=\"{name}\""))
+            .unwrap_or_else(|| panic!("{file}: no field {name}"));
+        let body = &doc[start..];
+        let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
+        body.split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    assert!(
+        std::fs::read_to_string(vtu.join("step_0003.vtu"))
+            .unwrap()
+            .contains("Name=\"internal_p\""),
+        "cell averages of p"
+    );
+    let mut first = true;
+    for k in 1..=10 {
+        let file = format!("gauss_{k:04}.vtu");
+        let (p, eq) = (values(&file, "internal_p"), values(&file, "eps_p_eq"));
+        assert_eq!(p.len(), eq.len());
+        let pmax = p.iter().fold(0.0_f64, |m, v| m.max(*v));
+        if pmax == 0.0 {
+            continue;
+        }
+        for (a, b) in p.iter().zip(&eq) {
+            assert!(*b <= a * (1.0 + 1e-9) + 1e-12 * pmax, "{file}: eps_p_eq {b} > p {a}");
+            if first {
+                assert!((a - b).abs() <= 1e-9 * pmax, "{file}: first plastic step: p {a}, eps_p_eq {b}");
+            }
+        }
+        first = false;
+    }
+    assert!(!first, "the cone yields");
+}
+
 #[test]
 fn a_failing_step_writes_the_partial_curve_and_fails_cleanly() {
     let dir = tempfile::tempdir().unwrap();

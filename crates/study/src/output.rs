@@ -151,6 +151,24 @@ fn qp_fields(
     f
 }
 
+/// The law's own internal variables (`Material::internal`, e.g. J2's accumulated plastic
+/// strain `p`, a Prony branch's viscous strain `ev1_zz`), one scalar field per variable named
+/// `internal_<name>`, from a state's point-major `alpha`; none for a stress-only law.
+fn internal_fields(law: &dyn Material, alpha: &[f64], nq: usize) -> Vec<(String, Vec<f64>)> {
+    let n = law.n_internal();
+    if n == 0 || alpha.len() != n * nq {
+        return Vec::new();
+    }
+    law.internal()
+        .iter()
+        .enumerate()
+        .map(|(i, info)| {
+            let v = (0..nq).map(|q| alpha[q * n + i]).collect();
+            (format!("internal_{}", info.name), v)
+        })
+        .collect()
+}
+
 /// Volume average over each element's Gauss points (weights `w_g`) of a field with
 /// `ncomp` components per point.
 fn cell_average(model: &Model, values: &[f64], ncomp: usize) -> Vec<f64> {
@@ -174,7 +192,8 @@ fn cell_average(model: &Model, values: &[f64], ncomp: usize) -> Vec<f64> {
 }
 
 /// Writes `step_NNNN.vtu` (mesh: point displacement `(u_r, u_z, 0)` and contact pressure;
-/// cell volume averages of stress, von Mises stress, viscoplastic strain and its equivalent)
+/// cell volume averages of stress, von Mises stress, viscoplastic strain and its equivalent,
+/// and of the law's internal variables, `internal_<name>`)
 /// and `gauss_NNNN.vtu` (the same fields at the Gauss points, unsmoothed) for every
 /// recorded state (0 = initial, then every converged step, sub-steps included), and
 /// `steps.pvd` indexing both by time. Returns the number of states written.
@@ -222,33 +241,46 @@ pub fn write_vtu_series(
             cell_average(model, &q.eps_p, 4),
             cell_average(model, &q.eps_p_eq, 1),
         );
+        let internal = internal_fields(law, &state.alpha, model.disc.n_qp());
+        let internal_cells: Vec<Vec<f64>> = internal
+            .iter()
+            .map(|(_, v)| cell_average(model, v, 1))
+            .collect();
         let field = |name, ncomp, values| Field {
             name,
             ncomp,
             values,
         };
+        let mut cell_fields = vec![
+            field("stress", 4, &cell.0),
+            field("von_mises", 1, &cell.1),
+            field("eps_p", 4, &cell.2),
+            field("eps_p_eq", 1, &cell.3),
+        ];
+        let mut gauss_fields = vec![
+            field("stress", 4, &q.stress),
+            field("von_mises", 1, &q.von_mises),
+            field("eps_p", 4, &q.eps_p),
+            field("eps_p_eq", 1, &q.eps_p_eq),
+        ];
+        for ((name, v), c) in internal.iter().zip(&internal_cells) {
+            let scalar = |values| Field {
+                name: name.as_str(),
+                ncomp: 1,
+                values,
+            };
+            gauss_fields.push(scalar(v));
+            cell_fields.push(scalar(c));
+        }
         let mesh_doc = mesh_to_vtu(
             &model.mesh,
             &[
                 field("displacement", 3, &disp),
                 field("contact_pressure", 1, &pressure),
             ],
-            &[
-                field("stress", 4, &cell.0),
-                field("von_mises", 1, &cell.1),
-                field("eps_p", 4, &cell.2),
-                field("eps_p_eq", 1, &cell.3),
-            ],
+            &cell_fields,
         );
-        let gauss_doc = points_to_vtu(
-            &positions,
-            &[
-                field("stress", 4, &q.stress),
-                field("von_mises", 1, &q.von_mises),
-                field("eps_p", 4, &q.eps_p),
-                field("eps_p_eq", 1, &q.eps_p_eq),
-            ],
-        );
+        let gauss_doc = points_to_vtu(&positions, &gauss_fields);
         let mesh_name = format!("step_{k:04}.vtu");
         let gauss_name = format!("gauss_{k:04}.vtu");
         for (name, doc) in [(&mesh_name, mesh_doc), (&gauss_name, gauss_doc)] {
