@@ -227,3 +227,107 @@ fn a_batch_from_closed_forms_gives_the_same_bits_on_1_and_2_threads() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// One fit's numbers: iterations, forward, sensitivity solves, seconds of the fit.
+fn counts(o: &IdentifyOutcome) -> String {
+    format!(
+        "{} iterations, {} forward, {} sensitivity solves, fit {:.1} s, pipeline {:.1} s",
+        o.result.iterations,
+        o.result.forward_solves,
+        o.result.sensitivity_solves,
+        o.result.seconds,
+        o.wall_seconds
+    )
+}
+
+/// A cold forward run at the configuration's start (s), for the fits' cost in forward runs.
+fn forward_seconds(o: &IdentifyOptions) -> f64 {
+    let s = identify::setup(identify::resolve(o).expect("resolve"), o).expect("setup");
+    let start: Vec<f64> = s
+        .id_cfg
+        .params
+        .iter()
+        .map(|p| p.value.unwrap_or(0.0))
+        .collect();
+    let clock = std::time::Instant::now();
+    indentify_identify::Evaluator::new(&s.problem)
+        .and_then(|mut ev| ev.forces(&start))
+        .expect("forward");
+    clock.elapsed().as_secs_f64()
+}
+
+/// `cargo test -p indentify-study --test closed_form_start -- --ignored --nocapture`: a
+/// single fit with and without the closed-form start, back to back on one thread (an R1
+/// map indent; ht-nh, the sphere record under Norton-Hoff): iterations, solves, the fits'
+/// time in forward runs (a measurement, not a check).
+#[test]
+#[ignore = "a measurement: minutes on a loaded machine"]
+fn measure_single_fits_with_and_without_the_closed_form_start() {
+    let dir = std::env::temp_dir().join(format!("study-cf-measure-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let map = make_map(
+        &dir,
+        &MapOptions {
+            n: 2,
+            ..Default::default()
+        },
+    )
+    .expect("map");
+    let mut r1 = IdentifyOptions::new(ConfigSource::Path(map.base.clone()));
+    r1.data = Some(
+        dir.join("records")
+            .join(format!("{}.csv", map.indents[0].0)),
+    );
+    let mut ht = IdentifyOptions::new(ConfigSource::Path(example("real/ht-nh.ron")));
+    for o in [&mut r1, &mut ht] {
+        o.refine = false;
+        o.figures = false;
+        o.jobs = Some(1);
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    for (name, base) in [("r1-map", r1), ("ht-nh", ht)] {
+        pool.install(|| {
+            let fwd = forward_seconds(&base);
+            let mut closed = base.clone();
+            closed.closed_form_start = true;
+            let b = identify::run(&base, &mut ()).expect("configuration's start");
+            let a = identify::run(&closed, &mut ()).expect("closed-form start");
+            let c = a.start.as_ref().expect("start");
+            eprintln!("{name}: one forward {fwd:.3} s; {}", c.summary());
+            eprintln!(
+                "{name}: configuration start: {} = {:.1} forward runs",
+                counts(&b),
+                b.wall_seconds / fwd
+            );
+            eprintln!(
+                "{name}: closed-form start: {} = {:.1} forward runs (pre-fit {:.3} s)",
+                counts(&a),
+                a.wall_seconds / fwd,
+                c.seconds
+            );
+            eprintln!(
+                "{name}: ratio closed-form / configuration: {:.2}",
+                a.wall_seconds / b.wall_seconds
+            );
+            for p in a.result.params.iter().filter(|p| p.free) {
+                let sd = a.std_dev(p.name).unwrap_or(f64::NAN);
+                let other = b.value(p.name).unwrap_or(f64::NAN);
+                eprintln!(
+                    "{name}: {} {} against {} ({:.4} sd)",
+                    p.name,
+                    p.value,
+                    other,
+                    (p.value - other).abs() / sd
+                );
+            }
+            eprintln!(
+                "{name}: stops: {} / {}",
+                a.result.stop_reason, b.result.stop_reason
+            );
+        });
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
