@@ -27,7 +27,10 @@ fn ramp_hold(h_max: f64, t_r: f64, t_h: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
     (t, h)
 }
 
-fn punches() -> [(Punch, Box<dyn Fn(f64, f64, f64) -> f64>); 3] {
+/// A closed form `F(E, nu, h)` written out.
+type Formula = Box<dyn Fn(f64, f64, f64) -> f64>;
+
+fn punches() -> [(Punch, Formula); 3] {
     // the formulas written out, independently of `Punch::law`
     let alpha = 68f64.to_radians();
     [
