@@ -156,6 +156,9 @@ class Result:
     """The Oliver-Pharr analysis of the fitted record beside the FE result (result.json's
     `oliver_pharr`); without values and with `skipped` when the record cannot be analysed.
     None for synthesized data and joint fits (each of `tests` has its own)."""
+    start: Optional[dict[str, Any]]
+    """The closed-form start of start="closed-form" (result.json's start: method, values,
+    half_space, rms_rel, seconds, notes); None otherwise."""
 
 class OliverPharrBeside(TypedDict, total=False):
     """The O&P values of a fitted record beside the FE result (MPa, N/mm, mm, N)."""
@@ -319,7 +322,7 @@ def identify(
     max_iterations: Optional[int] = None,
     free: Optional[Sequence[str]] = None,
     fixed: Union[Mapping[str, Optional[float]], Sequence[str], None] = None,
-    start: Union[Mapping[str, float], Literal["oliver-pharr"], None] = None,
+    start: Union[Mapping[str, float], Literal["oliver-pharr", "closed-form"], None] = None,
     noise: Optional[float] = None,
     seed: int = 1,
     noise_model: Optional[NoiseModel] = None,
@@ -332,7 +335,9 @@ def identify(
 
     A joint configuration (tests: [...]) is fitted as a whole (Result.tests). noise_model
     replaces the configuration's identify.noise. start="oliver-pharr" starts the free
-    parameters from the Oliver-Pharr analysis of the record (as first_guess)."""
+    parameters from the Oliver-Pharr analysis of the record (as first_guess);
+    start="closed-form" starts E (Maxwell: E and eta) from the closed-form pre-fit of the
+    curve's loading and hold (Result.start says what was set)."""
 
 def design(
     config: ConfigLike = None,

@@ -234,9 +234,10 @@ impl Observer for PyObserver {
 /// `seconds`); an exception it raises stops the run and is raised. `out`: a report
 /// directory (result.json, history.csv, fit.csv, report and figures), `force` replacing
 /// another run's. `method` ("bfgs", "lbfgs", "lbfgsb", "lm"), `max_iterations`, `free`
-/// (names), `fixed` ({name: value or None}) and `start` ({name: value}, or "oliver-pharr":
+/// (names), `fixed` ({name: value or None}) and `start` ({name: value}, "oliver-pharr":
 /// the free parameters' starts from the Oliver-Pharr analysis of the record, as
-/// `first_guess`) override the configuration's `identify` section. `noise_model` replaces `identify.noise`, what the
+/// `first_guess`, or "closed-form": those a closed form covers from the pre-fit of the
+/// curve's loading and hold, `Result.start`) override the configuration's `identify` section. `noise_model` replaces `identify.noise`, what the
 /// standard deviations assume about the force noise: "Residual" (one variance, the
 /// default), "RelativeEstimated", {"Relative": f} (standard deviation f |F|) or
 /// {"Absolute": s} (N). A joint configuration (`tests: [...]`) is fitted as a whole;
@@ -297,11 +298,15 @@ fn identify(
     opts.figures = opts.out.is_some();
     opts.refine = refine;
     opts.noise = noise.map(|a| (a, seed));
+    let start = start.filter(|s| !s.is_none());
+    opts.closed_form_start =
+        start.is_some_and(|s| s.extract::<String>().is_ok_and(|t| t == "closed-form"));
     opts.overrides = Overrides {
         free: names_arg(free, "free")?,
         fixed: fixed_arg(fixed)?,
-        starts: match start.filter(|s| !s.is_none()) {
+        starts: match start {
             None => Vec::new(),
+            Some(_) if opts.closed_form_start => Vec::new(),
             // the free parameters' starts from the Oliver-Pharr analysis of the record
             Some(s) if s.extract::<String>().is_ok_and(|t| t == "oliver-pharr") => {
                 analysis::starts(config, data_path, sets)?
@@ -314,7 +319,7 @@ fn identify(
                 .extract::<std::collections::HashMap<String, f64>>()
                 .map_err(|_| {
                     PyTypeError::new_err(format!(
-                        "start: expected a dict {{name: value}} or \"oliver-pharr\", got {}",
+                        "start: expected a dict {{name: value}}, \"oliver-pharr\" or \"closed-form\", got {}",
                         type_name(s)
                     ))
                 })?

@@ -307,6 +307,11 @@ pub struct IdentifyResult {
     /// a joint fit (each of `Result.tests` has its own).
     #[pyo3(get)]
     oliver_pharr: Py<PyAny>,
+    /// The closed-form start of `identify(start="closed-form")`, as result.json's `start`:
+    /// a dict `method`, `values` and `half_space` (lists of `[name, value]`), `rms_rel`,
+    /// `seconds` and `notes` (why no closed form applies, a value clamped); None otherwise.
+    #[pyo3(get)]
+    start: Py<PyAny>,
     /// The discretization check (the fit re-run on a 2x refined mesh with twice the
     /// steps): a dict `mesh`, `steps` (the refined discretization in words), `rms` (N),
     /// `rms_rel`, `max_abs` (N) of the force change, `shift` and `relative_shift`
@@ -498,6 +503,10 @@ impl IdentifyResult {
             files,
             tests: tests.unbind(),
             oliver_pharr: op_dict(py, o.oliver_pharr.as_ref())?,
+            start: match &o.start {
+                Some(c) => to_python(py, c)?.unbind(),
+                None => py.None(),
+            },
             discretization: discretization_dict(py, o)?,
             caveats: o.caveats(),
         })

@@ -15,7 +15,7 @@
 //! (another version of the code), the ratio before and after and every parameter's shift
 //! in standard deviations, `|after - before| / sigma`. `--batch` times the
 //! 100-indent map through the batch path (`batch.rs`: throughput from the base start, from
-//! each row's Oliver-Pharr first guess and from its Lee-Radok pre-fit, `--jobs N` threads,
+//! each row's Oliver-Pharr first guess and from its closed-form start (`batch --start closed-form`), `--jobs N` threads,
 //! 2 by default; `--profile`: one indent's stages timed, `profile.rs`).
 //! `--no-chi2` turns the chi-square stop of fits with an undetermined parameter off
 //! (`StopCriteria::chi2_stop`), for before/after counts; `--columns` times a sensitivity

@@ -6,7 +6,6 @@ pub mod batch_start;
 pub mod calculix;
 pub mod dao;
 pub mod doc;
-pub mod lee_radok;
 pub mod mesh_study;
 pub mod paper;
 pub mod svg;

@@ -16,6 +16,9 @@
 //!   others analysed.
 //! - [`calibrate`]: the frame compliance from `1/S = C_f + k/sqrt(F_max)` and the ISO area
 //!   function from the areas a reference's modulus implies.
+//! - [`closed_form`]: the modulus from the loading's elastic closed form (Sneddon's cone,
+//!   Hertz's sphere, the flat punch) and the Maxwell law's `(E, eta)` from Lee and Radok's
+//!   form of the loading and hold, the starts of a finite element fit.
 //!
 //! ```
 //! use indentify_analysis::{AreaFunction, Options, Tip, analyze};
@@ -40,6 +43,7 @@
 //! ```
 
 pub mod calibrate;
+pub mod closed_form;
 mod error;
 mod fit;
 mod op;

@@ -63,6 +63,10 @@ pub struct Indent {
     /// `start` column's `oliver-pharr`) instead of the configuration's start values.
     #[serde(default)]
     pub start_from_analysis: bool,
+    /// Start the fit from the closed-form pre-fit of the indent's own curve (the `start`
+    /// column's `closed-form`; [`crate::closed_form_start`]).
+    #[serde(default)]
+    pub start_closed_form: bool,
 }
 
 /// A manifest read and checked.
@@ -220,13 +224,15 @@ pub(crate) fn parse_manifest(
                 _ => bail!("{name}:{line}: column `test`: `{s}` is not a test number (1, 2, ...)"),
             },
         };
-        let start_from_analysis = match cell(col("start")) {
-            None | Some("config") => false,
-            Some("oliver-pharr") => true,
+        let (start_from_analysis, start_closed_form) = match cell(col("start")) {
+            None | Some("config") => (false, false),
+            Some("oliver-pharr") => (true, false),
+            Some("closed-form") => (false, true),
             Some(s) => bail!(
                 "{name}:{line}: column `start`: `{s}` is not a start: expected oliver-pharr (the \
-                 Oliver-Pharr analysis of the indent's record) or config (the configuration's \
-                 start values; also an empty cell)"
+                 Oliver-Pharr analysis of the indent's record), closed-form (the closed-form \
+                 pre-fit of the indent's curve) or config (the configuration's start values; \
+                 also an empty cell)"
             ),
         };
         let config = cell(col("config")).map(resolve);
@@ -250,6 +256,7 @@ pub(crate) fn parse_manifest(
             y: number("y")?,
             sets,
             start_from_analysis,
+            start_closed_form,
         });
     }
     if indents.is_empty() {
@@ -321,6 +328,11 @@ pub struct BatchOptions {
     /// Memory for the recorded runs of all workers together (bytes): an indent whose
     /// recording would exceed its share checkpoints (see [`IdentifyOptions::memory_budget`]).
     pub memory_budget: usize,
+    /// Start every indent's fit from the closed-form pre-fit of its own curve
+    /// (`--start closed-form`; [`crate::closed_form_start`]): each indent's start depends on
+    /// its own curve and configuration only, so the results do not depend on the thread
+    /// count or the order.
+    pub closed_form_start: bool,
 }
 
 impl BatchOptions {
@@ -337,6 +349,7 @@ impl BatchOptions {
             figures: false,
             cancel: Cancel::default(),
             memory_budget: identify::DEFAULT_MEMORY_BUDGET,
+            closed_form_start: false,
         }
     }
 
@@ -418,6 +431,9 @@ pub struct IndentStatus {
     /// beyond σ, undetermined, at a bound).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub caveats: Vec<String>,
+    /// The closed-form start's summary (the values it set, or why none), when asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<String>,
 }
 
 /// Progress of a batch.
@@ -621,6 +637,7 @@ impl IndentStatus {
             seconds: 0.0,
             adequacy: None,
             caveats: Vec::new(),
+            start: None,
         }
     }
 }
@@ -683,6 +700,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
         profiles: None,
         // the indents are the parallel work: one thread each
         jobs: Some(1),
+        closed_form_start: opts.closed_form_start || indent.start_closed_form,
     };
     let mut status = IndentStatus::failed(indent);
     match identify::run(&id_opts, &mut ()) {
@@ -705,6 +723,7 @@ fn run_one(opts: &BatchOptions, indent: &Indent) -> IndentStatus {
             status.iterations = o.result.iterations;
             status.adequacy = o.adequacy().map(|a| a.verdict.as_str().to_string());
             status.caveats = o.caveats();
+            status.start = o.start.as_ref().map(|c| c.summary());
         }
         Err(e) => {
             status.message = e.messages().join(": ");
@@ -750,6 +769,7 @@ pub fn merge(out: &Path) -> Result<BatchSummary> {
                 y: *y,
                 sets: Vec::new(),
                 start_from_analysis: false,
+                start_closed_form: false,
             })
             .collect(),
         set_columns: Vec::new(),
@@ -1281,6 +1301,7 @@ mod tests {
             seconds: 1.23456,
             adequacy: (state != State::Failed).then(|| "systematic residuals".into()),
             caveats: Vec::new(),
+            start: None,
         };
         let csv = results_csv(
             &[st("a", State::Converged, 2e4), st("b", State::Failed, 0.0)],

@@ -75,6 +75,10 @@ pub struct IdentifyOptions {
     /// Threads solving the tests of a joint fit in parallel (`None`: the current rayon
     /// pool, all cores by default). The results do not depend on it.
     pub jobs: Option<usize>,
+    /// Start the free parameters a closed form covers from the pre-fit of the test's own
+    /// curve (`--start closed-form`, [`crate::closed_form_start`]) instead of the
+    /// configuration's starts; ignored when resuming or with a multi-start.
+    pub closed_form_start: bool,
 }
 
 /// The default [`IdentifyOptions::memory_budget`]: 1 GiB.
@@ -106,6 +110,7 @@ impl IdentifyOptions {
             starts: None,
             profiles: None,
             jobs: None,
+            closed_form_start: false,
         }
     }
 }
@@ -234,6 +239,9 @@ pub struct IdentifyOutcome {
     /// `E` (`None` for synthesized data and joint fits: a joint fit's are its tests',
     /// [`TestFit::oliver_pharr`]; docs/analysis.md).
     pub oliver_pharr: Option<crate::op_beside::OpBeside>,
+    /// The closed-form start, when asked for ([`IdentifyOptions::closed_form_start`]): the
+    /// values it set, or why none.
+    pub start: Option<crate::closed_form_start::ClosedFormStart>,
 }
 
 /// One test of a joint fit.
@@ -679,6 +687,11 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         ));
     }
     let mut s = setup(resolved, opts)?;
+    let start = (opts.closed_form_start && !opts.resume && opts.starts.is_none())
+        .then(|| crate::closed_form_start::apply(&mut s));
+    if let Some(c) = &start {
+        tracing::info!("{}", c.summary());
+    }
     if opts.profiles.is_some() {
         // the profiles' threshold needs s^2 from the identifiability summary
         s.id_cfg.identifiability = true;
@@ -721,6 +734,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     let mut outcome = outcome(&s, result, resume_from.is_some())?;
     outcome.multistart = multistart;
     outcome.profiles = profiles;
+    outcome.start = start;
     let s = std::sync::Arc::new(s);
     if opts.refine {
         discretization_check(&mut outcome, &s, &opts.cancel);
@@ -876,6 +890,7 @@ fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyO
         profiles: None,
         tests: if joint { fits } else { Vec::new() },
         oliver_pharr,
+        start: None,
     })
 }
 
@@ -1552,6 +1567,9 @@ fn write_report(
 fn explorations(paths: &Paths, outcome: &IdentifyOutcome) -> (String, Vec<PathBuf>) {
     let mut markdown = String::new();
     let mut figures = Vec::new();
+    if let Some(c) = &outcome.start {
+        markdown.push_str(&format!("## Start\n\n{}\n\n", c.summary()));
+    }
     if let Some(b) = &outcome.oliver_pharr {
         markdown.push_str(&crate::op_beside::markdown(b));
         markdown.push('\n');
@@ -1828,6 +1846,9 @@ struct ResultJson {
     /// A joint fit's tests, each with its weight, share of J and fit quality.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     tests: Vec<TestJson>,
+    /// The closed-form start (`--start closed-form`): the values it set, or why none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    start: Option<crate::closed_form_start::ClosedFormStart>,
     /// The Oliver-Pharr numbers of the same test beside the FE result.
     #[serde(skip_serializing_if = "Option::is_none")]
     oliver_pharr: Option<crate::op_beside::OpBeside>,
@@ -2049,6 +2070,7 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
             })
             .collect(),
         oliver_pharr: o.oliver_pharr.clone(),
+        start: o.start.clone(),
         history: paths.history.display().to_string(),
         fit: paths.fit.display().to_string(),
     }

@@ -25,6 +25,7 @@ pub mod atomic;
 pub mod batch;
 pub mod batch_analysis;
 pub mod check;
+pub mod closed_form_start;
 pub mod coarse_to_fine;
 pub mod config;
 pub mod costmap;

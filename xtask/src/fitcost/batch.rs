@@ -2,13 +2,14 @@
 //! `cargo xtask make-map` (10 x 10, 2% noise) identified through the study's batch path
 //! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), back to
 //! back in one process: from the base configuration's start (the map's manifest), from
-//! each row's Oliver-Pharr first guess where the analysis gives one, and from each row's
-//! Lee-Radok pre-fit (`xtask::lee_radok`, one calibration run per manifest); the starts are
-//! manifest columns (`identify.params.*.start`) computed here once, so an indent's start is
-//! fixed by the manifest whatever the thread count. Printed: the time (the starts'
-//! computation included), throughput, iterations, convergence and every parameter's shift
-//! in standard deviations against the base start. `--profile`: one indent of each phase
-//! stage by stage (`profile.rs`).
+//! each row's Oliver-Pharr first guess where the analysis gives one (manifest columns
+//! `identify.params.*.start` computed here once), and from each row's closed-form start as
+//! the product computes it (`indentify batch --start closed-form`:
+//! `study::closed_form_start`, Lee and Radok's Maxwell form with one calibration run per
+//! indent, inside the batch's time). Printed: the time (the starts' computation included),
+//! throughput, iterations, convergence and every parameter's shift in standard deviations
+//! against the base start. `--profile`: one indent of each phase stage by stage
+//! (`profile.rs`).
 
 use std::path::Path;
 use std::time::Instant;
@@ -17,7 +18,7 @@ use anyhow::Result;
 use indentify_study::batch::{self, BatchOptions};
 use indentify_study::synthetic::{MapFiles, MapOptions, make_map};
 use serde_json::{Value, json};
-use xtask::batch_start::{calibrate, lee_radok_manifest, lee_radok_starts, start_manifest};
+use xtask::batch_start::{closed_form_start, start_manifest};
 
 /// One batch of `manifest` into a fresh `out` on `jobs` threads: its wall time and every
 /// indent's status.
@@ -26,11 +27,13 @@ fn run_batch(
     manifest: &Path,
     out: &Path,
     jobs: usize,
+    closed_form: bool,
 ) -> Result<(f64, Vec<batch::IndentStatus>)> {
     let _ = std::fs::remove_dir_all(out);
     let mut o = BatchOptions::new(manifest.to_path_buf(), out.to_path_buf());
     o.config = Some(map.base.clone());
     o.jobs = jobs;
+    o.closed_form_start = closed_form;
     let clock = Instant::now();
     batch::run(&o, &())?;
     let seconds = clock.elapsed().as_secs_f64();
@@ -113,7 +116,8 @@ fn case_row(
 
 /// `--batch`: before and after on `jobs` threads, a map of `n x n` indents: every indent
 /// from the base start (before), from its Oliver-Pharr first guess where the analysis
-/// gives one (run only if some row has one), from its Lee-Radok pre-fit.
+/// gives one (run only if some row has one), from its closed-form start
+/// (`indentify batch --start closed-form`).
 pub fn measure(jobs: usize, n: usize) -> Result<Value> {
     let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
     let _ = std::fs::remove_dir_all(&dir);
@@ -127,14 +131,10 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
     let clock = Instant::now();
     let (op_manifest, guessed) = start_manifest(&map, &dir.join("manifest-op-start.csv"))?;
     let guess_s = clock.elapsed().as_secs_f64();
-    let clock = Instant::now();
-    let (lr_manifest, lr_started) =
-        lee_radok_manifest(&map, &dir.join("manifest-lee-radok-start.csv"))?;
-    let lr_s = clock.elapsed().as_secs_f64();
-    let (tb, before) = run_batch(&map, &map.manifest, &dir.join("out-before"), jobs)?;
+    let (tb, before) = run_batch(&map, &map.manifest, &dir.join("out-before"), jobs, false)?;
     let mut cases = vec![case_row("base start", tb, 0.0, 0, &before, &before, tb)];
     if guessed > 0 {
-        let (ta, after) = run_batch(&map, &op_manifest, &dir.join("out-op"), jobs)?;
+        let (ta, after) = run_batch(&map, &op_manifest, &dir.join("out-op"), jobs, false)?;
         cases.push(case_row(
             "O&P first guess",
             ta,
@@ -147,12 +147,26 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
     } else {
         eprintln!("no row has an O&P first guess: that batch would repeat the base one");
     }
-    let (tl, after) = run_batch(&map, &lr_manifest, &dir.join("out-lee-radok"), jobs)?;
+    let (tl, after) = run_batch(
+        &map,
+        &map.manifest,
+        &dir.join("out-closed-form"),
+        jobs,
+        true,
+    )?;
+    let started = after
+        .iter()
+        .filter(|s| {
+            s.start
+                .as_deref()
+                .is_some_and(|t| t.contains("closed form"))
+        })
+        .count();
     cases.push(case_row(
-        "Lee-Radok pre-fit",
+        "closed-form start (batch --start closed-form)",
         tl,
-        lr_s,
-        lr_started,
+        0.0,
+        started,
         &after,
         &before,
         tb,
@@ -167,7 +181,7 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
 }
 
 /// `--batch --profile`: one indent of each phase of an `n x n` map, stage by stage, from
-/// the base start and from its Lee-Radok pre-fit.
+/// the base start and from its closed-form start (its calibration run timed apart).
 pub fn profile(n: usize) -> Result<Value> {
     let dir = std::env::temp_dir().join("indentify-fit-cost-batch-profile");
     let _ = std::fs::remove_dir_all(&dir);
@@ -178,28 +192,20 @@ pub fn profile(n: usize) -> Result<Value> {
             ..Default::default()
         },
     )?;
-    let cal = calibrate(&map)?;
-    eprintln!(
-        "Lee-Radok calibration: one forward run, {:.3} s",
-        cal.seconds
-    );
-    let starts = |id: &str| {
-        let clock = Instant::now();
-        let s = lee_radok_starts(&map, id, &cal).ok().flatten();
-        if let Some((_, p)) = &s {
-            eprintln!(
-                "{id}: Lee-Radok pre-fit E = {:.2}, eta = {:.2} (rms {:.4} of F_max, {} samples) in {:.3} s",
-                p.e,
-                p.eta,
-                p.rms_rel,
-                p.samples,
-                clock.elapsed().as_secs_f64()
-            );
+    let seconds = std::cell::Cell::new(0.0);
+    let starts = |id: &str| match closed_form_start(&map, id) {
+        Ok(c) => {
+            eprintln!("{id}: {} in {:.3} s", c.summary(), c.seconds);
+            seconds.set(seconds.get() + c.seconds);
+            c.values
         }
-        s.map(|(s, _)| s).unwrap_or_default()
+        Err(e) => {
+            eprintln!("{id}: no closed-form start: {e:#}");
+            Vec::new()
+        }
     };
     let mut m = super::profile::measure(&map, &dir, &starts)?;
-    m["calibration_s"] = json!(cal.seconds);
+    m["closed_form_start_s"] = json!(seconds.get());
     Ok(m)
 }
 

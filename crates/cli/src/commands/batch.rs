@@ -38,7 +38,8 @@ pub enum Action {
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
     /// The manifest (CSV): id, config, data, test, x, y, start (oliver-pharr: start from the
-    /// analysis of the indent's record) and configuration paths as columns.
+    /// analysis of the indent's record; closed-form: from the closed-form pre-fit of its
+    /// curve) and configuration paths as columns.
     #[arg(required = true)]
     pub manifest: Option<PathBuf>,
 
@@ -73,6 +74,13 @@ pub struct RunArgs {
     /// Also draw each indent's figures and report.md (slower).
     #[arg(long)]
     pub figures: bool,
+
+    /// Where every indent's fit starts: `config` (the configuration's starts, or the
+    /// manifest's `start` column) or `closed-form` (the parameters a closed form covers
+    /// from the pre-fit of the indent's own curve, corrected by one forward run; each
+    /// indent's start depends on its own curve only: docs/analysis.md).
+    #[arg(long, value_name = "START", default_value = "config", value_parser = ["config", "closed-form"])]
+    pub start: String,
 
     /// Memory for the recorded runs of all workers together (MB): an indent whose
     /// recording would exceed its share checkpoints instead.
@@ -198,6 +206,7 @@ fn run_batch(a: &RunArgs) -> Result<()> {
     opts.overrides.max_iterations = a.max_iter;
     opts.figures = a.figures;
     opts.memory_budget = a.memory_budget.saturating_mul(1 << 20);
+    opts.closed_form_start = a.start == "closed-form";
     opts.cancel = crate::interrupt::cancel_on_ctrl_c();
     let console = Console {
         bar: std::sync::Mutex::new(None),

@@ -48,7 +48,10 @@ pub struct Args {
     #[arg(long, value_name = "NAME[=VALUE]", value_delimiter = ',')]
     pub fixed: Vec<String>,
 
-    /// Start of a free parameter (comma-separated, repeatable), e.g. `--start E=4000,eta=7e4`.
+    /// Start of a free parameter (comma-separated, repeatable), e.g. `--start E=4000,eta=7e4`;
+    /// `--start closed-form`: the parameters a closed form covers (`E`; Maxwell's `E` and
+    /// `eta`) from the pre-fit of the curve's loading and hold (Sneddon, Hertz, the flat
+    /// punch, Lee and Radok), corrected by one forward run (docs/analysis.md).
     #[arg(long, value_name = "NAME=VALUE", value_delimiter = ',')]
     pub start: Vec<String>,
 
@@ -238,6 +241,7 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
             starts: args
                 .start
                 .iter()
+                .filter(|s| s.as_str() != "closed-form")
                 .map(|s| name_value("--start", s))
                 .collect::<Result<_>>()?,
             method: args.method,
@@ -258,6 +262,7 @@ pub fn options(args: &Args) -> Result<IdentifyOptions> {
             .map(|n| StartsOptions::new(n as usize, args.seed.unwrap_or(1))),
         profiles: args.profiles.then(ProfileSettings::default),
         jobs: args.jobs.map(|n| n as usize),
+        closed_form_start: args.start.iter().any(|s| s == "closed-form"),
     })
 }
 
@@ -343,6 +348,9 @@ pub fn run(args: &Args) -> Result<()> {
 /// The table of the result and the lines under it.
 pub fn summary(o: &IdentifyOutcome) -> String {
     let mut text = parameter_table(o);
+    if let Some(c) = &o.start {
+        text.push_str(&format!("  {}\n", c.summary()));
+    }
     text.push_str(&fit_lines(o));
     if let Some(i) = &o.result.identifiability {
         text.push_str(&identifiability_lines(i, o.fit.observable));
