@@ -79,6 +79,22 @@ def test_identify_from_in_memory_data(coarse):
     assert r.params["E"] == pytest.approx(30000, rel=1e-4)
 
 
+def test_closed_form_start(coarse):
+    """`start="closed-form"` starts R1's E and eta from Lee and Radok's Maxwell pre-fit of
+    the curve (corrected by one forward run), says so in `Result.start`, and ends where the
+    configuration's start ends."""
+    c = indentify.simulate(R1, sets={**coarse, "law.E": 30000})
+    plain = indentify.identify(R1, data=c, sets=coarse)
+    r = indentify.identify(R1, data=c, sets=coarse, start="closed-form")
+    assert plain.start is None
+    assert "Lee and Radok" in r.start["method"], r.start
+    values = dict(r.start["values"])
+    assert set(values) == {"E", "eta"}, r.start
+    assert values["E"] == pytest.approx(30000, rel=0.05)
+    assert r.converged and r.iterations <= plain.iterations
+    assert r.params["E"] == pytest.approx(plain.params["E"], rel=1e-4)
+
+
 def test_a_report_directory_is_written_and_protected(coarse, tmp_path):
     out = tmp_path / "report"
     r = indentify.identify(R1, sets=coarse, out=out, max_iterations=3)
