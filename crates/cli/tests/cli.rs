@@ -350,7 +350,10 @@ fn vtu_writes_the_accumulated_plastic_strain_of_j2() {
     let vtu = dir.path().join("fields");
     let args: Vec<String> = [
         "simulate",
-        &examples().join("plastic-power-cone.ron").display().to_string(),
+        &examples()
+            .join("plastic-power-cone.ron")
+            .display()
+            .to_string(),
         "--vtu",
         &vtu.display().to_string(),
         "--out",
@@ -399,9 +402,15 @@ fn vtu_writes_the_accumulated_plastic_strain_of_j2() {
             continue;
         }
         for (a, b) in p.iter().zip(&eq) {
-            assert!(*b <= a * (1.0 + 1e-9) + 1e-12 * pmax, "{file}: eps_p_eq {b} > p {a}");
+            assert!(
+                *b <= a * (1.0 + 1e-9) + 1e-12 * pmax,
+                "{file}: eps_p_eq {b} > p {a}"
+            );
             if first {
-                assert!((a - b).abs() <= 1e-9 * pmax, "{file}: first plastic step: p {a}, eps_p_eq {b}");
+                assert!(
+                    (a - b).abs() <= 1e-9 * pmax,
+                    "{file}: first plastic step: p {a}, eps_p_eq {b}"
+                );
             }
         }
         first = false;

@@ -9,7 +9,9 @@ use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 
 fn example(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
 }
 
 fn options(config: &str, sets: &[&str], starts: &[(&str, f64)]) -> IdentifyOptions {
