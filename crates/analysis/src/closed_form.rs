@@ -342,30 +342,8 @@ pub fn fit_maxwell(
         });
     }
     // golden sections on the bracket around the grid's best
-    let (mut a, mut b) = (grid[best - 1], grid[best + 1]);
-    let r = (5f64.sqrt() - 1.0) / 2.0;
-    let mut x1 = b - r * (b - a);
-    let mut x2 = a + r * (b - a);
-    let (mut f1, mut f2) = (sse(x1), sse(x2));
-    for _ in 0..100 {
-        if f1 <= f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - r * (b - a);
-            f1 = sse(x1);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + r * (b - a);
-            f2 = sse(x2);
-        }
-        if b - a < 1e-12 {
-            break;
-        }
-    }
-    let ln_tau = 0.5 * (a + b);
+    let g = crate::fit::golden_section(sse, grid[best - 1], grid[best + 1], 100, 1e-12);
+    let ln_tau = 0.5 * (g.lo + g.hi);
     let tau = ln_tau.exp();
     let (e, s) = fit(ln_tau);
     if !(e.is_finite() && e > 0.0) {

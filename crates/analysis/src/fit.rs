@@ -182,26 +182,8 @@ pub fn fit_power_law(h: &[f64], f: &[f64], h_max: f64, f_max: f64) -> Result<Pow
         ));
     }
     // golden section on k in [best - 1, best + 1]
-    let (mut lo, mut hi) = ((best.0 as f64 - 1.0).max(0.0), best.0 as f64 + 1.0);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut k1, mut k2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut c1, mut c2) = (cost_at(k1), cost_at(k2));
-    for _ in 0..60 {
-        if c1 <= c2 {
-            hi = k2;
-            k2 = k1;
-            c2 = c1;
-            k1 = hi - g * (hi - lo);
-            c1 = cost_at(k1);
-        } else {
-            lo = k1;
-            k1 = k2;
-            c1 = c2;
-            k2 = lo + g * (hi - lo);
-            c2 = cost_at(k2);
-        }
-    }
-    let k = if c1 <= c2 { k1 } else { k2 };
+    let lo = (best.0 as f64 - 1.0).max(0.0);
+    let k = golden_section(cost_at, lo, best.0 as f64 + 1.0, 60, 0.0).best;
     let mut p = x_min - d_at(k);
     let Some((la, m0, _)) = log_fit(&x, &y, p) else {
         return Err("the log-space fit fails at its own optimum".into());
@@ -279,6 +261,53 @@ pub fn fit_power_law(h: &[f64], f: &[f64], h_max: f64, f_max: f64) -> Result<Pow
         rms,
         r2,
     })
+}
+
+/// The end of a golden-section search: the last bracket and its better interior point.
+pub(crate) struct Golden {
+    /// The bracket's lower end.
+    pub lo: f64,
+    /// The bracket's upper end.
+    pub hi: f64,
+    /// The interior point with the lower value.
+    pub best: f64,
+}
+
+/// Golden-section search for a minimum of `f` on `[lo, hi]`: at most `max_iter` reductions,
+/// stopping once the bracket is shorter than `tol`.
+pub(crate) fn golden_section(
+    mut f: impl FnMut(f64) -> f64,
+    mut lo: f64,
+    mut hi: f64,
+    max_iter: usize,
+    tol: f64,
+) -> Golden {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut k1, mut k2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut c1, mut c2) = (f(k1), f(k2));
+    for _ in 0..max_iter {
+        if c1 <= c2 {
+            hi = k2;
+            k2 = k1;
+            c2 = c1;
+            k1 = hi - g * (hi - lo);
+            c1 = f(k1);
+        } else {
+            lo = k1;
+            k1 = k2;
+            c1 = c2;
+            k2 = lo + g * (hi - lo);
+            c2 = f(k2);
+        }
+        if hi - lo < tol {
+            break;
+        }
+    }
+    Golden {
+        lo,
+        hi,
+        best: if c1 <= c2 { k1 } else { k2 },
+    }
 }
 
 #[cfg(test)]
