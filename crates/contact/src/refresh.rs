@@ -74,20 +74,19 @@ pub(crate) struct Refresh {
     /// Solves of the current step in a row that factorized because CG failed (or, once
     /// [`STREAK`] is reached, because of it).
     streak: u32,
-    /// A material's run has begun and has not prepared a solve yet: its first solve
-    /// factorizes (the factor at hand may be the reusable tangent of an earlier run of a
-    /// linear law on the same system, which the run must not depend on).
+    /// A run has begun and has not prepared a solve yet: its first solve factorizes (the
+    /// factor at hand may be the reusable tangent of an earlier run of a linear law on the
+    /// same system, which the run must not depend on).
     first: bool,
     /// The log of every PCG solve, when kept.
     pub(crate) log: Option<Vec<PcgEvent>>,
 }
 
 impl Refresh {
-    /// Resolves the rule for a run of a stress-only law (`law`) or another material.
-    /// A material's run (not a stress-only law's: its bits are pinned as they are) starts
-    /// with a factorization whatever ran before on the system.
+    /// Resolves the rule for a run of a stress-only law (`law`) or another material. Every
+    /// run starts with a factorization whatever ran before on the system.
     pub(crate) fn begin_run(&mut self, law: bool) {
-        self.first = !law;
+        self.first = true;
         self.active = match self.rule {
             RefreshRule::Auto if law => RefreshRule::Legacy,
             RefreshRule::Auto => RefreshRule::Adaptive,
@@ -165,8 +164,8 @@ mod tests {
         };
         p.begin_run(law);
         p.begin_step(false);
-        // a material's run factorizes first; a stress-only law's keeps the factor at hand
-        assert_eq!(p.factorize_next(), !law);
+        // every run factorizes first, whatever factor is at hand
+        assert!(p.factorize_next());
         p.factorized();
         p.begin_step(false);
         p

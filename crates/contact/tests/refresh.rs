@@ -186,6 +186,22 @@ fn a_run_does_not_depend_on_an_earlier_linear_run() {
         .run(&mat, &c, &schedule(), &SolverOptions::default())
         .unwrap();
     assert_eq!(bits(&after), bits(&fresh));
+    // the same for a stress-only nonlinear law (Norton-Hoff) after a linear one
+    let nh = LawMaterial(&NortonHoff);
+    let nh_c = [1e5, 0.3, 1500.0, 5.0, 500.0];
+    let nh_fresh = run(&model, &nh, &nh_c, RefreshRule::Auto);
+    solver
+        .run(
+            &prony,
+            &[1e5, 0.3, 0.3, 0.2],
+            &schedule(),
+            &SolverOptions::default(),
+        )
+        .unwrap();
+    let nh_after = solver
+        .run(&nh, &nh_c, &schedule(), &SolverOptions::default())
+        .unwrap();
+    assert_eq!(bits(&nh_after), bits(&nh_fresh));
 }
 
 /// Load control (R2's load and hold under Norton-Hoff, the force history of the
