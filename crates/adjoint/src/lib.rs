@@ -160,8 +160,10 @@ pub struct Adjoint<'m> {
     skip: Vec<bool>,
     /// The one-pass sweep step of a law with one tangent ([`affine`]).
     fused: affine::Fused,
-    /// Whether sweeps use it ([`Adjoint::set_fused`]).
+    /// Whether sweeps use it ([`Adjoint::set_fused`]), and the all-nodal sweeps.
     fuse: bool,
+    /// The all-nodal sweep of a linear material with isotropic blocks (`material/nodal.rs`).
+    nodal_mat: material::NodalMat,
     /// Whether a bordered step's scalar takes the later sticking ties' depth term
     /// ([`Adjoint::set_friction_depth_term`]; always, outside tests).
     depth_ties: bool,
@@ -190,14 +192,17 @@ impl<'m> Adjoint<'m> {
             skip: Vec::new(),
             fused: affine::Fused::default(),
             fuse: true,
+            nodal_mat: material::NodalMat::default(),
             depth_ties: true,
         })
     }
 
     /// Whether the sweeps of a law with one tangent at every Gauss point (elasticity,
     /// Maxwell) under small strain visit the points once per step (`true`, the default)
-    /// or twice, in the general form every law takes (for comparisons and measurements:
-    /// the gradients agree to round-off).
+    /// or twice, in the general form every law takes, and whether a linear material with
+    /// isotropic blocks (`Prony`) sweeps all-nodal where it may (`material/nodal.rs`) or
+    /// visits the points (for comparisons and measurements: the gradients agree to
+    /// round-off).
     pub fn set_fused(&mut self, on: bool) {
         self.fuse = on;
     }

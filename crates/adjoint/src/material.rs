@@ -28,6 +28,9 @@ use indentify_laws::{LogStrain, Mat4, Material, Vec4};
 
 use crate::{Adjoint, AdjointError, Gradient, Replay, Sensitivities};
 
+mod nodal;
+pub(crate) use nodal::NodalMat;
+
 /// Per-step rows of per-parameter variations (`[step][parameter]`).
 type Rows = Vec<Vec<f64>>;
 
@@ -334,8 +337,14 @@ impl Adjoint<'_> {
         self.check_material(mat, c, traj, dj_df.len(), true)?;
         self.contact.begin();
         let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+        // the all-nodal sweep where it applies (`material/nodal.rs`)
+        let nodal = self.begin_nodal_material(mat, c, traj);
         for i in (0..traj.steps.len()).rev() {
             let fields = (&traj.fields[i], &traj.fields[i + 1]);
+            if nodal {
+                self.nodal_material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i])?;
+                continue;
+            }
             self.material_step(mat, c, &mut sw, i, &traj.steps[i], fields, dj_df[i], None)?;
         }
         Ok(Gradient {

@@ -1,6 +1,7 @@
 //! The adjoint sweep of a material with internal variables asks its blocks a counted
 //! number of times (a linear material such as `Prony`: `A`, `D`, `E` once per step and
-//! the contraction `mu^T P` once per Gauss point and step, no `P` block; a nonlinear one
+//! the contraction `mu^T P` once per Gauss point and step, no `P` block, in the
+//! Gauss-point sweep; no block per point in the all-nodal one; a nonlinear one
 //! such as `Plastic`: every block once per point, in one call); `Prony`'s closed-form
 //! contraction gives the gradient of the block path to 1e-12, J2's joint blocks the
 //! separate blocks' bits; the sweep gives the same bits on 1 and 2 threads.
@@ -173,15 +174,28 @@ fn the_sweep_asks_each_block_a_counted_number_of_times() {
     let (t, rho) = run(&m, &counted, &PRONY2);
     counted.take();
     let n = t.steps.len();
-    Adjoint::new(&m)
-        .unwrap()
-        .gradient(&counted, &PRONY2, &t, &rho)
-        .unwrap();
+    // the Gauss-point sweep (the all-nodal one off)
+    let mut adj = Adjoint::new(&m).unwrap();
+    adj.set_fused(false);
+    adj.gradient(&counted, &PRONY2, &t, &rho).unwrap();
     let [a, d, e, p, pt] = counted.take();
     assert_eq!(
         (a, d, e, p, pt),
         (n, n, n, 0, n * nq),
         "{n} steps, {nq} points"
+    );
+    // the all-nodal sweep (`material/nodal.rs`): no block per point; `A`, `D`, `E` once
+    // per step and once for the one step length's operators, whose parameter blocks are
+    // probed with `P` (`1 + 2 m + 4` calls) and checked at one recorded point (`1`)
+    adj.set_fused(true);
+    adj.gradient(&counted, &PRONY2, &t, &rho).unwrap();
+    assert!(adj.last_material_sweep_was_nodal());
+    let [a, d, e, p, pt] = counted.take();
+    let m_state = prony.state_len();
+    assert_eq!(
+        (a, d, e, p, pt),
+        (n + 1, n + 1, n + 1, 2 * m_state + 6, 0),
+        "{n} steps"
     );
 
     let pl = Plastic::new(Hardening::Linear, Rate::Independent);
@@ -276,6 +290,8 @@ fn prony_closed_form_contraction_gives_the_block_paths_gradient() {
             }
             let (t, rho) = run(&m, &prony, &c);
             let mut adj = Adjoint::new(&m).unwrap();
+            // the Gauss-point sweep's contraction (the all-nodal sweep contracts none)
+            adj.set_fused(false);
             let fast = adj.gradient(&prony, &c, &t, &rho).unwrap().dj_dc;
             let block = Counting::new(&prony, false);
             let slow = adj.gradient(&block, &c, &t, &rho).unwrap().dj_dc;
