@@ -336,9 +336,11 @@ impl Adjoint<'_> {
         let f0 = self.contact.factorizations();
         self.check_material(mat, c, traj, dj_df.len(), true)?;
         self.contact.begin();
-        let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
-        // the all-nodal sweep where it applies (`material/nodal.rs`)
+        // the all-nodal sweep where it applies (`material/nodal.rs`; its `MatSweep` holds
+        // the step's blocks and one point)
         let nodal = self.begin_nodal_material(mat, c, traj);
+        let nq = if nodal { 1 } else { self.model.disc.n_qp() };
+        let mut sw = MatSweep::new(mat, c.len(), nq);
         for i in (0..traj.steps.len()).rev() {
             let fields = (&traj.fields[i], &traj.fields[i + 1]);
             if nodal {

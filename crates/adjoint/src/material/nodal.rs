@@ -108,6 +108,10 @@ struct StepOps {
     da: Vec<IsoBlocks>,
     dd: Vec<IsoBlocks>,
     de: Vec<IsoBlocks>,
+    /// Per block pair `(I, J)`: whether some parameter's `y1` (first) or `y0` (second)
+    /// block is not zero; per block `I`, whether some `deps` block is not zero.
+    pairs: Vec<(bool, bool)>,
+    strain_blocks: Vec<bool>,
 }
 
 impl StepOps {
@@ -191,13 +195,21 @@ impl StepOps {
                 .map(|x| IsoBlocks::of(x, nb, cols, tol))
                 .collect::<Option<Vec<_>>>()
         };
+        let (da, dd, de) = (blocks(&da, nb)?, blocks(&dd, nb)?, blocks(&de, 1)?);
+        let any = |v: &[IsoBlocks], at: usize| v.iter().any(|b| b.d[at] != 0.0 || b.s[at] != 0.0);
+        let pairs = (0..nb * nb)
+            .map(|at| (any(&da, at), any(&dd, at)))
+            .collect();
+        let strain_blocks = (0..nb).map(|at| any(&de, at)).collect();
         Some(StepOps {
             dt_bits: dt.to_bits(),
             m: m_ops,
             n: n_ops,
-            da: blocks(&da, nb)?,
-            dd: blocks(&dd, nb)?,
-            de: blocks(&de, 1)?,
+            da,
+            dd,
+            de,
+            pairs,
+            strain_blocks,
         })
     }
 
@@ -229,6 +241,29 @@ impl StepOps {
             })
         })
     }
+}
+
+/// `[x . r, y . q]` in four lanes each (a fixed order: the same bits on any number of
+/// threads; the lanes let the compiler use vector registers).
+#[inline]
+fn dot_pair(x: &[f64], r: &[f64], y: &[f64], q: &[f64]) -> [f64; 2] {
+    let (mut s, mut t) = ([0.0; 4], [0.0; 4]);
+    let n4 = x.len() / 4 * 4;
+    for (((x, r), y), q) in (x[..n4].chunks_exact(4))
+        .zip(r[..n4].chunks_exact(4))
+        .zip(y[..n4].chunks_exact(4))
+        .zip(q[..n4].chunks_exact(4))
+    {
+        for l in 0..4 {
+            s[l] += x[l] * r[l];
+            t[l] += y[l] * q[l];
+        }
+    }
+    for e in n4..x.len() {
+        s[0] += x[e] * r[e];
+        t[0] += y[e] * q[e];
+    }
+    [(s[0] + s[1]) + (s[2] + s[3]), (t[0] + t[1]) + (t[2] + t[3])]
 }
 
 /// A step in the smooth regime (a linear material has no other).
@@ -659,18 +694,20 @@ impl Adjoint<'_> {
                 &nd.r[bi * n_eq..(bi + 1) * n_eq],
                 &nd.q[bi * n_eq..(bi + 1) * n_eq],
             );
+            // (a pair whose coefficients are all zero is skipped: its sums stay zero)
             sums.fill(0.0);
-            for e in 0..n_eq {
-                let (re, qe) = (r[e], q[e]);
-                for bj in 0..nb {
-                    let x = bj * n_eq + e;
-                    sums[4 * bj] += a1[x] * re;
-                    sums[4 * bj + 1] += h1[x] * qe;
-                    sums[4 * bj + 2] += a0[x] * re;
-                    sums[4 * bj + 3] += h0[x] * qe;
+            for bj in 0..nb {
+                let x = bj * n_eq..(bj + 1) * n_eq;
+                if ops.pairs[bi * nb + bj].0 {
+                    [sums[4 * bj], sums[4 * bj + 1]] =
+                        dot_pair(&a1[x.clone()], r, &h1[x.clone()], q);
                 }
-                sums[4 * nb] += du[e] * re;
-                sums[4 * nb + 1] += du[e] * qe;
+                if ops.pairs[bi * nb + bj].1 {
+                    [sums[4 * bj + 2], sums[4 * bj + 3]] = dot_pair(&a0[x.clone()], r, &h0[x], q);
+                }
+            }
+            if ops.strain_blocks[bi] {
+                [sums[4 * nb], sums[4 * nb + 1]] = dot_pair(du, r, du, q);
             }
             for k in 0..np {
                 let mut acc = 0.0;
