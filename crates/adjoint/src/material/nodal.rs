@@ -379,9 +379,10 @@ impl Adjoint<'_> {
         let (nb, n_eq) = (m / 4, model.dofs.n_eq);
         nd.nb = nb;
         nd.ops = None;
+        // (the state at rest is zero; the loop below writes every later one whole)
         for v in [&mut nd.a, &mut nd.h] {
-            v.clear();
             v.resize((n + 1) * nb * n_eq, 0.0);
+            v[..nb * n_eq].fill(0.0);
         }
         for v in [
             &mut nd.r,
@@ -540,6 +541,7 @@ impl Adjoint<'_> {
     /// # Errors
     /// As `Adjoint::material_step`; a step whose folded blocks are not isotropic (the
     /// sweep's start checked every step length's) is refused rather than swept wrong.
+    #[allow(clippy::too_many_arguments)] // (`material_step`'s own, less the border)
     pub(crate) fn nodal_material_step(
         &mut self,
         mat: &dyn Material,
