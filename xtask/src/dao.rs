@@ -40,7 +40,7 @@ use indentify_study::simulate::{self, SimulateOptions};
 
 pub use indentify_analysis::dao::{
     C_STAR, DaoPrediction, EPS_R, HALF_ANGLE_DEG, dao_forward, e_star, flow_stress, pi1, pi2, pi4,
-    pi5, sigma_r,
+    pi5, pi5_inverse, sigma_r,
 };
 
 /// Dao's Coulomb friction coefficient.

@@ -326,7 +326,7 @@ fn quadratic_slope(h: &[f64], f: &[f64], ks: &[usize]) -> Option<f64> {
 /// (`0.211` to `0.995`).
 pub fn pi5_inverse(wp_wt: f64) -> Result<f64, DaoError> {
     let (lo, hi) = (pi5(0.0), pi5(HR_HM_MAX));
-    if !(wp_wt >= lo && wp_wt <= hi) {
+    if !(lo..=hi).contains(&wp_wt) {
         return Err(DaoError::Range {
             what: "W_p/W_t",
             value: wp_wt,
@@ -470,7 +470,7 @@ pub fn reverse(input: &ReverseInput, nu: f64, n_hint: Option<f64>) -> Result<Rev
             "Poisson's ratio {nu} is outside (-1, 0.5)"
         )));
     }
-    if !(hr_hm >= 0.0 && hr_hm < HR_HM_MAX) {
+    if !(0.0..HR_HM_MAX).contains(&hr_hm) {
         return Err(DaoError::Input(format!(
             "h_r/h_m = {hr_hm} is outside [0, {HR_HM_MAX})"
         )));
