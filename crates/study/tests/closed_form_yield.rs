@@ -207,8 +207,7 @@ fn measure_fits_from_the_yield_start() {
                 "power" => measure_case("power-cone", power_cone()),
                 "r2" => measure_case("r2-norton-hoff", options("r2-norton-hoff.ron", &[])),
                 "ht-nh" => {
-                    let mut o =
-                        IdentifyOptions::new(ConfigSource::Path(example("real/ht-nh.ron")));
+                    let mut o = IdentifyOptions::new(ConfigSource::Path(example("real/ht-nh.ron")));
                     o.refine = false;
                     o.figures = false;
                     o.jobs = Some(1);
@@ -259,6 +258,9 @@ fn the_real_berkovich_record_starts_from_the_stiffness_and_says_why() {
             .any(|n| n.contains("sY keeps") && n.contains("overstress")),
         "{c:?}"
     );
-    assert!(c.notes.iter().any(|n| n.contains("sY, n, K, m keep")), "{c:?}");
+    assert!(
+        c.notes.iter().any(|n| n.contains("sY, n, K, m keep")),
+        "{c:?}"
+    );
     assert!(c.rms_rel.is_none(), "{c:?}");
 }
