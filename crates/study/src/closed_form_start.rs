@@ -275,8 +275,9 @@ fn yield_start(
         .collect();
     if !others.is_empty() {
         notes.push(format!(
-            "{} keep the configuration's start (no closed form)",
-            others.join(", ")
+            "{} {} the configuration's start (no closed form)",
+            others.join(", "),
+            if others.len() == 1 { "keeps" } else { "keep" }
         ));
     }
     ClosedFormStart {

@@ -69,7 +69,11 @@ impl YieldLaw {
             }),
             other => return Err(format!("the law {other} has no yield stress")),
         };
-        let in_ = at("n").filter(|_| matches!(hardening, Some(Hardening::Power)));
+        // Dao's n is set only where it is the power form's and free (a held n is used)
+        let free = |i: &usize| s.id_cfg.params.get(*i).is_some_and(|p| p.free);
+        let in_ = at("n")
+            .filter(|_| matches!(hardening, Some(Hardening::Power)))
+            .filter(free);
         Ok(YieldLaw {
             hardening,
             ie,
@@ -88,10 +92,15 @@ impl YieldLaw {
     }
 
     /// The `sY` at which the flow stress at `p` is `target`, the other parameters those of
-    /// `c` (bisection on `ln sY`: the flow stress increases with `sY` in every form).
-    fn sy_for(&self, c: &[f64], p: f64, target: f64) -> f64 {
+    /// `c` (bisection on `ln sY`: the flow stress increases with `sY` in every form);
+    /// `None` when the hardening alone exceeds `target` (`H p`, `Q (1 - e^(-b p))` above it).
+    fn sy_for(&self, c: &[f64], p: f64, target: f64) -> Option<f64> {
         let mut c = c.to_vec();
         let (mut lo, mut hi) = ((target * 1e-9).ln(), target.ln());
+        c[self.isy] = lo.exp();
+        if self.flow(&c, p) > target {
+            return None;
+        }
         for _ in 0..200 {
             let mid = 0.5 * (lo + hi);
             c[self.isy] = mid.exp();
@@ -101,7 +110,7 @@ impl YieldLaw {
                 lo = mid;
             }
         }
-        (0.5 * (lo + hi)).exp()
+        Some((0.5 * (lo + hi)).exp())
     }
 }
 
@@ -220,7 +229,11 @@ fn set(law: &YieldLaw, start: &[f64], a: &Analysed, over: f64) -> (Vec<f64>, Opt
         c[i] = n;
     }
     let target = a.sigma_r - over;
-    let sy = (target > 0.0).then(|| law.sy_for(&c, a.eps_r, target));
+    let sy = if target > 0.0 {
+        law.sy_for(&c, a.eps_r, target)
+    } else {
+        None
+    };
     if let Some(v) = sy {
         c[law.isy] = v;
     }
@@ -293,7 +306,20 @@ pub(crate) fn values(
         }
         v
     };
-    if sy1.is_none() {
+    if sy1.is_none() && over < corrected.sigma_r {
+        notes.push(format!(
+            "sY keeps the configuration's start: the hardening's own increase at the \
+             representative plastic strain {} with the configuration's parameters exceeds \
+             the representative stress {} MPa{}",
+            sig(corrected.eps_r, 3),
+            sig(corrected.sigma_r, 4),
+            if over > 0.0 {
+                format!(" less the rate's overstress {} MPa", sig(over, 4))
+            } else {
+                String::new()
+            }
+        ));
+    } else if sy1.is_none() {
         notes.push(format!(
             "sY keeps the configuration's start: the rate's overstress {} MPa (K (h'/h)^(1/m) \
              at the loading's {} 1/s with the configuration's K, m) exceeds the \

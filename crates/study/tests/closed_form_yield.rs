@@ -205,6 +205,7 @@ fn measure_fits_from_the_yield_start() {
         for case in which.split(',') {
             match case {
                 "power" => measure_case("power-cone", power_cone()),
+                "sphere" => measure_case("sphere-linear", sphere_linear()),
                 "r2" => measure_case("r2-norton-hoff", options("r2-norton-hoff.ron", &[])),
                 "ht-nh" => {
                     let mut o = IdentifyOptions::new(ConfigSource::Path(example("real/ht-nh.ron")));
@@ -263,4 +264,59 @@ fn the_real_berkovich_record_starts_from_the_stiffness_and_says_why() {
         "{c:?}"
     );
     assert!(c.rms_rel.is_none(), "{c:?}");
+}
+
+/// A sphere on `Plastic(Linear)` (synthesized, 2% noise): the stiffness and Tabor's route,
+/// `sY` through the linear hardening at `0.2 a/R` with the configuration's `H`, which
+/// keeps its start (a note); corrected by a calibration run (rate-independent).
+fn sphere_linear() -> IdentifyOptions {
+    let text = "(
+        specimen: Cylinder(radius: 10.0, height: 10.0, nr: 12, nz: 12, grading_r: 1.3, grading_z: 1.3),
+        punch: Sphere(radius: 0.5),
+        contact: Vertical,
+        kinematics: Small,
+        law: Plastic(E: 100000.0, nu: 0.3, sY: 300.0, hardening: Linear(H: 2000.0)),
+        history: (segments: [
+            (duration: 1.0, depth: 0.05, steps: 12),
+            (duration: 0.2, depth: 0.045, steps: 10),
+            (duration: 0.8, depth: 0.0, steps: 2),
+        ]),
+        identify: (
+            params: {
+                \"E\": Free(start: 150000.0, lower: 1000.0, upper: 1e6),
+                \"nu\": Fixed(value: 0.3),
+                \"sY\": Free(start: 600.0, lower: 1.0, upper: 10000.0),
+                \"H\": Free(start: 2000.0, lower: 0.0, upper: 1e5, scaling: Linear),
+            },
+            method: Lm,
+        ),
+    )";
+    let mut o = options("r0-elastic.ron", &[]);
+    o.config = ConfigSource::Text {
+        text: text.into(),
+        name: "sphere linear".into(),
+    };
+    o
+}
+
+#[test]
+fn a_sphere_on_linear_hardening_starts_from_tabor_s_hardness() {
+    let c = prefit(&sphere_linear());
+    eprintln!("{}", c.summary());
+    eprintln!("half-space {:?}", c.half_space);
+    assert!(
+        c.method.contains("Tabor") && c.method.contains("sphere"),
+        "{c:?}"
+    );
+    let names: Vec<&str> = c.values.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["E", "sY"], "{c:?}");
+    assert!(c.notes.iter().any(|n| n.contains("H keeps")), "{c:?}");
+    assert!(
+        c.notes.iter().any(|n| n.contains("calibration run")),
+        "{c:?}"
+    );
+    // truth E 100000, sY 300 (start 150000, 600): measured 93765 and 321 (the half-space
+    // values 68788 and 261 before the correction)
+    assert!((value(&c, "E") / 100_000.0 - 1.0).abs() < 0.15, "{c:?}");
+    assert!((value(&c, "sY") / 300.0 - 1.0).abs() < 0.2, "{c:?}");
 }
