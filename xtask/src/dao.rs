@@ -4,6 +4,10 @@
 //! runs of the same problem measured against them (`cargo xtask dao`; the table of
 //! docs/validation-laws.md §9).
 //!
+//! The functions and the measurement live in the analysis crate
+//! (`indentify_analysis::dao`, with Dao's reverse algorithm: the closed-form start of a law
+//! with a yield stress); this module re-exports them and runs the comparison.
+//!
 //! The functions (their Appendix A; the coefficients as publicly transcribed, not yet
 //! compared with the printed appendix: docs/validation-laws.md §9 says how far they are
 //! checked; `x = ln(E*/sigma_r)`,
@@ -34,110 +38,17 @@ use anyhow::{Context, Result, bail};
 use indentify_study::ConfigSource;
 use indentify_study::simulate::{self, SimulateOptions};
 
-/// Dao's representative plastic strain of the 70.3-degree cone.
-pub const EPS_R: f64 = 0.033;
-/// The cone's half-angle (deg): the area-equivalent cone of a Berkovich or Vickers tip.
-pub const HALF_ANGLE_DEG: f64 = 70.3;
+pub use indentify_analysis::dao::{
+    C_STAR, DaoPrediction, EPS_R, HALF_ANGLE_DEG, dao_forward, e_star, flow_stress, pi1, pi2, pi4,
+    pi5, pi5_inverse, sigma_r,
+};
+
 /// Dao's Coulomb friction coefficient.
 pub const FRICTION: f64 = 0.15;
 /// Poisson's ratio of every Dao material.
 pub const NU: f64 = 0.3;
 /// Young's modulus of our runs (MPa); `sY = E / ratio`.
 pub const E: f64 = 200_000.0;
-/// `c*` of `S = c* E* sqrt(A_m)` for the 70.3-degree cone in Dao's forward algorithm.
-pub const C_STAR: f64 = 1.1957;
-
-/// Dao's flow stress `sY (1 + E p / sY)^n` (the law's `Power` hardening).
-pub fn flow_stress(e: f64, sy: f64, n: f64, p: f64) -> f64 {
-    sy * (1.0 + e * p / sy).powf(n)
-}
-
-/// The representative stress `sigma_r = sigma(eps_p = 0.033)`.
-pub fn sigma_r(e: f64, sy: f64, n: f64) -> f64 {
-    flow_stress(e, sy, n, EPS_R)
-}
-
-/// The indentation modulus of a rigid tip, `E/(1 - nu^2)`.
-pub fn e_star(e: f64, nu: f64) -> f64 {
-    e / (1.0 - nu * nu)
-}
-
-/// Dao's `Pi1`: `C/sigma_r` against `E*/sigma_r`.
-pub fn pi1(estar_over_sr: f64) -> f64 {
-    let x = estar_over_sr.ln();
-    -1.131 * x.powi(3) + 13.635 * x.powi(2) - 30.594 * x + 29.267
-}
-
-/// Dao's `Pi2`: `S/(E* h_m)` against `E*/sigma_r` and `n`.
-pub fn pi2(estar_over_sr: f64, n: f64) -> f64 {
-    let x = estar_over_sr.ln();
-    let c3 = -1.40557 * n.powi(3) + 0.77526 * n.powi(2) + 0.15830 * n - 0.06831;
-    let c2 = 17.93006 * n.powi(3) - 9.22091 * n.powi(2) - 2.37733 * n + 0.86295;
-    let c1 = -79.99715 * n.powi(3) + 40.55620 * n.powi(2) + 9.00157 * n - 2.54543;
-    let c0 = 122.65069 * n.powi(3) - 63.88418 * n.powi(2) - 9.58936 * n + 6.20045;
-    c3 * x.powi(3) + c2 * x.powi(2) + c1 * x + c0
-}
-
-/// Dao's `Pi4`: `p_ave/E*` against `h_r/h_m`.
-pub fn pi4(hr_hm: f64) -> f64 {
-    0.268536 * (0.9952495 - hr_hm).max(0.0).powf(1.1142735)
-}
-
-/// Dao's `Pi5`: `W_p/W_t` against `h_r/h_m`.
-pub fn pi5(hr_hm: f64) -> f64 {
-    1.61217
-        * (1.13111
-            - 1.74756f64.powf(-1.49291 * hr_hm.powf(2.535334))
-            - 0.075187 * hr_hm.powf(1.135826))
-}
-
-/// What Dao's functions predict for one material.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DaoPrediction {
-    /// `C = P/h^2` (MPa).
-    pub c: f64,
-    /// `S/(E* h_m)`.
-    pub s_norm: f64,
-    /// `p_ave/E*` (from `C`, `S` and `c*`).
-    pub p_ave_norm: f64,
-    /// `h_r/h_m` (`Pi4` inverted).
-    pub hr_hm: f64,
-    /// `W_p/W_t` (`Pi5` of that `h_r/h_m`).
-    pub wp_wt: f64,
-}
-
-/// Dao's forward algorithm for `(E, nu, sY, n)` under a rigid tip.
-pub fn dao_forward(e: f64, nu: f64, sy: f64, n: f64) -> DaoPrediction {
-    let sr = sigma_r(e, sy, n);
-    let es = e_star(e, nu);
-    let c = sr * pi1(es / sr);
-    let s_norm = pi2(es / sr, n);
-    // h_m = 1: P_m = C, S = E* s_norm, A_m = (S / (c* E*))^2
-    let a_m = (s_norm / C_STAR).powi(2);
-    let p_ave_norm = c / a_m / es;
-    // Pi4 decreases from Pi4(0) to 0 at 0.9952495: bisection
-    let hr_hm = if p_ave_norm >= pi4(0.0) {
-        0.0
-    } else {
-        let (mut lo, mut hi) = (0.0, 0.9952495);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if pi4(mid) > p_ave_norm {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
-    };
-    DaoPrediction {
-        c,
-        s_norm,
-        p_ave_norm,
-        hr_hm,
-        wp_wt: pi5(hr_hm),
-    }
-}
 
 /// A point of a force-depth curve: depth (mm), force (N), contact radius (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,96 +81,28 @@ pub struct Measured {
 }
 
 /// Reads `C`, `S`, `h_r`, `W_p/W_t` and the contact radius at `h_m` off a curve that loads
-/// monotonically to its deepest point and then unloads.
+/// monotonically to its deepest point and then unloads
+/// (`indentify_analysis::dao::measure`, the contact radius beside).
 ///
 /// # Errors
 /// A curve without a loading and an unloading part, one whose unloading never reaches
 /// zero force, too few points for the fits.
 pub fn measure(curve: &[Point]) -> Result<Measured> {
-    let i_m = curve
-        .iter()
-        .enumerate()
-        .fold(0, |best, (i, p)| if p.h > curve[best].h { i } else { best });
-    if i_m < 2 || i_m + 3 > curve.len() {
-        bail!("the curve has no loading and unloading around its deepest point");
-    }
-    let (load, unload) = (&curve[..=i_m], &curve[i_m..]);
-    let top = curve[i_m];
-    let (h_m, p_m) = (top.h, top.f);
-    if !(p_m > 0.0) {
-        bail!("no force at the deepest point ({p_m} N)");
-    }
-    // C: P = C h^2 by least squares over the loading's upper half
-    let (mut num, mut den) = (0.0, 0.0);
-    for p in load.iter().filter(|p| p.h >= 0.5 * h_m) {
-        num += p.f * p.h * p.h;
-        den += p.h.powi(4);
-    }
-    let c = num / den;
-    // S: slope at h_m of a quadratic in (h - h_m) through the unloading's top points
-    let mut top_pts: Vec<&Point> = unload.iter().take_while(|p| p.f >= 0.75 * p_m).collect();
-    if top_pts.len() < 4 {
-        top_pts = unload.iter().take(4).collect();
-    }
-    let s = quadratic_slope(&top_pts)?;
-    // h_r: where the unloading force reaches zero
-    let tol = 1e-9 * p_m;
-    let k = unload
-        .iter()
-        .position(|p| p.f <= tol)
-        .context("the unloading never reaches zero force: unload further")?;
-    let (p0, p1) = (unload[k - 1], unload[k]);
-    let h_r = p0.h + (p1.h - p0.h) * (p0.f - tol) / (p0.f - p1.f);
-    // works
-    let trapezoid = |pts: &[Point]| -> f64 {
-        pts.windows(2)
-            .map(|w| 0.5 * (w[0].f + w[1].f) * (w[1].h - w[0].h))
-            .sum::<f64>()
+    let h: Vec<f64> = curve.iter().map(|p| p.h).collect();
+    let f: Vec<f64> = curve.iter().map(|p| p.f).collect();
+    let m = indentify_analysis::dao::measure(&h, &f)?;
+    let (Some(h_r), Some(wp_wt)) = (m.h_r, m.wp_wt) else {
+        bail!("the unloading never reaches zero force: unload further");
     };
-    let w_t = trapezoid(load);
-    let w_e = -trapezoid(unload);
     Ok(Measured {
-        h_m,
-        p_m,
-        c,
-        s,
+        h_m: m.h_m,
+        p_m: m.p_m,
+        c: m.c,
+        s: m.s,
         h_r,
-        wp_wt: (w_t - w_e) / w_t,
-        a_m: top.a,
+        wp_wt,
+        a_m: curve[m.unloading_start].a,
     })
-}
-
-/// `dP/dh` at the first point of `pts` from a least-squares quadratic in `h - h_0`.
-fn quadratic_slope(pts: &[&Point]) -> Result<f64> {
-    let h0 = pts[0].h;
-    // normal equations of f = c0 + c1 x + c2 x^2
-    let mut m = [[0.0f64; 3]; 3];
-    let mut r = [0.0f64; 3];
-    for p in pts {
-        let x = p.h - h0;
-        let v = [1.0, x, x * x];
-        for i in 0..3 {
-            r[i] += v[i] * p.f;
-            for j in 0..3 {
-                m[i][j] += v[i] * v[j];
-            }
-        }
-    }
-    let det3 = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det3(&m);
-    if !(d.abs() > 0.0) {
-        bail!("the unloading's top points do not determine a slope");
-    }
-    // Cramer's rule for c1
-    let mut m1 = m;
-    for i in 0..3 {
-        m1[i][1] = r[i];
-    }
-    Ok(det3(&m1) / d)
 }
 
 /// One material of the grid and the discretization it runs on.

@@ -103,6 +103,30 @@ fn coarse_cone_follows_dao_and_a_wrong_exponent_does_not() {
     // Pi5 relates our own h_r/h_m and W_p/W_t
     let w5 = right.ours.wp_wt - dao::pi5(right.hr_hm());
     assert!(w5.abs() < TOL_W, "W_p/W_t vs Pi5(h_r/h_m) off by {w5}");
+    // Dao's reverse analysis of this curve (W_p/W_t through Pi5) against the truth it was
+    // run with (E 200000, sigma_r = sigma(0.033)): within the deviations above, carried
+    // through S^2 (E*) and Pi1's slope (sigma_r); n is the least determined
+    let input = indentify_analysis::dao::ReverseInput {
+        c: right.ours.c,
+        s: right.ours.s,
+        h_m: right.ours.h_m,
+        p_m: right.ours.p_m,
+        hr_hm: dao::pi5_inverse(right.ours.wp_wt).unwrap(),
+    };
+    let r = indentify_analysis::dao::reverse(&input, dao::NU, None).unwrap();
+    let sr = dao::sigma_r(dao::E, right.run.sy(), 0.2);
+    println!(
+        "reverse: E {:.0} ({:+.1}%), sigma_r {:.0} ({:+.1}%), n {:.3}, sY {:.0} (truth {:.0})",
+        r.e,
+        100.0 * (r.e / dao::E - 1.0),
+        r.sigma_r,
+        100.0 * (r.sigma_r / sr - 1.0),
+        r.n,
+        r.sy,
+        right.run.sy()
+    );
+    assert!((r.e / dao::E - 1.0).abs() < 2.0 * TOL_S, "E {}", r.e);
+    assert!((r.sigma_r / sr - 1.0).abs() < 0.15, "sigma_r {}", r.sigma_r);
     // the same cone on n = 0, against the prediction for n = 0.2
     let wrong = dao::Compared::of(coarse(0.0)).unwrap();
     let c0 = wrong.ours.c / right.dao.c;

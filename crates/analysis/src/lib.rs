@@ -19,6 +19,10 @@
 //! - [`closed_form`]: the modulus from the loading's elastic closed form (Sneddon's cone,
 //!   Hertz's sphere, the flat punch) and the Maxwell law's `(E, eta)` from Lee and Radok's
 //!   form of the loading and hold, the starts of a finite element fit.
+//! - [`dao`]: Dao et al.'s dimensionless functions of the 70.3-degree cone, what a curve
+//!   gives them, and their reverse analysis (`E`, the representative stress, `n`, `sY`);
+//!   [`tabor`]: `E` from the unloading stiffness and the representative stress from the
+//!   mean pressure for a sphere or any cone: the starts of laws with a yield stress.
 //!
 //! ```
 //! use indentify_analysis::{AreaFunction, Options, Tip, analyze};
@@ -44,10 +48,12 @@
 
 pub mod calibrate;
 pub mod closed_form;
+pub mod dao;
 mod error;
 mod fit;
 mod op;
 mod special;
+pub mod tabor;
 mod tip;
 
 pub use error::AnalysisError;

@@ -10,6 +10,13 @@
 //! with a note; where no closed form applies the fit starts from the configuration and the
 //! note says why. The start depends on the indent's own curve and configuration only, so a
 //! batch's results do not depend on its thread count or order.
+//!
+//! A law with a yield stress (`Plastic`, `NortonHoff`) takes its own route first
+//! (`crate::closed_form_yield`: Dao et al.'s reverse analysis under a 70.3-degree cone,
+//! the unloading stiffness and Tabor's hardness under a sphere or another cone: `E`, `sY`
+//! and Dao's `n`); where that route has nothing (a flat punch, a tabulated hardening, a
+//! curve with no unloading), `E` comes from the loading's elastic closed form as before and
+//! a note says why.
 
 use std::time::Instant;
 
@@ -152,6 +159,14 @@ pub fn apply(s: &mut Setup) -> ClosedFormStart {
     let maxwell = s.cfg.law.variant() == "Maxwell";
     let ieta = at("eta").filter(|_| maxwell);
     let mut notes = Vec::new();
+    if at("sY").is_some() {
+        match crate::closed_form_yield::values(s, punch, &start, nu) {
+            Ok(y) => return yield_start(s, y, clock),
+            Err(why) => notes.push(format!(
+                "no start for the yield stress: {why}; E from the loading's elastic closed form"
+            )),
+        }
+    }
     let (values, half, rms, method) = {
         let sch = s.problem.schedule();
         let curve = Curve {
@@ -238,6 +253,38 @@ pub fn apply(s: &mut Setup) -> ClosedFormStart {
         values,
         half_space: half,
         rms_rel: Some(rms),
+        seconds: clock.elapsed().as_secs_f64(),
+        notes,
+    }
+}
+
+/// The outcome of a law with a yield stress: the values set and the free parameters kept.
+fn yield_start(
+    s: &mut Setup,
+    y: crate::closed_form_yield::YieldValues,
+    clock: Instant,
+) -> ClosedFormStart {
+    let mut notes = y.notes;
+    let values = set_starts(s, y.values, &mut notes);
+    let others: Vec<&str> = s
+        .id_cfg
+        .params
+        .iter()
+        .filter(|p| p.free && !values.iter().any(|(n, _)| *n == p.name))
+        .map(|p| p.name.as_str())
+        .collect();
+    if !others.is_empty() {
+        notes.push(format!(
+            "{} {} the configuration's start (no closed form)",
+            others.join(", "),
+            if others.len() == 1 { "keeps" } else { "keep" }
+        ));
+    }
+    ClosedFormStart {
+        method: y.method,
+        values,
+        half_space: y.half_space,
+        rms_rel: y.rms_rel,
         seconds: clock.elapsed().as_secs_f64(),
         notes,
     }

@@ -26,6 +26,7 @@ pub mod batch;
 pub mod batch_analysis;
 pub mod check;
 pub mod closed_form_start;
+mod closed_form_yield;
 pub mod coarse_to_fine;
 pub mod config;
 pub mod costmap;
