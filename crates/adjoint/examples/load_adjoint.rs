@@ -114,6 +114,8 @@ fn main() {
     // the one-pass gradients with the forward's factor handed over
     let mut reused = [0.0; 3];
     let mut facts_reused = [0; 3];
+    // the last load-controlled forward's own split, Newton iterations, largest contact
+    let mut split = None;
     let frame = Frame {
         compliance: 1e-4,
         ..Frame::default()
@@ -137,6 +139,11 @@ fn main() {
             .run_history(&mat, &params, &history, &opts)
             .expect("load run");
         time(&mut best[0][0], t0);
+        split = Some((
+            traj.timing,
+            traj.total_iterations(),
+            traj.steps.iter().map(|s| s.active.len()).max().unwrap_or(0),
+        ));
 
         let n = traj.steps.len();
         let dj_dh: Vec<f64> = traj.steps.iter().map(|s| s.depth).collect();
@@ -230,6 +237,19 @@ fn main() {
         "{case}: factorizations per sweep (one pass, two passes) {facts:?}; with the \
          forward's factor (load, depth, compliant) {facts_reused:?}"
     );
+    if let Some((t, iterations, active)) = &split {
+        println!(
+            "{case} load control, the last forward: {iterations} Newton iterations, at most \
+             {active} active nodes, {} factorizations; wall ms: local {:.1}, assembly {:.1}, \
+             factorization {:.1}, solves {:.1}, total {:.1}",
+            t.factorizations,
+            t.local * 1e3,
+            t.assembly * 1e3,
+            t.factorization * 1e3,
+            t.solve * 1e3,
+            t.total * 1e3
+        );
+    }
     for (k, (name, b, g, s)) in [
         ("load", best[0], "gradient_load", "sensitivities_load"),
         ("depth", best[1], "gradient", "sensitivities"),
