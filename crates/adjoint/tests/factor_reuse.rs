@@ -12,7 +12,7 @@
 mod common;
 
 use common::small_model;
-use indentify_adjoint::{Adjoint, Gradient};
+use indentify_adjoint::{Adjoint, Gradient, LoadReplay};
 use indentify_contact::{
     ContactKind, DirectSolver, Frame, HistorySegment, LoadHistory, Model, Punch, Schedule,
     SolverOptions, Trajectory, trapezoid,
@@ -254,6 +254,58 @@ fn depth_control_compliant_and_sensitivities_equal_the_fresh_ones() {
     let reused = adj.sensitivities_load(&mat, &c, &traj, h).unwrap();
     for (a, b) in fresh.dh_dc.iter().zip(&reused.dh_dc) {
         assert!(rel(a, b) <= 1e-12, "{a:?} vs {b:?}");
+    }
+}
+
+#[test]
+fn checkpointed_runs_replayed_with_the_forward_factor() {
+    // the replaying solver runs beside the sweep: it holds the adjoint's old factor
+    // after the exchange, and its stretches must still repeat the recorded steps
+    let m = small_model(cone(), ContactKind::Vertical);
+    let c = [21000.0, 0.3, 25000.0];
+    let mat = LawMaterial(&Maxwell);
+    let ck_opts = SolverOptions {
+        record_fields: false,
+        checkpoint_every: 4,
+        ..opts()
+    };
+    for h in histories() {
+        let mut solver = DirectSolver::new(&m).unwrap();
+        let ck = solver.run_history(&mat, &c, &h, &ck_opts).unwrap();
+        assert!(ck.checkpoints.len() > 1);
+        let (dj_dh, dj_df) = costs(ck.steps.len());
+        let mut sweep = |adj: &mut Adjoint, solver: &mut DirectSolver| {
+            adj.gradient_load_replayed(
+                &mat,
+                &c,
+                &ck,
+                &h,
+                &dj_dh,
+                &dj_df,
+                LoadReplay {
+                    solver,
+                    opts: &ck_opts,
+                },
+            )
+            .unwrap()
+        };
+        let fresh = sweep(&mut Adjoint::new(&m).unwrap(), &mut solver);
+        solver.run_history(&mat, &c, &h, &ck_opts).unwrap();
+        let mut adj = Adjoint::new(&m).unwrap();
+        assert!(adj.take_factor(&mut solver));
+        let reused = sweep(&mut adj, &mut solver);
+        let r = rel(&fresh.dj_dc, &reused.dj_dc);
+        println!(
+            "replayed: reused vs fresh {r:.2e}, factorizations {} -> {}",
+            fresh.factorizations, reused.factorizations
+        );
+        assert!(
+            r <= 1e-12,
+            "{:?} vs {:?}: {r:.2e}",
+            reused.dj_dc,
+            fresh.dj_dc
+        );
+        assert_eq!(reused.factorizations + 1, fresh.factorizations);
     }
 }
 
