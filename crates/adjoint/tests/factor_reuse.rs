@@ -274,7 +274,7 @@ fn checkpointed_runs_replayed_with_the_forward_factor() {
         let ck = solver.run_history(&mat, &c, &h, &ck_opts).unwrap();
         assert!(ck.checkpoints.len() > 1);
         let (dj_dh, dj_df) = costs(ck.steps.len());
-        let mut sweep = |adj: &mut Adjoint, solver: &mut DirectSolver| {
+        let sweep = |adj: &mut Adjoint, solver: &mut DirectSolver| {
             adj.gradient_load_replayed(
                 &mat,
                 &c,
