@@ -114,6 +114,9 @@ fn main() {
     // the one-pass gradients with the forward's factor handed over
     let mut reused = [0.0; 3];
     let mut facts_reused = [0; 3];
+    // the largest difference of the load-controlled gradients with and without it,
+    // relative to the largest component
+    let mut worst = 0.0f64;
     // the last load-controlled forward's own split, Newton iterations, largest contact
     let mut split = None;
     let frame = Frame {
@@ -155,7 +158,7 @@ fn main() {
             .expect("gradient");
         time(&mut reused[0], t0);
         facts_reused[0] = g.factorizations;
-        std::hint::black_box(g);
+        let with_factor = g.dj_dc;
         for (k, fused) in [(1, true), (2, false)] {
             adjoint.set_fused(fused);
             let t0 = Clock::now();
@@ -164,6 +167,13 @@ fn main() {
                 .expect("gradient");
             time(&mut best[0][k], t0);
             facts[usize::from(k == 2)] = g.factorizations;
+            if k == 1 {
+                // the gradient with the forward's factor against the fresh one
+                let scale = g.dj_dc.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                for (a, b) in g.dj_dc.iter().zip(&with_factor) {
+                    worst = worst.max((a - b).abs() / scale);
+                }
+            }
             std::hint::black_box(g);
         }
         adjoint.set_fused(true);
@@ -235,7 +245,8 @@ fn main() {
     }
     println!(
         "{case}: factorizations per sweep (one pass, two passes) {facts:?}; with the \
-         forward's factor (load, depth, compliant) {facts_reused:?}"
+         forward's factor (load, depth, compliant) {facts_reused:?}, load control's \
+         gradient {worst:.1e} from the fresh one"
     );
     if let Some((t, iterations, active)) = &split {
         println!(

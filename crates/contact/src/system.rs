@@ -50,6 +50,10 @@ pub struct ConstrainedSystem {
     /// key, so that a factorization handed from another system
     /// ([`ConstrainedSystem::exchange_factor`]) is reused only for the same matrix.
     k_tangent: Option<Mat4>,
+    /// The next key comparison is exact (a uniform tangent's bits): a direct solver's
+    /// first tangent after a factorization was handed over, so that it uses a handed
+    /// factor only where it would have assembled the same `K` bit for bit.
+    exact_next: bool,
     /// Constrained equations of the current factorization, when it may be reused.
     factor_for: Option<Vec<bool>>,
     /// Capacitance mode: `chol` holds the unconstrained `K` of `k_key`.
@@ -146,6 +150,7 @@ impl ConstrainedSystem {
             constrained: vec![false; model.dofs.n_eq],
             k_key: None,
             k_tangent: None,
+            exact_next: false,
             factor_for: None,
             base: false,
             columns: HashMap::new(),
@@ -290,9 +295,19 @@ impl ConstrainedSystem {
     /// unless it is the current one: parameters bit for bit, dt to 1e-12 relative, since
     /// schedule times carry round-off, and a uniform tangent `uniform` to 1e-12 of its
     /// largest entry, or neither uniform); a new tangent drops the cached factorizations.
+    ///
+    /// Right after a factorization was handed over to a direct solver (`exact_next`),
+    /// only a uniform tangent equal bit for bit keeps it: the same `K` the solver would
+    /// assemble, so a forward run's bits do not depend on the handover. (An adjoint keeps
+    /// a handed factor under the usual tolerance: the forward's own `K` for the steps
+    /// under its key.)
     fn new_key(&mut self, reuse: Option<(&[f64], f64)>, uniform: Option<&Mat4>) -> bool {
+        let exact = std::mem::take(&mut self.exact_next);
         let same_tangent = match (uniform, &self.k_tangent) {
-            (None, None) => true,
+            (None, None) => !exact,
+            (Some(a), Some(b)) if exact => (a.0.iter().flatten())
+                .zip(b.0.iter().flatten())
+                .all(|(x, y)| x.to_bits() == y.to_bits()),
             (Some(a), Some(b)) => {
                 let scale = a.0.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
                 (a.0.iter().flatten())
@@ -530,6 +545,7 @@ impl ConstrainedSystem {
         self.forget_assembly();
         self.k_key = None;
         self.k_tangent = None;
+        self.exact_next = false;
         self.factor_for = None;
         self.base = false;
         self.columns.clear();
@@ -617,6 +633,7 @@ impl ConstrainedSystem {
         for s in [&mut *self, other] {
             s.forget_assembly();
             s.pcg = false;
+            s.exact_next = s.k_key.is_some();
         }
     }
 

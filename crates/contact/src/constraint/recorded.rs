@@ -142,8 +142,8 @@ impl<'m> RecordedContact<'m> {
     /// of that run's trajectory reuses the forward's factor and columns for the steps
     /// under its key (the last ones: a sweep runs backward) and factorizes the others as
     /// before. The solver receives this contact's last factorization in exchange, which
-    /// its next run reuses under the same key only (every key is checked: a factor of
-    /// another tangent is never used).
+    /// its next run uses only for a tangent equal bit for bit (so its runs keep their
+    /// bits); a factor of another tangent is never used.
     pub fn exchange_factor(&mut self, solver: &mut crate::DirectSolver<'_>) -> bool {
         if !std::ptr::eq(solver.model(), self.model) {
             return false;
