@@ -17,10 +17,12 @@ impl<'m> Adjoint<'m> {
     /// steps under the kept key (the parameters bit for bit, the step length and the
     /// tangent to 1e-12 relative) then take no factorization and no column solve, the
     /// others factorize as before; a factor of other parameters, another step length or
-    /// another law is never used. The gradient equals the one without it to round-off
-    /// (the same `K`, factor and columns when the tangents are assembled alike:
-    /// `tests/factor_reuse.rs`). Only the next pass keeps it: the ones after start from
-    /// a new system's state again.
+    /// another law is never used. The gradient equals the one without it bit for bit
+    /// where the forward keyed the segment with the tangent the fresh sweep would (the
+    /// same `K`, factor and columns: `tests/factor_reuse.rs`), and to round-off where
+    /// the segment's step lengths, hence tangents, differ in their last bits (the sweep
+    /// then transposes the forward's own `K`). Only the next pass keeps it: the ones
+    /// after start from a new system's state again.
     pub fn take_factor(&mut self, solver: &mut DirectSolver<'m>) -> bool {
         self.contact.exchange_factor(solver)
     }
