@@ -38,6 +38,7 @@ mod finite;
 mod load;
 mod material;
 mod nodal;
+mod reuse;
 
 pub use compliant::{FrameGradient, FrameIndex};
 pub use load::{LoadReplay, LoadSensitivities};

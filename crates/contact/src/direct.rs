@@ -279,6 +279,12 @@ impl<'m> DirectSolver<'m> {
         &self.newton.system
     }
 
+    /// The constrained tangent system itself: [`crate::RecordedContact::exchange_factor`]
+    /// exchanges its factorization with an adjoint's.
+    pub(crate) fn system_mut(&mut self) -> &mut ConstrainedSystem {
+        &mut self.newton.system
+    }
+
     /// A solver for `model`, which it keeps for every run: analyses the model's pattern
     /// once.
     ///

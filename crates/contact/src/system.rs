@@ -46,6 +46,14 @@ pub struct ConstrainedSystem {
     constrained: Vec<bool>,
     /// Key of the tangent in `k_values` when it may be reused: (parameter bits, dt).
     k_key: Option<(Vec<u64>, f64)>,
+    /// The one tangent of `k_key` when it was set uniform (an affine law): part of the
+    /// key, so that a factorization handed from another system
+    /// ([`ConstrainedSystem::exchange_factor`]) is reused only for the same matrix.
+    k_tangent: Option<Mat4>,
+    /// The next key comparison is exact (a uniform tangent's bits): a direct solver's
+    /// first tangent after a factorization was handed over, so that it uses a handed
+    /// factor only where it would have assembled the same `K` bit for bit.
+    exact_next: bool,
     /// Constrained equations of the current factorization, when it may be reused.
     factor_for: Option<Vec<bool>>,
     /// Capacitance mode: `chol` holds the unconstrained `K` of `k_key`.
@@ -141,6 +149,8 @@ impl ConstrainedSystem {
             elements: ElementCache::default(),
             constrained: vec![false; model.dofs.n_eq],
             k_key: None,
+            k_tangent: None,
+            exact_next: false,
             factor_for: None,
             base: false,
             columns: HashMap::new(),
@@ -229,7 +239,7 @@ impl ConstrainedSystem {
         reuse: Option<(&[f64], f64)>,
     ) -> bool {
         let t0 = std::time::Instant::now();
-        let fresh = self.new_key(reuse);
+        let fresh = self.new_key(reuse, None);
         if fresh && reuse.is_some() {
             // a new key changes every element: a full sum, which the next delta restarts from
             model.pattern.assemble_b_c_b_cached(
@@ -254,7 +264,7 @@ impl ConstrainedSystem {
     /// element matrices are not `sum w B^T C B`): never reused, always a full sum.
     pub(crate) fn set_tangent_elements(&mut self, model: &Model, ke: &[[[f64; 16]; 16]]) -> bool {
         let t0 = std::time::Instant::now();
-        self.new_key(None);
+        self.new_key(None, None);
         model.pattern.assemble_elements(ke, &mut self.k_values);
         self.elements.forget_sum();
         self.seconds[0] += t0.elapsed().as_secs_f64();
@@ -270,7 +280,7 @@ impl ConstrainedSystem {
         key: (&[f64], f64),
     ) -> bool {
         let t0 = std::time::Instant::now();
-        let fresh = self.new_key(Some(key));
+        let fresh = self.new_key(Some(key), Some(c_mat));
         if fresh {
             model
                 .pattern
@@ -283,18 +293,41 @@ impl ConstrainedSystem {
 
     /// Whether the tangent keyed `reuse` must be assembled (always for `None`; for a key,
     /// unless it is the current one: parameters bit for bit, dt to 1e-12 relative, since
-    /// schedule times carry round-off); a new tangent drops the cached factorizations.
-    fn new_key(&mut self, reuse: Option<(&[f64], f64)>) -> bool {
-        let same = match (reuse, &self.k_key) {
-            (Some((p, dt)), Some((q, d))) => {
-                p.len() == q.len()
-                    && p.iter().zip(q).all(|(a, b)| a.to_bits() == *b)
-                    && (dt - d).abs() <= 1e-12 * dt.abs()
+    /// schedule times carry round-off, and a uniform tangent `uniform` to 1e-12 of its
+    /// largest entry, or neither uniform); a new tangent drops the cached factorizations.
+    ///
+    /// Right after a factorization was handed over to a direct solver (`exact_next`),
+    /// only a uniform tangent equal bit for bit keeps it: the same `K` the solver would
+    /// assemble, so a forward run's bits do not depend on the handover. (An adjoint keeps
+    /// a handed factor under the usual tolerance: the forward's own `K` for the steps
+    /// under its key.)
+    fn new_key(&mut self, reuse: Option<(&[f64], f64)>, uniform: Option<&Mat4>) -> bool {
+        let exact = std::mem::take(&mut self.exact_next);
+        let same_tangent = match (uniform, &self.k_tangent) {
+            (None, None) => !exact,
+            (Some(a), Some(b)) if exact => (a.0.iter().flatten())
+                .zip(b.0.iter().flatten())
+                .all(|(x, y)| x.to_bits() == y.to_bits()),
+            (Some(a), Some(b)) => {
+                let scale = a.0.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+                (a.0.iter().flatten())
+                    .zip(b.0.iter().flatten())
+                    .all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
             }
             _ => false,
         };
+        let same = same_tangent
+            && match (reuse, &self.k_key) {
+                (Some((p, dt)), Some((q, d))) => {
+                    p.len() == q.len()
+                        && p.iter().zip(q).all(|(a, b)| a.to_bits() == *b)
+                        && (dt - d).abs() <= 1e-12 * dt.abs()
+                }
+                _ => false,
+            };
         if !same {
             self.k_key = reuse.map(|(c, dt)| (c.iter().map(|v| v.to_bits()).collect(), dt));
+            self.k_tangent = uniform.copied();
             self.factor_for = None;
             self.base = false;
             self.columns.clear();
@@ -511,6 +544,8 @@ impl ConstrainedSystem {
     pub(crate) fn forget_factorizations(&mut self) {
         self.forget_assembly();
         self.k_key = None;
+        self.k_tangent = None;
+        self.exact_next = false;
         self.factor_for = None;
         self.base = false;
         self.columns.clear();
@@ -529,6 +564,77 @@ impl ConstrainedSystem {
         self.slip_z.clear();
         self.slip_lu.clear();
         self.slip_piv.clear();
+    }
+
+    /// As [`ConstrainedSystem::forget_factorizations`], but keeps the factorization of a
+    /// reusable tangent's unconstrained `K` (the capacitance mode's base: its key, values,
+    /// factor, the columns `K^-1 e_c` and the Schur factor of the last prescribed set),
+    /// which a computation with the same key then uses without factorizing or solving for
+    /// the columns again. Those depend on the key alone (the columns are solves with the
+    /// factor, the Schur factor is formed afresh from them for each prescribed set), so
+    /// what follows is what a fresh system would compute from the same `K`. Without such
+    /// a base everything is forgotten.
+    pub(crate) fn forget_all_but_the_factor(&mut self) {
+        if !(self.base && self.factor_ok && self.k_key.is_some()) {
+            self.forget_factorizations();
+            return;
+        }
+        let key = self.k_key.take();
+        let tangent = self.k_tangent.take();
+        let columns = std::mem::take(&mut self.columns);
+        let set = std::mem::take(&mut self.schur_set);
+        let schur = std::mem::take(&mut self.schur);
+        self.forget_factorizations();
+        self.k_key = key;
+        self.k_tangent = tangent;
+        self.columns = columns;
+        self.schur_set = set;
+        self.schur = schur;
+        self.base = true;
+        self.factor_ok = true;
+    }
+
+    /// Exchanges the factorization state of this system with `other`'s (a system of the
+    /// same model: the same symbolic analysis): the tangent values and their key, the
+    /// numeric factor, the capacitance columns and small factors, the direct mode's
+    /// factor record. The counters, timings, refresh rule and work space stay with each
+    /// system, and each forgets its assembly sum (the next per-point assembly sums every
+    /// element). Each system afterwards holds a consistent state: a factor of the values
+    /// under its key, or none.
+    pub(crate) fn exchange_factor(&mut self, other: &mut ConstrainedSystem) {
+        use std::mem::swap;
+        swap(&mut self.chol, &mut other.chol);
+        // the counters stay with their system
+        swap(
+            &mut self.chol.n_factorizations,
+            &mut other.chol.n_factorizations,
+        );
+        swap(&mut self.chol.n_solves, &mut other.chol.n_solves);
+        swap(&mut self.k_values, &mut other.k_values);
+        swap(&mut self.k_constrained, &mut other.k_constrained);
+        swap(&mut self.k_key, &mut other.k_key);
+        swap(&mut self.k_tangent, &mut other.k_tangent);
+        swap(&mut self.factor_for, &mut other.factor_for);
+        swap(&mut self.frames_factored, &mut other.frames_factored);
+        swap(&mut self.base, &mut other.base);
+        swap(&mut self.columns, &mut other.columns);
+        swap(&mut self.schur_set, &mut other.schur_set);
+        swap(&mut self.schur, &mut other.schur);
+        swap(&mut self.capacitance, &mut other.capacitance);
+        swap(&mut self.factor_ok, &mut other.factor_ok);
+        swap(&mut self.k_rot, &mut other.k_rot);
+        swap(&mut self.cap_frames, &mut other.cap_frames);
+        swap(&mut self.cap_lu, &mut other.cap_lu);
+        swap(&mut self.cap_piv, &mut other.cap_piv);
+        swap(&mut self.slip_idx, &mut other.slip_idx);
+        swap(&mut self.slip_z, &mut other.slip_z);
+        swap(&mut self.slip_lu, &mut other.slip_lu);
+        swap(&mut self.slip_piv, &mut other.slip_piv);
+        for s in [&mut *self, other] {
+            s.forget_assembly();
+            s.pcg = false;
+            s.exact_next = s.k_key.is_some();
+        }
     }
 
     /// Makes the next [`ConstrainedSystem::prepare_inexact`] factorize and the next

@@ -717,6 +717,9 @@ fn gradient_task(
     let Some(traj) = te.traj.as_ref() else {
         return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
+    // the sweep starts from the forward's factor where its key is the same (a linear
+    // law's last tangent and capacitance columns; checked, never a stale one)
+    w.adjoint.take_factor(&mut w.solver);
     match (&p.applied, &t.load) {
         (Some(a), Some(h)) => return instrumented_gradient(p, a, c, k, w, te, h),
         (Some(a), None) => return crate::instrument::compliant_gradient(p, a, c, k, w, traj),
@@ -870,6 +873,8 @@ fn jacobian_task(
     let Some(traj) = te.traj.as_ref() else {
         return Err(IdentifyError::Optimizer("trajectory missing".into()));
     };
+    // as the gradient, from the forward's factor where its key is the same
+    w.adjoint.take_factor(&mut w.solver);
     // the forward sensitivities need every step's fields: a checkpointed trajectory is
     // recorded again in full for them (the memory of one unbounded run)
     if let (Some(a), None) = (&p.applied, &t.load) {

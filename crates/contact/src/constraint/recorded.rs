@@ -92,6 +92,9 @@ pub struct RecordedContact<'m> {
     ties: Vec<Tie>,
     /// Load control: scratch of the depth column's solve (equations).
     w: Vec<f64>,
+    /// The next [`RecordedContact::begin`] keeps a reusable tangent's factorization
+    /// (set by [`RecordedContact::exchange_factor`]).
+    keep_factor: bool,
 }
 
 impl<'m> RecordedContact<'m> {
@@ -110,14 +113,44 @@ impl<'m> RecordedContact<'m> {
             stick: Vec::new(),
             ties: Vec::new(),
             w: vec![0.0; model.dofs.n_eq],
+            keep_factor: false,
         })
     }
 
     /// Starts a computation from a new system's state (no factorization, no assembly sum,
     /// nothing carried from an earlier sweep): its bits depend on its inputs alone.
+    ///
+    /// After [`RecordedContact::exchange_factor`], the next `begin` keeps the
+    /// factorization of a reusable tangent (a linear law's unconstrained `K`, its
+    /// capacitance columns) and forgets everything else: a step under the same key
+    /// (parameters, step length, tangent) then needs no factorization and no column
+    /// solve, and computes what a fresh system would from the same `K`.
     pub fn begin(&mut self) {
-        self.system.forget_factorizations();
+        if std::mem::take(&mut self.keep_factor) {
+            self.system.forget_all_but_the_factor();
+        } else {
+            self.system.forget_factorizations();
+        }
         self.constraint.adjoint_reset();
+    }
+
+    /// Exchanges this contact's factorization with the one `solver` kept of its last run
+    /// (built on the same model; `false`, nothing exchanged, otherwise): a linear law's
+    /// factor of the unconstrained tangent and the capacitance columns of every dof its
+    /// run prescribed, keyed by the parameters, the step length and the tangent. The next
+    /// [`RecordedContact::begin`] keeps it, so that the adjoint sweep or sensitivity pass
+    /// of that run's trajectory reuses the forward's factor and columns for the steps
+    /// under its key (the last ones: a sweep runs backward) and factorizes the others as
+    /// before. The solver receives this contact's last factorization in exchange, which
+    /// its next run uses only for a tangent equal bit for bit (so its runs keep their
+    /// bits); a factor of another tangent is never used.
+    pub fn exchange_factor(&mut self, solver: &mut crate::DirectSolver<'_>) -> bool {
+        if !std::ptr::eq(solver.model(), self.model) {
+            return false;
+        }
+        self.system.exchange_factor(solver.system_mut());
+        self.keep_factor = true;
+        true
     }
 
     /// Numeric factorizations done so far.
