@@ -32,8 +32,8 @@ use indentify_contact::{
 };
 use indentify_laws::{Law, Material};
 
-use crate::load::{BorderedRho, Column, SegmentCarry};
 use crate::LoadReplay;
+use crate::load::{BorderedRho, Column, SegmentCarry};
 use crate::material::MatSweep;
 use crate::{Adjoint, AdjointError, Recorded, Sweep, check_inputs};
 
@@ -256,7 +256,10 @@ impl Adjoint<'_> {
         }
         // Coulomb friction: the first step's sticking ties read the initial depth H(t0),
         // which moves with -h0 (the carry the sweep left is the first step's)
-        if let Some(u0) = u_initial.as_deref().filter(|_| self.contact.adjoint_pending()) {
+        if let Some(u0) = u_initial
+            .as_deref()
+            .filter(|_| self.contact.adjoint_pending())
+        {
             col.col.fill(0.0);
             let init = initial_record(schedule, frame);
             dj_dframe[2] -= self.contact.adjoint_depth(&init, u0, &col.col);

@@ -30,8 +30,7 @@ fn pdotp_example_is_identified_through_the_cli() {
     let table = stdout(&o);
     assert!(table.contains("converged"), "{table}");
     let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap()).unwrap();
     assert_eq!(v["converged"], true, "{v}");
     assert_eq!(v["observable"], "Depth", "{v}");
     let ident = &v["identifiability"];

@@ -55,9 +55,18 @@ fn checkpointed_compliant_fit_lands_where_the_recorded_one_does() {
             o.value("Cf")
         );
         assert!(o.converged(), "{name}: {}", o.result.stop_reason);
-        assert!(o.result.adjoint_solves > 0, "{name}: the adjoint gradient ran");
-        assert!((o.value("E").unwrap() / 20000.0 - 1.0).abs() < 1e-4, "{name}");
-        assert!((o.value("eta").unwrap() / 30000.0 - 1.0).abs() < 1e-4, "{name}");
+        assert!(
+            o.result.adjoint_solves > 0,
+            "{name}: the adjoint gradient ran"
+        );
+        assert!(
+            (o.value("E").unwrap() / 20000.0 - 1.0).abs() < 1e-4,
+            "{name}"
+        );
+        assert!(
+            (o.value("eta").unwrap() / 30000.0 - 1.0).abs() < 1e-4,
+            "{name}"
+        );
         assert!(o.value("Cf").unwrap().abs() < 1e-9, "{name}");
     }
     assert_eq!(full.result.iterations, ck.result.iterations);
