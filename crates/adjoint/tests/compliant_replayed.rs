@@ -142,12 +142,15 @@ fn frame(cf: f64) -> Frame {
     }
 }
 
+/// A case: its name, model, material, parameters, frame and machine-depth schedule.
+type Case<'a> = (&'a str, Model, &'a dyn Material, &'a [f64], Frame, Schedule);
+
 #[test]
 fn replayed_compliant_gradient_equals_the_recorded_one() {
     let mx = LawMaterial(&Maxwell);
     let pl = Plastic::new(Hardening::Power, Rate::Norton);
     let mu = |m: f64| ContactKind::normal_with_friction(m).unwrap();
-    let cases: [(&str, Model, &dyn Material, &[f64], Frame, Schedule); 4] = [
+    let cases: [Case; 4] = [
         (
             "Maxwell cone vertical",
             small_model(cone(), ContactKind::Vertical),
