@@ -2,7 +2,8 @@
 //! constant Pdot/P"; docs/validation-load-control.md §12): a load-controlled record loaded
 //! at constant Pdot/P, held and unloaded, its depth (1% noise, one seeded draw) fitted from
 //! the example's start. The run exits 0, says "converged", and result.json's E and eta lie
-//! within 2.5 of their standard deviations of the law values that generated the data.
+//! within 2.5 of their standard deviations of the law values that generated the data;
+//! result.json's noise model names the depth.
 
 mod common;
 
@@ -34,6 +35,9 @@ fn pdotp_example_is_identified_through_the_cli() {
     assert_eq!(v["converged"], true, "{v}");
     assert_eq!(v["observable"], "Depth", "{v}");
     let ident = &v["identifiability"];
+    // the stated noise model names the fitted quantity, the depth (it said `% of F`)
+    let noise = ident["noise"].as_str().unwrap();
+    assert!(noise.contains("% of h"), "{noise}");
     for (name, truth) in [("E", 20000.0), ("eta", 30000.0)] {
         let value = v["parameters"]
             .as_array()
