@@ -133,14 +133,17 @@ fn dat_parser_reads_the_reference_depth_and_the_spring_force() {
 /// `|h_ours - h_ccx| / h_max` over the whole history and on `|h_ours / h_ccx - 1|` at
 /// 1, 2 and 3 s (docs/validation-load-control.md §11: the first step, with a few contact
 /// nodes, differs most under small strain; under `NLGEOM` the elastic laws differ,
-/// Hencky's against CalculiX's neo-Hooke, by 2-3% in depth).
-const COMMITTED: [(&str, f64, bool, f64, f64); 7] = [
+/// Hencky's against CalculiX's neo-Hooke, by 2-3% in depth, with Coulomb friction
+/// (mu 0.1) as without).
+const COMMITTED: [(&str, f64, bool, f64, f64); 9] = [
     ("r0", 0.0, false, 0.01, 0.004),
     ("r1", 0.0, false, 0.01, 0.004),
     ("r0", 0.1, false, 0.01, 0.004),
     ("r1", 0.1, false, 0.01, 0.004),
     ("r0", 0.0, true, 0.035, 0.035),
     ("r1", 0.0, true, 0.035, 0.035),
+    ("r0", 0.1, true, 0.035, 0.035),
+    ("r1", 0.1, true, 0.035, 0.035),
     ("r2", 0.0, false, 0.01, 0.004),
 ];
 

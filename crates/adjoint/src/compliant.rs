@@ -26,9 +26,13 @@
 //! each step's motion relative to the punch for the next step's ties.
 
 use crate::SensBuffers;
-use indentify_contact::{Frame, RecordedContact, Schedule, StepRecord, Trajectory};
+use indentify_contact::{
+    DirectSolver, Frame, RecordedContact, Schedule, SolverOptions, StepFields, StepRecord,
+    Trajectory,
+};
 use indentify_laws::{Law, Material};
 
+use crate::LoadReplay;
 use crate::load::{BorderedRho, Column, SegmentCarry};
 use crate::material::MatSweep;
 use crate::{Adjoint, AdjointError, Recorded, Sweep, check_inputs};
@@ -69,12 +73,79 @@ impl Adjoint<'_> {
         (schedule, frame): (&Schedule, &Frame),
         dj_df: &[f64],
     ) -> Result<FrameGradient, AdjointError> {
+        self.gradient_compliant_from(mat, c, traj, (schedule, frame), dj_df, None)
+    }
+
+    /// [`Adjoint::gradient_compliant`] of a run recorded with checkpoints instead of
+    /// fields ([`indentify_contact::SolverOptions::checkpoint_every`] in
+    /// [`indentify_contact::DirectSolver::run_compliant`]): each stretch between
+    /// checkpoints is replayed by `replay.solver` with
+    /// [`indentify_contact::DirectSolver::replay_compliant`] (through the same frame, the
+    /// same bits), swept backward and dropped, so the sweep holds one stretch's fields at a
+    /// time. A trajectory with every step's fields is swept as by
+    /// [`Adjoint::gradient_compliant`].
+    ///
+    /// # Errors
+    /// As [`Adjoint::gradient_compliant`]; [`AdjointError::Replay`] when the replaying
+    /// solver runs another model or a stretch replays other steps than the run took;
+    /// [`AdjointError::NotRecorded`] for a run with neither fields nor a checkpoint at its
+    /// start.
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradient_compliant_replayed(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        (schedule, frame): (&Schedule, &Frame),
+        dj_df: &[f64],
+        replay: LoadReplay<'_, '_>,
+    ) -> Result<FrameGradient, AdjointError> {
+        if traj.fields.len() == traj.steps.len() + 1 {
+            return self.gradient_compliant(mat, c, traj, (schedule, frame), dj_df);
+        }
+        if !std::ptr::eq(replay.solver.model(), self.model) {
+            return Err(AdjointError::Replay(
+                "the replaying solver runs another model than this adjoint's: build both \
+                 from the same Model"
+                    .into(),
+            ));
+        }
+        if traj.checkpoints.first().is_none_or(|cp| cp.steps_done != 0) {
+            return Err(AdjointError::NotRecorded {
+                fields: traj.fields.len(),
+                steps: traj.steps.len(),
+            });
+        }
+        self.gradient_compliant_from(mat, c, traj, (schedule, frame), dj_df, Some(replay))
+    }
+
+    /// [`Adjoint::gradient_compliant`] from the recorded fields (`replay` `None`) or from
+    /// the replayed stretches between checkpoints.
+    fn gradient_compliant_from(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        (schedule, frame): (&Schedule, &Frame),
+        dj_df: &[f64],
+        replay: Option<LoadReplay<'_, '_>>,
+    ) -> Result<FrameGradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
         let law = mat.as_law();
-        match law {
-            Some(law) => check_inputs(law, c, traj, dj_df.len())?,
-            None => self.check_material(mat, c, traj, dj_df.len(), true)?,
+        match (law, &replay) {
+            (Some(law), None) => check_inputs(law, c, traj, dj_df.len())?,
+            (Some(law), Some(_)) => {
+                if dj_df.len() != traj.steps.len() {
+                    return Err(AdjointError::Length {
+                        expected: traj.steps.len(),
+                        got: dj_df.len(),
+                    });
+                }
+                law.check_params(c)?;
+                law.check_differentiable(c)?;
+            }
+            (None, _) => self.check_material(mat, c, traj, dj_df.len(), replay.is_none())?,
         }
         let cf = frame.compliance;
         if !(cf.is_finite() && cf >= 0.0) {
@@ -101,12 +172,18 @@ impl Adjoint<'_> {
             ))),
         };
         self.begin_sweep();
-        if let Some(law) = law {
+        if let (Some(law), None) = (law, &replay) {
             self.begin_nodal(law, c, traj);
         }
-        for i in (0..n).rev() {
+        // the initial displacement (the first step's fields before it), which friction's
+        // h0 term reads after the sweep
+        let mut u_initial: Option<Vec<f64>> = None;
+        let mut visit = |adj: &mut Self,
+                         i: usize,
+                         f0: &StepFields,
+                         f1: &StepFields|
+         -> Result<(), AdjointError> {
             let rec = &traj.steps[i];
-            let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
             let g = dj_df[i];
             let mut d = 0.0;
             let mut rho_of = |a: f64, s: f64| {
@@ -128,10 +205,10 @@ impl Adjoint<'_> {
                         rho: g,
                         prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
                     };
-                    self.bordered_step(*law, c, sweep, &step, border)?;
+                    adj.bordered_step(*law, c, sweep, &step, border)?;
                 }
                 Which::Material(sw) => {
-                    self.material_step(mat, c, sw, i, rec, (f0, f1), g, Some(border))?;
+                    adj.material_step(mat, c, sw, i, rec, (f0, f1), g, Some(border))?;
                 }
             }
             if !d.is_finite() {
@@ -144,6 +221,27 @@ impl Adjoint<'_> {
                 });
             }
             dj_dh[i] = d;
+            if i == 0 && adj.depth_ties {
+                u_initial = Some(f0.u.clone());
+            }
+            Ok(())
+        };
+        match replay {
+            None => {
+                for i in (0..n).rev() {
+                    visit(self, i, &traj.fields[i], &traj.fields[i + 1])?;
+                }
+            }
+            Some(LoadReplay { solver, opts }) => {
+                replayed_compliant_steps_rev(
+                    solver,
+                    (mat, c),
+                    (schedule, frame),
+                    opts,
+                    traj,
+                    |i, f0, f1| visit(self, i, f0, f1),
+                )?;
+            }
         }
         let dj_dc = match which {
             Which::Law(law, sweep) => sweep.finish(law, c),
@@ -158,12 +256,13 @@ impl Adjoint<'_> {
         }
         // Coulomb friction: the first step's sticking ties read the initial depth H(t0),
         // which moves with -h0 (the carry the sweep left is the first step's)
-        if self.depth_ties && self.contact.adjoint_pending() {
+        if let Some(u0) = u_initial
+            .as_deref()
+            .filter(|_| self.contact.adjoint_pending())
+        {
             col.col.fill(0.0);
             let init = initial_record(schedule, frame);
-            dj_dframe[2] -= self
-                .contact
-                .adjoint_depth(&init, &traj.fields[0].u, &col.col);
+            dj_dframe[2] -= self.contact.adjoint_depth(&init, u0, &col.col);
         }
         Ok(FrameGradient {
             dj_dc,
@@ -173,6 +272,50 @@ impl Adjoint<'_> {
             factorizations: self.contact.factorizations() - f0,
         })
     }
+}
+
+/// Replays a checkpointed run of [`indentify_contact::DirectSolver::run_compliant`]
+/// stretch by stretch, the last first, and visits its steps in reverse order:
+/// `visit(i, fields before, fields after)` with `i` the step's index in the whole run.
+/// A stretch that replays another number of steps than the run had, or other steps
+/// (times, or depths beyond round-off), is an error.
+fn replayed_compliant_steps_rev(
+    solver: &mut DirectSolver<'_>,
+    (mat, c): (&dyn Material, &[f64]),
+    (schedule, frame): (&Schedule, &Frame),
+    opts: &SolverOptions,
+    traj: &Trajectory,
+    mut visit: impl FnMut(usize, &StepFields, &StepFields) -> Result<(), AdjointError>,
+) -> Result<(), AdjointError> {
+    let (last, n) = (schedule.t.len() - 1, traj.steps.len());
+    for (s_idx, cp) in traj.checkpoints.iter().enumerate().rev() {
+        let (j_end, steps_end) = match traj.checkpoints.get(s_idx + 1) {
+            Some(next) => (next.schedule_index, next.steps_done),
+            None => (last, n),
+        };
+        let seg = solver
+            .replay_compliant(mat, c, schedule, frame, opts, cp, j_end)
+            .map_err(|e| AdjointError::Replay(e.to_string()))?;
+        let recorded = traj.steps.get(cp.steps_done..steps_end).unwrap_or(&[]);
+        let scale = recorded.iter().fold(0.0f64, |m, s| m.max(s.depth.abs()));
+        if seg.steps.len() != recorded.len()
+            || seg.steps.iter().zip(recorded).any(|(a, b)| {
+                a.t.to_bits() != b.t.to_bits() || (a.depth - b.depth).abs() > 1e-9 * scale
+            })
+        {
+            return Err(AdjointError::Replay(format!(
+                "the compliant stretch from schedule index {} replayed {} steps, the run \
+                 had {} (or other depths)",
+                cp.schedule_index,
+                seg.steps.len(),
+                recorded.len()
+            )));
+        }
+        for i in (0..seg.steps.len()).rev() {
+            visit(cp.steps_done + i, &seg.fields[i], &seg.fields[i + 1])?;
+        }
+    }
+    Ok(())
 }
 
 /// The sweep of a stress-only law, or of a material with internal variables.

@@ -31,7 +31,7 @@
 
 use std::sync::{Arc, Mutex, OnceLock};
 
-use indentify_adjoint::FrameIndex;
+use indentify_adjoint::{FrameIndex, LoadReplay};
 use indentify_contact::{Frame, Trajectory};
 use indentify_laws::{
     ElasticDomain, InternalInfo, Law, LawError, LocalFailure, LocalUpdate, Mat4, Material,
@@ -394,9 +394,9 @@ impl Applied {
 }
 
 /// A depth-controlled test `k`'s gradient with the instrument (docs/theory.md §13.7):
-/// the compliant adjoint over its run through the frame (`traj`, recorded again with
-/// fields when it was checkpointed), `dJ/dF_i = w_i (F_i - F_exp,i)`; the law's entries
-/// and the frame's.
+/// the compliant adjoint over its run through the frame (`traj`; a checkpointed run's
+/// stretches replayed one at a time, `Adjoint::gradient_compliant_replayed`),
+/// `dJ/dF_i = w_i (F_i - F_exp,i)`; the law's entries and the frame's.
 pub(crate) fn compliant_gradient(
     p: &Problem,
     a: &Applied,
@@ -407,15 +407,20 @@ pub(crate) fn compliant_gradient(
 ) -> Result<Vec<f64>, IdentifyError> {
     let t = &p.tests[k];
     let (cl, frame) = (p.law_part(c), a.frame(k, c));
-    let mut slot = None;
-    let traj = in_full(traj, &t.solver_options, c, &mut slot, |o| {
-        w.solver
-            .run_compliant(&**p.material(), cl, &t.schedule, &frame, o)
-    })?;
     let rho = t.dj_df(traj);
     let g = w
         .adjoint
-        .gradient_compliant(&**p.material(), cl, traj, (&t.schedule, &frame), &rho)
+        .gradient_compliant_replayed(
+            &**p.material(),
+            cl,
+            traj,
+            (&t.schedule, &frame),
+            &rho,
+            LoadReplay {
+                solver: &mut w.solver,
+                opts: &t.solver_options,
+            },
+        )
         .map_err(|source| IdentifyError::Adjoint {
             params: c.to_vec(),
             source,

@@ -161,10 +161,11 @@ fn plastic_gradient_and_jacobian_through_the_frame_match_differences() {
     assert!(worst_jt <= 1e-12, "J^T r vs adjoint {worst_jt:.2e}");
 }
 
-/// Runs recorded with checkpoints only: the evaluator runs a test's adjoint and
-/// sensitivities on a run with fields again (without checkpoints, whose stretches each
-/// start from a fresh factorization: the same steps to round-off, not bit for bit; the
-/// replay of a checkpointed compliant run itself is bit for bit,
+/// Runs recorded with checkpoints only: the evaluator's gradient replays the run's
+/// stretches one at a time (`Adjoint::gradient_compliant_replayed`), its sensitivities run
+/// the test with fields again (without checkpoints, whose stretches each start from a
+/// fresh factorization: the same steps to round-off, not bit for bit; the replay of a
+/// checkpointed compliant run itself is bit for bit,
 /// `crates/adjoint/tests/compliant_frame.rs`), so the cost, the gradient and the Jacobian
 /// equal those of runs recording every field to round-off (1e-10 of each entry's scale).
 #[test]

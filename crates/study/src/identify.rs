@@ -1766,8 +1766,10 @@ struct IdentifiabilityJson {
     intervals: Named<[f64; 2]>,
 }
 
-impl From<&Identifiability> for IdentifiabilityJson {
-    fn from(i: &Identifiability) -> Self {
+impl IdentifiabilityJson {
+    /// The summary of `i` for a fit of `observable` (its noise model named in the fitted
+    /// quantity: `% of h` under load control).
+    fn of(i: &Identifiability, observable: Observable) -> Self {
         IdentifiabilityJson {
             names: i.names.clone(),
             n_data: i.n_data,
@@ -1788,8 +1790,12 @@ impl From<&Identifiability> for IdentifiabilityJson {
                     .zip(i.reasons.iter().cloned()),
             ),
             unidentifiable: i.undetermined.clone(),
-            noise: (i.noise != indentify_identify::NoiseModel::Residual)
-                .then(|| i.noise.describe(i.noise_level)),
+            noise: (i.noise != indentify_identify::NoiseModel::Residual).then(
+                || match observable {
+                    Observable::Force => i.noise.describe(i.noise_level),
+                    Observable::Depth => i.noise.describe_observed(i.noise_level, "h", "mm"),
+                },
+            ),
             intervals: Named::new(
                 i.names
                     .iter()
@@ -2045,7 +2051,10 @@ fn result_json(o: &IdentifyOutcome, opts: &IdentifyOptions, paths: &Paths) -> Re
         fit_quality: o.quality.as_ref().map(fit_json),
         adequacy: o.adequacy(),
         caveats: o.caveats(),
-        identifiability: r.identifiability.as_ref().map(IdentifiabilityJson::from),
+        identifiability: r
+            .identifiability
+            .as_ref()
+            .map(|i| IdentifiabilityJson::of(i, o.fit.observable)),
         discretization: o
             .discretization
             .as_ref()
