@@ -233,7 +233,7 @@ impl Extrapolation {
             // so that the first iterate is one state of the same linear motion rather than
             // the last state with the punch moved alone (a coarse mesh's force history
             // changes its rate by up to 5x from step to step as nodes touch down; R2's
-            // rate-independent laws: 244-279 Newton iterations and 63-114 factorizations
+            // rate-independent laws: 221-244 Newton iterations and 56-63 factorizations
             // with it against 270-316 and 83-212 without, the line search on)
             let kept = if load && kept == 0 && last.load && last.dt > 0.0 && last.du.len() == n {
                 1
@@ -565,8 +565,8 @@ impl<'m> Newton<'m> {
         // the merit: the relative largest residual under depth control (its bits kept);
         // the Euclidean norm of the bordered residual in N under load control, where the
         // largest component relative to the largest internal force saturates at 1 while
-        // the iterate is far off (R2's Voce: 5 cut steps and 344 factorizations on the
-        // largest component, none and 63 on the norm)
+        // the iterate is far off (R2's Voce: 1 cut sub-step and 114 factorizations on
+        // the largest component, none and 63 on the norm)
         let merit = |r: &Residual| if spec.load.is_some() { r.norm } else { r.rel };
         let m0 = merit(&prev.0);
         if !switching || law.law.is_some() || it.changes != prev.1 || merit(&r) <= m0 {
