@@ -529,6 +529,9 @@ impl<'m> Newton<'m> {
             }
             it.iterations += 1;
             self.solve(spec, &law, &mut it, r, timing)?;
+            if triggered && self.d_depth > 0.0 {
+                self.join_penetrating(spec, &mut it);
+            }
         }
     }
 
@@ -615,6 +618,23 @@ impl<'m> Newton<'m> {
         }
         if bordered {
             it.depth -= f * self.d_depth;
+        }
+    }
+
+    /// A load-controlled step from the trigger whose update moved the punch down: the
+    /// inactive candidates the iterate's depth makes penetrate join the contact set at
+    /// once. From the trigger a single node carries the force, and its small stiffness
+    /// throws the depth far beyond the contact that then forms, where the set check only
+    /// comes once equilibrium is loosely met (a 40 x 40 mesh: 12 updates growing the
+    /// depth threefold each up to 0.62 mm for a step whose depth is 3.3e-3 mm, then 66
+    /// nodes in contact and 23 more iterations releasing two at a time); joined as the
+    /// depth moves, the contact's stiffness stops the depth near its solution.
+    fn join_penetrating(&mut self, spec: &StepSpec<'_>, it: &mut Iteration) {
+        let before = it.set.active().count();
+        self.constraint
+            .predict(&mut it.set, &it.u, &spec.state.past[0].du, 0.0, it.depth);
+        if it.set.active().count() != before {
+            it.changes += 1;
         }
     }
 
