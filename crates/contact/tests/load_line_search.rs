@@ -127,7 +127,8 @@ fn rate_independent_load_control_converges_without_cuts() {
 
 /// With the line search active (the same runs), the force history of the
 /// depth-controlled run drives the load-controlled run back to its depths, to the
-/// solver's tolerance, and to the prescribed forces.
+/// solver's tolerance, and to the prescribed forces (before the line search: 9.8e-3 of the
+/// largest depth for Linear, whose cut sub-steps made it another discrete problem).
 #[test]
 fn rate_independent_force_history_drives_back_to_the_depths() {
     let m = model();
