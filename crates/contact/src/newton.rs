@@ -546,20 +546,21 @@ impl<'m> Newton<'m> {
     /// Backtracking for a material whose residual switches branches (a point of the
     /// iterate in [`Regime::Elastic`] or [`Regime::Plastic`]): when a Newton update raised
     /// the merit above that of the iterate before (`prev.0`, with the contact set of
-    /// `prev.1` unchanged), the update is halved, up to four times, while that lowers it. A rate-independent
-    /// law's points switch between the elastic and plastic branches of their residual,
-    /// where the consistent tangent jumps: a full step across the switch can overshoot
-    /// into a cycle the iteration never leaves (R2's mesh and history: 60 iterations at a
-    /// relative residual of 1, then a step cut). Under depth control the update halved is
-    /// the free equations' part (the constrained equations keep their prescribed values);
-    /// under load control and through the frame's spring it is the bordered update, the
-    /// displacement and the depth together ([`Newton::shorten`]). The merit is the
-    /// relative residual under depth control (`r.rel`, the largest component over the
-    /// largest internal force), and under load control the Euclidean norm of the
-    /// bordered residual in N (`r.norm`: equilibrium, the constraint's rows and the force
-    /// equation, [`Newton::evaluate`]); docs/solver.md, "The line search". Smooth materials and the laws' paths (`as_law`) are left as they are
-    /// (their bits unchanged), and so is every update that lowered the residual. Returns
-    /// the residual of the iterate kept.
+    /// `prev.1` unchanged), the update is halved, up to four times, while that lowers it.
+    /// A rate-independent law's points switch between the elastic and plastic branches of
+    /// their residual, where the consistent tangent jumps: a full step across the switch
+    /// can overshoot into a cycle the iteration never leaves (R2's mesh and history: 60
+    /// iterations at a relative residual of 1, then a step cut). Under depth control the
+    /// update halved is the free equations' part (the constrained equations keep their
+    /// prescribed values); under load control and through the frame's spring it is the
+    /// bordered update, the displacement and the depth together ([`Newton::shorten`]).
+    /// The merit is the relative residual under depth control (`r.rel`, the largest
+    /// component over the largest internal force), and under load control the Euclidean
+    /// norm of the bordered residual in N (`r.norm`: equilibrium, the constraint's rows
+    /// and the force equation, [`Newton::evaluate`]); docs/solver.md, "The line search".
+    /// Smooth materials and the laws' paths (`as_law`) are left as they are (their bits
+    /// unchanged), and so is every update that lowered the merit. Returns the residual of
+    /// the iterate kept.
     ///
     /// # Errors
     /// A failed local update of a shortened iterate, as [`Newton::evaluate`].
