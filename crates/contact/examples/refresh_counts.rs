@@ -5,8 +5,9 @@
 //! load and hold), with each refresh rule (docs/performance.md, "The preconditioner
 //! refresh policy"):
 //! `cargo run --release -p indentify-contact --example refresh_counts -- [REPEAT] [FILTER]`
-//! prints, per law, control and rule, Newton iterations, PCG solves, CG iterations,
-//! fallbacks and factorizations, then the fastest and median of REPEAT runs (alternated:
+//! prints, per law, control and rule, Newton iterations (of the converged steps), cut
+//! steps (sub-steps a failed step was cut into), PCG solves, CG iterations, fallbacks and
+//! factorizations, then the fastest and median of REPEAT runs (alternated:
 //! every law and rule in turn, REPEAT rounds) and the ratios to Norton-Hoff's forward and
 //! to the depth-controlled run. `REFRESH_LOG=1` prints the CG iterations of every PCG
 //! solve of the first round (`N:i` converged in `i` at the step's `N`-th Newton solve,
@@ -230,9 +231,11 @@ fn main() {
             row.times.push(cpu_seconds() - t0);
             if round == 0 {
                 let tm = traj.timing;
+                let cuts = traj.steps.iter().filter(|s| !s.on_schedule).count();
                 row.counts = format!(
-                    "{:>5} {:>6} {:>6} {:>6} {:>6}",
+                    "{:>5} {:>4} {:>6} {:>6} {:>6} {:>6}",
                     traj.total_iterations(),
+                    cuts,
                     tm.pcg_solves,
                     tm.cg_iterations,
                     tm.pcg_fallbacks,
@@ -264,11 +267,12 @@ fn main() {
         }
     }
     println!(
-        "{:<22} {:<19} {:<8} {:>5} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9} {:>7} {:>7}",
+        "{:<22} {:<19} {:<8} {:>5} {:>4} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9} {:>7} {:>7}",
         "law",
         "control",
         "rule",
         "Newton",
+        "cuts",
         "PCG",
         "CG its",
         "fallbk",
