@@ -184,6 +184,8 @@ pub fn run(opts: &GradientOptions) -> Result<GradientOutcome> {
     let j = problem.cost_of(&traj.forces());
     let rho = problem.dj_df(&traj);
     let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
+    // the forward's factorization serves the sweep (docs/validation-load-control.md §6)
+    adjoint.take_factor(&mut solver);
     let grad: Gradient = if opts.checkpoint.is_some() {
         adjoint.gradient_replayed(
             &**law,

@@ -112,8 +112,10 @@ pub(crate) fn run(
         }
     }
     let zero = vec![0.0; traj.steps.len()];
-    let grad = Adjoint::new(model)
-        .kind(ErrorKind::Solver)?
+    let mut adjoint = Adjoint::new(model).kind(ErrorKind::Solver)?;
+    // the forward's factorization serves the sweep (docs/validation-load-control.md §6)
+    adjoint.take_factor(&mut solver);
+    let grad = adjoint
         .gradient_load_replayed(
             law,
             &params,
