@@ -68,6 +68,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut jobs = 2usize;
     let mut map_n = 10usize;
     let mut profile = false;
+    let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut c2f: Option<usize> = None;
     let mut it = args.iter();
@@ -84,6 +85,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "--columns" => columns_mode = true,
             "--batch" => batch_mode = true,
             "--profile" => profile = true,
+            "--op" => op = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
             "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
             "--lm-radius" => {
@@ -140,7 +142,7 @@ pub fn run(args: &[String]) -> Result<()> {
             println!("{}", profile::table(&m));
             return write_json(json_out.as_deref(), &m);
         }
-        let m = batch::measure(jobs, map_n)?;
+        let m = batch::measure(jobs, map_n, op)?;
         println!("{}", batch::table(&m));
         return write_json(json_out.as_deref(), &m);
     }

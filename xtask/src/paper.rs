@@ -742,6 +742,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         RoundOff => "round-off",
         StepBelowSigma { .. } => "step < sigma",
         Chi2BelowSigma { .. } => "chi2 < sigma^2",
+        ProposedBelowSigma { .. } => "next step < sigma",
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",
