@@ -79,6 +79,7 @@ mod argmin_glue;
 mod chi2_stop;
 mod lm;
 mod tasks;
+mod valley_stop;
 
 pub use data::ForceRecord;
 pub use identifiability::{Identifiability, NoiseModel, Observed};
@@ -91,6 +92,7 @@ pub use optimize::{
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
 pub use problem::{Evaluator, IntoMaterial, Prefetch, Problem, Test};
+pub use valley_stop::ValleyStop;
 
 use indentify_adjoint::AdjointError;
 use indentify_contact::ContactError;

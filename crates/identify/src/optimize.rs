@@ -159,6 +159,12 @@ pub struct StopCriteria {
     /// plain rule needs to confirm it. Not with an undetermined parameter or one pushed
     /// out at a bound (as `step_sigma`). `false` by default.
     pub proposed_step: bool,
+    /// Levenberg-Marquardt only: stop a crawl along the valley of an undetermined
+    /// parameter when the last accepted steps moved every determined combination by less
+    /// than a fraction of its conditional deviation and the chi-square by less than a
+    /// stated amount ([`crate::ValleyStop`], [`StopReason::ValleyBelowSigma`]; the run
+    /// still ends undetermined). `None` (the default): off.
+    pub valley_stop: Option<crate::ValleyStop>,
     /// How [`Method::LevenbergMarquardt`] chooses its first damping and its trials after a
     /// rejection (the other methods ignore it; default: the classic run).
     pub lm: LmStrategy,
@@ -186,6 +192,7 @@ impl Default for StopCriteria {
             step_sigma: None,
             chi2_stop: true,
             proposed_step: false,
+            valley_stop: None,
             lm: LmStrategy::default(),
         }
     }
@@ -374,6 +381,18 @@ pub enum StopReason {
         /// The last step's gain ratio.
         gain: f64,
     },
+    /// Levenberg-Marquardt crawled along the valley of an undetermined parameter: each
+    /// of the last `steps` accepted steps moved every determined combination by less than
+    /// `fraction` of its conditional deviation and lowered the chi-square by less than
+    /// `chi2` ([`StopCriteria::valley_stop`]).
+    ValleyBelowSigma {
+        /// The steps in a row.
+        steps: usize,
+        /// The fraction of a conditional deviation.
+        fraction: f64,
+        /// The chi-square decrease per step.
+        chi2: f64,
+    },
     /// The iteration limit.
     MaxIterations,
     /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
@@ -412,6 +431,7 @@ impl StopReason {
                 | StopReason::StepBelowSigma { .. }
                 | StopReason::Chi2BelowSigma { .. }
                 | StopReason::ProposedBelowSigma { .. }
+                | StopReason::ValleyBelowSigma { .. }
         )
     }
 }
@@ -438,6 +458,16 @@ impl std::fmt::Display for StopReason {
                 f,
                 "next Gauss-Newton step < {fraction} \u{3c3} for every parameter after a step \
                  the model predicted (gain ratio {gain:.3})"
+            ),
+            StopReason::ValleyBelowSigma {
+                steps,
+                fraction,
+                chi2,
+            } => write!(
+                f,
+                "stopped along an undetermined valley: each of the last {steps} steps moved \
+                 every determined combination by < {fraction} \u{3c3} and the chi-square by < \
+                 {chi2}"
             ),
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
@@ -691,6 +721,8 @@ pub(crate) struct Monitor<'a, 'p> {
     noise: NoiseModel,
     /// The gain ratio of the last accepted Levenberg-Marquardt step (NaN before one).
     pub last_gain: Cell<f64>,
+    /// [`StopCriteria::valley_stop`] when the method honours it (Levenberg-Marquardt).
+    valley: Option<crate::ValleyStop>,
 }
 
 impl<'a, 'p> Monitor<'a, 'p> {
@@ -762,6 +794,16 @@ impl<'a, 'p> Monitor<'a, 'p> {
             })
         {
             Some(StopReason::Chi2BelowSigma { fraction })
+        } else if let Some(rule) = self
+            .valley
+            .filter(|_| iter > 0 && !repeated)
+            .filter(|rule| self.valley_holds(rule, &rec.params))
+        {
+            Some(StopReason::ValleyBelowSigma {
+                steps: rule.steps,
+                fraction: rule.fraction,
+                chi2: rule.chi2,
+            })
         } else if rec.iteration >= s.max_iterations {
             Some(StopReason::MaxIterations)
         } else if self.cancel.is_raised() {
@@ -888,6 +930,55 @@ impl<'a, 'p> Monitor<'a, 'p> {
             &id,
         );
         last.is_finite() && last < threshold && next.is_some_and(|n| n < threshold)
+    }
+
+    /// Whether the valley stop `rule` holds at `c` (physical parameters; its iterate the
+    /// history's last): the last `rule.steps` accepted steps, from the history
+    /// (`crate::valley_stop`).
+    fn valley_holds(&self, rule: &crate::ValleyStop, c: &[f64]) -> bool {
+        let p = self.objective.eval.borrow().problem();
+        let Some(Linearized {
+            forces,
+            jac,
+            columns,
+            id,
+        }) = self.linearize(p, c)
+        else {
+            return false;
+        };
+        if id.undetermined.is_empty() {
+            return false;
+        }
+        let Some(var) = crate::chi2_stop::noise_variance(&id) else {
+            return false;
+        };
+        // the Gauss-Newton model sees no larger decrease ahead either: a plateau far from
+        // the optimum (a viscosity so high that the law is elastic there) is no valley
+        let next = crate::chi2_stop::predicted_chi2_decrease(
+            &jac,
+            &forces,
+            (&p.weights, &p.target),
+            &columns,
+            &id,
+        );
+        if !next.is_some_and(|n| n < rule.chi2) {
+            return false;
+        }
+        let h = self.history.borrow();
+        let need = rule.steps.max(1) + 1;
+        if h.len() < need {
+            return false;
+        }
+        let recent: Vec<(Vec<f64>, f64)> = h[h.len() - need..]
+            .iter()
+            .map(|r| {
+                (
+                    columns.iter().map(|col| r.params[col.index]).collect(),
+                    r.cost,
+                )
+            })
+            .collect();
+        crate::valley_stop::holds(rule, &id, &recent, var)
     }
 
     /// The stopping rules.
@@ -1116,6 +1207,10 @@ fn run(
             .filter(|_| config.method == Method::LevenbergMarquardt),
         noise: config.noise,
         last_gain: Cell::new(f64::NAN),
+        valley: config
+            .stop
+            .valley_stop
+            .filter(|_| config.method == Method::LevenbergMarquardt),
     };
     let outcome = match config.method {
         Method::Bfgs => run_bfgs(&monitor, &y0, config.bfgs_start),
