@@ -44,6 +44,20 @@ use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
 
+/// `--valley-steps N` or `--valley-chi2 X` (`a`) with its value: the valley stop's
+/// settings (the stop turned on).
+fn valley_option(valley: &mut Option<ValleyStop>, a: &str, v: &str) -> Result<()> {
+    let rule = valley.get_or_insert_with(ValleyStop::default);
+    if a == "--valley-steps" {
+        rule.steps = v.parse().context("--valley-steps: a number >= 1")?;
+    } else {
+        rule.chi2 = v
+            .parse()
+            .context("--valley-chi2: a chi-square decrease > 0")?;
+    }
+    Ok(())
+}
+
 /// The cases, in the order they run.
 const CASES: [&str; 6] = [
     "r1-map",
@@ -86,15 +100,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "--cold" => cold = true,
             "--no-chi2" => chi2 = false,
             "--valley" => valley = Some(ValleyStop::default()),
-            "--valley-steps" => {
-                valley.get_or_insert_with(ValleyStop::default).steps =
-                    val().parse().context("--valley-steps: a number >= 1")?;
-            }
-            "--valley-chi2" => {
-                valley.get_or_insert_with(ValleyStop::default).chi2 = val()
-                    .parse()
-                    .context("--valley-chi2: a chi-square decrease > 0")?;
-            }
+            "--valley-steps" | "--valley-chi2" => valley_option(&mut valley, a, &val())?,
             "--columns" => columns_mode = true,
             "--batch" => batch_mode = true,
             "--profile" => profile = true,

@@ -261,7 +261,7 @@ impl IdentifyConfig {
         }
     }
 
-    fn validate(&self) -> Result<(), IdentifyError> {
+    pub(crate) fn validate(&self) -> Result<(), IdentifyError> {
         self.noise.validate()?;
         let s = &self.stop;
         let check = |ok: bool, field: &'static str, value: f64, allowed: &'static str| {
@@ -299,6 +299,26 @@ impl IdentifyConfig {
                 "stop.step_sigma",
                 f,
                 "a finite fraction > 0 of a standard deviation, or None (off)",
+            )?;
+        }
+        if let Some(v) = s.valley_stop {
+            check(
+                v.steps >= 1,
+                "stop.valley_stop.steps",
+                v.steps as f64,
+                "an integer >= 1 (accepted steps in a row)",
+            )?;
+            check(
+                v.fraction > 0.0 && v.fraction.is_finite(),
+                "stop.valley_stop.fraction",
+                v.fraction,
+                "a finite fraction > 0 of a standard deviation",
+            )?;
+            check(
+                v.chi2 > 0.0 && v.chi2.is_finite(),
+                "stop.valley_stop.chi2",
+                v.chi2,
+                "a finite chi-square decrease > 0",
             )?;
         }
         check(

@@ -1,12 +1,13 @@
 //! `cargo xtask fit-cost --batch`: the 100 indents of the synthetic R1 Maxwell map of
 //! `cargo xtask make-map` (10 x 10, 2% noise) identified through the study's batch path
 //! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), back to
-//! back in one process: from the base configuration's start (the map's manifest), from
-//! each row's Oliver-Pharr first guess where the analysis gives one (manifest columns
-//! `identify.params.*.start` computed here once), and from each row's closed-form start as
-//! the product computes it (`indentify batch --start closed-form`:
-//! `study::closed_form_start`, Lee and Radok's Maxwell form with one calibration run per
-//! indent, inside the batch's time). Printed: the time (the starts' computation included),
+//! back in one process: from the base configuration's start (the map's manifest); with
+//! `--op`, from each row's Oliver-Pharr first guess where the analysis gives one (manifest
+//! columns `identify.params.*.start` computed here once); from each row's closed-form start
+//! with its own calibration run (`BatchOptions::seeded` off); from the closed-form starts
+//! seeded per configuration (`study::batch_seed`, what `indentify batch --start
+//! closed-form` runs); and seeded with the stop on the proposed step (a manifest column
+//! `identify.stop.proposed_step`). Printed: the time (the starts' computation included),
 //! throughput, iterations, convergence and every parameter's shift in standard deviations
 //! against the base start. `--profile`: one indent of each phase stage by stage
 //! (`profile.rs`).
