@@ -333,12 +333,14 @@ pub struct BatchOptions {
     /// its own curve and configuration only, so the results do not depend on the thread
     /// count or the order.
     pub closed_form_start: bool,
-    /// Closed-form starts seeded per configuration (default true; `crate::batch_seed`):
+    /// Closed-form starts seeded per configuration (default false; `crate::batch_seed`):
     /// the first indent of each configuration in manifest order is fitted first, from its
     /// own closed-form start; every other indent of that configuration starts from the
     /// half-space closed form of its own curve corrected by the seed's fitted / half-space
     /// ratio, without a calibration run of its own. False: every indent calibrates its
-    /// own closed form.
+    /// own closed form. Off by default: alone it measured no faster (1.64x the base
+    /// start's throughput against 1.70x, docs/performance.md "The 100-indent batch"); with
+    /// `identify.stop.proposed_step` 2.30x.
     pub seeded: bool,
 }
 
@@ -357,7 +359,7 @@ impl BatchOptions {
             cancel: Cancel::default(),
             memory_budget: identify::DEFAULT_MEMORY_BUDGET,
             closed_form_start: false,
-            seeded: true,
+            seeded: false,
         }
     }
 

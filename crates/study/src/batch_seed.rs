@@ -1,5 +1,5 @@
-//! Seeded closed-form starts of a batch (`indentify batch --start closed-form`,
-//! [`crate::batch::BatchOptions::seeded`]): the indents of one configuration (the same
+//! Seeded closed-form starts of a batch's closed-form indents
+//! ([`crate::batch::BatchOptions::seeded`], off by default): the indents of one configuration (the same
 //! configuration file, manifest columns and test) share one fit instead of each running
 //! its own calibration forward run. The **seed** of a configuration is its first indent in
 //! manifest order (whatever the shard, thread count or the order the workers take the

@@ -1,5 +1,4 @@
-//! Seeded closed-form starts of a batch (`study::batch_seed`, `BatchOptions::seeded`, the
-//! default of `indentify batch --start closed-form`): on the coarse 3 x 3 synthetic Maxwell
+//! Seeded closed-form starts of a batch (`study::batch_seed`, `BatchOptions::seeded`): on the coarse 3 x 3 synthetic Maxwell
 //! map (two phases, 2% noise) every indent's result is the same bits on 1 and 2 threads and
 //! as two shards into one folder; the first indent is the seed, the others say they were
 //! seeded by it; and every parameter lies within a tenth of its standard deviation of the
@@ -35,6 +34,7 @@ fn run_shard(
     o.config = Some(map.base.clone());
     o.jobs = jobs;
     o.closed_form_start = closed;
+    o.seeded = true;
     o.shard = shard;
     batch::run(&o, &()).expect("batch");
 }

@@ -4,9 +4,9 @@
 //! back in one process: from the base configuration's start (the map's manifest); with
 //! `--op`, from each row's Oliver-Pharr first guess where the analysis gives one (manifest
 //! columns `identify.params.*.start` computed here once); from each row's closed-form start
-//! with its own calibration run (`BatchOptions::seeded` off); from the closed-form starts
-//! seeded per configuration (`study::batch_seed`, what `indentify batch --start
-//! closed-form` runs); and seeded with the stop on the proposed step (a manifest column
+//! with its own calibration run (what `indentify batch --start closed-form` runs); from
+//! the closed-form starts seeded per configuration (`study::batch_seed`,
+//! `BatchOptions::seeded`); and seeded with the stop on the proposed step (a manifest column
 //! `identify.stop.proposed_step`). Printed: the time (the starts' computation included),
 //! throughput, iterations, convergence and every parameter's shift in standard deviations
 //! against the base start. `--profile`: one indent of each phase stage by stage
@@ -144,9 +144,8 @@ fn started(st: &[batch::IndentStatus], what: &str) -> usize {
 /// `--batch`: before and after on `jobs` threads, a map of `n x n` indents: every indent
 /// from the base start (before); with `op`, from its Oliver-Pharr first guess where the
 /// analysis gives one (run only if some row has one); from its closed-form start with its
-/// own calibration run (`indentify batch --start closed-form` before the seeds,
-/// `BatchOptions::seeded` off); seeded by its configuration's first indent (the default
-/// now); and seeded with `identify.stop.proposed_step` (a manifest column).
+/// own calibration run (`indentify batch --start closed-form`); seeded by its
+/// configuration's first indent (`BatchOptions::seeded`); and seeded with `identify.stop.proposed_step` (a manifest column).
 pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
     let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
     let _ = std::fs::remove_dir_all(&dir);
@@ -197,7 +196,7 @@ pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
         false,
     )?;
     cases.push(case_row(
-        "closed-form start, own calibration (batch --start closed-form before)",
+        "closed-form start, own calibration (batch --start closed-form)",
         tl,
         0.0,
         started(&after, "closed form"),
@@ -214,7 +213,7 @@ pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
         true,
     )?;
     cases.push(case_row(
-        "closed-form start seeded per configuration (batch --start closed-form)",
+        "closed-form start seeded per configuration (BatchOptions::seeded)",
         ts,
         0.0,
         started(&after, "seeded by"),
