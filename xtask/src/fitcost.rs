@@ -18,7 +18,9 @@
 //! each row's Oliver-Pharr first guess and from its closed-form start (`batch --start closed-form`), `--jobs N` threads,
 //! 2 by default; `--profile`: one indent's stages timed, `profile.rs`).
 //! `--no-chi2` turns the chi-square stop of fits with an undetermined parameter off
-//! (`StopCriteria::chi2_stop`), for before/after counts; `--columns` times a sensitivity
+//! (`StopCriteria::chi2_stop`), for before/after counts; `--valley` turns the stop along an
+//! undetermined valley on (`StopCriteria::valley_stop`, `--valley-steps N`,
+//! `--valley-chi2 X` its settings); `--columns` times a sensitivity
 //! pass of every parameter against one of the free ones (`columns.rs`). `--lm-radius R`,
 //! `--line-model` and `--geodesic` set the Levenberg-Marquardt strategy of the fits
 //! (`StopCriteria::lm`: the first damping from the Gauss-Newton step's length, rejected
@@ -37,10 +39,24 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_identify::{Evaluator, IdentifyResult, LmStrategy};
+use indentify_identify::{Evaluator, IdentifyResult, LmStrategy, ValleyStop};
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
+
+/// `--valley-steps N` or `--valley-chi2 X` (`a`) with its value: the valley stop's
+/// settings (the stop turned on).
+fn valley_option(valley: &mut Option<ValleyStop>, a: &str, v: &str) -> Result<()> {
+    let rule = valley.get_or_insert_with(ValleyStop::default);
+    if a == "--valley-steps" {
+        rule.steps = v.parse().context("--valley-steps: a number >= 1")?;
+    } else {
+        rule.chi2 = v
+            .parse()
+            .context("--valley-chi2: a chi-square decrease > 0")?;
+    }
+    Ok(())
+}
 
 /// The cases, in the order they run.
 const CASES: [&str; 6] = [
@@ -53,7 +69,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--no-chi2] [--lm-radius R] [--line-model] [--geodesic] [--c2f N]
+/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
@@ -63,11 +79,13 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut compare: Option<PathBuf> = None;
     let mut cold = false;
     let mut chi2 = true;
+    let mut valley: Option<ValleyStop> = None;
     let mut columns_mode = false;
     let mut batch_mode = false;
     let mut jobs = 2usize;
     let mut map_n = 10usize;
     let mut profile = false;
+    let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut c2f: Option<usize> = None;
     let mut it = args.iter();
@@ -81,9 +99,12 @@ pub fn run(args: &[String]) -> Result<()> {
             "--compare" => compare = Some(PathBuf::from(val())),
             "--cold" => cold = true,
             "--no-chi2" => chi2 = false,
+            "--valley" => valley = Some(ValleyStop::default()),
+            "--valley-steps" | "--valley-chi2" => valley_option(&mut valley, a, &val())?,
             "--columns" => columns_mode = true,
             "--batch" => batch_mode = true,
             "--profile" => profile = true,
+            "--op" => op = true,
             "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
             "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
             "--lm-radius" => {
@@ -140,7 +161,7 @@ pub fn run(args: &[String]) -> Result<()> {
             println!("{}", profile::table(&m));
             return write_json(json_out.as_deref(), &m);
         }
-        let m = batch::measure(jobs, map_n)?;
+        let m = batch::measure(jobs, map_n, op)?;
         println!("{}", batch::table(&m));
         return write_json(json_out.as_deref(), &m);
     }
@@ -171,7 +192,7 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold, chi2, lm, c2f)?;
+        let m = measure(&root, case, rounds, cold, (chi2, valley), lm, c2f)?;
         println!(
             "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
@@ -283,7 +304,7 @@ fn measure(
     case: &str,
     rounds: usize,
     cold: bool,
-    chi2: bool,
+    (chi2, valley): (bool, Option<ValleyStop>),
     lm: Option<LmStrategy>,
     c2f: Option<usize>,
 ) -> Result<Value> {
@@ -291,6 +312,7 @@ fn measure(
     let resolved = identify::resolve(&opts)?;
     let mut s = identify::setup(resolved, &opts)?;
     s.id_cfg.stop.chi2_stop = chi2;
+    s.id_cfg.stop.valley_stop = valley;
     if let Some(lm) = lm {
         s.id_cfg.stop.lm = lm;
     }

@@ -742,6 +742,8 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         RoundOff => "round-off",
         StepBelowSigma { .. } => "step < sigma",
         Chi2BelowSigma { .. } => "chi2 < sigma^2",
+        ProposedBelowSigma { .. } => "next step < sigma",
+        ValleyBelowSigma { .. } => "valley",
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",

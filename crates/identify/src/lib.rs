@@ -79,6 +79,7 @@ mod argmin_glue;
 mod chi2_stop;
 mod lm;
 mod tasks;
+mod valley_stop;
 
 pub use data::ForceRecord;
 pub use identifiability::{Identifiability, NoiseModel, Observed};
@@ -86,11 +87,12 @@ pub use instrument::{Instrument, Instrumented};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
     BfgsStart, Cancel, DEFAULT_STEP_SIGMA, IdentifyConfig, IdentifyResult, IterationRecord,
-    LmStrategy, Method, MultiStart, ParamOutcome, StopCriteria, StopReason, identify, multistart,
-    resume,
+    LmStrategy, Method, MultiStart, PROPOSED_GAIN_TOL, ParamOutcome, StopCriteria, StopReason,
+    identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
 pub use problem::{Evaluator, IntoMaterial, Prefetch, Problem, Test};
+pub use valley_stop::ValleyStop;
 
 use indentify_adjoint::AdjointError;
 use indentify_contact::ContactError;

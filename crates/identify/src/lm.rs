@@ -310,6 +310,9 @@ pub(crate) trait LeastSquares {
     fn iterate(&mut self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> bool;
     /// A trial that did not decrease `f`.
     fn rejected(&mut self) {}
+    /// The gain ratio (actual over predicted decrease) of the trial just accepted, told
+    /// before the iterate.
+    fn gain(&mut self, _rho: f64) {}
 }
 
 /// `a . b`.
@@ -430,6 +433,7 @@ pub(crate) fn minimize(
                 g = g1;
                 damping.accepted(rho, len);
                 damping.cap = f64::INFINITY;
+                ls.gain(rho);
                 accepted = true;
                 break;
             }
@@ -497,6 +501,10 @@ impl LeastSquares for Fit<'_, '_, '_> {
 
     fn iterate(&mut self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> bool {
         self.monitor.iterate(iter, y, f, g).is_some()
+    }
+
+    fn gain(&mut self, rho: f64) {
+        self.monitor.last_gain.set(rho);
     }
 
     fn rejected(&mut self) {

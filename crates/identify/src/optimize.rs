@@ -148,6 +148,23 @@ pub struct StopCriteria {
     /// parameter ([`StopReason::Chi2BelowSigma`]; the run still ends with the undetermined
     /// status). `true` by default; off, such a run ends by the relative decrease.
     pub chi2_stop: bool,
+    /// With [`StopCriteria::step_sigma`] `= Some(f)`: also stop when the Gauss-Newton step
+    /// from the new iterate moves every free parameter by less than `f` of its deviation
+    /// and the last accepted step's gain ratio (actual over predicted decrease) lies within
+    /// [`PROPOSED_GAIN_TOL`] of 1, however long that step was
+    /// ([`StopReason::ProposedBelowSigma`]): the quadratic model has just predicted the
+    /// cost over the whole last step, so its next step, below `f` of every deviation, is
+    /// where the remaining distance to the optimum is read (docs/performance.md, "The
+    /// 100-indent batch"). Saves the trial run and the sensitivity pass of the step the
+    /// plain rule needs to confirm it. Not with an undetermined parameter or one pushed
+    /// out at a bound (as `step_sigma`). `false` by default.
+    pub proposed_step: bool,
+    /// Levenberg-Marquardt only: stop a crawl along the valley of an undetermined
+    /// parameter when the last accepted steps moved every determined combination by less
+    /// than a fraction of its conditional deviation and the chi-square by less than a
+    /// stated amount ([`crate::ValleyStop`], [`StopReason::ValleyBelowSigma`]; the run
+    /// still ends undetermined). `None` (the default): off.
+    pub valley_stop: Option<crate::ValleyStop>,
     /// How [`Method::LevenbergMarquardt`] chooses its first damping and its trials after a
     /// rejection (the other methods ignore it; default: the classic run).
     pub lm: LmStrategy,
@@ -157,6 +174,11 @@ pub struct StopCriteria {
 /// configurations use unless told otherwise: a step below a tenth of a deviation changes
 /// nothing the user reads.
 pub const DEFAULT_STEP_SIGMA: f64 = 0.1;
+
+/// How far from 1 the gain ratio of the last accepted Levenberg-Marquardt step may lie for
+/// [`StopCriteria::proposed_step`] to trust the Gauss-Newton model's next step: the actual
+/// decrease within 10% of the predicted one.
+pub const PROPOSED_GAIN_TOL: f64 = 0.1;
 
 impl Default for StopCriteria {
     fn default() -> Self {
@@ -169,6 +191,8 @@ impl Default for StopCriteria {
             roundoff_cost: 1e-16,
             step_sigma: None,
             chi2_stop: true,
+            proposed_step: false,
+            valley_stop: None,
             lm: LmStrategy::default(),
         }
     }
@@ -237,7 +261,7 @@ impl IdentifyConfig {
         }
     }
 
-    fn validate(&self) -> Result<(), IdentifyError> {
+    pub(crate) fn validate(&self) -> Result<(), IdentifyError> {
         self.noise.validate()?;
         let s = &self.stop;
         let check = |ok: bool, field: &'static str, value: f64, allowed: &'static str| {
@@ -275,6 +299,26 @@ impl IdentifyConfig {
                 "stop.step_sigma",
                 f,
                 "a finite fraction > 0 of a standard deviation, or None (off)",
+            )?;
+        }
+        if let Some(v) = s.valley_stop {
+            check(
+                v.steps >= 1,
+                "stop.valley_stop.steps",
+                v.steps as f64,
+                "an integer >= 1 (accepted steps in a row)",
+            )?;
+            check(
+                v.fraction > 0.0 && v.fraction.is_finite(),
+                "stop.valley_stop.fraction",
+                v.fraction,
+                "a finite fraction > 0 of a standard deviation",
+            )?;
+            check(
+                v.chi2 > 0.0 && v.chi2.is_finite(),
+                "stop.valley_stop.chi2",
+                v.chi2,
+                "a finite chi-square decrease > 0",
             )?;
         }
         check(
@@ -347,6 +391,28 @@ pub enum StopReason {
         /// The fraction of a standard deviation (the chi-square threshold is its square).
         fraction: f64,
     },
+    /// Levenberg-Marquardt's last step decreased the cost as the Gauss-Newton model
+    /// predicted (gain ratio within [`PROPOSED_GAIN_TOL`] of 1), and the Gauss-Newton step
+    /// from where it ended would move every free parameter by less than `fraction` of its
+    /// standard deviation ([`StopCriteria::proposed_step`]).
+    ProposedBelowSigma {
+        /// The fraction of a standard deviation.
+        fraction: f64,
+        /// The last step's gain ratio.
+        gain: f64,
+    },
+    /// Levenberg-Marquardt crawled along the valley of an undetermined parameter: each
+    /// of the last `steps` accepted steps moved every determined combination by less than
+    /// `fraction` of its conditional deviation and lowered the chi-square by less than
+    /// `chi2` ([`StopCriteria::valley_stop`]).
+    ValleyBelowSigma {
+        /// The steps in a row.
+        steps: usize,
+        /// The fraction of a conditional deviation.
+        fraction: f64,
+        /// The chi-square decrease per step.
+        chi2: f64,
+    },
     /// The iteration limit.
     MaxIterations,
     /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
@@ -384,6 +450,8 @@ impl StopReason {
                 | StopReason::RoundOff
                 | StopReason::StepBelowSigma { .. }
                 | StopReason::Chi2BelowSigma { .. }
+                | StopReason::ProposedBelowSigma { .. }
+                | StopReason::ValleyBelowSigma { .. }
         )
     }
 }
@@ -405,6 +473,21 @@ impl std::fmt::Display for StopReason {
                 format!("{:.6e}", fraction * fraction)
                     .parse::<f64>()
                     .unwrap_or(fraction * fraction)
+            ),
+            StopReason::ProposedBelowSigma { fraction, gain } => write!(
+                f,
+                "next Gauss-Newton step < {fraction} \u{3c3} for every parameter after a step \
+                 the model predicted (gain ratio {gain:.3})"
+            ),
+            StopReason::ValleyBelowSigma {
+                steps,
+                fraction,
+                chi2,
+            } => write!(
+                f,
+                "stopped along an undetermined valley: each of the last {steps} steps moved \
+                 every determined combination by < {fraction} \u{3c3} and the chi-square by < \
+                 {chi2}"
             ),
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
@@ -656,6 +739,10 @@ pub(crate) struct Monitor<'a, 'p> {
     step_sigma: Option<f64>,
     /// The noise model of the deviations [`StopCriteria::step_sigma`] compares with.
     noise: NoiseModel,
+    /// The gain ratio of the last accepted Levenberg-Marquardt step (NaN before one).
+    pub last_gain: Cell<f64>,
+    /// [`StopCriteria::valley_stop`] when the method honours it (Levenberg-Marquardt).
+    valley: Option<crate::ValleyStop>,
 }
 
 impl<'a, 'p> Monitor<'a, 'p> {
@@ -703,10 +790,20 @@ impl<'a, 'p> Monitor<'a, 'p> {
                 .filter(|&fr| {
                     previous
                         .as_ref()
-                        .is_some_and(|p| self.steps_below_sigma(fr, &p.params, &rec.params))
+                        .is_some_and(|p| self.steps_below_sigma(fr, Some(&p.params), &rec.params))
                 })
         {
             Some(StopReason::StepBelowSigma { fraction })
+        } else if let Some(fraction) = self
+            .step_sigma
+            .filter(|_| s.proposed_step && iter > 0 && !repeated)
+            .filter(|_| (self.last_gain.get() - 1.0).abs() <= PROPOSED_GAIN_TOL)
+            .filter(|&fr| self.steps_below_sigma(fr, None, &rec.params))
+        {
+            Some(StopReason::ProposedBelowSigma {
+                fraction,
+                gain: self.last_gain.get(),
+            })
         } else if let Some(fraction) = self
             .step_sigma
             .filter(|_| s.chi2_stop && iter > 0 && !repeated)
@@ -717,6 +814,16 @@ impl<'a, 'p> Monitor<'a, 'p> {
             })
         {
             Some(StopReason::Chi2BelowSigma { fraction })
+        } else if let Some(rule) = self
+            .valley
+            .filter(|_| iter > 0 && !repeated)
+            .filter(|rule| self.valley_holds(rule, &rec.params))
+        {
+            Some(StopReason::ValleyBelowSigma {
+                steps: rule.steps,
+                fraction: rule.fraction,
+                chi2: rule.chi2,
+            })
         } else if rec.iteration >= s.max_iterations {
             Some(StopReason::MaxIterations)
         } else if self.cancel.is_raised() {
@@ -765,12 +872,13 @@ impl<'a, 'p> Monitor<'a, 'p> {
         })
     }
 
-    /// Whether the step from `prev` to `c` (physical parameters) and the undamped
+    /// Whether the step from `prev` to `c` (physical parameters; no such test without
+    /// `prev`) and the undamped
     /// Gauss-Newton step from `c` move every free parameter by less than `fraction` of its
     /// standard deviation at `c` ([`StopCriteria::step_sigma`]); false when a parameter is
     /// undetermined at `c` or anything cannot be computed. The forces and the Jacobian at
     /// `c` come from the evaluator's cache (Levenberg-Marquardt has just linearized there).
-    fn steps_below_sigma(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
+    fn steps_below_sigma(&self, fraction: f64, prev: Option<&[f64]>, c: &[f64]) -> bool {
         let p = self.objective.eval.borrow().problem();
         let Some(Linearized {
             forces,
@@ -805,7 +913,7 @@ impl<'a, 'p> Monitor<'a, 'p> {
             // the step pushes out does not move (and is not called converged by this rule)
             let next = (c[k] + dy * col.dc_dy).clamp(col.lower, col.upper);
             let at_bound = next == col.lower || next == col.upper;
-            (c[k] - prev[k]).abs() < fraction * sd
+            prev.is_none_or(|prev| (c[k] - prev[k]).abs() < fraction * sd)
                 && (next - c[k]).abs() < fraction * sd
                 && !(at_bound && (dy * col.dc_dy).abs() >= fraction * sd)
         })
@@ -842,6 +950,55 @@ impl<'a, 'p> Monitor<'a, 'p> {
             &id,
         );
         last.is_finite() && last < threshold && next.is_some_and(|n| n < threshold)
+    }
+
+    /// Whether the valley stop `rule` holds at `c` (physical parameters; its iterate the
+    /// history's last): the last `rule.steps` accepted steps, from the history
+    /// (`crate::valley_stop`).
+    fn valley_holds(&self, rule: &crate::ValleyStop, c: &[f64]) -> bool {
+        let p = self.objective.eval.borrow().problem();
+        let Some(Linearized {
+            forces,
+            jac,
+            columns,
+            id,
+        }) = self.linearize(p, c)
+        else {
+            return false;
+        };
+        if id.undetermined.is_empty() {
+            return false;
+        }
+        let Some(var) = crate::chi2_stop::noise_variance(&id) else {
+            return false;
+        };
+        // the Gauss-Newton model sees no larger decrease ahead either: a plateau far from
+        // the optimum (a viscosity so high that the law is elastic there) is no valley
+        let next = crate::chi2_stop::predicted_chi2_decrease(
+            &jac,
+            &forces,
+            (&p.weights, &p.target),
+            &columns,
+            &id,
+        );
+        if !next.is_some_and(|n| n < rule.chi2) {
+            return false;
+        }
+        let h = self.history.borrow();
+        let need = rule.steps.max(1) + 1;
+        if h.len() < need {
+            return false;
+        }
+        let recent: Vec<(Vec<f64>, f64)> = h[h.len() - need..]
+            .iter()
+            .map(|r| {
+                (
+                    columns.iter().map(|col| r.params[col.index]).collect(),
+                    r.cost,
+                )
+            })
+            .collect();
+        crate::valley_stop::holds(rule, &id, &recent, var)
     }
 
     /// The stopping rules.
@@ -1069,6 +1226,11 @@ fn run(
             .step_sigma
             .filter(|_| config.method == Method::LevenbergMarquardt),
         noise: config.noise,
+        last_gain: Cell::new(f64::NAN),
+        valley: config
+            .stop
+            .valley_stop
+            .filter(|_| config.method == Method::LevenbergMarquardt),
     };
     let outcome = match config.method {
         Method::Bfgs => run_bfgs(&monitor, &y0, config.bfgs_start),

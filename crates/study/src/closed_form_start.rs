@@ -292,7 +292,7 @@ fn yield_start(
 
 /// Sets the starts of the free parameters among `values` in `s.id_cfg`, clamped to their
 /// bounds (a note each); a fixed parameter is left as it is (a note). Returns the values set.
-fn set_starts(
+pub(crate) fn set_starts(
     s: &mut Setup,
     values: Vec<(String, f64)>,
     notes: &mut Vec<String>,

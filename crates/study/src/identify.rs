@@ -835,7 +835,7 @@ fn profiles(
 /// The outcome of a fit before its explorations, discretization error and files: each
 /// test's curves at the start and at the result, and every test's end to end.
 fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyOutcome> {
-    let fits = test_fits(s, &result)?;
+    let fits = test_fits(s, &result, resumed)?;
     // one observable for the whole fit, or mixed (force and depth tests of a joint fit)
     let observable = fits.first().map_or(Observable::Force, |f| f.fit.observable);
     let mixed = fits.iter().any(|f| f.fit.observable != observable);
@@ -909,8 +909,11 @@ fn oliver_pharr(test: &TestSetup, result: &IdentifyResult) -> Option<crate::op_b
 }
 
 /// Each test's curves at the start and at the result (the result's forces are the
-/// optimizer's; the start is solved again, the tests one after the other) and fit quality.
-fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
+/// optimizer's; so are the start's forces of a depth-controlled test of a run that was not
+/// resumed, the optimizer's first forward run, at the start's round trip through the
+/// scaled variables; otherwise the start is solved again, the tests one after the other)
+/// and fit quality.
+fn test_fits(s: &Setup, result: &IdentifyResult, resumed: bool) -> Result<Vec<TestFit>> {
     let start_params: Vec<f64> = result.params.iter().map(|p| p.start).collect();
     let mut fits = Vec::with_capacity(s.tests.len());
     for (k, (test, info)) in s.problem.tests.iter().zip(&s.tests).enumerate() {
@@ -938,7 +941,14 @@ fn test_fits(s: &Setup, result: &IdentifyResult) -> Result<Vec<TestFit>> {
             };
             Ok((s.problem.observables_of(k, c, &traj), traj.forces()))
         };
-        let (f_start, _) = curve_at(&start_params)?;
+        let kept = (!resumed && test.load.is_none())
+            .then(|| result.initial_forces.get(s.problem.rows_of(k)))
+            .flatten()
+            .filter(|_| result.initial_forces.len() == s.problem.target.len());
+        let f_start = match kept {
+            Some(f) => f.to_vec(),
+            None => curve_at(&start_params)?.0,
+        };
         let fit = match &test.load {
             Some(_) => {
                 // the force at the result: a run there (the observables too)

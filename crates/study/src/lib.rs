@@ -24,6 +24,7 @@ pub mod analyze;
 pub mod atomic;
 pub mod batch;
 pub mod batch_analysis;
+mod batch_seed;
 pub mod check;
 pub mod closed_form_start;
 mod closed_form_yield;

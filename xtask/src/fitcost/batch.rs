@@ -1,17 +1,18 @@
 //! `cargo xtask fit-cost --batch`: the 100 indents of the synthetic R1 Maxwell map of
 //! `cargo xtask make-map` (10 x 10, 2% noise) identified through the study's batch path
 //! (`indentify batch`: `study::batch::run`) on `--jobs` threads (2 by default), back to
-//! back in one process: from the base configuration's start (the map's manifest), from
-//! each row's Oliver-Pharr first guess where the analysis gives one (manifest columns
-//! `identify.params.*.start` computed here once), and from each row's closed-form start as
-//! the product computes it (`indentify batch --start closed-form`:
-//! `study::closed_form_start`, Lee and Radok's Maxwell form with one calibration run per
-//! indent, inside the batch's time). Printed: the time (the starts' computation included),
+//! back in one process: from the base configuration's start (the map's manifest); with
+//! `--op`, from each row's Oliver-Pharr first guess where the analysis gives one (manifest
+//! columns `identify.params.*.start` computed here once); from each row's closed-form start
+//! with its own calibration run (what `indentify batch --start closed-form` runs); from
+//! the closed-form starts seeded per configuration (`study::batch_seed`,
+//! `BatchOptions::seeded`); and seeded with the stop on the proposed step (a manifest column
+//! `identify.stop.proposed_step`). Printed: the time (the starts' computation included),
 //! throughput, iterations, convergence and every parameter's shift in standard deviations
 //! against the base start. `--profile`: one indent of each phase stage by stage
 //! (`profile.rs`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
@@ -28,12 +29,14 @@ fn run_batch(
     out: &Path,
     jobs: usize,
     closed_form: bool,
+    seeded: bool,
 ) -> Result<(f64, Vec<batch::IndentStatus>)> {
     let _ = std::fs::remove_dir_all(out);
     let mut o = BatchOptions::new(manifest.to_path_buf(), out.to_path_buf());
     o.config = Some(map.base.clone());
     o.jobs = jobs;
     o.closed_form_start = closed_form;
+    o.seeded = seeded;
     let clock = Instant::now();
     batch::run(&o, &())?;
     let seconds = clock.elapsed().as_secs_f64();
@@ -114,11 +117,36 @@ fn case_row(
     })
 }
 
+/// `map`'s manifest with the column `identify.stop.proposed_step` = true on every row
+/// (`StopCriteria::proposed_step`), written to `out`.
+fn proposed_step_manifest(map: &MapFiles, out: &Path) -> Result<PathBuf> {
+    let text = std::fs::read_to_string(&map.manifest)?;
+    let mut s = String::new();
+    for (k, line) in text.lines().enumerate() {
+        s.push_str(line);
+        s.push_str(if k == 0 {
+            ",identify.stop.proposed_step\n"
+        } else {
+            ",true\n"
+        });
+    }
+    std::fs::write(out, s)?;
+    Ok(out.to_path_buf())
+}
+
+/// Rows whose status names a start containing `what`.
+fn started(st: &[batch::IndentStatus], what: &str) -> usize {
+    st.iter()
+        .filter(|s| s.start.as_deref().is_some_and(|t| t.contains(what)))
+        .count()
+}
+
 /// `--batch`: before and after on `jobs` threads, a map of `n x n` indents: every indent
-/// from the base start (before), from its Oliver-Pharr first guess where the analysis
-/// gives one (run only if some row has one), from its closed-form start
-/// (`indentify batch --start closed-form`).
-pub fn measure(jobs: usize, n: usize) -> Result<Value> {
+/// from the base start (before); with `op`, from its Oliver-Pharr first guess where the
+/// analysis gives one (run only if some row has one); from its closed-form start with its
+/// own calibration run (`indentify batch --start closed-form`); seeded by its
+/// configuration's first indent (`BatchOptions::seeded`); and seeded with `identify.stop.proposed_step` (a manifest column).
+pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
     let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
     let _ = std::fs::remove_dir_all(&dir);
     let map = make_map(
@@ -128,24 +156,36 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
             ..Default::default()
         },
     )?;
-    let clock = Instant::now();
-    let (op_manifest, guessed) = start_manifest(&map, &dir.join("manifest-op-start.csv"))?;
-    let guess_s = clock.elapsed().as_secs_f64();
-    let (tb, before) = run_batch(&map, &map.manifest, &dir.join("out-before"), jobs, false)?;
+    let (tb, before) = run_batch(
+        &map,
+        &map.manifest,
+        &dir.join("out-before"),
+        jobs,
+        false,
+        false,
+    )?;
     let mut cases = vec![case_row("base start", tb, 0.0, 0, &before, &before, tb)];
-    if guessed > 0 {
-        let (ta, after) = run_batch(&map, &op_manifest, &dir.join("out-op"), jobs, false)?;
-        cases.push(case_row(
-            "O&P first guess",
-            ta,
-            guess_s,
-            guessed,
-            &after,
-            &before,
-            tb,
-        ));
-    } else {
-        eprintln!("no row has an O&P first guess: that batch would repeat the base one");
+    let (mut guessed, mut guess_s) = (0, 0.0);
+    if op {
+        let clock = Instant::now();
+        let (op_manifest, g) = start_manifest(&map, &dir.join("manifest-op-start.csv"))?;
+        guess_s = clock.elapsed().as_secs_f64();
+        guessed = g;
+        if guessed > 0 {
+            let (ta, after) =
+                run_batch(&map, &op_manifest, &dir.join("out-op"), jobs, false, false)?;
+            cases.push(case_row(
+                "O&P first guess",
+                ta,
+                guess_s,
+                guessed,
+                &after,
+                &before,
+                tb,
+            ));
+        } else {
+            eprintln!("no row has an O&P first guess: that batch would repeat the base one");
+        }
     }
     let (tl, after) = run_batch(
         &map,
@@ -153,20 +193,41 @@ pub fn measure(jobs: usize, n: usize) -> Result<Value> {
         &dir.join("out-closed-form"),
         jobs,
         true,
+        false,
     )?;
-    let started = after
-        .iter()
-        .filter(|s| {
-            s.start
-                .as_deref()
-                .is_some_and(|t| t.contains("closed form"))
-        })
-        .count();
     cases.push(case_row(
-        "closed-form start (batch --start closed-form)",
+        "closed-form start, own calibration (batch --start closed-form)",
         tl,
         0.0,
-        started,
+        started(&after, "closed form"),
+        &after,
+        &before,
+        tb,
+    ));
+    let (ts, after) = run_batch(
+        &map,
+        &map.manifest,
+        &dir.join("out-seeded"),
+        jobs,
+        true,
+        true,
+    )?;
+    cases.push(case_row(
+        "closed-form start seeded per configuration (BatchOptions::seeded)",
+        ts,
+        0.0,
+        started(&after, "seeded by"),
+        &after,
+        &before,
+        tb,
+    ));
+    let proposed = proposed_step_manifest(&map, &dir.join("manifest-proposed.csv"))?;
+    let (tp, after) = run_batch(&map, &proposed, &dir.join("out-proposed"), jobs, true, true)?;
+    cases.push(case_row(
+        "seeded + identify.stop.proposed_step",
+        tp,
+        0.0,
+        started(&after, "seeded by"),
         &after,
         &before,
         tb,

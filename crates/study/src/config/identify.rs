@@ -318,6 +318,12 @@ pub struct StopSection {
     /// log-scaled parameter); `None`: the classic first damping `1e-3` (see
     /// `indentify_identify::LmStrategy::first_radius`).
     pub lm_radius: Option<f64>,
+    /// Levenberg-Marquardt with `step_sigma` only: also stop when the Gauss-Newton step
+    /// from the new iterate moves every free parameter by less than `step_sigma` of its
+    /// deviation and the last step's decrease was the one the model predicted (gain ratio
+    /// within 0.1 of 1), however long that step was (see
+    /// `indentify_identify::StopCriteria::proposed_step`). Default false.
+    pub proposed_step: bool,
 }
 
 impl Default for StopSection {
@@ -332,6 +338,7 @@ impl Default for StopSection {
             roundoff_cost: d.roundoff_cost,
             step_sigma: Some(DEFAULT_STEP_SIGMA),
             lm_radius: DEFAULT_LM_RADIUS,
+            proposed_step: false,
         }
     }
 }
@@ -346,6 +353,7 @@ impl StopSection {
             max_line_search_evaluations: self.max_line_search_evaluations,
             roundoff_cost: self.roundoff_cost,
             step_sigma: self.step_sigma,
+            proposed_step: self.proposed_step,
             lm: LmStrategy {
                 first_radius: self.lm_radius,
                 ..LmStrategy::default()

@@ -1,0 +1,114 @@
+//! The stop on the proposed step (`StopCriteria::proposed_step`, with `step_sigma`): on a
+//! small R1-like problem (Maxwell, cone 68 deg, 8 x 8 Q8) with 2% noise, a determined fit
+//! shall end by it (`StopReason::ProposedBelowSigma`) in no more iterations than the plain
+//! statistical stop, with every parameter within a tenth of its standard deviation of the
+//! fit run to the tight rules (`step_sigma` off: the relative decrease); the gain ratio it
+//! reports shall be within `PROPOSED_GAIN_TOL` of 1. With eta undetermined (1e11 MPa s,
+//! no relaxation during the test) it shall change nothing, bit for bit.
+//!
+//! Reference: the same fit run to the tight rules, and its Gauss-Newton deviations.
+
+use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_identify::{
+    ForceRecord, IdentifyConfig, Method, PROPOSED_GAIN_TOL, ParamSpec, Problem, StopReason,
+    identify, multiplicative_noise,
+};
+use indentify_laws::{LawMaterial, Maxwell};
+use indentify_mesh::CylinderMesher;
+
+fn model() -> Model {
+    let mesh = CylinderMesher {
+        radius: 4.0,
+        height: 4.0,
+        nr: 8,
+        nz: 8,
+        grading_r: 1.45,
+        grading_z: 1.45,
+    }
+    .build()
+    .unwrap();
+    Model::new(
+        mesh,
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+    )
+    .unwrap()
+}
+
+fn problem(truth: &[f64]) -> Problem {
+    let s = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
+    let f = DirectSolver::new(&model())
+        .unwrap()
+        .run(&LawMaterial(&Maxwell), truth, &s, &SolverOptions::default())
+        .unwrap()
+        .forces();
+    let f = multiplicative_noise(&f, 0.02, 7);
+    let rec = ForceRecord::new(s.t.clone(), f).unwrap();
+    Problem::new(model(), &Maxwell, s, &rec, None, SolverOptions::default()).unwrap()
+}
+
+/// `step_sigma` 0.1 or off, `proposed_step` on or off, from `start` (E, eta).
+fn config(step_sigma: bool, proposed: bool, start: [f64; 2]) -> IdentifyConfig {
+    let mut cfg = IdentifyConfig::new(vec![
+        ParamSpec::free("E", start[0], 1000.0, 1e6),
+        ParamSpec::fixed("nu", 0.3),
+        ParamSpec::free("eta", start[1], 1000.0, 1e13),
+    ]);
+    cfg.method = Method::LevenbergMarquardt;
+    cfg.stop.step_sigma = step_sigma.then_some(0.1);
+    cfg.stop.proposed_step = proposed;
+    cfg.stop.relative_decrease_tol = 1e-12;
+    cfg.stop.max_iterations = 40;
+    cfg
+}
+
+#[test]
+fn a_determined_fit_stops_on_the_proposed_step_within_a_tenth_of_sigma() {
+    let p = problem(&[20000.0, 0.3, 30000.0]);
+    let start = [23000.0, 36000.0];
+    let tight = identify(&p, &config(false, false, start), &mut |_| {}).unwrap();
+    let plain = identify(&p, &config(true, false, start), &mut |_| {}).unwrap();
+    let fast = identify(&p, &config(true, true, start), &mut |_| {}).unwrap();
+    println!(
+        "tight {:?} {} it ({}); plain {:?} {} it ({}); proposed {:?} {} it, {} forward ({})",
+        tight.c,
+        tight.iterations,
+        tight.stop_reason,
+        plain.c,
+        plain.iterations,
+        plain.stop_reason,
+        fast.c,
+        fast.iterations,
+        fast.forward_solves,
+        fast.stop_reason
+    );
+    let StopReason::ProposedBelowSigma { fraction, gain } = fast.stop_reason else {
+        panic!("expected the proposed-step stop, got {}", fast.stop_reason);
+    };
+    assert_eq!(fraction, 0.1);
+    assert!((gain - 1.0).abs() <= PROPOSED_GAIN_TOL, "gain {gain}");
+    assert!(fast.stop_reason.is_converged());
+    assert!(fast.iterations <= plain.iterations);
+    assert!(fast.forward_solves <= plain.forward_solves);
+    let id = tight.identifiability.as_ref().unwrap();
+    for (k, name) in [(0usize, "E"), (2, "eta")] {
+        let j = id.names.iter().position(|n| *n == name).unwrap();
+        let sd = id.std_dev[j];
+        assert!(sd.is_finite() && sd > 0.0);
+        let shift = (fast.c[k] - tight.c[k]).abs() / sd;
+        assert!(shift < 0.1, "{name} shift {shift} sigma");
+    }
+}
+
+#[test]
+fn the_proposed_step_changes_nothing_while_a_parameter_is_undetermined() {
+    let p = problem(&[20000.0, 0.3, 1e11]);
+    let start = [15000.0, 5e10];
+    let a = identify(&p, &config(true, true, start), &mut |_| {}).unwrap();
+    let b = identify(&p, &config(true, false, start), &mut |_| {}).unwrap();
+    assert_eq!(a.c, b.c);
+    assert_eq!(a.iterations, b.iterations);
+    assert_eq!(a.stop_reason, b.stop_reason);
+    assert!(matches!(a.stop_reason, StopReason::Undetermined { .. }));
+}
