@@ -721,6 +721,15 @@ struct Linearized {
     id: Identifiability,
 }
 
+/// A linearization where a parameter is undetermined ([`Monitor::chi2_below`],
+/// [`Monitor::valley_holds`]): the noise variance and the Gauss-Newton model's predicted
+/// chi-square decrease for the next step.
+struct Undetermined {
+    lin: Linearized,
+    var: f64,
+    next: Option<f64>,
+}
+
 pub(crate) struct Monitor<'a, 'p> {
     pub objective: &'a Objective<'p>,
     stop: StopCriteria,
@@ -925,62 +934,43 @@ impl<'a, 'p> Monitor<'a, 'p> {
     /// ([`StopCriteria::chi2_stop`], `crate::chi2_stop`); false when every parameter is
     /// determined (the step rule serves then) or anything cannot be computed.
     fn chi2_below(&self, threshold: f64, prev_cost: f64, cost: f64, c: &[f64]) -> bool {
+        let Some(u) = self.undetermined_at(c) else {
+            return false;
+        };
+        let last = 2.0 * (prev_cost - cost) / u.var;
+        last.is_finite() && last < threshold && u.next.is_some_and(|n| n < threshold)
+    }
+
+    /// The linearization at `c` (physical parameters) when a parameter is undetermined
+    /// there, with the noise variance and the chi-square decrease the Gauss-Newton model
+    /// predicts for the next step (`crate::chi2_stop`); `None` when every parameter is
+    /// determined or the linearization or the variance cannot be computed.
+    fn undetermined_at(&self, c: &[f64]) -> Option<Undetermined> {
         let p = self.objective.eval.borrow().problem();
-        let Some(Linearized {
-            forces,
-            jac,
-            columns,
-            id,
-        }) = self.linearize(p, c)
-        else {
-            return false;
-        };
-        if id.undetermined.is_empty() {
-            return false;
+        let lin = self.linearize(p, c)?;
+        if lin.id.undetermined.is_empty() {
+            return None;
         }
-        let Some(var) = crate::chi2_stop::noise_variance(&id) else {
-            return false;
-        };
-        let last = 2.0 * (prev_cost - cost) / var;
+        let var = crate::chi2_stop::noise_variance(&lin.id)?;
         let next = crate::chi2_stop::predicted_chi2_decrease(
-            &jac,
-            &forces,
+            &lin.jac,
+            &lin.forces,
             (&p.weights, &p.target),
-            &columns,
-            &id,
+            &lin.columns,
+            &lin.id,
         );
-        last.is_finite() && last < threshold && next.is_some_and(|n| n < threshold)
+        Some(Undetermined { lin, var, next })
     }
 
     /// Whether the valley stop `rule` holds at `c` (physical parameters; its iterate the
     /// history's last): the last `rule.steps` accepted steps, from the history
     /// (`crate::valley_stop`).
     fn valley_holds(&self, rule: &crate::ValleyStop, c: &[f64]) -> bool {
-        let p = self.objective.eval.borrow().problem();
-        let Some(Linearized {
-            forces,
-            jac,
-            columns,
-            id,
-        }) = self.linearize(p, c)
-        else {
-            return false;
-        };
-        if id.undetermined.is_empty() {
-            return false;
-        }
-        let Some(var) = crate::chi2_stop::noise_variance(&id) else {
+        let Some(Undetermined { lin, var, next }) = self.undetermined_at(c) else {
             return false;
         };
         // the Gauss-Newton model sees no larger decrease ahead either: a plateau far from
         // the optimum (a viscosity so high that the law is elastic there) is no valley
-        let next = crate::chi2_stop::predicted_chi2_decrease(
-            &jac,
-            &forces,
-            (&p.weights, &p.target),
-            &columns,
-            &id,
-        );
         if !next.is_some_and(|n| n < rule.chi2) {
             return false;
         }
@@ -993,12 +983,12 @@ impl<'a, 'p> Monitor<'a, 'p> {
             .iter()
             .map(|r| {
                 (
-                    columns.iter().map(|col| r.params[col.index]).collect(),
+                    lin.columns.iter().map(|col| r.params[col.index]).collect(),
                     r.cost,
                 )
             })
             .collect();
-        crate::valley_stop::holds(rule, &id, &recent, var)
+        crate::valley_stop::holds(rule, &lin.id, &recent, var)
     }
 
     /// The stopping rules.
