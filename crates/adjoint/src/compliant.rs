@@ -132,21 +132,8 @@ impl Adjoint<'_> {
     ) -> Result<FrameGradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
+        self.check_drive_inputs(mat, c, traj, dj_df.len(), replay.is_some())?;
         let law = mat.as_law();
-        match (law, &replay) {
-            (Some(law), None) => check_inputs(law, c, traj, dj_df.len())?,
-            (Some(law), Some(_)) => {
-                if dj_df.len() != traj.steps.len() {
-                    return Err(AdjointError::Length {
-                        expected: traj.steps.len(),
-                        got: dj_df.len(),
-                    });
-                }
-                law.check_params(c)?;
-                law.check_differentiable(c)?;
-            }
-            (None, _) => self.check_material(mat, c, traj, dj_df.len(), replay.is_none())?,
-        }
         let cf = frame.compliance;
         if !(cf.is_finite() && cf >= 0.0) {
             return Err(AdjointError::Step {

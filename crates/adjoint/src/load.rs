@@ -111,21 +111,8 @@ impl Adjoint<'_> {
     ) -> Result<Gradient, AdjointError> {
         let start = std::time::Instant::now();
         let f0 = self.contact.factorizations();
+        self.check_drive_inputs(mat, c, traj, dj_df.len(), replay.is_some())?;
         let law = mat.as_law();
-        match (law, &replay) {
-            (Some(law), None) => check_inputs(law, c, traj, dj_df.len())?,
-            (Some(law), Some(_)) => {
-                if dj_df.len() != traj.steps.len() {
-                    return Err(AdjointError::Length {
-                        expected: traj.steps.len(),
-                        got: dj_df.len(),
-                    });
-                }
-                law.check_params(c)?;
-                law.check_differentiable(c)?;
-            }
-            (None, _) => self.check_material(mat, c, traj, dj_df.len(), replay.is_none())?,
-        }
         if dj_dh.len() != traj.steps.len() {
             return Err(AdjointError::Length {
                 expected: traj.steps.len(),
@@ -423,6 +410,37 @@ fn segment_index(history: &LoadHistory, t: f64) -> usize {
         .ends
         .partition_point(|e| e.0 < t)
         .min(history.ends.len() - 1)
+}
+
+impl Adjoint<'_> {
+    /// The inputs of a load-controlled or compliant sweep of `mat` at `c` over `traj`
+    /// with `n_rho` cotangents: a law's as [`Adjoint::gradient`] checks them (a replayed
+    /// run, whose fields are not recorded, only its parameters and the cotangents'
+    /// count), a material's through its own check.
+    pub(crate) fn check_drive_inputs(
+        &self,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        n_rho: usize,
+        replayed: bool,
+    ) -> Result<(), AdjointError> {
+        match mat.as_law() {
+            Some(law) if !replayed => check_inputs(law, c, traj, n_rho),
+            Some(law) => {
+                if n_rho != traj.steps.len() {
+                    return Err(AdjointError::Length {
+                        expected: traj.steps.len(),
+                        got: n_rho,
+                    });
+                }
+                law.check_params(c)?;
+                law.check_differentiable(c)?;
+                Ok(())
+            }
+            None => self.check_material(mat, c, traj, n_rho, !replayed),
+        }
+    }
 }
 
 impl Adjoint<'_> {
