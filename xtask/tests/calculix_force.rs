@@ -169,8 +169,8 @@ const fn run(
 /// strain; under `NLGEOM` the elastic laws differ, Hencky's against CalculiX's neo-Hooke
 /// solid (R0, R1: 2-3% in depth, with Coulomb friction, mu 0.1, as without) or Simo's
 /// elasticity with multiplicative flow (R2: 0.2-0.7% in depth, up to 1.1% of h_max in
-/// the ramp, 0.6-1.2% in the creep over the hold).
-const COMMITTED: [Committed; 15] = [
+/// the ramp, 0.6-2.1% in the creep over the hold).
+const COMMITTED: [Committed; 16] = [
     run("r0", 0.0, false, (0.01, 0.004), None),
     run("r1", 0.0, false, (0.01, 0.004), Some(0.005)),
     run("r0", 0.1, false, (0.01, 0.004), None),
@@ -186,6 +186,7 @@ const COMMITTED: [Committed; 15] = [
     run("r2", 0.0, true, (0.011, 0.009), Some(0.01)),
     run("r2", 0.1, true, (0.014, 0.009), Some(0.008)),
     run("r2-sy0", 0.0, true, (0.0085, 0.006), Some(0.015)),
+    run("r2-sy0", 0.1, true, (0.009, 0.008), Some(0.027)),
 ];
 
 #[test]
