@@ -107,6 +107,69 @@ fn force_deck_ties_the_punch_to_its_reference_node_and_loads_it() {
     assert_eq!(force::load_stem("r1", 0.1, true), "r1-mu0.1-nlgeom-load");
 }
 
+/// The deck of the R2 runs under `NLGEOM` (docs/validation-load-control.md §11):
+/// Norton-Hoff as CalculiX's `*PLASTIC` + `*CREEP`, Coulomb friction, and the loading and
+/// the rest as two `NLGEOM` steps, the amplitude and time points in total time, the soft
+/// start in the first step only.
+#[test]
+fn force_deck_splits_the_load_under_nlgeom_with_norton_hoff_and_friction() {
+    let mesh = CylinderMesher {
+        radius: 2.0,
+        height: 2.0,
+        nr: 3,
+        nz: 2,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    }
+    .build()
+    .unwrap();
+    let punch = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 500.0);
+    let o = DeckOptions {
+        punch_segments: 4,
+        nlgeom: true,
+        split_load: true,
+        friction: 0.1,
+        ..DeckOptions::default()
+    };
+    let history = force::force_history(500.0).unwrap();
+    let deck = force::deck("t", &mesh, &punch, &m, &history, &o).unwrap();
+    // CalculiX's finite-strain Norton-Hoff: A = K^-m, n = m, the yield stress as *PLASTIC
+    let a = 1500f64.powf(-5.0);
+    assert!(deck.contains(&format!(
+        "*ELASTIC\n1e5, 0.3\n*PLASTIC\n5e2, 0.0\n*CREEP, LAW=NORTON\n{a:.12e}, 5, 0.0\n"
+    )));
+    assert!(!deck.contains("*USER MATERIAL"));
+    assert!(deck.contains("*FRICTION\n0.1, 1e8\n"));
+    assert!(deck.contains("*AMPLITUDE, NAME=FORCE, TIME=TOTAL TIME\n"));
+    assert!(deck.contains("*TIME POINTS, NAME=TP, TIME=TOTAL TIME\n"));
+    // two NLGEOM steps: the ramp (1 s, the soft start) and the hold with the unloading (2 s)
+    let dt = 1.0 / 30.0;
+    let steps: Vec<&str> = deck.split("*STEP, NLGEOM").skip(1).collect();
+    assert_eq!(steps.len(), 2);
+    assert!(steps[0].contains(&format!(
+        "*VISCO, CETOL=1.0\n{:.12e}, {:.12e}, {:.12e}, {dt:.12e}\n",
+        dt * 1e-3,
+        1.0,
+        dt * 1e-7
+    )));
+    assert!(steps[1].contains(&format!(
+        "*VISCO, CETOL=1.0\n{dt:.12e}, {:.12e}, {:.12e}, {dt:.12e}\n",
+        2.0,
+        dt * 1e-7
+    )));
+    for step in steps {
+        assert!(step.contains("*CLOAD, AMPLITUDE=FORCE\n"));
+        assert!(step.contains("*NODE PRINT, NSET=REF, TIME POINTS=TP\nU\n"));
+    }
+    assert_eq!(
+        force::load_stem("r2-sy0", 0.1, true),
+        "r2-sy0-mu0.1-nlgeom-load"
+    );
+}
+
 #[test]
 fn dat_parser_reads_the_reference_depth_and_the_spring_force() {
     let dat = "\n displacements (vx,vy,vz) for set REF and time  0.1000000E+01\n\n      \
