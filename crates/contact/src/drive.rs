@@ -27,6 +27,11 @@ pub(crate) struct Load {
     pub force: f64,
     /// The instrument's spring: the force is `(H - h) / Cf` at the punch depth `h`.
     pub spring: Option<Spring>,
+    /// At the first step of a configured segment after a load-controlled step whose rate
+    /// it does not share: the factor on the last step's increments (depth and
+    /// displacement) that starts Newton, in place of the time extrapolation
+    /// ([`ForceDrive`], `newton.rs`).
+    pub restart: Option<f64>,
 }
 
 /// The frame's spring of a compliant depth-controlled step: `h + Cf F = H`.
@@ -110,23 +115,75 @@ impl Drive for ForceDrive<'_> {
                 };
                 // Newton starts from the depth extrapolated linearly from the last step
                 // (a nonlinear law's Newton driver replaces it by the displacement's own
-                // time extrapolation, `newton.rs`)
+                // time extrapolation, `newton.rs`); at the start of a configured segment
+                // the last step's increments scaled to this step's force increment
                 let last = &state.past[0];
-                let depth = if last.dt > 0.0 {
-                    state.depth + (t1 - state.t) / last.dt * last.depth
+                let restart = if self.0.starts_configured_segment(state.t, t1) {
+                    restart_factor(state, force)
                 } else {
-                    state.depth
+                    None
+                };
+                let depth = match restart {
+                    Some(q) => state.depth + q * last.depth,
+                    None if last.dt > 0.0 => state.depth + (t1 - state.t) / last.dt * last.depth,
+                    None => state.depth,
                 };
                 (
                     depth,
                     Some(Load {
                         force,
                         spring: None,
+                        restart,
                     }),
                 )
             }
         }
     }
+}
+
+/// The factor on the last step's increments that starts a load-controlled step to the
+/// force `force` (N) from `state` where a configured segment begins: `None` unless the
+/// last step prescribed the force and both steps load (or both unload) the punch.
+///
+/// The time extrapolation assumes the force rate carries on; a fast trigger ramp then a
+/// slow segment (steps 9.2 times longer) put its first iterate about 18 increments too
+/// deep, and Newton cycled between contact sets until the step was cut
+/// (docs/validation-load-control.md §12). The depth follows the force instead: the power
+/// law `h ~ F^m` through the last two states (`m = 1/2` for a sharp tip, `2/3` for a
+/// sphere), where both are in contact and `m` lies in `[1/4, 1]`; otherwise the last
+/// step's depth increment per newton, `dF / dF_last`.
+pub(crate) fn restart_factor(state: &State, force: f64) -> Option<f64> {
+    let last = &state.past[0];
+    if !(last.load && last.dt > 0.0) {
+        return None;
+    }
+    let df_last = last.rate * last.dt;
+    follow_force(
+        (state.force - df_last, state.depth - last.depth),
+        (state.force, state.depth),
+        force,
+    )
+}
+
+/// [`restart_factor`] from the states before and after the last step, `(force N, depth
+/// mm)`, to the force `force` (N): the new depth increment over the last one.
+fn follow_force(before: (f64, f64), now: (f64, f64), force: f64) -> Option<f64> {
+    let ((f0, h0), (f1, h1)) = (before, now);
+    let (df_last, dh_last) = (f1 - f0, h1 - h0);
+    let q = (force - f1) / df_last;
+    // a hold (no force increment, as `newton.rs` counts it) keeps the time extrapolation
+    let hold = (force - f1).abs() <= 1e-6 * force.abs();
+    if hold || !(q.is_finite() && q > 0.0 && dh_last != 0.0) {
+        return None;
+    }
+    if f0 > 0.0 && h0 > 0.0 {
+        let m = (h1 / h0).ln() / (f1 / f0).ln();
+        if (0.25..=1.0).contains(&m) {
+            let h = h1 * (force / f1).powf(m);
+            return Some((h - h1) / dh_last);
+        }
+    }
+    Some(q)
 }
 
 /// The instrument's frame between the recorded depth and the punch (docs/theory.md
@@ -182,7 +239,50 @@ impl Drive for CompliantDrive<'_> {
             Some(Load {
                 force: state.force,
                 spring: Some(spring),
+                restart: None,
             }),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On `h = c F^m` (a sharp tip's `m = 1/2`, a sphere's `2/3`, a flat punch's 1) the
+    /// restart lands on the power law's depth at the new force exactly, where the time
+    /// extrapolation of a trigger at 40 N/s followed by 2 N/s in 9.2-times-longer steps
+    /// would be about 18 increments deep.
+    #[test]
+    fn restart_follows_the_power_law_through_the_last_two_states() {
+        for m in [0.5, 2.0 / 3.0, 1.0] {
+            let h = |f: f64| 0.01 * f.powf(m);
+            let (before, now) = ((2.0, h(2.0)), (4.0, h(4.0)));
+            for force in [4.2, 5.04, 9.0, 3.9 + 1.0] {
+                let q = follow_force(before, now, force).unwrap();
+                let predicted = now.1 + q * (now.1 - before.1);
+                assert!(
+                    (predicted - h(force)).abs() <= 1e-13 * h(force),
+                    "m {m}, F {force}: {predicted} vs {}",
+                    h(force)
+                );
+            }
+        }
+    }
+
+    /// Without two states in contact the depth follows the last step's depth per newton;
+    /// an unloading after a loading (or a hold, no force increment) does not restart.
+    #[test]
+    fn restart_falls_back_to_the_force_ratio_and_skips_reversals() {
+        // the last step loaded from zero force: dF / dF_last
+        let q = follow_force((0.0, 0.001), (2.0, 0.003), 3.0).unwrap();
+        assert!((q - 0.5).abs() < 1e-15, "{q}");
+        // an exponent outside [1/4, 1] (h ~ F^2 here): the force ratio
+        let q = follow_force((2.0, 0.04), (4.0, 0.16), 5.0).unwrap();
+        assert!((q - 0.5).abs() < 1e-15, "{q}");
+        // unloading after loading, a hold before, no depth increment
+        assert_eq!(follow_force((2.0, 0.1), (4.0, 0.14), 3.0), None);
+        assert_eq!(follow_force((4.0, 0.1), (4.0, 0.11), 5.0), None);
+        assert_eq!(follow_force((2.0, 0.1), (4.0, 0.1), 5.0), None);
     }
 }

@@ -353,6 +353,11 @@ pub struct LoadHistory {
     pub schedule: Schedule,
     /// `(t_end, target)` of every segment, in time order.
     pub ends: Vec<(f64, Target)>,
+    /// For every segment of `ends`, the index of the configured segment it comes from: a
+    /// constant-`Pdot/P` segment's steps share one (`pdotp.rs`), and a force record is one
+    /// configured segment. Where it changes the drive restarts Newton's first guess
+    /// (`drive.rs`, [`LoadHistory::starts_configured_segment`]).
+    pub configured: Vec<usize>,
 }
 
 impl LoadHistory {
@@ -386,7 +391,12 @@ impl LoadHistory {
             j += s.steps;
             end.0 = schedule.t[j];
         }
-        Ok(LoadHistory { schedule, ends })
+        let configured = (0..ends.len()).collect();
+        Ok(LoadHistory {
+            schedule,
+            ends,
+            configured,
+        })
     }
 
     /// A history prescribing a measured force record `(t_i, F_i)` (s, N), one
@@ -419,7 +429,14 @@ impl LoadHistory {
             }
             ends.push((t[i], Target::Force(force[i])));
         }
-        Ok(LoadHistory { schedule, ends })
+        // one configured segment: a record's force rate jumps from sample to sample on a
+        // coarse contact while its depth moves smoothly, so no sample restarts the guess
+        let configured = vec![0; ends.len()];
+        Ok(LoadHistory {
+            schedule,
+            ends,
+            configured,
+        })
     }
 
     /// Whether some segment prescribes the force.
@@ -429,8 +446,27 @@ impl LoadHistory {
 
     /// The segment a step ending at time `t` (s) belongs to: its end time and target.
     pub fn segment_at(&self, t: f64) -> (f64, Target) {
+        self.ends[self.index_at(t)]
+    }
+
+    /// The index in `ends` of the segment a step ending at time `t` (s) belongs to.
+    fn index_at(&self, t: f64) -> usize {
         let i = self.ends.partition_point(|e| e.0 < t);
-        self.ends[i.min(self.ends.len() - 1)]
+        i.min(self.ends.len() - 1)
+    }
+
+    /// Whether a step from the state at `t0` (s; the end of the last step) to `t1` (s)
+    /// is the first of another configured segment than the last step's (`false` from the
+    /// initial state, and for a history without [`LoadHistory::configured`] entries).
+    pub fn starts_configured_segment(&self, t0: f64, t1: f64) -> bool {
+        if t0 <= self.schedule.t[0] {
+            return false;
+        }
+        let (a, b) = (self.index_at(t0), self.index_at(t1));
+        match (self.configured.get(a), self.configured.get(b)) {
+            (Some(x), Some(y)) => x != y,
+            _ => false,
+        }
     }
 }
 

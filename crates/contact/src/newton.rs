@@ -252,6 +252,22 @@ impl Extrapolation {
         Extrapolation { degrees, weights }
     }
 
+    /// At the first step of a configured segment (`restart`, [`Load::restart`]): the last
+    /// step's increment times `q`, degree 1, in place of the time polynomial (affine laws
+    /// keep none).
+    fn restarted(self, state: &State, q: f64, affine: bool, n: usize) -> Extrapolation {
+        let last = &state.past[0];
+        if affine || !(last.dt > 0.0 && last.du.len() == n) {
+            return self;
+        }
+        let mut weights = self.weights;
+        weights[0] = [q, 0.0, 0.0];
+        Extrapolation {
+            degrees: 1,
+            weights,
+        }
+    }
+
     /// The increment predicted by degree `d` at dof `i` (reads the `d` latest steps only).
     fn predict(&self, past: &[Increment; 3], d: usize, i: usize) -> f64 {
         let w = &self.weights[d - 1];
@@ -421,9 +437,15 @@ impl<'m> Newton<'m> {
             single_change: false,
         };
         // predictor: activate nodes that the new depth makes penetrate, with the surface
-        // displacement extrapolated from the last increment
+        // displacement extrapolated from the last increment (at the start of a configured
+        // segment, scaled as the drive scaled the depth)
         let last = &state.past[0];
-        let ratio = if last.dt > 0.0 { dt / last.dt } else { 0.0 };
+        let restart = spec.load.and_then(|l| l.restart);
+        let ratio = match restart {
+            Some(q) => q,
+            None if last.dt > 0.0 => dt / last.dt,
+            None => 0.0,
+        };
         self.constraint
             .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
         // a force prescribed out of contact needs the trigger; the frame's spring
@@ -473,7 +495,7 @@ impl<'m> Newton<'m> {
             None if dt > 0.0 => (spec.depth - state.depth) / dt,
             _ => 0.0,
         };
-        let extra = Extrapolation::new(
+        let mut extra = Extrapolation::new(
             state,
             dt,
             rate,
@@ -481,6 +503,9 @@ impl<'m> Newton<'m> {
             force_prescribed,
             it.u.len(),
         );
+        if let Some(q) = restart {
+            extra = extra.restarted(state, q, law.affine.is_some(), it.u.len());
+        }
         match spec.guess {
             Some((u0, u1)) if law.affine.is_none() => {
                 for ((x, a), b) in it.u.iter_mut().zip(u0).zip(u1) {
@@ -558,9 +583,13 @@ impl<'m> Newton<'m> {
     /// component over the largest internal force), and under load control the Euclidean
     /// norm of the bordered residual in N (`r.norm`: equilibrium, the constraint's rows
     /// and the force equation, [`Newton::evaluate`]); docs/solver.md, "The line search".
-    /// Smooth materials and the laws' paths (`as_law`) are left as they are (their bits
-    /// unchanged), and so is every update that lowered the merit. Returns the residual of
-    /// the iterate kept.
+    /// Under depth control and the frame's spring, smooth materials and the laws' paths
+    /// (`as_law`) are left as they are (their bits unchanged); under a prescribed force
+    /// every law's update that raised the merit is shortened: Norton-Hoff's first iterate
+    /// of a Pdot/P step where a third node had just touched down sat 9 increments deep,
+    /// and its updates raised the norm 15x, then cycled until the step was cut
+    /// (docs/validation-load-control.md §12). Every update that lowered the merit is
+    /// left as it is. Returns the residual of the iterate kept.
     ///
     /// # Errors
     /// A failed local update of a shortened iterate, as [`Newton::evaluate`].
@@ -581,7 +610,14 @@ impl<'m> Newton<'m> {
         // the largest component, none and 63 on the norm)
         let merit = |r: &Residual| if spec.load.is_some() { r.norm } else { r.rel };
         let m0 = merit(&prev.0);
-        if !switching || law.law.is_some() || it.changes != prev.1 || merit(&r) <= m0 {
+        // under a prescribed force every nonlinear law's diverging update is shortened
+        // too (a smooth law's, Norton-Hoff's through `as_law`, included): see above
+        let eligible = if spec.load.is_some_and(|l| l.is_force()) {
+            true
+        } else {
+            switching && law.law.is_none()
+        };
+        if !eligible || it.changes != prev.1 || merit(&r) <= m0 {
             return Ok(r);
         }
         let mut best = r;

@@ -268,6 +268,8 @@ impl LoadHistory {
             .map(|(i, s)| s.leg(i))
             .collect::<Result<Vec<Leg>, _>>()?;
         let mut plain = Vec::with_capacity(specs.len());
+        // the configured segment of every plain one
+        let mut configured = Vec::with_capacity(specs.len());
         // the force the last segment prescribed (`None` after depth control)
         let mut prescribed: Option<f64> = None;
         for (i, leg) in legs.iter().enumerate() {
@@ -286,8 +288,11 @@ impl LoadHistory {
                     prescribed = Some(p.force);
                 }
             }
+            configured.resize(plain.len(), i);
         }
-        LoadHistory::from_segments(&plain)
+        let mut history = LoadHistory::from_segments(&plain)?;
+        history.configured = configured;
+        Ok(history)
     }
 }
 
