@@ -28,6 +28,13 @@
 //! material's products at every Gauss point. The nodal states are checked against the
 //! recorded last state at every point once per sweep (else the Gauss-point pass sweeps).
 //! Sequential: the same bits on any number of threads.
+//!
+//! Under load control (`load.rs`) the step is bordered: its cotangent comes from the
+//! nodal right-hand side `g` against the step's depth column and its Schur complement,
+//! as the Gauss-point sweep forms it from its own `g` (the same vector), and the
+//! transposed solve takes it (one solve with the capacitance system of the material's
+//! uniform tangent). The free rows still solve `K_i V = g`, so `K_i V` and the
+//! recursion of `R`, `Q` are unchanged.
 
 use indentify_contact::{ContactKind, ForceCotangent, StepFields, StepRecord, Trajectory};
 use indentify_fe::dofs::NO_EQ;
@@ -319,8 +326,8 @@ impl NodalMat {
 }
 
 impl Adjoint<'_> {
-    /// Whether the last depth-controlled sweep of a material with internal variables ran
-    /// all-nodal (for tests that compare it with the Gauss-point pass).
+    /// Whether the last depth- or load-controlled sweep of a material with internal
+    /// variables ran all-nodal (for tests that compare it with the Gauss-point pass).
     #[doc(hidden)]
     pub fn last_material_sweep_was_nodal(&self) -> bool {
         self.nodal_mat.on
