@@ -256,3 +256,64 @@ fn nodal_load_gradient_matches_finite_differences() {
         worst.0, worst.1
     );
 }
+
+/// The system shall give, through the instrument's frame (`gradient_compliant`: machine
+/// depth `H = h + Cf F - vd t - h0`, the same bordered step), the Gauss-point sweep's
+/// gradient (the law's parameters, `Cf`, `vd`, `h0` and `dJ/dH_i`) to 1e-12 relative from
+/// the all-nodal sweep of a Prony solid of one to three terms (which it shall use there).
+#[test]
+fn nodal_compliant_sweep_equals_the_gauss_point_sweep() {
+    use indentify_contact::{Frame, Schedule, Segment};
+    let m = small_model(cone(), ContactKind::Vertical);
+    let mut solver = DirectSolver::new(&m).unwrap();
+    let seg = |duration: f64, depth: f64, steps: usize| Segment {
+        duration,
+        depth,
+        steps,
+    };
+    // machine depth: load, hold, partial unload (step lengths 1/6, 1/2, 1/5 s)
+    let s = Schedule::from_segments(&[seg(1.0, 0.08, 6), seg(1.0, 0.08, 2), seg(1.0, 0.05, 5)])
+        .unwrap();
+    let frame = Frame {
+        compliance: 2e-5,
+        drift: 1e-3,
+        offset: 1e-3,
+    };
+    let mut worst = 0.0f64;
+    for n in 1..=3 {
+        let (mat, c) = prony(n);
+        let t = solver
+            .run_compliant(&mat, &c, &s, &frame, &opts(true, 1e-11))
+            .unwrap();
+        let w: Vec<f64> = (0..t.steps.len())
+            .map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64)
+            .collect();
+        let mut adj = Adjoint::new(&m).unwrap();
+        let nodal = adj
+            .gradient_compliant(&mat, &c, &t, (&s, &frame), &w)
+            .unwrap();
+        assert!(adj.last_material_sweep_was_nodal(), "{n} terms");
+        adj.set_fused(false);
+        let points = adj
+            .gradient_compliant(&mat, &c, &t, (&s, &frame), &w)
+            .unwrap();
+        assert!(!adj.last_material_sweep_was_nodal());
+        let r = rel(&points.dj_dc, &nodal.dj_dc, &c);
+        let scale = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let off = |a: &[f64], b: &[f64]| {
+            let big = scale(a);
+            a.iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / big))
+        };
+        let r_frame = off(&points.dj_dframe, &nodal.dj_dframe);
+        let r_h = off(&points.dj_dh, &nodal.dj_dh);
+        assert!(points.dj_dframe.iter().all(|g| g.is_finite() && *g != 0.0));
+        assert!(
+            r <= 1e-12 && r_frame <= 1e-12 && r_h <= 1e-12,
+            "{n} terms: law {r:e}, frame {r_frame:e}, dJ/dH {r_h:e}"
+        );
+        worst = worst.max(r).max(r_frame).max(r_h);
+    }
+    eprintln!("all-nodal against Gauss-point Prony sweep through the frame: {worst:e}");
+}
