@@ -13,13 +13,18 @@
 //! no forward finds the factor of the round before. Prints the mean of REPEAT rounds
 //! (on-CPU time of the thread) and the ratios to the load-controlled forward:
 //! `RAYON_NUM_THREADS=1 cargo run --release -p indentify-adjoint --example
-//! laws_load_adjoint -- [FILTER] [REPEAT]` (`FILTER`: the cases whose name contains it).
+//! laws_load_adjoint -- [FILTER] [REPEAT] [frame]` (`FILTER`: the cases whose name
+//! contains it). With `frame`, the second drive is depth through the instrument's frame
+//! instead of load control: `DirectSolver::run_compliant` of the trapezoid's machine
+//! depths with `Cf = 1e-4` mm/N, `Adjoint::gradient_compliant` of the force cost
+//! `J = sum F_i^2 / 2` (the "load" columns are then the compliant drive's).
 
 use std::time::Instant;
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
-    ContactKind, DirectSolver, LoadHistory, Model, Punch, Schedule, SolverOptions, trapezoid,
+    ContactKind, DirectSolver, Frame, LoadHistory, Model, Punch, Schedule, SolverOptions,
+    Trajectory, trapezoid,
 };
 use indentify_laws::{
     Elastic, Hardening, LawMaterial, Material, Maxwell, NortonHoff, Plastic, Prony, Rate,
@@ -132,6 +137,11 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(3);
+    let through_frame = std::env::args().nth(3).is_some_and(|s| s == "frame");
+    let frame = Frame {
+        compliance: 1e-4,
+        ..Frame::default()
+    };
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
     let model = Model::with_contact(
         mesh,
@@ -181,36 +191,47 @@ fn main() {
             std::hint::black_box(d);
             let params = point(1);
             let t0 = Clock::now();
-            let traj = solver
-                .run_history(mat, &params, &history, &opts)
-                .expect("load run");
+            let traj = if through_frame {
+                solver.run_compliant(mat, &params, &schedule, &frame, &opts)
+            } else {
+                solver.run_history(mat, &params, &history, &opts)
+            }
+            .expect("second run");
             time(&mut t[1], t0);
             steps = traj.steps.len();
             let dj_dh: Vec<f64> = traj.steps.iter().map(|s| s.depth).collect();
+            let dj_df: Vec<f64> = traj.steps.iter().map(|s| s.force).collect();
             let zero = vec![0.0; steps];
+            let gradient = |adjoint: &mut Adjoint, traj: &Trajectory| {
+                if through_frame {
+                    adjoint
+                        .gradient_compliant(mat, &params, traj, (&schedule, &frame), &dj_df)
+                        .expect("gradient")
+                        .dj_dc
+                } else {
+                    adjoint
+                        .gradient_load(mat, &params, traj, &history, &dj_dh, &zero)
+                        .expect("gradient")
+                        .dj_dc
+                }
+            };
             let t0 = Clock::now();
             adjoint.take_factor(&mut solver);
-            let g = adjoint
-                .gradient_load(mat, &params, &traj, &history, &dj_dh, &zero)
-                .expect("gradient");
+            let with_factor = gradient(&mut adjoint, &traj);
             time(&mut t[2], t0);
             nodal = adjoint.last_material_sweep_was_nodal() && mat.as_law().is_none();
-            let with_factor = g.dj_dc;
             for (slot, fused) in [(3, true), (4, false)] {
                 adjoint.set_fused(fused);
                 let t0 = Clock::now();
-                let g = adjoint
-                    .gradient_load(mat, &params, &traj, &history, &dj_dh, &zero)
-                    .expect("gradient");
+                let g = gradient(&mut adjoint, &traj);
                 time(&mut t[slot], t0);
                 // the three sweeps give one gradient (to round-off)
                 let big = g
-                    .dj_dc
                     .iter()
                     .zip(&params)
                     .fold(0.0f64, |m, (g, c)| m.max((g * c).abs()));
                 let off = (0..params.len()).fold(0.0f64, |m, k| {
-                    m.max((g.dj_dc[k] - with_factor[k]).abs() * params[k].abs() / big)
+                    m.max((g[k] - with_factor[k]).abs() * params[k].abs() / big)
                 });
                 assert!(off < 1e-9, "{name}: the sweeps differ by {off:e}");
             }
