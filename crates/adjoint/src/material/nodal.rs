@@ -29,7 +29,8 @@
 //! recorded last state at every point once per sweep (else the Gauss-point pass sweeps).
 //! Sequential: the same bits on any number of threads.
 //!
-//! Under load control (`load.rs`) the step is bordered: its cotangent comes from the
+//! Under load control (`load.rs`) and through the frame (`compliant.rs`) the step is
+//! bordered: its cotangent comes from the
 //! nodal right-hand side `g` against the step's depth column and its Schur complement,
 //! as the Gauss-point sweep forms it from its own `g` (the same vector), and the
 //! transposed solve takes it (one solve with the capacitance system of the material's
