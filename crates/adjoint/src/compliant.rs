@@ -150,12 +150,18 @@ impl Adjoint<'_> {
             kv: vec![0.0; n_eq],
         };
         let mut dj_dh = vec![0.0; n];
+        // a linear material with isotropic blocks: the all-nodal sweep where it applies
+        // (`material/nodal.rs`, its step bordered as the Gauss-point one)
+        let nodal = law.is_none() && replay.is_none() && self.begin_nodal_material(mat, c, traj);
+        if law.is_none() && !nodal {
+            self.nodal_mat.on = false;
+        }
         let mut which = match law {
             Some(law) => Which::Law(law, Box::new(Sweep::new(law, c))),
             None => Which::Material(Box::new(MatSweep::new(
                 mat,
                 c.len(),
-                self.model.disc.n_qp(),
+                if nodal { 1 } else { self.model.disc.n_qp() },
             ))),
         };
         self.begin_sweep();
@@ -193,6 +199,18 @@ impl Adjoint<'_> {
                         prev_dt: i.checked_sub(1).map(|p| traj.steps[p].dt),
                     };
                     adj.bordered_step(*law, c, sweep, &step, border)?;
+                }
+                Which::Material(sw) if nodal => {
+                    adj.nodal_material_step_bordered(
+                        mat,
+                        c,
+                        sw,
+                        i,
+                        rec,
+                        (f0, f1),
+                        g,
+                        Some(border),
+                    )?;
                 }
                 Which::Material(sw) => {
                     adj.material_step(mat, c, sw, i, rec, (f0, f1), g, Some(border))?;

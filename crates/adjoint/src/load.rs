@@ -139,7 +139,16 @@ impl Adjoint<'_> {
             })?;
             sweep.finish(law, c)
         } else {
-            let mut sw = MatSweep::new(mat, c.len(), self.model.disc.n_qp());
+            // the all-nodal sweep of a linear material with isotropic blocks where it
+            // applies (`material/nodal.rs`, its step bordered as the Gauss-point one)
+            let nodal = if source.replay.is_none() {
+                self.begin_nodal_material(mat, c, traj)
+            } else {
+                self.nodal_mat.on = false;
+                false
+            };
+            let nq = if nodal { 1 } else { self.model.disc.n_qp() };
+            let mut sw = MatSweep::new(mat, c.len(), nq);
             self.load_sweep(source, (dj_dh, dj_df), |adj, step, border| {
                 let Recorded {
                     i,
@@ -149,6 +158,18 @@ impl Adjoint<'_> {
                     rho,
                     ..
                 } = *step;
+                if nodal {
+                    return adj.nodal_material_step_bordered(
+                        mat,
+                        c,
+                        &mut sw,
+                        i,
+                        rec,
+                        (f0, f1),
+                        rho,
+                        border,
+                    );
+                }
                 adj.material_step(mat, c, &mut sw, i, rec, (f0, f1), rho, border)
             })?;
             sw.grad
@@ -387,7 +408,7 @@ impl Adjoint<'_> {
 
 /// The error of a load-controlled step `i` whose contact stiffness `s` (N/mm) gives no
 /// finite cotangent.
-fn not_positive(i: usize, rec: &StepRecord, s: f64) -> AdjointError {
+pub(crate) fn not_positive(i: usize, rec: &StepRecord, s: f64) -> AdjointError {
     AdjointError::Step {
         step: i,
         t: rec.t,

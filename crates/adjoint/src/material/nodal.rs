@@ -28,6 +28,14 @@
 //! material's products at every Gauss point. The nodal states are checked against the
 //! recorded last state at every point once per sweep (else the Gauss-point pass sweeps).
 //! Sequential: the same bits on any number of threads.
+//!
+//! Under load control (`load.rs`) and through the frame (`compliant.rs`) the step is
+//! bordered: its cotangent comes from the
+//! nodal right-hand side `g` against the step's depth column and its Schur complement,
+//! as the Gauss-point sweep forms it from its own `g` (the same vector), and the
+//! transposed solve takes it (one solve with the capacitance system of the material's
+//! uniform tangent). The free rows still solve `K_i V = g`, so `K_i V` and the
+//! recursion of `R`, `Q` are unchanged.
 
 use indentify_contact::{ContactKind, ForceCotangent, StepFields, StepRecord, Trajectory};
 use indentify_fe::dofs::NO_EQ;
@@ -36,6 +44,7 @@ use indentify_laws::{Mat4, Material, Vec4};
 
 use super::MatSweep;
 use crate::affine::Iso;
+use crate::load::{BorderedRho, not_positive};
 use crate::{Adjoint, AdjointError};
 
 /// The most blocks a state may have (`Prony`'s eight terms and the stress).
@@ -318,8 +327,8 @@ impl NodalMat {
 }
 
 impl Adjoint<'_> {
-    /// Whether the last depth-controlled sweep of a material with internal variables ran
-    /// all-nodal (for tests that compare it with the Gauss-point pass).
+    /// Whether the last depth- or load-controlled sweep of a material with internal
+    /// variables ran all-nodal (for tests that compare it with the Gauss-point pass).
     #[doc(hidden)]
     pub fn last_material_sweep_was_nodal(&self) -> bool {
         self.nodal_mat.on
@@ -552,8 +561,39 @@ impl Adjoint<'_> {
         (f0, f1): (&StepFields, &StepFields),
         rho: f64,
     ) -> Result<(), AdjointError> {
-        if sw.zero && rho == 0.0 && rec.active.is_empty() && !self.contact.adjoint_pending() {
-            return Ok(());
+        self.nodal_material_step_bordered(mat, c, sw, i, rec, (f0, f1), rho, None)
+            .map(|_| ())
+    }
+
+    /// [`Adjoint::nodal_material_step`] with the cotangent of a load-controlled step (or
+    /// of a depth-controlled step whose depth starts from a load-controlled one's) set by
+    /// its depth column (`border`, `load.rs`): the bordered scalar from the nodal
+    /// right-hand side, as `Adjoint::material_step` forms it from the Gauss-point one, and
+    /// the step's transposed solve with it (one solve where the system is an affine law's
+    /// capacitance system). Returns the cotangent used.
+    ///
+    /// # Errors
+    /// As [`Adjoint::nodal_material_step`]; [`AdjointError::Step`] when a load-controlled
+    /// step's contact stiffness is not positive.
+    #[allow(clippy::too_many_arguments)] // (`material_step`'s own)
+    pub(crate) fn nodal_material_step_bordered(
+        &mut self,
+        mat: &dyn Material,
+        c: &[f64],
+        sw: &mut MatSweep,
+        i: usize,
+        rec: &StepRecord,
+        (f0, f1): (&StepFields, &StepFields),
+        rho: f64,
+        border: Option<BorderedRho<'_>>,
+    ) -> Result<f64, AdjointError> {
+        if border.is_none()
+            && sw.zero
+            && rho == 0.0
+            && rec.active.is_empty()
+            && !self.contact.adjoint_pending()
+        {
+            return Ok(rho);
         }
         sw.zero = false;
         let fail = |reason: String| AdjointError::Step {
@@ -566,11 +606,14 @@ impl Adjoint<'_> {
             return Err(fail("singular local Jacobian A (tangent)".into()));
         }
         let mut nd = std::mem::take(&mut self.nodal_mat);
-        let out = self.nodal_step_inner(&mut nd, mat, c, sw, i, rec, (f0, f1), rho);
+        let out = self.nodal_step_inner(&mut nd, mat, c, sw, (i, rec), (f0, f1), (rho, border));
         self.nodal_mat = nd;
         sw.d_next.copy_from_slice(&sw.d);
         sw.e_next.copy_from_slice(&sw.ej);
-        out.map_err(fail)
+        out.map_err(|e| match e {
+            StepError::Nodal(reason) => fail(reason),
+            StepError::Adjoint(e) => e,
+        })
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -580,27 +623,30 @@ impl Adjoint<'_> {
         mat: &dyn Material,
         c: &[f64],
         sw: &mut MatSweep,
-        i: usize,
-        rec: &StepRecord,
+        (i, rec): (usize, &StepRecord),
         (f0, f1): (&StepFields, &StepFields),
-        rho: f64,
-    ) -> Result<(), String> {
+        (rho, border): (f64, Option<BorderedRho<'_>>),
+    ) -> Result<f64, StepError> {
         let model = self.model;
         let (nb, n_eq) = (nd.nb, model.dofs.n_eq);
         let m = 4 * nb;
-        let not_iso = || "the all-nodal sweep's folded blocks are not isotropic".to_string();
+        let not_iso =
+            || StepError::Nodal("the all-nodal sweep's folded blocks are not isotropic".into());
         let qf = IsoBlocks::of(&sw.qm, nb, nb, 1e-10).ok_or_else(not_iso)?;
         let sm = IsoBlocks::of(&sw.sm, nb, 1, 1e-10).ok_or_else(not_iso)?;
         let gl = IsoBlocks::of(&sw.glin, nb, 1, 1e-10).ok_or_else(not_iso)?;
         let ct = Iso::of(&sw.ct).ok_or_else(not_iso)?;
         let (cd, cs) = (ct.p, ct.p + ct.q);
         if !nd.ops_for(mat, c, rec.dt) {
-            return Err("the all-nodal sweep's parameter blocks are not isotropic".into());
+            return Err(StepError::Nodal(
+                "the all-nodal sweep's parameter blocks are not isotropic".into(),
+            ));
         }
         debug_assert_eq!(sw.m, m);
         // the step's system
         self.tangents[0] = sw.ct;
-        self.prepare_material_step(rec, f1, Some(c))?;
+        self.prepare_material_step(rec, f1, Some(c))
+            .map_err(StepError::Nodal)?;
         // the right-hand side sum_I S^d_I R_I + S^s_I Q_I
         nd.g.fill(0.0);
         let g = &mut nd.g[..n_eq];
@@ -616,7 +662,34 @@ impl Adjoint<'_> {
         }
         let mut eq = std::mem::take(&mut self.eq);
         eq.copy_from_slice(g);
-        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+        let rho = match border {
+            None => {
+                self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+                rho
+            }
+            // the depth column, the cotangent and the transposed solve in one solve (an
+            // affine law's capacitance system), else the bordered scalar from the
+            // right-hand side and the plain solve, as the Gauss-point sweep does
+            Some(b) => {
+                match (self.contact).adjoint_solve_bordered(rec, &f1.u, &mut eq, &mut *b.rho_of) {
+                    Some((rho, _)) if rho.is_finite() => rho,
+                    Some((_, s)) => {
+                        self.eq = eq;
+                        return Err(StepError::Adjoint(not_positive(i, rec, s)));
+                    }
+                    None => {
+                        eq.copy_from_slice(g);
+                        self.eq = eq;
+                        let rho = self
+                            .bordered_rho(i, rec, &f1.u, b)
+                            .map_err(StepError::Adjoint)?;
+                        eq = std::mem::take(&mut self.eq);
+                        self.contact.adjoint_solve(rec, &f1.u, rho, &mut eq);
+                        rho
+                    }
+                }
+            }
+        };
         // K_i V: the right-hand side on the free rows, the step's tangent on the
         // constrained ones
         let kv = &mut nd.kv[..n_eq];
@@ -723,6 +796,13 @@ impl Adjoint<'_> {
                 sw.grad[k] -= acc;
             }
         }
-        Ok(())
+        Ok(rho)
     }
+}
+
+/// How a step of the all-nodal sweep fails: a condition of the nodal form (a message,
+/// named with the material by the caller) or the bordered step's own error.
+enum StepError {
+    Nodal(String),
+    Adjoint(AdjointError),
 }
