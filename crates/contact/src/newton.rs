@@ -958,12 +958,19 @@ impl<'m> Newton<'m> {
         let eta = rel
             .max(0.1 * spec.opts.residual_tol / rel.max(1e-300))
             .clamp(1e-12, 0.1);
-        self.system
-            .solve_inexact(model, &mut self.rhs, &self.aux, eta)
-            .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
-            .map_err(|f| distortion(model, f, &it.u, depth))?;
-        if let Some(load) = spec.load {
-            self.border(it, load, spec.state.depth, eta)?;
+        // load control in the capacitance mode: the step and the depth column in one
+        let fused = match spec.load {
+            Some(load) => self.border_capacitance(it, load, spec.state.depth)?,
+            None => false,
+        };
+        if !fused {
+            self.system
+                .solve_inexact(model, &mut self.rhs, &self.aux, eta)
+                .map_err(|e: FeError| StepFailure::Linear(e.to_string()))
+                .map_err(|f| distortion(model, f, &it.u, depth))?;
+            if let Some(load) = spec.load {
+                self.border(it, load, spec.state.depth, eta)?;
+            }
         }
         for (d, &e) in model.dofs.eq.iter().enumerate() {
             if e != NO_EQ {
@@ -1007,20 +1014,11 @@ impl Newton<'_> {
         eta: f64,
     ) -> Result<(), StepFailure> {
         let model = self.model;
-        let n = model.dofs.n_eq;
-        if self.v.len() != n {
-            self.v = vec![0.0; n];
-            self.kv = vec![0.0; n];
-            self.col = vec![0.0; n];
-            self.w_prev = vec![0.0; n];
-            self.v_prev = vec![0.0; n];
-            self.w_ok = false;
-        }
-        let force = load.target(it.depth);
+        self.border_space();
         if !load.is_force() && it.set.active().next().is_none() {
             // the spring alone: out of contact the depth column and `s` vanish
             self.col.fill(0.0);
-            let du = force / load.stiffness();
+            let du = load.target(it.depth) / load.stiffness();
             it.depth += du;
             self.d_depth = du;
             return Ok(());
@@ -1095,43 +1093,89 @@ impl Newton<'_> {
         };
         let g_du1 = -dot(&self.kv, &self.rhs);
         let f = punch_force(model, &it.set, &self.body.f_int);
-        let n_active = it.set.active().count();
-        if !load.is_force() {
-            let total = s + load.stiffness();
-            if !(total.is_finite() && total > 0.0) {
-                return Err(StepFailure::Load(format!(
-                    "compliant depth control: the contact and frame stiffness dF/dU + 1/Cf                      = {total:.3e} N/mm is not positive at the depth {} mm with {n_active}                      nodes in contact",
-                    it.depth
-                )));
-            }
-            let du = (force - f - g_du1) / total;
-            for (x, c) in self.rhs.iter_mut().zip(&self.col) {
-                *x += du * c;
-            }
-            it.depth += du;
-            self.d_depth = du;
-            return Ok(());
-        }
-        if !(s.is_finite() && s > 1e-12 * vkv.abs()) {
-            return Err(StepFailure::Load(format!(
-                "load control: the contact stiffness dF/dU = {s:.3e} N/mm is not positive \
-                 at the depth {} mm with {n_active} nodes in contact: the force {force} N \
-                 cannot be prescribed there (no contact that carries load); end the \
-                 segment in depth control",
-                it.depth
-            )));
-        }
-        // the depth moves at most to three times its distance from the step's start (or
-        // by a tenth of the first element's width): from a trigger, a single node's small stiffness
-        // would throw the punch far beyond the contact that then forms
-        let cap = (2.0 * (it.depth - start).abs()).max(0.1 * model.gap_length());
-        let du = ((force - f - g_du1) / s).clamp(-cap, cap);
+        let border = Border {
+            load,
+            depth: it.depth,
+            start,
+            force: f,
+            gap: model.gap_length(),
+            n_active: it.set.active().count(),
+        };
+        let du = border.depth_increment(g_du1, s, vkv)?;
         for (x, c) in self.rhs.iter_mut().zip(&self.col) {
             *x += du * c;
         }
         it.depth += du;
         self.d_depth = du;
         Ok(())
+    }
+
+    /// The bordered update in the capacitance mode ([`ConstrainedSystem::solve_bordered`]:
+    /// one solve and one set of column updates for the step and the depth column, `g .
+    /// du_1` from the step's multipliers, no product `K v`), in place of the step's solve
+    /// and [`Newton::border`]; the same update to round-off. Returns `false` (nothing
+    /// changed) where that mode does not hold the system (then the step solves as
+    /// before).
+    ///
+    /// # Errors
+    /// As [`Newton::border`].
+    fn border_capacitance(
+        &mut self,
+        it: &mut Iteration,
+        load: Load,
+        start: f64,
+    ) -> Result<bool, StepFailure> {
+        let model = self.model;
+        if it.set.active().next().is_none() {
+            return Ok(false);
+        }
+        self.border_space();
+        self.v.fill(0.0);
+        for k in it.set.active() {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k] + 1) {
+                self.v[e] = 1.0;
+            }
+        }
+        let border = Border {
+            load,
+            depth: it.depth,
+            start,
+            force: punch_force(model, &it.set, &self.body.f_int),
+            gap: model.gap_length(),
+            n_active: it.set.active().count(),
+        };
+        let solved = self.system.solve_bordered(
+            model,
+            &self.v,
+            &mut self.rhs,
+            &self.aux,
+            |g_du1, s, vkv| border.depth_increment(g_du1, s, vkv),
+        );
+        let du = match solved {
+            None => return Ok(false),
+            Some(du) => du?,
+        };
+        // the depth column on the constrained equations (the line search's to shorten):
+        // -1 on the active candidates' vertical equations, 0 on the others
+        for (c, v) in self.col.iter_mut().zip(&self.v) {
+            *c = -v;
+        }
+        it.depth += du;
+        self.d_depth = du;
+        Ok(true)
+    }
+
+    /// Load control's work space, sized to the equations.
+    fn border_space(&mut self) {
+        let n = self.model.dofs.n_eq;
+        if self.v.len() != n {
+            self.v = vec![0.0; n];
+            self.kv = vec![0.0; n];
+            self.col = vec![0.0; n];
+            self.w_prev = vec![0.0; n];
+            self.v_prev = vec![0.0; n];
+            self.w_ok = false;
+        }
     }
 
     /// A converged load-controlled depth must lie within the specimen.
@@ -1159,6 +1203,59 @@ impl Newton<'_> {
 
 /// The depth (mm) at which the punch touches the first candidate of the body deformed
 /// by `u`: the smallest `phi(r_k) - u_z,k` (the vertical gap closes there).
+/// What the bordered update's force row needs of the iterate besides `g . du_1` and the
+/// contact stiffness `s` ([`Newton::border`], [`Newton::border_capacitance`]).
+struct Border {
+    load: Load,
+    /// The iterate's depth and the step's start depth (mm).
+    depth: f64,
+    start: f64,
+    /// The punch force of the iterate (N).
+    force: f64,
+    /// The first element's width (mm).
+    gap: f64,
+    n_active: usize,
+}
+
+impl Border {
+    /// The depth increment `dU` from the force row `F + g . du_1 + s dU = P` (through
+    /// the frame's spring: `s + 1 / Cf` for `s`, `P` the spring's force), limited under
+    /// a prescribed force to three times the depth's distance from the step's start (or
+    /// a tenth of the first element's width): from a trigger, a single node's small
+    /// stiffness would throw the punch far beyond the contact that then forms.
+    ///
+    /// # Errors
+    /// [`StepFailure::Load`] when the stiffness is not positive (`s` against `1e-12 v . K
+    /// v` under a prescribed force).
+    fn depth_increment(&self, g_du1: f64, s: f64, vkv: f64) -> Result<f64, StepFailure> {
+        let (load, f, n_active) = (self.load, self.force, self.n_active);
+        let force = load.target(self.depth);
+        if !load.is_force() {
+            let total = s + load.stiffness();
+            if !(total.is_finite() && total > 0.0) {
+                return Err(StepFailure::Load(format!(
+                    "compliant depth control: the contact and frame stiffness dF/dU + 1/Cf \
+                     = {total:.3e} N/mm is not positive at the depth {} mm with {n_active} \
+                     nodes in contact",
+                    self.depth
+                )));
+            }
+            return Ok((force - f - g_du1) / total);
+        }
+        if !(s.is_finite() && s > 1e-12 * vkv.abs()) {
+            return Err(StepFailure::Load(format!(
+                "load control: the contact stiffness dF/dU = {s:.3e} N/mm is not positive \
+                 at the depth {} mm with {n_active} nodes in contact: the force {force} N \
+                 cannot be prescribed there (no contact that carries load); end the \
+                 segment in depth control",
+                self.depth
+            )));
+        }
+        let cap = (2.0 * (self.depth - self.start).abs()).max(0.1 * self.gap);
+        Ok(((force - f - g_du1) / s).clamp(-cap, cap))
+    }
+}
+
 fn touch_depth(model: &Model, u: &[f64]) -> f64 {
     (0..model.candidates.len())
         .map(|k| model.candidate_profile[k] - u[2 * model.candidates[k] + 1])

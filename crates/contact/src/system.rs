@@ -1264,6 +1264,92 @@ impl ConstrainedSystem {
 }
 
 impl ConstrainedSystem {
+    /// Load control's bordered forward step in the capacitance mode (a reusable tangent
+    /// factorized exactly, vertical contact, no friction; the prescribed equations exactly
+    /// those marked 1 in `v`) with one solve and one set of column updates serving the
+    /// step and the depth column. With `y = K^-1 b~` (`b~` = `b` with the prescribed
+    /// equations zeroed), `S mu = y_C - xbar_C` and `S mu1 = 1`, the step's solve is
+    /// `du_1 = y - sum_c mu_c z_c` (`xbar` on `C`) and the depth column `du_2 = -sum_c
+    /// mu1_c z_c` (`-1` on `C`), as [`ConstrainedSystem::depth_column_capacitance`].
+    /// Since `K du_1 = b~ - sum_c mu_c e_c`, the linearized force row's product
+    /// `g . du_1 = -(K v) . du_1 = -sum_C (K du_1)_c = sum_c mu_c`, and the contact
+    /// stiffness is `s = 1 . mu1`: neither the product `K v` nor the depth column itself
+    /// is formed. `du_of(g . du_1, s, v . K v)` (`v . K v` from the rows of `C` alone)
+    /// returns the depth increment `dU`, and `b` receives `du_1 + dU du_2 = y - sum_c
+    /// (mu_c + dU mu1_c) z_c`, `xbar_C - dU` on `C`. Returns `Some(du_of's result)`, or
+    /// `None` (nothing changed) when the current system is not in that mode.
+    pub(crate) fn solve_bordered<E>(
+        &mut self,
+        model: &Model,
+        v: &[f64],
+        b: &mut [f64],
+        xbar: &[f64],
+        du_of: impl FnOnce(f64, f64, f64) -> Result<f64, E>,
+    ) -> Option<Result<f64, E>> {
+        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+            return None;
+        }
+        let m = self.schur_set.len();
+        let marked = v.iter().filter(|&&x| x != 0.0).count();
+        if m == 0
+            || marked != m
+            || !(self.schur_set.iter())
+                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
+        {
+            return None;
+        }
+        let t0 = std::time::Instant::now();
+        for &c in &self.schur_set {
+            b[c] = 0.0;
+        }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.chol.solve_with(b, &mut scratch);
+        self.scratch = scratch;
+        self.chol.n_solves += 1;
+        let (mu1, mu) = (&mut self.depth_mu, &mut self.bordered_nu);
+        mu1.clear();
+        mu1.resize(m, 1.0);
+        dense_cholesky_solve(&self.schur, m, mu1);
+        mu.clear();
+        mu.extend(self.schur_set.iter().map(|&c| b[c] - xbar[c]));
+        dense_cholesky_solve(&self.schur, m, mu);
+        let g_du1: f64 = mu.iter().sum();
+        let s: f64 = mu1.iter().sum();
+        // `v . K v`: the entries of `K` in the rows and columns of `C`
+        let k = &self.k_values;
+        let mut vkv = 0.0;
+        for &c in &self.schur_set {
+            vkv += k[model.pattern.diag[c]];
+            model.pattern.for_each_off_diagonal(c, |i, p| {
+                if v[i] != 0.0 {
+                    vkv += k[p];
+                }
+            });
+        }
+        let du = match du_of(g_du1, s, vkv) {
+            Ok(du) => du,
+            Err(e) => {
+                self.seconds[2] += t0.elapsed().as_secs_f64();
+                return Some(Err(e));
+            }
+        };
+        for ((c, n), u) in self.schur_set.iter().zip(mu.iter()).zip(mu1.iter()) {
+            let f = n + du * u;
+            if let Some(z) = self.columns.get(c) {
+                for (x, zi) in b.iter_mut().zip(z) {
+                    *x -= f * zi;
+                }
+            }
+        }
+        for &c in &self.schur_set {
+            b[c] = xbar[c] - du;
+        }
+        self.seconds[2] += t0.elapsed().as_secs_f64();
+        Some(Ok(du))
+    }
+}
+
+impl ConstrainedSystem {
     /// The adjoint's bordered step in the capacitance mode (a reusable tangent, vertical
     /// contact, no friction; the prescribed equations exactly those marked 1 in `v`),
     /// with one solve and one set of column updates: with `y = K^-1 g~` (`g~` = `b` with
@@ -1700,6 +1786,105 @@ mod tests {
             let mut w = v.clone();
             w[(0..n).find(|&e| v[e] == 0.0).unwrap()] = 1.0;
             assert!(reusable.depth_column_capacitance(&w, &mut col).is_none());
+        }
+        assert_eq!(reusable.factorizations(), 1);
+    }
+
+    /// Load control's fused bordered step in the capacitance mode: the arguments it hands
+    /// `du_of` equal the products formed from direct solves (`g . du_1 = -(K v) . du_1`
+    /// with the step's `du_1`, the stiffness `s = -(K v) . du_2` of the depth column
+    /// `du_2`, and `v . K v`) to 1e-10, and its result equals `du_1 + dU du_2` from those
+    /// solves to 1e-10 of its largest entry, `xbar - dU` exactly on the prescribed
+    /// equations, for growing and shrinking contact sets, with one factorization; the
+    /// direct mode and a `v` that is not the prescribed set decline, and an error from
+    /// `du_of` is handed back.
+    #[test]
+    fn fused_bordered_step_equals_the_two_solves() {
+        let model = small_model(6, 5);
+        let c = [20000.0, 0.3];
+        let t = Elastic.tangent(&c, &Vec4::default(), 1.0).unwrap();
+        let tangents = vec![t; model.disc.qp.len()];
+        let n = model.dofs.n_eq;
+        let nc = model.candidates.len();
+        let b0: Vec<f64> = (0..n)
+            .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        let mut reusable = ConstrainedSystem::new(&model).unwrap();
+        let mut direct = ConstrainedSystem::new(&model).unwrap();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        for (round, k_active) in [1, 3, 4, 2, nc].into_iter().enumerate() {
+            let active: Vec<bool> = (0..nc).map(|k| k < k_active).collect();
+            reusable.set_tangent(&model, &tangents, Some((&c, 1.0)));
+            reusable.set_active(&model, &active);
+            reusable.factorize(&model).unwrap();
+            direct.set_tangent(&model, &tangents, None);
+            direct.set_active(&model, &active);
+            direct.factorize(&model).unwrap();
+            let mut v = vec![0.0; n];
+            for k in (0..nc).filter(|&k| active[k]) {
+                v[model.dofs.equation(2 * model.candidates[k] + 1).unwrap()] = 1.0;
+            }
+            // prescribed increments on the active equations (zero elsewhere)
+            let xbar: Vec<f64> = (0..n)
+                .map(|i| v[i] * 1e-3 * ((i * 31) % 17) as f64)
+                .collect();
+            // the references: the two direct solves and the products
+            let mut du1 = b0.clone();
+            direct.solve_dirichlet(&model, &mut du1, &xbar);
+            let minus_v: Vec<f64> = v.iter().map(|x| -x).collect();
+            let mut du2 = vec![0.0; n];
+            direct.solve_dirichlet(&model, &mut du2, &minus_v);
+            let mut kv = vec![0.0; n];
+            model.pattern.sym_mul_add(direct.k_values(), &v, &mut kv);
+            let g_ref = -dot(&kv, &du1);
+            let g_scale: f64 = kv.iter().zip(&du1).map(|(a, b)| (a * b).abs()).sum();
+            let s_ref = -dot(&kv, &du2);
+            let vkv_ref = dot(&v, &kv);
+            let du = 0.37 - 0.1 * round as f64;
+            let mut x = b0.clone();
+            let mut args = (0.0, 0.0, 0.0);
+            let got = reusable.solve_bordered(&model, &v, &mut x, &xbar, |g, s, vkv| {
+                args = (g, s, vkv);
+                Ok::<f64, ()>(du)
+            });
+            assert_eq!(got, Some(Ok(du)));
+            let what = format!("{k_active} active");
+            let (g, s, vkv) = args;
+            assert!(
+                (g - g_ref).abs() <= 1e-10 * g_scale,
+                "{what}: g.du1 {g} vs {g_ref}"
+            );
+            assert!(
+                (s - s_ref).abs() <= 1e-10 * s_ref,
+                "{what}: s {s} vs {s_ref}"
+            );
+            assert!(
+                (vkv - vkv_ref).abs() <= 1e-12 * vkv_ref.abs(),
+                "{what}: v.Kv {vkv} vs {vkv_ref}"
+            );
+            let expect: Vec<f64> = du1.iter().zip(&du2).map(|(a, b)| a + du * b).collect();
+            let xbar_du: Vec<f64> = (0..n)
+                .map(|i| if v[i] != 0.0 { xbar[i] - du } else { xbar[i] })
+                .collect();
+            assert_same_solution(&x, &expect, &xbar_du, &direct, 1e-10, &what);
+            // declined: the direct mode, and a `v` that is not the prescribed set
+            let mut y = b0.clone();
+            assert!(
+                direct
+                    .solve_bordered(&model, &v, &mut y, &xbar, |_, _, _| Ok::<f64, ()>(0.0))
+                    .is_none()
+            );
+            let mut w = v.clone();
+            w[(0..n).find(|&e| v[e] == 0.0).unwrap()] = 1.0;
+            assert!(
+                reusable
+                    .solve_bordered(&model, &w, &mut y, &xbar, |_, _, _| Ok::<f64, ()>(0.0))
+                    .is_none()
+            );
+            assert_eq!(y, b0, "{what}: a declined call leaves b as it was");
+            // an error of `du_of` is handed back
+            let err = reusable.solve_bordered(&model, &v, &mut y, &xbar, |_, _, _| Err("no"));
+            assert_eq!(err, Some(Err("no")));
         }
         assert_eq!(reusable.factorizations(), 1);
     }
