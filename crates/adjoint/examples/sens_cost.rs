@@ -15,7 +15,9 @@
 //! `cargo run --release -p indentify-adjoint --example sens_cost -- r1 [ROUNDS]`
 //! prints the median of each and its ratio to the forward, the numeric factorizations of
 //! each pass, and the largest difference of the columns against the Gauss-point pass's,
-//! relative to each column's largest entry.
+//! relative to each column's largest entry. `... -- r1 ROUNDS gauss|nodal|forward` runs
+//! that alone ROUNDS times (the sensitivity passes on one trajectory, without the
+//! forward's factor), for `perf record`.
 use std::time::Instant;
 
 use indentify_adjoint::Adjoint;
@@ -85,6 +87,25 @@ fn main() {
     let mat = LawMaterial(law);
     let mut solver = DirectSolver::new(&model).expect("solver");
     let mut adjoint = Adjoint::new(&model).expect("adjoint");
+    // `sens_cost r1 N gauss|nodal|forward`: that alone, N times (for `perf record`)
+    if let Some(only) = std::env::args().nth(3) {
+        let traj = solver.run(&mat, &base, &schedule, &opts).expect("forward");
+        adjoint.set_fused(only != "gauss");
+        let t0 = Clock::now();
+        for _ in 0..rounds {
+            if only == "forward" {
+                std::hint::black_box(solver.run(&mat, &base, &schedule, &opts).expect("forward"));
+            } else {
+                std::hint::black_box(
+                    adjoint
+                        .sensitivities_of(&mat, &base, &traj, &free)
+                        .expect("sensitivities"),
+                );
+            }
+        }
+        println!("{only}: {:.2} ms each", 1e3 * t0.elapsed() / rounds as f64);
+        return;
+    }
     let mut t = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
     let mut facts = [0usize; 3];
     let mut worst = 0.0f64;

@@ -244,11 +244,9 @@ impl Adjoint<'_> {
         };
         let n = traj.steps.len();
         let (f0, f1) = (&traj.fields[n - 1], &traj.fields[n]);
-        let Some(q) = (0..f1.sigma.len()).max_by(|&a, &b| {
-            f1.sigma[a]
-                .max_abs()
-                .total_cmp(&f1.sigma[b].max_abs())
-        }) else {
+        let Some(q) = (0..f1.sigma.len())
+            .max_by(|&a, &b| f1.sigma[a].max_abs().total_cmp(&f1.sigma[b].max_abs()))
+        else {
             return false;
         };
         let (s0, s1) = (f0.sigma[q], f1.sigma[q]);

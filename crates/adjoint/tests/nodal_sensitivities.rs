@@ -52,8 +52,7 @@ fn seg(duration: f64, depth: f64, steps: usize) -> Segment {
 /// and takes the Gauss-point pass (Maxwell's keeps a residual stress).
 fn schedules() -> [Schedule; 2] {
     [
-        Schedule::from_segments(&[seg(0.5, 0.1, 6), seg(0.5, 0.1, 6), seg(0.5, 0.02, 6)])
-            .unwrap(),
+        Schedule::from_segments(&[seg(0.5, 0.1, 6), seg(0.5, 0.1, 6), seg(0.5, 0.02, 6)]).unwrap(),
         Schedule::from_segments(&[
             seg(1.0, 0.1, 6),
             seg(1.0, 0.1, 4),
@@ -114,7 +113,9 @@ fn nodal_sensitivities_equal_the_gauss_point_pass() {
     let mut adj = Adjoint::new(&model).unwrap();
     for schedule in &schedules() {
         for (law, c, cols) in cases() {
-            let traj = solver.run(&LawMaterial(law), &c, schedule, &opts()).unwrap();
+            let traj = solver
+                .run(&LawMaterial(law), &c, schedule, &opts())
+                .unwrap();
             assert!(traj.steps.iter().any(|s| s.active.len() > 2));
             adj.set_fused(true);
             let nodal = pass(&mut adj, law, &c, &traj, &cols);
@@ -145,10 +146,14 @@ fn nodal_sensitivities_stay_off_under_normal_contact() {
     let traj = solver
         .run(&LawMaterial(&Maxwell), &c, &schedules()[1], &opts())
         .unwrap();
-    let s = adj.sensitivities(&LawMaterial(&Maxwell), &c, &traj).unwrap();
+    let s = adj
+        .sensitivities(&LawMaterial(&Maxwell), &c, &traj)
+        .unwrap();
     assert!(!adj.last_pass_nodal());
     adj.set_fused(false);
-    let g = adj.sensitivities(&LawMaterial(&Maxwell), &c, &traj).unwrap();
+    let g = adj
+        .sensitivities(&LawMaterial(&Maxwell), &c, &traj)
+        .unwrap();
     assert_eq!(bits(&s), bits(&g));
 }
 
@@ -227,7 +232,8 @@ fn depth_controlled_sensitivities_with_the_forward_factor_equal_the_fresh_ones()
         let model = small_model(cone(), kind);
         for (j, schedule) in schedules().iter().enumerate() {
             for (law, c, cols) in cases() {
-                let (d, same, with, without) = taken_vs_fresh(&model, law, (&c, &c), schedule, &cols);
+                let (d, same, with, without) =
+                    taken_vs_fresh(&model, law, (&c, &c), schedule, &cols);
                 println!(
                     "{kind:?} schedule {j} {} {cols:?}: {d:.1e} (bits {same}), factorizations {with} against {without}",
                     law.name()
@@ -259,14 +265,13 @@ fn a_factor_of_other_parameters_is_not_used() {
 
 #[test]
 fn load_controlled_sensitivities_with_the_forward_factor_equal_the_fresh_ones() {
-    let seg = |duration: f64, depth: Option<f64>, force: Option<f64>, steps: usize| {
-        HistorySegment {
+    let seg =
+        |duration: f64, depth: Option<f64>, force: Option<f64>, steps: usize| HistorySegment {
             duration,
             depth,
             force,
             steps,
-        }
-    };
+        };
     let h = LoadHistory::from_segments(&[
         seg(1.0, Some(0.02), None, 4),
         seg(1.0, None, Some(40.0), 6),
