@@ -64,8 +64,11 @@ fn schedules() -> [Schedule; 2] {
     ]
 }
 
-/// The laws, their parameters and the column subsets asked for (`None`: every column).
-fn cases() -> Vec<(&'static dyn Law, Vec<f64>, Option<Vec<usize>>)> {
+/// A law, its parameters and the column subset asked for (`None`: every column).
+type Case = (&'static dyn Law, Vec<f64>, Option<Vec<usize>>);
+
+/// The laws, their parameters and the column subsets asked for.
+fn cases() -> Vec<Case> {
     vec![
         (&Maxwell, vec![20000.0, 0.3, 30000.0], None),
         (&Maxwell, vec![20000.0, 0.3, 30000.0], Some(vec![0, 2])),
