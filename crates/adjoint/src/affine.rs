@@ -198,8 +198,8 @@ fn add_bt(dn: &[[f64; 3]; 8], s: &Vec4, fe: &mut [f64; 16]) {
 /// derivatives at every point.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct IsoParams {
-    ds: Vec<Iso>,
-    dg: Vec<Iso>,
+    pub(crate) ds: Vec<Iso>,
+    pub(crate) dg: Vec<Iso>,
 }
 
 impl IsoParams {

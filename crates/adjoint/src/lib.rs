@@ -38,6 +38,7 @@ mod finite;
 mod load;
 mod material;
 mod nodal;
+mod nodal_sens;
 mod reuse;
 
 pub use compliant::{FrameGradient, FrameIndex};
@@ -168,6 +169,8 @@ pub struct Adjoint<'m> {
     /// Whether a bordered step's scalar takes the later sticking ties' depth term
     /// ([`Adjoint::set_friction_depth_term`]; always, outside tests).
     depth_ties: bool,
+    /// Whether the last forward sensitivity pass ran all-nodal (`nodal_sens.rs`).
+    nodal_sens: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -195,6 +198,7 @@ impl<'m> Adjoint<'m> {
             fuse: true,
             nodal_mat: material::NodalMat::default(),
             depth_ties: true,
+            nodal_sens: false,
         })
     }
 
@@ -203,7 +207,8 @@ impl<'m> Adjoint<'m> {
     /// or twice, in the general form every law takes, and whether a linear material with
     /// isotropic blocks (`Prony`) sweeps all-nodal where it may (`material/nodal.rs`) or
     /// visits the points (for comparisons and measurements: the gradients agree to
-    /// round-off).
+    /// round-off). The forward sensitivities of a law with one isotropic tangent run
+    /// all-nodal under the same switch (`nodal_sens.rs`; the columns agree to round-off).
     pub fn set_fused(&mut self, on: bool) {
         self.fuse = on;
     }
@@ -620,6 +625,15 @@ impl<'m> Adjoint<'m> {
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
         self.contact.begin();
+        // a law with one isotropic tangent under vertical contact: no Gauss-point pass
+        self.nodal_sens = false;
+        if let Some(df_dc) = self.sensitivities_nodal(law, c, traj)? {
+            self.nodal_sens = true;
+            return Ok(Sensitivities {
+                df_dc,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
         let s = law.compliance(c);
         let np = c.len();
         let SensBuffers {

@@ -40,10 +40,10 @@ pub(crate) struct Nodal {
     /// Whether the current sweep runs all-nodal.
     pub(crate) on: bool,
     /// `K_J = sum w B^T J B` on the model's pattern (geometry alone: formed once).
-    kj: Vec<f64>,
+    pub(crate) kj: Vec<f64>,
     /// `a_j`, `b_j` of every recorded state `j = 0..=n`, flat (`n_eq` each).
-    a: Vec<f64>,
-    b: Vec<f64>,
+    pub(crate) a: Vec<f64>,
+    pub(crate) b: Vec<f64>,
     /// `P`, `Q` of the last step swept (equations).
     p: Vec<f64>,
     q: Vec<f64>,
@@ -57,8 +57,8 @@ pub(crate) struct Nodal {
     step: usize,
     cons: Vec<usize>,
     /// The compliance and the law's parameter derivatives, isotropic.
-    s: Option<Iso>,
-    params: Option<IsoParams>,
+    pub(crate) s: Option<Iso>,
+    pub(crate) params: Option<IsoParams>,
 }
 
 impl Adjoint<'_> {

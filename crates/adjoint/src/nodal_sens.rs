@@ -1,0 +1,280 @@
+//! The all-nodal forward sensitivities of a law with one isotropic tangent (elasticity,
+//! Maxwell) under small strain and vertical contact, from a run recorded from rest
+//! (docs/performance.md, "A cheaper sensitivity pass"): the forward counterpart of the
+//! all-nodal adjoint sweep (`nodal.rs`), under the same conditions, with no pass over
+//! the Gauss points per step.
+//!
+//! Every operator of the recursion (`lib.rs`, `ParamStep::solve`) is `p I + q J`
+//! (`J = 1 (x) 1 / 3`), and a Gauss-point field `B x + J B x'` of two nodal vectors
+//! (equations) stays of that form under them: `(p I + q J)(B x + J B x') = B (p x) +
+//! J B (q x + (p + q) x')`. With the stresses `sigma_j = B a_j + J B b_j` of `nodal.rs`,
+//! parameter `k`'s step `i` (tangent `C = (c_p, c_q)`, compliance `S = (s_p, s_q)`):
+//! - `R_i e_k = dS/dc_k (sigma_{i+1} - sigma_i) + dt D_k sigma_{i+1}` (the law's
+//!   isotropic parameter derivatives) is `(r, r')`;
+//! - `q = y_{i-1} - R_i e_k = (q_a, q_b)` from the previous step's `y = (y, y')`;
+//! - the right-hand side `-sum w B^T C q = -(K_i q_a + (c_p + c_q) K_J q_b)`, with
+//!   `K_i = c_p K_1 + c_q K_J` the step's own tangent (`K_1 = sum w B^T B`, `K_J = sum w
+//!   B^T J B`, formed once per model): two sparse products instead of a Gauss-point pass;
+//! - the solve gives `du` (zero on the active dofs, as the contact prescribes);
+//! - `dsigma = C (B du + q) = (c_p w, c_q w + (c_p + c_q) q_b)` with `w = du + q_a`,
+//!   `y_i = S dsigma - B du`: vector updates;
+//! - `dF_i = -sum_A (sum w B^T dsigma)_A = -sum_A (K_i w + (c_p + c_q) K_J q_b)_A`: the
+//!   rows of the active dofs only (on the free rows it is the step's equation, zero).
+//!
+//! Per parameter and step: two sparse products, the solve and a few vector updates,
+//! instead of three passes over the Gauss points and the residual's parameter
+//! derivatives at every point. The columns are the Gauss-point pass's to round-off
+//! (`tests/nodal_sensitivities.rs`); each parameter's recursion is the same arithmetic on
+//! any thread, so the same bits on any number of threads. The stresses' nodal form is
+//! checked against the recorded last state (as the sweep checks it): an elastic run
+//! unloaded to rest, with no stress left to check, keeps the Gauss-point pass.
+
+use indentify_contact::{StepRecord, Trajectory};
+use indentify_laws::{Law, Vec4};
+
+use crate::affine::Iso;
+use crate::{Adjoint, AdjointError};
+
+/// One parameter's state and work space in the all-nodal pass (equation vectors).
+struct NodalParam {
+    /// `y_{i-1} = (y, y')`: `B y + J B y'`.
+    y: Vec<f64>,
+    yb: Vec<f64>,
+    qa: Vec<f64>,
+    qb: Vec<f64>,
+    /// `K_i q_a` and `K_J q_b`.
+    kq: Vec<f64>,
+    kjq: Vec<f64>,
+    /// The right-hand side, then `du`.
+    eq: Vec<f64>,
+    xbar: Vec<f64>,
+    solve: indentify_fe::SolveScratch,
+}
+
+/// What a step shares between its parameters (read only).
+struct NodalStep<'a> {
+    pattern: &'a indentify_fe::Pattern,
+    /// `K_i` (the step's unconstrained tangent) and `K_J`.
+    k: &'a [f64],
+    kj: &'a [f64],
+    /// The states `a`, `b` before and after the step.
+    a0: &'a [f64],
+    a1: &'a [f64],
+    b0: &'a [f64],
+    b1: &'a [f64],
+    /// The tangent, the compliance, the step length (s).
+    ct: Iso,
+    s: Iso,
+    dt: f64,
+    /// The law's parameter derivatives: `dS/dc_k`, `D_k`.
+    ds: &'a [Iso],
+    dg: &'a [Iso],
+    /// The active dofs' equations.
+    cons: &'a [usize],
+    contact: &'a indentify_contact::RecordedContact<'a>,
+}
+
+impl NodalStep<'_> {
+    /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k`.
+    fn solve(&self, k: usize, w: &mut NodalParam) -> f64 {
+        let (ds, dg, dt) = (self.ds[k], self.dg[k], self.dt);
+        for e in 0..w.y.len() {
+            let (a1, b1) = (self.a1[e], self.b1[e]);
+            let (xa, xb) = (a1 - self.a0[e], b1 - self.b0[e]);
+            let ra = ds.p * xa + dt * (dg.p * a1);
+            let rb = ds.q * xa + (ds.p + ds.q) * xb + dt * (dg.q * a1 + (dg.p + dg.q) * b1);
+            w.qa[e] = w.y[e] - ra;
+            w.qb[e] = w.yb[e] - rb;
+        }
+        w.kq.fill(0.0);
+        self.pattern.sym_mul_add(self.k, &w.qa, &mut w.kq);
+        w.kjq.fill(0.0);
+        self.pattern.sym_mul_add(self.kj, &w.qb, &mut w.kjq);
+        let (ct, s) = (self.ct, self.s);
+        let f = ct.p + ct.q;
+        for ((b, kq), kjq) in w.eq.iter_mut().zip(&w.kq).zip(&w.kjq) {
+            *b = -(kq + f * kjq);
+        }
+        self.contact
+            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+        // dF: the active rows of K_i (q_a + du) + (c_p + c_q) K_J q_b
+        let pat = self.pattern;
+        let mut df = 0.0;
+        for &c in self.cons {
+            let mut kdu = self.k[pat.diag[c]] * w.eq[c];
+            pat.for_each_off_diagonal(c, |r, pos| kdu += self.k[pos] * w.eq[r]);
+            df += w.kq[c] + kdu + f * w.kjq[c];
+        }
+        for e in 0..w.y.len() {
+            let du = w.eq[e];
+            let wv = du + w.qa[e];
+            let (sa, sb) = (ct.p * wv, ct.q * wv + f * w.qb[e]);
+            w.y[e] = s.p * sa - du;
+            w.yb[e] = s.q * sa + (s.p + s.q) * sb;
+        }
+        -df
+    }
+}
+
+impl Adjoint<'_> {
+    /// Numeric factorizations this workspace has made so far (its sweeps and sensitivity
+    /// passes; a pass that took the forward's factor makes none for the steps under its
+    /// key).
+    pub fn factorizations(&self) -> usize {
+        self.contact.factorizations()
+    }
+
+    /// Whether the last forward sensitivity pass ran all-nodal (for tests and
+    /// measurements).
+    #[doc(hidden)]
+    pub fn last_pass_nodal(&self) -> bool {
+        self.nodal_sens
+    }
+
+    /// The forward sensitivities `dF_i/dc_k` of `traj` all-nodal (the parameters
+    /// [`Adjoint::skips`] leaves out stay zero), or `None` when the pass does not apply
+    /// (the conditions of the all-nodal sweep, `Adjoint::begin_nodal`, a constraint that
+    /// ties steps, an active dof without an equation, or a law whose residual's parameter
+    /// derivatives are not the isotropic form's at the largest stress): the Gauss-point
+    /// pass then runs. Call it after `self.contact.begin()`.
+    pub(crate) fn sensitivities_nodal(
+        &mut self,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+    ) -> Result<Option<Vec<Vec<f64>>>, AdjointError> {
+        let model = self.model;
+        if self.contact.ties_steps()
+            || (model.candidates.iter()).any(|&n| model.dofs.equation(2 * n + 1).is_none())
+        {
+            return Ok(None);
+        }
+        self.begin_nodal(law, c, traj);
+        let on = std::mem::take(&mut self.fused.nodal.on);
+        if !on || !self.residual_is_isotropic(law, c, traj) {
+            return Ok(None);
+        }
+        let (Some(s), Some(ip)) = (self.fused.nodal.s, self.fused.nodal.params.take()) else {
+            return Ok(None);
+        };
+        let n = traj.steps.len();
+        let n_eq = model.dofs.n_eq;
+        let np = c.len();
+        let vec = || vec![0.0; n_eq];
+        let mut work: Vec<NodalParam> = (0..np)
+            .map(|_| NodalParam {
+                y: vec(),
+                yb: vec(),
+                qa: vec(),
+                qb: vec(),
+                kq: vec(),
+                kjq: vec(),
+                eq: vec(),
+                xbar: vec(),
+                solve: self.contact.solve_scratch(),
+            })
+            .collect();
+        let mut df = vec![vec![0.0; np]; n];
+        let mut cons = Vec::new();
+        for i in 0..n {
+            let rec = &traj.steps[i];
+            let f1 = &traj.fields[i + 1];
+            self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, true)?;
+            let prev = i
+                .checked_sub(1)
+                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
+            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let ct = Iso::of(&self.tangents[0]).ok_or_else(|| AdjointError::Step {
+                step: i,
+                t: rec.t,
+                reason: "the tangent is no longer isotropic".into(),
+            })?;
+            active_equations(model, rec, &mut cons);
+            let nd = &self.fused.nodal;
+            let (r0, r1) = (i * n_eq..(i + 1) * n_eq, (i + 1) * n_eq..(i + 2) * n_eq);
+            let step = NodalStep {
+                pattern: &model.pattern,
+                k: self.contact.tangent_values(),
+                kj: &nd.kj,
+                a0: &nd.a[r0.clone()],
+                a1: &nd.a[r1.clone()],
+                b0: &nd.b[r0],
+                b1: &nd.b[r1],
+                ct,
+                s,
+                dt: rec.dt,
+                ds: &ip.ds,
+                dg: &ip.dg,
+                cons: &cons,
+                contact: &self.contact,
+            };
+            let skip = &self.skip;
+            let one = |(k, (w, dfk)): (usize, (&mut NodalParam, &mut f64))| {
+                if !skip.get(k).copied().unwrap_or(false) {
+                    *dfk = step.solve(k, w);
+                }
+            };
+            // as the Gauss-point pass: the parameters in parallel on a pool's worker
+            let on_pool = rayon::current_thread_index().is_some();
+            if np > 1 && on_pool && rayon::current_num_threads() > 1 {
+                use rayon::prelude::*;
+                work.par_iter_mut()
+                    .zip(df[i].par_iter_mut())
+                    .enumerate()
+                    .with_max_len(1)
+                    .for_each(one);
+            } else {
+                work.iter_mut()
+                    .zip(df[i].iter_mut())
+                    .enumerate()
+                    .for_each(one);
+            }
+        }
+        self.fused.nodal.params = Some(ip);
+        Ok(Some(df))
+    }
+
+    /// Whether the law's own `R_i e_k` (`Law::residual_param_derivatives`) is the
+    /// isotropic form's `dS/dc_k (s1 - s0) + dt D_k s1` at the point of largest stress of
+    /// the last step, to 1e-12 of its largest entry (a linear law that differentiates its
+    /// residual otherwise keeps the Gauss-point pass).
+    fn residual_is_isotropic(&self, law: &dyn Law, c: &[f64], traj: &Trajectory) -> bool {
+        let (Some(ip), Some(rec)) = (&self.fused.nodal.params, traj.steps.last()) else {
+            return false;
+        };
+        let n = traj.steps.len();
+        let (f0, f1) = (&traj.fields[n - 1], &traj.fields[n]);
+        let Some(q) = (0..f1.sigma.len())
+            .max_by(|&a, &b| f1.sigma[a].max_abs().total_cmp(&f1.sigma[b].max_abs()))
+        else {
+            return false;
+        };
+        let (s0, s1) = (f0.sigma[q], f1.sigma[q]);
+        let mut out = vec![Vec4::ZERO; c.len()];
+        law.residual_param_derivatives(c, &s0, &s1, rec.dt, &mut out);
+        let apply = |m: Iso, x: &Vec4| {
+            let t = (x.0[0] + x.0[1] + x.0[2]) * (m.q / 3.0);
+            Vec4([
+                m.p * x.0[0] + t,
+                m.p * x.0[1] + t,
+                m.p * x.0[2] + t,
+                m.p * x.0[3],
+            ])
+        };
+        out.iter().enumerate().all(|(k, o)| {
+            let iso = apply(ip.ds[k], &(s1 - s0)) + apply(ip.dg[k], &s1) * rec.dt;
+            let scale = o.max_abs().max(iso.max_abs());
+            (iso - *o).max_abs() <= 1e-12 * scale
+        })
+    }
+}
+
+/// The equations of the active candidates' vertical dofs of step `rec` into `out`.
+fn active_equations(model: &indentify_contact::Model, rec: &StepRecord, out: &mut Vec<usize>) {
+    out.clear();
+    out.extend(
+        rec.active
+            .iter()
+            .filter_map(|&k| model.dofs.equation(2 * model.candidates[k as usize] + 1)),
+    );
+}
