@@ -18,6 +18,8 @@
 //! instead of load control: `DirectSolver::run_compliant` of the trapezoid's machine
 //! depths with `Cf = 1e-4` mm/N, `Adjoint::gradient_compliant` of the force cost
 //! `J = sum F_i^2 / 2` (the "load" columns are then the compliant drive's).
+//! With `LAWS_LOAD_BITS` set in the environment, each round's gradient (the forward's
+//! factor taken) is printed to stderr as its bits, to compare two builds.
 
 use std::time::Instant;
 
