@@ -18,6 +18,8 @@
 //! instead of load control: `DirectSolver::run_compliant` of the trapezoid's machine
 //! depths with `Cf = 1e-4` mm/N, `Adjoint::gradient_compliant` of the force cost
 //! `J = sum F_i^2 / 2` (the "load" columns are then the compliant drive's).
+//! With `LAWS_LOAD_BITS` set in the environment, each round's gradient (the forward's
+//! factor taken) is printed to stderr as its bits, to compare two builds.
 
 use std::time::Instant;
 
@@ -219,6 +221,14 @@ fn main() {
             adjoint.take_factor(&mut solver);
             let with_factor = gradient(&mut adjoint, &traj);
             time(&mut t[2], t0);
+            if std::env::var_os("LAWS_LOAD_BITS").is_some() {
+                // the gradient's bits, to compare two builds
+                let bits: Vec<String> = with_factor
+                    .iter()
+                    .map(|g| format!("{:016x}", g.to_bits()))
+                    .collect();
+                eprintln!("{name} round {round}: {}", bits.join(" "));
+            }
             nodal = adjoint.last_material_sweep_was_nodal() && mat.as_law().is_none();
             for (slot, fused) in [(3, true), (4, false)] {
                 adjoint.set_fused(fused);

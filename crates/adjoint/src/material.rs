@@ -61,6 +61,8 @@ pub(crate) struct MatSweep {
     ej: Vec<f64>,
     p: Vec<f64>,
     x: Vec<f64>,
+    /// `P^T mu` of a point (`n_c`, scratch of the second pass).
+    pacc: Vec<f64>,
     /// The material's blocks depend on `(c, dt)` only ([`Material::is_linear`]): `A^-T`,
     /// `G`, `D`, `E` and the tangent are formed once per step (in `ainvt`, `glin`, `d`,
     /// `ej`, `ct`) and every point reuses them.
@@ -119,6 +121,7 @@ impl MatSweep {
             ej: vec![0.0; m * 4],
             p: vec![0.0; m * np],
             x: vec![0.0; m],
+            pacc: vec![0.0; np],
             linear: mat.is_linear(),
             ainvt: vec![0.0; m * m],
             rhs5: vec![0.0; m * 5],
@@ -298,29 +301,57 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
-/// `sum_r blk[r * cols + k] x[r]` (column `k` of a row-major block with `cols`
-/// columns against `x`) in row order, as a plain loop: the bits of the iterator sum it
-/// replaces (which starts from `-0.0`), without the adapters the `dev` profile leaves as
-/// calls.
+/// `out[k] = sum_r blk[r * cols + k] x[r]` for every column `k < cols = out.len()` of a
+/// row-major block against `x` (`x.len()` rows): each column's sum in row order from
+/// `-0.0` (the bits of the strided dot product per column it replaces, and of the
+/// iterator sum before that), taken row by row over contiguous rows, as plain loops
+/// without the adapters the `dev` profile leaves as calls.
 #[inline(always)]
-#[allow(clippy::needless_range_loop)]
-fn dot_column(blk: &[f64], cols: usize, k: usize, x: &[f64]) -> f64 {
-    let mut s = -0.0;
-    for r in 0..x.len() {
-        s += blk[r * cols + k] * x[r];
+fn column_dots(blk: &[f64], x: &[f64], out: &mut [f64]) {
+    let cols = out.len();
+    out.fill(-0.0);
+    if cols == 0 {
+        return;
     }
-    s
+    for (row, &xr) in blk.chunks_exact(cols).zip(x) {
+        for (o, b) in out.iter_mut().zip(row) {
+            *o += b * xr;
+        }
+    }
 }
 
-/// `sum_k g[k * 4 + a] e[k * 4 + b]` over `k < m` (two columns of `m x 4` blocks), as
-/// [`dot_column`].
+/// [`column_dots`] of an `m x 4` block (`m = x.len()`), on the stack.
 #[inline(always)]
-fn dot_strided(g: &[f64], a: usize, e: &[f64], b: usize, m: usize) -> f64 {
-    let mut s = -0.0;
-    for k in 0..m {
-        s += g[k * 4 + a] * e[k * 4 + b];
+fn column_dots4(blk: &[f64], x: &[f64]) -> [f64; 4] {
+    let mut out = [-0.0; 4];
+    for (row, &xr) in blk.chunks_exact(4).zip(x) {
+        for (o, b) in out.iter_mut().zip(row) {
+            *o += b * xr;
+        }
     }
-    s
+    out
+}
+
+/// The point's tangent `-G^T E` from its `m x 4` blocks `G` and `E` (row-major, `m` rows
+/// each): entry `(a, b)` is `-sum_k G[k][a] E[k][b]`, summed over `k` in order from
+/// `-0.0` (the bits of one strided dot product per entry), row by row.
+#[inline(always)]
+fn tangent_of(g: &[f64], e: &[f64]) -> Mat4 {
+    let mut acc = [[-0.0; 4]; 4];
+    for (gk, ek) in g.chunks_exact(4).zip(e.chunks_exact(4)) {
+        for (row, &ga) in acc.iter_mut().zip(gk) {
+            for (o, &eb) in row.iter_mut().zip(ek) {
+                *o += ga * eb;
+            }
+        }
+    }
+    let mut ct = Mat4::ZERO;
+    for (c, a) in ct.0.iter_mut().zip(&acc) {
+        for (x, y) in c.iter_mut().zip(a) {
+            *x = -y;
+        }
+    }
+    ct
 }
 
 impl Adjoint<'_> {
@@ -765,13 +796,7 @@ impl Adjoint<'_> {
                 sw.x[k] = sw.rhs5[k * 5 + 4];
             }
             let gq = &sw.g[q * m * 4..(q + 1) * m * 4];
-            let mut ct = Mat4::ZERO;
-            for a in 0..4 {
-                for b in 0..4 {
-                    ct.0[a][b] = -dot_strided(gq, a, ej, b, m);
-                }
-            }
-            self.tangents[q] = ct;
+            self.tangents[q] = tangent_of(gq, ej);
             sw.az[q * m..(q + 1) * m].copy_from_slice(&sw.x);
             if shift_source && !finite {
                 let bea = self.strain[q];
@@ -781,8 +806,9 @@ impl Adjoint<'_> {
                 }
             }
             let mut src = sw.e[q];
+            let ex = column_dots4(ej, &sw.x);
             for b in 0..4 {
-                src.0[b] += dot_column(ej, 4, b, &sw.x);
+                src.0[b] += ex[b];
             }
             self.field_b[q] = src;
         }
@@ -859,15 +885,12 @@ impl Adjoint<'_> {
                 &sw.eblk[q * m * 4..(q + 1) * m * 4],
             );
             let p = &sw.pblk[q * m * np..(q + 1) * m * np];
-            for k in 0..np {
-                sw.grad[k] += -w * dot_column(p, np, k, &sw.x);
+            column_dots(p, &sw.x, &mut sw.pacc);
+            for (g, s) in sw.grad.iter_mut().zip(&sw.pacc) {
+                *g += -w * s;
             }
-            for k in 0..m {
-                sw.z[q * m + k] = dot_column(d, m, k, &sw.x);
-            }
-            for b in 0..4 {
-                sw.e[q].0[b] = dot_column(ej, 4, b, &sw.x);
-            }
+            column_dots(d, &sw.x, &mut sw.z[q * m..(q + 1) * m]);
+            sw.e[q] = Vec4(column_dots4(ej, &sw.x));
         }
         if linear {
             sw.d_next.copy_from_slice(&sw.d);

@@ -85,10 +85,12 @@ impl Mat4 {
     ]);
 
     /// The deviatoric projector `P = I4 - 1(x)1/3`.
+    #[inline]
     pub fn deviatoric_projector() -> Mat4 {
         Mat4::IDENTITY - Vec4::ONE.outer(&Vec4::ONE) * (1.0 / 3.0)
     }
     /// `1 (x) 1`.
+    #[inline]
     pub fn one_one() -> Mat4 {
         Vec4::ONE.outer(&Vec4::ONE)
     }
@@ -182,17 +184,21 @@ macro_rules! elementwise {
 }
 
 impl Vec4 {
+    #[inline]
     fn as_flat(&self) -> &[f64] {
         &self.0
     }
+    #[inline]
     fn as_flat_mut(&mut self) -> &mut [f64] {
         &mut self.0
     }
 }
 impl Mat4 {
+    #[inline]
     fn as_flat(&self) -> &[f64] {
         self.0.as_flattened()
     }
+    #[inline]
     fn as_flat_mut(&mut self) -> &mut [f64] {
         self.0.as_flattened_mut()
     }
@@ -207,14 +213,24 @@ impl Mul<f64> for Vec4 {
     type Output = Vec4;
     #[inline]
     fn mul(self, s: f64) -> Vec4 {
-        Vec4(self.0.map(|v| v * s))
+        // (plain loops: the optimizer left `array::map`'s adapters as calls in the laws'
+        // per-point work; the same products)
+        let mut r = self;
+        for v in &mut r.0 {
+            *v *= s;
+        }
+        r
     }
 }
 impl Mul<f64> for Mat4 {
     type Output = Mat4;
     #[inline]
     fn mul(self, s: f64) -> Mat4 {
-        Mat4(self.0.map(|r| r.map(|v| v * s)))
+        let mut r = self;
+        for v in r.0.as_flattened_mut() {
+            *v *= s;
+        }
+        r
     }
 }
 impl Neg for Vec4 {
