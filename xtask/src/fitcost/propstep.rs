@@ -15,10 +15,13 @@ use indentify_study::config::MethodName;
 use indentify_study::identify::{IdentifyOptions, Setup};
 use serde_json::{Value, json};
 
-/// The further cases: name, configuration under the repository root, the multiplicative
-/// noise (amplitude, seed) of synthesized data, and whether the method is set to
+/// A further case: name, configuration under the repository root, the multiplicative noise
+/// (amplitude, seed) of synthesized data, and whether the method is set to
 /// Levenberg-Marquardt (a configuration that fits by BFGS).
-pub const EXTRA: [(&str, &str, Option<(f64, u64)>, bool); 14] = [
+pub type Case = (&'static str, &'static str, Option<(f64, u64)>, bool);
+
+/// The further cases.
+pub const EXTRA: [Case; 14] = [
     ("r1-noisy", "examples/r1-maxwell.ron", Some((0.02, 1)), true),
     (
         "pdotp-maxwell",
