@@ -29,11 +29,16 @@
 //! `--c2f N` runs each fit coarse to fine (`study::coarse_to_fine`: at most N iterations
 //! on the 2x coarser model, then the full-fidelity fit from its optimum); the fit's time
 //! then includes the coarse phase, and the coarse phase's iterations and solves are
-//! printed beside the fine ones.
+//! printed beside the fine ones. `--proposed-step` fits each case with the stop on the
+//! proposed step and, where it fired, without it, back to back, and prints every
+//! parameter's shift in standard deviations and both outcomes (`propstep.rs`; without
+//! `--only` the further Levenberg-Marquardt examples too; `--both` makes the run without
+//! it also where it did not fire); `--no-proposed-step` turns it off for the other modes.
 
 mod batch;
 mod columns;
 mod profile;
+mod propstep;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -70,7 +75,8 @@ const CASES: [&str; 6] = [
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
 /// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N]
-/// [--columns] [--batch [--jobs N] [--map-n N] [--profile]]`.
+/// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
+/// [--no-proposed-step]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -88,6 +94,9 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut c2f: Option<usize> = None;
+    let mut proposed: Option<bool> = None;
+    let mut pairs_mode = false;
+    let mut both = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
@@ -118,6 +127,9 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
             "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
+            "--proposed-step" => pairs_mode = true,
+            "--both" => both = true,
+            "--no-proposed-step" => proposed = Some(false),
             "--c2f" => c2f = Some(val().parse().context("--c2f: coarse iterations, >= 1")?),
             other => bail!("unknown option {other}"),
         }
@@ -126,17 +138,25 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("--rounds takes a number >= 1");
     }
     if let Some(o) = &only {
-        if let Some(bad) = o.iter().find(|c| !CASES.contains(&c.as_str())) {
-            bail!("--only: unknown case `{bad}` (cases: {})", CASES.join(", "));
+        let known = |c: &str| CASES.contains(&c) || propstep::EXTRA.iter().any(|e| e.0 == c);
+        if let Some(bad) = o.iter().find(|c| !known(c)) {
+            let extra: Vec<&str> = propstep::EXTRA.iter().map(|e| e.0).collect();
+            bail!(
+                "--only: unknown case `{bad}` (cases: {}, {})",
+                CASES.join(", "),
+                extra.join(", ")
+            );
         }
     }
     // quick: the two cheap cases, one forward run on each side of the fit
     let cases: Vec<&str> = CASES
         .iter()
         .copied()
+        .chain(propstep::EXTRA.iter().map(|e| e.0))
         .filter(|c| match &only {
             Some(o) => o.iter().any(|x| x == c),
-            None => !quick || matches!(*c, "r1-map" | "r2"),
+            None if CASES.contains(c) => !quick || matches!(*c, "r1-map" | "r2"),
+            None => pairs_mode && !quick,
         })
         .collect();
     if quick {
@@ -166,25 +186,14 @@ pub fn run(args: &[String]) -> Result<()> {
         return write_json(json_out.as_deref(), &m);
     }
     if columns_mode {
-        println!(
-            "| case | free / parameters | forward (s) | all columns / forward | free columns / forward | free / all |"
-        );
-        println!("|---|---|---|---|---|---|");
-        let mut results = Vec::new();
-        for case in cases {
-            let m = columns::measure(&root, case, rounds)?;
-            println!(
-                "| {case} | {} / {} | {:.3} | {:.3} | {:.3} | {:.3} |",
-                m["free"],
-                m["params"],
-                m["forward_s"].as_f64().unwrap_or(f64::NAN),
-                m["all_over_forward"].as_f64().unwrap_or(f64::NAN),
-                m["free_over_forward"].as_f64().unwrap_or(f64::NAN),
-                m["free_over_all"].as_f64().unwrap_or(f64::NAN)
-            );
-            results.push(m);
-        }
+        let results = columns::sweep(&root, &cases, rounds)?;
         return write_json(json_out.as_deref(), &Value::Array(results));
+    }
+    if pairs_mode {
+        let run = |case: &str, on: bool| {
+            measure(&root, case, rounds, cold, (chi2, valley, Some(on)), lm, c2f)
+        };
+        return propstep::sweep(&cases, both, json_out.as_deref(), run);
     }
     let mut results = Vec::new();
     println!(
@@ -192,7 +201,7 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold, (chi2, valley), lm, c2f)?;
+        let m = measure(&root, case, rounds, cold, (chi2, valley, proposed), lm, c2f)?;
         println!(
             "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
@@ -219,7 +228,7 @@ pub fn run(args: &[String]) -> Result<()> {
 }
 
 /// Writes `v` to `path`, if given.
-fn write_json(path: Option<&Path>, v: &Value) -> Result<()> {
+pub(crate) fn write_json(path: Option<&Path>, v: &Value) -> Result<()> {
     if let Some(p) = path {
         std::fs::write(p, serde_json::to_string_pretty(v)?)
             .with_context(|| format!("writing {}", p.display()))?;
@@ -250,7 +259,10 @@ fn options(root: &Path, case: &str) -> Result<IdentifyOptions> {
             o.data = Some(dir.join("records").join("p00_00.csv"));
             o
         }
-        other => bail!("unknown case {other}"),
+        other => match propstep::options(root, other) {
+            Some(o) => o,
+            None => bail!("unknown case {other}"),
+        },
     };
     if case == "r2-noisy" {
         o.noise = Some((0.02, 1));
@@ -304,7 +316,7 @@ fn measure(
     case: &str,
     rounds: usize,
     cold: bool,
-    (chi2, valley): (bool, Option<ValleyStop>),
+    (chi2, valley, proposed): (bool, Option<ValleyStop>, Option<bool>),
     lm: Option<LmStrategy>,
     c2f: Option<usize>,
 ) -> Result<Value> {
@@ -313,6 +325,9 @@ fn measure(
     let mut s = identify::setup(resolved, &opts)?;
     s.id_cfg.stop.chi2_stop = chi2;
     s.id_cfg.stop.valley_stop = valley;
+    if let Some(on) = proposed {
+        s.id_cfg.stop.proposed_step = on;
+    }
     if let Some(lm) = lm {
         s.id_cfg.stop.lm = lm;
     }
@@ -390,6 +405,8 @@ fn measure(
         "factorizations": r.factorizations,
         "stop": r.stop_reason.to_string(),
         "converged": r.stop_reason.is_converged(),
+        "fired": propstep::fired(&r),
+        "outcome": propstep::outcome(&s, &r),
         "cost": r.cost,
         "params": params,
         "coarse": coarse,

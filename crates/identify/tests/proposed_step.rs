@@ -112,3 +112,34 @@ fn the_proposed_step_changes_nothing_while_a_parameter_is_undetermined() {
     assert_eq!(a.stop_reason, b.stop_reason);
     assert!(matches!(a.stop_reason, StopReason::Undetermined { .. }));
 }
+
+/// A parameter held against a bound the Gauss-Newton step pushes it out of (E's upper
+/// bound 19000 MPa below the data's 20000 MPa, about 20 deviations): the fit ends on the
+/// bound by the other rules, and the stop on the proposed step shall not end it there
+/// (a step clamped to the bound is no step below the deviation), bit for bit the run
+/// without it.
+#[test]
+fn the_proposed_step_never_stops_a_fit_pushed_against_a_bound() {
+    let p = problem(&[20000.0, 0.3, 30000.0]);
+    let start = [17000.0, 36000.0];
+    let bounded = |proposed: bool| {
+        let mut cfg = config(true, proposed, start);
+        cfg.params[0] = ParamSpec::free("E", start[0], 1000.0, 19000.0);
+        identify(&p, &cfg, &mut |_| {}).unwrap()
+    };
+    let on = bounded(true);
+    let off = bounded(false);
+    println!(
+        "on {:?} {} it ({}); off {:?} {} it ({})",
+        on.c, on.iterations, on.stop_reason, off.c, off.iterations, off.stop_reason
+    );
+    assert!(
+        !matches!(on.stop_reason, StopReason::ProposedBelowSigma { .. }),
+        "{}",
+        on.stop_reason
+    );
+    assert_eq!(on.c, off.c);
+    assert_eq!(on.iterations, off.iterations);
+    assert_eq!(on.stop_reason, off.stop_reason);
+    assert_eq!(on.c[0], 19000.0, "E held on its bound");
+}

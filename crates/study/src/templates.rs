@@ -748,6 +748,10 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
                 },
                 "Lm: the first step moves no scaled parameter by more than this (1: a factor e; None: off)".into(),
             ),
+            (
+                format!("proposed_step: {},", st.proposed_step),
+                "Lm: also stop when the next Gauss-Newton step is < step_sigma x every std. dev. after a step the model predicted".into(),
+            ),
         ],
     );
     out.push_str("        ),\n");

@@ -75,7 +75,8 @@ fn near_base(base: &[IndentStatus], st: &[IndentStatus], what: &str) -> usize {
     st.iter().map(|s| s.iterations).sum()
 }
 
-fn with_column(map: &MapFiles, out: &Path) -> PathBuf {
+/// The map's manifest with the column `identify.stop.proposed_step` = `on` on every row.
+fn with_column(map: &MapFiles, out: &Path, on: bool) -> PathBuf {
     let text = std::fs::read_to_string(&map.manifest).expect("manifest");
     let mut s = String::new();
     for (k, line) in text.lines().enumerate() {
@@ -83,7 +84,7 @@ fn with_column(map: &MapFiles, out: &Path) -> PathBuf {
         s.push_str(if k == 0 {
             ",identify.stop.proposed_step\n"
         } else {
-            ",true\n"
+            if on { ",true\n" } else { ",false\n" }
         });
     }
     std::fs::write(out, s).expect("write");
@@ -103,16 +104,18 @@ fn seeded_starts_do_not_depend_on_threads_or_shards_and_keep_the_fits() {
         },
     )
     .expect("map");
-    let base = run(&map, &map.manifest, &dir.join("base"), 2, false);
-    let one = run(&map, &map.manifest, &dir.join("one"), 1, true);
-    let two = run(&map, &map.manifest, &dir.join("two"), 2, true);
+    // without the stop on the proposed step (on by default in configurations), then with it
+    let off = with_column(&map, &dir.join("manifest-off.csv"), false);
+    let base = run(&map, &off, &dir.join("base"), 2, false);
+    let one = run(&map, &off, &dir.join("one"), 1, true);
+    let two = run(&map, &off, &dir.join("two"), 2, true);
     same_bits(&one, &two, "1 and 2 threads");
     let sharded = dir.join("shards");
     // the second shard first: its seed (row 1) is the first shard's and runs here unwritten
     for k in [2, 1] {
         run_shard(
             &map,
-            &map.manifest,
+            &off,
             &sharded,
             1,
             true,
@@ -136,7 +139,7 @@ fn seeded_starts_do_not_depend_on_threads_or_shards_and_keep_the_fits() {
     }
     let its_base = near_base(&base, &base, "base");
     let its_seeded = near_base(&base, &one, "seeded");
-    let proposed = with_column(&map, &dir.join("manifest-proposed.csv"));
+    let proposed = with_column(&map, &dir.join("manifest-proposed.csv"), true);
     let fast = run(&map, &proposed, &dir.join("proposed"), 2, true);
     let its_fast = near_base(&base, &fast, "seeded + proposed_step");
     eprintln!("LM iterations: base {its_base}, seeded {its_seeded}, + proposed_step {its_fast}");

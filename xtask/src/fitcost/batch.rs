@@ -6,8 +6,9 @@
 //! columns `identify.params.*.start` computed here once); from each row's closed-form start
 //! with its own calibration run (what `indentify batch --start closed-form` runs); from
 //! the closed-form starts seeded per configuration (`study::batch_seed`,
-//! `BatchOptions::seeded`); and seeded with the stop on the proposed step (a manifest column
-//! `identify.stop.proposed_step`). Printed: the time (the starts' computation included),
+//! `BatchOptions::seeded`); each start with the stop on the proposed step off and on (a
+//! manifest column `identify.stop.proposed_step`, false or true on every row), the run with
+//! it on compared with the same start's run without it. Printed: the time (the starts' computation included),
 //! throughput, iterations, convergence and every parameter's shift in standard deviations
 //! against the base start. `--profile`: one indent of each phase stage by stage
 //! (`profile.rs`).
@@ -117,9 +118,9 @@ fn case_row(
     })
 }
 
-/// `map`'s manifest with the column `identify.stop.proposed_step` = true on every row
+/// `map`'s manifest with the column `identify.stop.proposed_step` = `on` on every row
 /// (`StopCriteria::proposed_step`), written to `out`.
-fn proposed_step_manifest(map: &MapFiles, out: &Path) -> Result<PathBuf> {
+fn proposed_step_manifest(map: &MapFiles, out: &Path, on: bool) -> Result<PathBuf> {
     let text = std::fs::read_to_string(&map.manifest)?;
     let mut s = String::new();
     for (k, line) in text.lines().enumerate() {
@@ -127,11 +128,26 @@ fn proposed_step_manifest(map: &MapFiles, out: &Path) -> Result<PathBuf> {
         s.push_str(if k == 0 {
             ",identify.stop.proposed_step\n"
         } else {
-            ",true\n"
+            if on { ",true\n" } else { ",false\n" }
         });
     }
     std::fs::write(out, s)?;
     Ok(out.to_path_buf())
+}
+
+/// `row` (a case with the stop on the proposed step) with its shifts against `off`, the
+/// same start's batch without the rule, and the indents whose state differs.
+fn against_off(mut row: Value, st: &[batch::IndentStatus], off: &[batch::IndentStatus]) -> Value {
+    let (worst, mean) = shifts(off, st);
+    row["max_shift_vs_off"] = json!(worst);
+    row["mean_shift_vs_off"] = json!(mean);
+    row["state_changes"] = json!(
+        st.iter()
+            .zip(off)
+            .filter(|(a, b)| a.state != b.state)
+            .count()
+    );
+    row
 }
 
 /// Rows whose status names a start containing `what`.
@@ -145,7 +161,9 @@ fn started(st: &[batch::IndentStatus], what: &str) -> usize {
 /// from the base start (before); with `op`, from its Oliver-Pharr first guess where the
 /// analysis gives one (run only if some row has one); from its closed-form start with its
 /// own calibration run (`indentify batch --start closed-form`); seeded by its
-/// configuration's first indent (`BatchOptions::seeded`); and seeded with `identify.stop.proposed_step` (a manifest column).
+/// configuration's first indent (`BatchOptions::seeded`). The base, closed-form and seeded
+/// starts each without and with `identify.stop.proposed_step` (a manifest column), the
+/// run with it compared with the one without it.
 pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
     let dir = std::env::temp_dir().join("indentify-fit-cost-batch");
     let _ = std::fs::remove_dir_all(&dir);
@@ -156,15 +174,13 @@ pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
             ..Default::default()
         },
     )?;
-    let (tb, before) = run_batch(
-        &map,
-        &map.manifest,
-        &dir.join("out-before"),
-        jobs,
-        false,
-        false,
-    )?;
+    let off = proposed_step_manifest(&map, &dir.join("manifest-off.csv"), false)?;
+    let on = proposed_step_manifest(&map, &dir.join("manifest-on.csv"), true)?;
+    let (tb, before) = run_batch(&map, &off, &dir.join("out-before"), jobs, false, false)?;
     let mut cases = vec![case_row("base start", tb, 0.0, 0, &before, &before, tb)];
+    let (t, st) = run_batch(&map, &on, &dir.join("out-base-on"), jobs, false, false)?;
+    let row = case_row("base start + proposed_step", t, 0.0, 0, &st, &before, tb);
+    cases.push(against_off(row, &st, &before));
     let (mut guessed, mut guess_s) = (0, 0.0);
     if op {
         let clock = Instant::now();
@@ -187,51 +203,49 @@ pub fn measure(jobs: usize, n: usize, op: bool) -> Result<Value> {
             eprintln!("no row has an O&P first guess: that batch would repeat the base one");
         }
     }
-    let (tl, after) = run_batch(
-        &map,
-        &map.manifest,
-        &dir.join("out-closed-form"),
-        jobs,
-        true,
-        false,
-    )?;
-    cases.push(case_row(
-        "closed-form start, own calibration (batch --start closed-form)",
-        tl,
-        0.0,
-        started(&after, "closed form"),
-        &after,
-        &before,
-        tb,
-    ));
-    let (ts, after) = run_batch(
-        &map,
-        &map.manifest,
-        &dir.join("out-seeded"),
-        jobs,
-        true,
-        true,
-    )?;
-    cases.push(case_row(
-        "closed-form start seeded per configuration (BatchOptions::seeded)",
-        ts,
-        0.0,
-        started(&after, "seeded by"),
-        &after,
-        &before,
-        tb,
-    ));
-    let proposed = proposed_step_manifest(&map, &dir.join("manifest-proposed.csv"))?;
-    let (tp, after) = run_batch(&map, &proposed, &dir.join("out-proposed"), jobs, true, true)?;
-    cases.push(case_row(
-        "seeded + identify.stop.proposed_step",
-        tp,
-        0.0,
-        started(&after, "seeded by"),
-        &after,
-        &before,
-        tb,
-    ));
+    // each closed-form start without the rule, then with it
+    for (name, seeded, what) in [
+        (
+            "closed-form start, own calibration (batch --start closed-form)",
+            false,
+            "closed form",
+        ),
+        (
+            "closed-form start seeded per configuration (BatchOptions::seeded)",
+            true,
+            "seeded by",
+        ),
+    ] {
+        let tag = if seeded { "seeded" } else { "closed-form" };
+        let (t, st_off) = run_batch(
+            &map,
+            &off,
+            &dir.join(format!("out-{tag}")),
+            jobs,
+            true,
+            seeded,
+        )?;
+        let started_off = started(&st_off, what);
+        cases.push(case_row(name, t, 0.0, started_off, &st_off, &before, tb));
+        let (t, st) = run_batch(
+            &map,
+            &on,
+            &dir.join(format!("out-{tag}-on")),
+            jobs,
+            true,
+            seeded,
+        )?;
+        let row = case_row(
+            &format!("{name} + proposed_step"),
+            t,
+            0.0,
+            started(&st, what),
+            &st,
+            &before,
+            tb,
+        );
+        cases.push(against_off(row, &st, &st_off));
+    }
     Ok(json!({
         "indents": map.indents.len(),
         "jobs": jobs,
@@ -273,14 +287,14 @@ pub fn profile(n: usize) -> Result<Value> {
 /// The table of [`measure`]'s result.
 pub fn table(m: &Value) -> String {
     let mut s = format!(
-        "{} indents on {} threads\n\n| start | seconds (starts included) | starts (s) | rows started | indents/s | throughput / base | converged | LM iterations | max abs(shift) / sigma | mean |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "{} indents on {} threads\n\n| start | seconds (starts included) | starts (s) | rows started | indents/s | throughput / base | converged | LM iterations | max abs(shift) / sigma | mean | against the same start without proposed_step: max | mean | states changed |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         m["indents"], m["jobs"]
     );
     let empty = Vec::new();
     for c in m["cases"].as_array().unwrap_or(&empty) {
         let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
         s.push_str(&format!(
-            "| {} | {:.1} | {:.2} | {} | {:.3} | {:.2} | {} | {} | {:.3} | {:.3} |\n",
+            "| {} | {:.1} | {:.2} | {} | {:.3} | {:.2} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} |\n",
             c["case"].as_str().unwrap_or(""),
             f("seconds"),
             f("starts_s"),
@@ -291,6 +305,9 @@ pub fn table(m: &Value) -> String {
             c["iterations"],
             f("max_shift_sigma"),
             f("mean_shift_sigma"),
+            f("max_shift_vs_off"),
+            f("mean_shift_vs_off"),
+            c["state_changes"].as_u64().map_or("-".into(), |v| v.to_string()),
         ));
     }
     s

@@ -86,3 +86,26 @@ pub fn measure(root: &Path, case: &str, rounds: usize) -> Result<Value> {
         "same_bits": same,
     }))
 }
+
+/// `--columns`: [`measure`] of each case, printed as a table row as it finishes.
+pub fn sweep(root: &Path, cases: &[&str], rounds: usize) -> Result<Vec<Value>> {
+    println!(
+        "| case | free / parameters | forward (s) | all columns / forward | free columns / forward | free / all |"
+    );
+    println!("|---|---|---|---|---|---|");
+    let mut results = Vec::new();
+    for case in cases {
+        let m = measure(root, case, rounds)?;
+        println!(
+            "| {case} | {} / {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            m["free"],
+            m["params"],
+            m["forward_s"].as_f64().unwrap_or(f64::NAN),
+            m["all_over_forward"].as_f64().unwrap_or(f64::NAN),
+            m["free_over_forward"].as_f64().unwrap_or(f64::NAN),
+            m["free_over_all"].as_f64().unwrap_or(f64::NAN)
+        );
+        results.push(m);
+    }
+    Ok(results)
+}
