@@ -1,6 +1,6 @@
 //! `indentify batch` end to end through the binary: a manifest of curves, results.csv, a
-//! rerun that skips, a failed indent that does not stop the batch, `batch slurm` and
-//! `batch merge`.
+//! rerun that skips, a failed indent that does not stop the batch, seeded starts,
+//! `batch slurm` and `batch merge`.
 
 mod common;
 
@@ -93,6 +93,22 @@ fn batch_identifies_a_manifest_and_reports_failures() {
     };
     let results2 = std::fs::read_to_string(d.join("out2/results.csv")).unwrap();
     assert_eq!(strip(&results2), strip(&results));
+
+    // seeded closed-form starts: a (first in the manifest) seeds b; the same fitted values
+    let out3 = d.join("out3").display().to_string();
+    let seeded = indentify(&[
+        "-q", "batch", &m, "--config", &b, "--out", &out3, "--start", "seeded", "--jobs", "2",
+    ]);
+    assert_rejected(&seeded, &["1 of 3 indents failed"], "batch --start seeded");
+    let status_b = std::fs::read_to_string(d.join("out3/b/status.json")).unwrap();
+    assert!(status_b.contains("seeded by a"), "{status_b}");
+    let results3 = std::fs::read_to_string(d.join("out3/results.csv")).unwrap();
+    let eta3 = |id: &str| -> f64 {
+        let row = results3.lines().find(|l| l.starts_with(id)).unwrap();
+        row.split(',').nth(7).unwrap().parse().unwrap()
+    };
+    assert!((eta3("a,") - 30000.0).abs() < 30.0, "{results3}");
+    assert!((eta3("b,") - 60000.0).abs() < 60.0, "{results3}");
 
     // a Slurm job array over the shards
     let slurm = indentify(&[

@@ -76,10 +76,13 @@ pub struct RunArgs {
     pub figures: bool,
 
     /// Where every indent's fit starts: `config` (the configuration's starts, or the
-    /// manifest's `start` column) or `closed-form` (the parameters a closed form covers
+    /// manifest's `start` column), `closed-form` (the parameters a closed form covers
     /// from the pre-fit of the indent's own curve, corrected by one forward run; each
-    /// indent's start depends on its own curve only: docs/analysis.md).
-    #[arg(long, value_name = "START", default_value = "config", value_parser = ["config", "closed-form"])]
+    /// indent's start depends on its own curve only: docs/analysis.md) or `seeded` (each
+    /// configuration's first indent in manifest order fitted first from its closed form;
+    /// the others from their own half-space closed form times its fitted / half-space
+    /// ratio, without a calibration run: the same bits for any `--jobs`, order and shard).
+    #[arg(long, value_name = "START", default_value = "config", value_parser = ["config", "closed-form", "seeded"])]
     pub start: String,
 
     /// Memory for the recorded runs of all workers together (MB): an indent whose
@@ -206,7 +209,8 @@ fn run_batch(a: &RunArgs) -> Result<()> {
     opts.overrides.max_iterations = a.max_iter;
     opts.figures = a.figures;
     opts.memory_budget = a.memory_budget.saturating_mul(1 << 20);
-    opts.closed_form_start = a.start == "closed-form";
+    opts.closed_form_start = a.start != "config";
+    opts.seeded = a.start == "seeded";
     opts.cancel = crate::interrupt::cancel_on_ctrl_c();
     let console = Console {
         bar: std::sync::Mutex::new(None),
