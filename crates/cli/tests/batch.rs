@@ -100,7 +100,7 @@ fn batch_identifies_a_manifest_and_reports_failures() {
         "-q", "batch", &m, "--config", &b, "--out", &out3, "--start", "seeded", "--jobs", "2",
     ]);
     assert_rejected(&seeded, &["1 of 3 indents failed"], "batch --start seeded");
-    let status_b = std::fs::read_to_string(d.join("out3/b/status.json")).unwrap();
+    let status_b = std::fs::read_to_string(d.join("out3/indents/b/status.json")).unwrap();
     assert!(status_b.contains("seeded by a"), "{status_b}");
     let results3 = std::fs::read_to_string(d.join("out3/results.csv")).unwrap();
     let eta3 = |id: &str| -> f64 {
