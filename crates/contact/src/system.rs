@@ -1218,6 +1218,22 @@ impl ConstrainedSystem {
 }
 
 impl ConstrainedSystem {
+    /// Whether the current system is in the capacitance mode (a reusable tangent factorized
+    /// exactly, no frames, the base set) and its prescribed equations are exactly those of
+    /// the depth's unit settlement `v` (1 on each, 0 elsewhere): the condition of every
+    /// bordered solve done with the stored columns.
+    fn bordered_by_capacitance(&self, v: &[f64]) -> bool {
+        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+            return false;
+        }
+        let m = self.schur_set.len();
+        let marked = v.iter().filter(|&&x| x != 0.0).count();
+        m > 0
+            && marked == m
+            && (self.schur_set.iter())
+                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
+    }
+
     /// Load control's depth column without a solve, where the capacitance mode holds the
     /// current system (a reusable tangent, vertical contact, no friction): the solution
     /// `du_U` of `K du_U = 0` on the free equations with `du_U = -1` on the prescribed
@@ -1229,20 +1245,11 @@ impl ConstrainedSystem {
     /// written) when the current system is not in that mode or its prescribed equations
     /// are not exactly those of `v`.
     pub(crate) fn depth_column_capacitance(&mut self, v: &[f64], col: &mut [f64]) -> Option<f64> {
-        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+        if !self.bordered_by_capacitance(v) {
             return None;
         }
         let set = &self.schur_set;
         let m = set.len();
-        let marked = v.iter().filter(|&&x| x != 0.0).count();
-        if m == 0
-            || marked != m
-            || !set
-                .iter()
-                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
-        {
-            return None;
-        }
         let mu = &mut self.depth_mu;
         mu.clear();
         mu.resize(m, 1.0);
@@ -1286,18 +1293,10 @@ impl ConstrainedSystem {
         xbar: &[f64],
         du_of: impl FnOnce(f64, f64, f64) -> Result<f64, E>,
     ) -> Option<Result<f64, E>> {
-        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+        if !self.bordered_by_capacitance(v) {
             return None;
         }
         let m = self.schur_set.len();
-        let marked = v.iter().filter(|&&x| x != 0.0).count();
-        if m == 0
-            || marked != m
-            || !(self.schur_set.iter())
-                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
-        {
-            return None;
-        }
         let t0 = std::time::Instant::now();
         for &c in &self.schur_set {
             b[c] = 0.0;
@@ -1367,18 +1366,10 @@ impl ConstrainedSystem {
         b: &mut [f64],
         rho_of: &mut dyn FnMut(f64, f64) -> f64,
     ) -> Option<(f64, f64)> {
-        if !self.capacitance || self.pcg || !self.frames.is_empty() || !self.base {
+        if !self.bordered_by_capacitance(v) {
             return None;
         }
         let m = self.schur_set.len();
-        let marked = v.iter().filter(|&&x| x != 0.0).count();
-        if m == 0
-            || marked != m
-            || !(self.schur_set.iter())
-                .all(|&e| v[e] == 1.0 && self.constrained[e] && self.columns.contains_key(&e))
-        {
-            return None;
-        }
         let t0 = std::time::Instant::now();
         let mut g_c = 0.0;
         for &c in &self.schur_set {
