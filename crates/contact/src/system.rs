@@ -1218,6 +1218,20 @@ impl ConstrainedSystem {
 }
 
 impl ConstrainedSystem {
+    /// The capacitance mode's solve shared by the bordered steps: `b` (zero on the
+    /// prescribed equations) becomes `K^-1 b` with the one factorization, and `depth_mu`
+    /// the multipliers of a unit settlement, `S mu1 = 1`.
+    fn solve_with_unit_multipliers(&mut self, b: &mut [f64]) {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.chol.solve_with(b, &mut scratch);
+        self.scratch = scratch;
+        self.chol.n_solves += 1;
+        let m = self.schur_set.len();
+        self.depth_mu.clear();
+        self.depth_mu.resize(m, 1.0);
+        dense_cholesky_solve(&self.schur, m, &mut self.depth_mu);
+    }
+
     /// Whether the current system is in the capacitance mode (a reusable tangent factorized
     /// exactly, no frames, the base set) and its prescribed equations are exactly those of
     /// the depth's unit settlement `v` (1 on each, 0 elsewhere): the condition of every
@@ -1301,14 +1315,8 @@ impl ConstrainedSystem {
         for &c in &self.schur_set {
             b[c] = 0.0;
         }
-        let mut scratch = std::mem::take(&mut self.scratch);
-        self.chol.solve_with(b, &mut scratch);
-        self.scratch = scratch;
-        self.chol.n_solves += 1;
-        let (mu1, mu) = (&mut self.depth_mu, &mut self.bordered_nu);
-        mu1.clear();
-        mu1.resize(m, 1.0);
-        dense_cholesky_solve(&self.schur, m, mu1);
+        self.solve_with_unit_multipliers(b);
+        let (mu1, mu) = (&self.depth_mu, &mut self.bordered_nu);
         mu.clear();
         mu.extend(self.schur_set.iter().map(|&c| b[c] - xbar[c]));
         dense_cholesky_solve(&self.schur, m, mu);
@@ -1376,14 +1384,8 @@ impl ConstrainedSystem {
             g_c += b[c];
             b[c] = 0.0;
         }
-        let mut scratch = std::mem::take(&mut self.scratch);
-        self.chol.solve_with(b, &mut scratch);
-        self.scratch = scratch;
-        self.chol.n_solves += 1;
-        let (mu1, nu) = (&mut self.depth_mu, &mut self.bordered_nu);
-        mu1.clear();
-        mu1.resize(m, 1.0);
-        dense_cholesky_solve(&self.schur, m, mu1);
+        self.solve_with_unit_multipliers(b);
+        let (mu1, nu) = (&self.depth_mu, &mut self.bordered_nu);
         nu.clear();
         nu.extend(self.schur_set.iter().map(|&c| b[c]));
         let a = -nu.iter().zip(mu1.iter()).map(|(y, u)| y * u).sum::<f64>() - g_c;
