@@ -178,6 +178,23 @@ impl Adjoint<'_> {
          -> Result<(), AdjointError> {
             let rec = &traj.steps[i];
             let g = dj_df[i];
+            if i == 0 && adj.depth_ties {
+                u_initial = Some(f0.u.clone());
+            }
+            // the steps after the last contact (a run unloaded through the frame off its
+            // impression): with nothing later swept (`mu_{i+1} = 0`), no contact and
+            // nothing carried, the step's depth column is zero (`a_i = s_i = 0`, so
+            // `dJ/dH_i = 0`) and its force has no dof to act on, whatever `g_i`: its
+            // adjoint state is zero and so is its share of the gradient. Skipped, as the
+            // depth-controlled sweep skips such steps without a cost (`Adjoint::sweep_step`)
+            let untouched = match &which {
+                Which::Law(_, sweep) => sweep.mu_zero,
+                Which::Material(sw) => sw.zero,
+            };
+            if untouched && rec.active.is_empty() && !adj.contact.adjoint_pending() {
+                dj_dh[i] = 0.0;
+                return Ok(());
+            }
             let mut d = 0.0;
             let mut rho_of = |a: f64, s: f64| {
                 let q = 1.0 + cf * s;
@@ -226,9 +243,6 @@ impl Adjoint<'_> {
                 });
             }
             dj_dh[i] = d;
-            if i == 0 && adj.depth_ties {
-                u_initial = Some(f0.u.clone());
-            }
             Ok(())
         };
         match replay {

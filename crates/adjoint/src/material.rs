@@ -47,7 +47,7 @@ pub(crate) struct MatSweep {
     az: Vec<f64>,
     pub(crate) grad: Vec<f64>,
     /// `mu_{i+1} = 0` everywhere (nothing swept yet).
-    zero: bool,
+    pub(crate) zero: bool,
     /// The step's strain increment at every point (small strain `B (u_1 - u_0)`, finite
     /// strain the Hencky strains' difference).
     deps: Vec<Vec4>,
