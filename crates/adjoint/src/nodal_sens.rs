@@ -26,8 +26,9 @@
 //! derivatives at every point. The columns are the Gauss-point pass's to round-off
 //! (`tests/nodal_sensitivities.rs`); each parameter's recursion is the same arithmetic on
 //! any thread, so the same bits on any number of threads. The stresses' nodal form is
-//! checked against the recorded last state (as the sweep checks it): an elastic run
-//! unloaded to rest, with no stress left to check, keeps the Gauss-point pass.
+//! checked against the recorded last state and the state of largest stress (as the sweep
+//! checks it), so an elastic run unloaded to rest, whose last stresses are round-off,
+//! runs all-nodal too (`tests/compliant_unload.rs`).
 
 use indentify_contact::{StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};

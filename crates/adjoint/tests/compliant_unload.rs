@@ -212,3 +212,46 @@ fn plastic_unloaded_off_its_impression_skips_the_steps_after_contact() {
     let fd = against_differences(&m, &mat, &c, &schedule, &g.dj_dc, 1e-5, n);
     assert!(fd < 1e-6, "{fd:.2e}");
 }
+
+/// The same check under plain depth control, which shares it: the elastic run unloaded to
+/// rest now sweeps all-nodal (`Adjoint::gradient`) and its forward sensitivities
+/// (`Adjoint::sensitivities`, which start from the same check) equal the Gauss-point
+/// pass's to round-off, whichever path they take.
+#[test]
+fn depth_controlled_elastic_run_unloaded_to_rest() {
+    let m = small_model(cone(), ContactKind::Vertical);
+    let mat = LawMaterial(&Elastic);
+    let c = [1e5, 0.3];
+    let schedule = to_rest(0.06, 8);
+    let traj = DirectSolver::new(&m)
+        .unwrap()
+        .run(&mat, &c, &schedule, &opts(true))
+        .unwrap();
+    let n = traj.steps.len();
+    let w = weights(n);
+    let mut adj = Adjoint::new(&m).unwrap();
+    let nodal = adj.gradient(&mat, &c, &traj, &w).unwrap();
+    assert!(
+        adj.last_sweep_was_nodal(),
+        "the sweep left the all-nodal path"
+    );
+    let s_fused = adj.sensitivities(&mat, &c, &traj).unwrap();
+    let s_nodal = adj.last_pass_nodal();
+    adj.set_fused(false);
+    let points = adj.gradient(&mat, &c, &traj, &w).unwrap();
+    let s_points = adj.sensitivities(&mat, &c, &traj).unwrap();
+    let a: Vec<f64> = nodal.dj_dc.iter().zip(&c).map(|(g, c)| g * c).collect();
+    let b: Vec<f64> = points.dj_dc.iter().zip(&c).map(|(g, c)| g * c).collect();
+    let off = rel(&a, &b);
+    println!("depth control, all-nodal vs Gauss-point sweep: {off:.2e}");
+    assert!(off < 1e-12, "{off:.2e}");
+    let flat = |s: &indentify_adjoint::Sensitivities| -> Vec<f64> {
+        s.df_dc
+            .iter()
+            .flat_map(|r| r.iter().zip(&c).map(|(d, c)| d * c))
+            .collect()
+    };
+    let off = rel(&flat(&s_points), &flat(&s_fused));
+    println!("sensitivities (all-nodal: {s_nodal}) vs the Gauss-point pass: {off:.2e}");
+    assert!(off < 1e-12, "{off:.2e}");
+}
