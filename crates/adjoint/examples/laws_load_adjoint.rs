@@ -229,7 +229,11 @@ fn main() {
                     .collect();
                 eprintln!("{name} round {round}: {}", bits.join(" "));
             }
-            nodal = adjoint.last_material_sweep_was_nodal() && mat.as_law().is_none();
+            nodal = if mat.as_law().is_some() {
+                adjoint.last_sweep_was_nodal()
+            } else {
+                adjoint.last_material_sweep_was_nodal()
+            };
             for (slot, fused) in [(3, true), (4, false)] {
                 adjoint.set_fused(fused);
                 let t0 = Clock::now();
