@@ -95,6 +95,17 @@ fn main() {
         ..SolverOptions::default()
     };
     let mat = LawMaterial(law);
+    // the size of one factorization of the model's tangent (what a pass keeping one per
+    // step would store)
+    if let Ok(ch) = indentify_fe::SparseCholesky::analyse(&model.pattern) {
+        println!(
+            "{case}: {} equations, {} Gauss points, factor {} nonzeros ({:.2} MB)",
+            model.dofs.n_eq,
+            model.disc.n_qp(),
+            ch.factor_nnz(),
+            8.0 * ch.factor_nnz() as f64 / 1e6
+        );
+    }
     let mut solver = DirectSolver::new(&model).expect("solver");
     let mut adjoint = Adjoint::new(&model).expect("adjoint");
     // `sens_cost r1 N gauss|nodal|forward`: that alone, N times (for `perf record`)
