@@ -9,8 +9,12 @@
 //! - `take`: `Adjoint::sensitivities_of` with the forward's factor handed over
 //!   (`Adjoint::take_factor`, as `identify` does);
 //! - `fresh`: the same pass without it;
-//! - `gauss`: the pass with the all-nodal recursion off (`Adjoint::set_fused(false)`),
-//!   the forward's factor taken from a second forward run at the same point (not timed).
+//! - `gauss`: the pass with the all-nodal recursion off (`Adjoint::set_fused(false)`;
+//!   for R2 the Gauss-point pass with its third pass over the points for `dF_i/dc_k`
+//!   instead of the force dofs' rows of the tangent), the forward's factor taken from a
+//!   second forward run at the same point (not timed).
+//!
+//! `r2f` is R2 under finite strain (frictionless normal contact).
 //!
 //! `cargo run --release -p indentify-adjoint --example sens_cost -- r1 [ROUNDS]`
 //! prints the median of each and its ratio to the forward, the numeric factorizations of
@@ -21,7 +25,9 @@
 use std::time::Instant;
 
 use indentify_adjoint::Adjoint;
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+use indentify_contact::{
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
+};
 use indentify_laws::{Law, LawMaterial, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
@@ -72,19 +78,34 @@ fn main() {
         ),
     };
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
-    let model = Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .expect("model");
+    let cone = Punch::Cone {
+        half_angle_deg: 68.0,
+    };
+    // `r2f`: R2 under finite strain (frictionless normal contact, as finite strain needs)
+    let model = if case == "r2f" {
+        Model::with_contact(mesh, cone, ContactKind::Normal)
+            .and_then(|m| m.with_kinematics(Kinematics::Finite))
+            .expect("model")
+    } else {
+        Model::new(mesh, cone).expect("model")
+    };
     let schedule = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 30)).expect("schedule");
     let opts = SolverOptions {
         record_fields: true,
         ..SolverOptions::default()
     };
     let mat = LawMaterial(law);
+    // the size of one factorization of the model's tangent (what a pass keeping one per
+    // step would store)
+    if let Ok(ch) = indentify_fe::SparseCholesky::analyse(&model.pattern) {
+        println!(
+            "{case}: {} equations, {} Gauss points, factor {} nonzeros ({:.2} MB)",
+            model.dofs.n_eq,
+            model.disc.n_qp(),
+            ch.factor_nnz(),
+            8.0 * ch.factor_nnz() as f64 / 1e6
+        );
+    }
     let mut solver = DirectSolver::new(&model).expect("solver");
     let mut adjoint = Adjoint::new(&model).expect("adjoint");
     // `sens_cost r1 N gauss|nodal|forward`: that alone, N times (for `perf record`)

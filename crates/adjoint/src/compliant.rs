@@ -443,6 +443,7 @@ impl Adjoint<'_> {
                 r_field: &r_field,
                 np,
                 rec,
+                reactions: None,
                 border: Some(crate::load::Border {
                     col: &carry.col.col,
                     s: carry.s,

@@ -171,6 +171,9 @@ pub struct Adjoint<'m> {
     depth_ties: bool,
     /// Whether the last forward sensitivity pass ran all-nodal (`nodal_sens.rs`).
     nodal_sens: bool,
+    /// Whether the last Gauss-point sensitivity pass read `dF_i/dc_k` from the force
+    /// dofs' rows of the step's tangent ([`ParamStep::solve`]).
+    reaction_rows: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -199,6 +202,7 @@ impl<'m> Adjoint<'m> {
             nodal_mat: material::NodalMat::default(),
             depth_ties: true,
             nodal_sens: false,
+            reaction_rows: false,
         })
     }
 
@@ -627,6 +631,7 @@ impl<'m> Adjoint<'m> {
         self.contact.begin();
         // a law with one isotropic tangent under vertical contact: no Gauss-point pass
         self.nodal_sens = false;
+        self.reaction_rows = false;
         if let Some(df_dc) = self.sensitivities_nodal(law, c, traj)? {
             self.nodal_sens = true;
             return Ok(Sensitivities {
@@ -642,6 +647,12 @@ impl<'m> Adjoint<'m> {
             mut work,
         } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
+        // `dF_i/dc_k` from the force dofs' rows of the step's tangent where every one has
+        // an equation (`set_fused(false)` keeps the Gauss-point pass: `pinned.rs`)
+        let reactions = self.fuse
+            && (model.candidates.iter()).all(|&n| model.dofs.equation(2 * n + 1).is_some());
+        self.reaction_rows = reactions;
+        let mut cons = Vec::new();
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -653,6 +664,9 @@ impl<'m> Adjoint<'m> {
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
+            if reactions {
+                nodal_sens::active_equations(model, rec, &mut cons);
+            }
             let step = ParamStep {
                 model,
                 tangents: &self.tangents,
@@ -663,6 +677,7 @@ impl<'m> Adjoint<'m> {
                 np,
                 rec,
                 border: None,
+                reactions: reactions.then_some(cons.as_slice()),
             };
             let skip = &self.skip;
             let one =
@@ -781,6 +796,12 @@ struct ParamStep<'a> {
     /// Load control: the step's depth column and what sets its depth variation
     /// (`load.rs`).
     border: Option<load::Border<'a>>,
+    /// The equations of the step's force dofs (the active candidates' vertical dofs),
+    /// when `dF_i/dc_k` is read from their rows of the step's tangent (`K du` there less
+    /// the right-hand side: [`ParamStep::solve`]) instead of from a third pass over the
+    /// Gauss points; `None` keeps that pass (`Adjoint::set_fused(false)`, load control,
+    /// an active dof without an equation).
+    reactions: Option<&'a [usize]>,
 }
 
 impl ParamStep<'_> {
@@ -799,6 +820,10 @@ impl ParamStep<'_> {
             *b = t.mul_vec(q) * -1.0;
         }
         force_into(model, self.finite, &w.field_b, &mut w.full);
+        // the right-hand side's force dofs: `delta f = K du - rhs` on every row
+        let rhs_a = self
+            .reactions
+            .map(|_| force_dofs(model, self.rec).map(|d| w.full[d]).sum::<f64>());
         model.dofs.restrict(&w.full, &mut w.eq);
         self.contact
             .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
@@ -816,6 +841,22 @@ impl ParamStep<'_> {
             let dsig = self.tangents[qp].mul_vec(&(bv + w.q[qp]));
             w.field_b[qp] = dsig;
             *y = self.s.mul_vec(&dsig) - bv;
+        }
+        if let (Some(cons), Some(rhs_a)) = (self.reactions, rhs_a) {
+            // `delta f = sum w B^T C (B du + q) = K du + sum w B^T C q = K du - rhs` (the
+            // geometric part in `K` under finite strain): the rows of the force dofs only
+            let (pat, k) = (&model.pattern, self.contact.tangent_values());
+            let mut kdu = 0.0;
+            for &c in cons {
+                let mut r = k[pat.diag[c]] * w.eq[c];
+                pat.for_each_off_diagonal(c, |j, pos| r += k[pos] * w.eq[j]);
+                kdu += r;
+            }
+            *dfk = rhs_a - kdu;
+            if let Some(du) = shift {
+                w.du_depth = du;
+            }
+            return;
         }
         delta_force_into(
             model,

@@ -674,6 +674,7 @@ impl Adjoint<'_> {
                 r_field: &r_field,
                 np,
                 rec,
+                reactions: None,
                 border: border.map(|load| Border {
                     col: &carry.col.col,
                     s: carry.s,

@@ -132,6 +132,14 @@ impl Adjoint<'_> {
         self.nodal_sens
     }
 
+    /// Whether the last Gauss-point sensitivity pass read `dF_i/dc_k` from the force
+    /// dofs' rows of each step's tangent instead of a third pass over the Gauss points
+    /// (for tests and measurements).
+    #[doc(hidden)]
+    pub fn last_pass_reaction_rows(&self) -> bool {
+        self.reaction_rows
+    }
+
     /// The forward sensitivities `dF_i/dc_k` of `traj` all-nodal (the parameters
     /// [`Adjoint::skips`] leaves out stay zero), or `None` when the pass does not apply
     /// (the conditions of the all-nodal sweep, `Adjoint::begin_nodal`, a constraint that
@@ -271,7 +279,11 @@ impl Adjoint<'_> {
 }
 
 /// The equations of the active candidates' vertical dofs of step `rec` into `out`.
-fn active_equations(model: &indentify_contact::Model, rec: &StepRecord, out: &mut Vec<usize>) {
+pub(crate) fn active_equations(
+    model: &indentify_contact::Model,
+    rec: &StepRecord,
+    out: &mut Vec<usize>,
+) {
     out.clear();
     out.extend(
         rec.active
