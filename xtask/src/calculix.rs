@@ -354,7 +354,8 @@ pub fn corners(schedule: &Schedule) -> Vec<(f64, f64)> {
 /// every node of it prescribed (a rigid body by kinematics, its reaction the punch force).
 ///
 /// # Errors
-/// A punch other than a cone, a non-uniform schedule.
+/// A punch other than a cone, a non-uniform schedule, a J2 material under the user
+/// material.
 pub fn deck(
     title: &str,
     mesh: &Mesh,
@@ -369,14 +370,6 @@ pub fn deck(
             punch.describe()
         )
     };
-    if o.nlgeom
-        && o.finite_elastic == FiniteElastic::HenckyUmat
-        && matches!(material, Material::Plastic { .. })
-    {
-        bail!(
-            "the user material USERHENCKY has no hardening: run the J2 cases with CalculiX's own *PLASTIC (no --elastic hencky-umat)"
-        );
-    }
     let cot = 1.0 / half_angle_deg.to_radians().tan();
     let dt = uniform_step(schedule)?;
     let t_end = schedule.t[schedule.t.len() - 1];
@@ -571,7 +564,18 @@ fn geometry_cards(w: &mut String, mesh: &Mesh, cot: f64, o: &DeckOptions) -> Res
 
 /// The specimen's material cards (`*MATERIAL`, its model, `*SOLID SECTION`): small or
 /// finite strain, CalculiX's own models or the user materials.
+///
+/// # Errors
+/// A J2 material under the user material (it has no hardening).
 fn material_cards(w: &mut String, material: &Material, o: &DeckOptions) -> Result<()> {
+    if o.nlgeom
+        && o.finite_elastic == FiniteElastic::HenckyUmat
+        && matches!(material, Material::Plastic { .. })
+    {
+        bail!(
+            "the user material USERHENCKY has no hardening: run the J2 cases with CalculiX's own *PLASTIC (no --elastic hencky-umat)"
+        );
+    }
     match *material {
         _ if o.nlgeom && o.finite_elastic == FiniteElastic::HenckyUmat => {
             let constants = hencky_umat_constants(material);

@@ -31,8 +31,8 @@ use indentify_contact::{DirectSolver, HistorySegment, LoadHistory, Punch, Target
 use indentify_mesh::Mesh;
 
 use super::{
-    CASES, Case, DeckOptions, Material, PUNCH_THICKNESS, RunOptions, head_cards, our_sets, stem,
-    uniform_step,
+    CASES, Case, DeckOptions, FiniteElastic, Material, PUNCH_THICKNESS, RunOptions, head_cards,
+    our_sets, stem, uniform_step,
 };
 
 /// Nominal stiffness of the soft spring holding the punch (N/mm, full circle).
@@ -412,6 +412,25 @@ pub fn load_stem(case: &str, friction: f64, nlgeom: bool) -> String {
     format!("{}-load", stem(case, friction, nlgeom))
 }
 
+/// The stem of a load-controlled run whose CalculiX material under `NLGEOM` is chosen by
+/// `elastic` ([`FiniteElastic::suffix`] where it applies to `material`): the files of
+/// `cargo xtask calculix --drive force` (`r2-nlgeom-hencky-load` for R2 with our law as
+/// CalculiX's user material, `r2-nlgeom-load` with CalculiX's own).
+pub fn material_load_stem(
+    case: &str,
+    friction: f64,
+    nlgeom: bool,
+    elastic: FiniteElastic,
+    material: &Material,
+) -> String {
+    let suffix = if nlgeom && elastic.applies_to(material) {
+        elastic.suffix()
+    } else {
+        ""
+    };
+    format!("{}{suffix}-load", stem(case, friction, nlgeom))
+}
+
 /// The comparison of one run: the depths at the peak (t = 1 s), at the end of the hold
 /// (t = 2 s) and at the end (t = 3 s), ours against CalculiX's, and the worst
 /// `|h_ours - h_ccx| / h_max` over every common time.
@@ -513,11 +532,13 @@ pub fn run(o: &RunOptions) -> Result<String> {
         let corners = force_corners(&history);
         for &nlgeom in &o.kinematics {
             for &mu in &o.frictions {
-                let mut stem = stem(case.name, mu, nlgeom);
-                if nlgeom && o.deck.finite_elastic.applies_to(&loaded.material) {
-                    stem.push_str(o.deck.finite_elastic.suffix());
-                }
-                stem.push_str("-load");
+                let stem = material_load_stem(
+                    case.name,
+                    mu,
+                    nlgeom,
+                    o.deck.finite_elastic,
+                    &loaded.material,
+                );
                 let opts = DeckOptions {
                     nlgeom,
                     friction: mu,
