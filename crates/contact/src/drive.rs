@@ -309,7 +309,7 @@ mod tests {
     #[test]
     fn touchdown_restart_reads_the_exponent_from_the_contact_stiffness() {
         let state = |m: f64, f0: f64| {
-            let h = |f: f64| 0.01 * f.powf(m);
+            let h = move |f: f64| 0.01 * f.powf(m);
             let (f1, dt) = (4.0, 0.05);
             let mut s = State {
                 t: 0.05,
