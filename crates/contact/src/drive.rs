@@ -28,9 +28,9 @@ pub(crate) struct Load {
     /// The instrument's spring: the force is `(H - h) / Cf` at the punch depth `h`.
     pub spring: Option<Spring>,
     /// At the first step of a configured segment after a load-controlled step whose rate
-    /// it does not share: the factor on the last step's increments (depth and
-    /// displacement) that starts Newton, in place of the time extrapolation
-    /// ([`ForceDrive`], `newton.rs`).
+    /// it does not share, and at the step after the one that loaded from zero force (the
+    /// trigger's): the factor on the last step's increments (depth and displacement) that
+    /// starts Newton, in place of the time extrapolation ([`ForceDrive`], `newton.rs`).
     pub restart: Option<f64>,
 }
 
@@ -115,8 +115,9 @@ impl Drive for ForceDrive<'_> {
                 };
                 // Newton starts from the depth extrapolated linearly from the last step
                 // (a nonlinear law's Newton driver replaces it by the displacement's own
-                // time extrapolation, `newton.rs`); at the start of a configured segment
-                // the last step's increments scaled to this step's force increment
+                // time extrapolation, `newton.rs`); after the trigger's step and at the
+                // start of a configured segment the last step's increments scaled to this
+                // step's force increment
                 let last = &state.past[0];
                 let restart = match touchdown_factor(state, force) {
                     Some(q) => Some(q),
