@@ -448,16 +448,37 @@ impl<'m> Newton<'m> {
         // segment, scaled as the drive scaled the depth)
         let last = &state.past[0];
         let restart = spec.load.and_then(|l| l.restart);
+        let force_prescribed = spec.load.is_some_and(|l| l.is_force());
         let ratio = match restart {
             Some(q) => q,
             None if last.dt > 0.0 => dt / last.dt,
             None => 0.0,
         };
+        // under a prescribed force (not at a restart) the nodes are activated at a depth no
+        // deeper than the run's mean depth rate over its last load-controlled steps
+        // gives: a coarse contact's depth increments alternate as nodes touch down (R2's
+        // reference mesh: 3.3e-3 to 1.0e-2 mm per step), and a node activated by an
+        // overshooting guess costs more than one that joins at the set check (Newton
+        // stalls against it under the line search: the 13th Pdot/P step 17 iterations
+        // against 10, docs/validation-load-control.md §12)
+        let pdepth = if restart.is_none() && force_prescribed && last.dt > 0.0 {
+            let (sum, n) = state
+                .past
+                .iter()
+                .take_while(|p| p.dt > 0.0 && p.load)
+                .fold((0.0, 0usize), |(s, n), p| (s + p.depth / p.dt, n + 1));
+            if n > 0 {
+                spec.depth.min(state.depth + sum / n as f64 * dt)
+            } else {
+                spec.depth
+            }
+        } else {
+            spec.depth
+        };
         self.constraint
-            .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
+            .predict(&mut it.set, &it.u, &last.du, ratio, pdepth);
         // a force prescribed out of contact needs the trigger; the frame's spring
         // (a compliant depth drive) carries the step from anywhere
-        let force_prescribed = spec.load.is_some_and(|l| l.is_force());
         let triggered = force_prescribed && !it.set.active.contains(&true);
         if triggered {
             // load control out of contact: the trigger moves the punch to where its first
