@@ -28,9 +28,9 @@ pub(crate) struct Load {
     /// The instrument's spring: the force is `(H - h) / Cf` at the punch depth `h`.
     pub spring: Option<Spring>,
     /// At the first step of a configured segment after a load-controlled step whose rate
-    /// it does not share: the factor on the last step's increments (depth and
-    /// displacement) that starts Newton, in place of the time extrapolation
-    /// ([`ForceDrive`], `newton.rs`).
+    /// it does not share, and at the step after the one that loaded from zero force (the
+    /// trigger's): the factor on the last step's increments (depth and displacement) that
+    /// starts Newton, in place of the time extrapolation ([`ForceDrive`], `newton.rs`).
     pub restart: Option<f64>,
 }
 
@@ -115,13 +115,16 @@ impl Drive for ForceDrive<'_> {
                 };
                 // Newton starts from the depth extrapolated linearly from the last step
                 // (a nonlinear law's Newton driver replaces it by the displacement's own
-                // time extrapolation, `newton.rs`); at the start of a configured segment
-                // the last step's increments scaled to this step's force increment
+                // time extrapolation, `newton.rs`); after the trigger's step and at the
+                // start of a configured segment the last step's increments scaled to this
+                // step's force increment
                 let last = &state.past[0];
-                let restart = if self.0.starts_configured_segment(state.t, t1) {
-                    restart_factor(state, force)
-                } else {
-                    None
+                let restart = match touchdown_factor(state, force) {
+                    Some(q) => Some(q),
+                    None if self.0.starts_configured_segment(state.t, t1) => {
+                        restart_factor(state, force)
+                    }
+                    None => None,
                 };
                 let depth = match restart {
                     Some(q) => state.depth + q * last.depth,
@@ -163,6 +166,36 @@ pub(crate) fn restart_factor(state: &State, force: f64) -> Option<f64> {
         (state.force, state.depth),
         force,
     )
+}
+
+/// The factor on the last step's increments that starts the load-controlled step to the
+/// force `force` (N) after the step that loaded the punch from zero force (the trigger's
+/// step): `None` elsewhere, or where the exponent is out of range.
+///
+/// From zero force the depth is not linear in the force (`h ~ F^m`, `m = 1/2` for a sharp
+/// tip): the time extrapolation of the trigger's step put the next step's first iterate
+/// 35% too deep on R2's reference mesh, where the predictor then activated two nodes too
+/// many and Newton released them one set check at a time (14 iterations against the
+/// depth-controlled run's 6; docs/validation-load-control.md §12). The exponent comes from
+/// the contact stiffness `s = dF/dU` of the trigger step's last bordered solve, `m = F /
+/// (s h)` at its depth increment `h` (the power law's own slope), taken where it lies in
+/// `[1/4, 1]`; then `h(F) = h (F / F_1)^m`.
+pub(crate) fn touchdown_factor(state: &State, force: f64) -> Option<f64> {
+    let last = &state.past[0];
+    if !(last.load && last.dt > 0.0 && state.stiffness > 0.0 && state.force > 0.0) {
+        return None;
+    }
+    // the last step started from zero force
+    let start = state.force - last.rate * last.dt;
+    if start.abs() > 1e-6 * state.force || !(last.depth > 0.0) {
+        return None;
+    }
+    let m = state.force / (state.stiffness * last.depth);
+    let ratio = force / state.force;
+    if !((0.25..=1.0).contains(&m) && ratio > 1.0 + 1e-6) {
+        return None;
+    }
+    Some(ratio.powf(m) - 1.0)
 }
 
 /// [`restart_factor`] from the states before and after the last step, `(force N, depth
@@ -268,6 +301,68 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// After the step that loaded from zero force, the exponent read from the contact
+    /// stiffness `s = dF/dh = F / (m h)` of `h = c F^m` puts the next depth on the power
+    /// law exactly; a step that did not start from zero force, a hold and an exponent
+    /// outside `[1/4, 1]` keep the time extrapolation.
+    #[test]
+    fn touchdown_restart_reads_the_exponent_from_the_contact_stiffness() {
+        let state = |m: f64, f0: f64| {
+            let h = move |f: f64| 0.01 * f.powf(m);
+            let (f1, dt) = (4.0, 0.05);
+            let mut s = State {
+                t: 0.05,
+                f_scale: 0.0,
+                u: Vec::new(),
+                sigma: Vec::new(),
+                internal: Default::default(),
+                f_int: Vec::new(),
+                set: crate::constraint::ContactSet {
+                    active: Vec::new(),
+                    slip: Vec::new(),
+                },
+                past: std::array::from_fn(|_| crate::newton::Increment {
+                    du: Vec::new(),
+                    dt: 0.0,
+                    rate: 0.0,
+                    depth: 0.0,
+                    load: false,
+                }),
+                order: 1,
+                depth: h(f1),
+                force: f1,
+                stiffness: f1 / (m * h(f1)),
+                xi: Vec::new(),
+            };
+            s.past[0].dt = dt;
+            s.past[0].rate = (f1 - f0) / dt;
+            s.past[0].depth = h(f1) - h(f0.max(0.0));
+            s.past[0].load = true;
+            (s, h)
+        };
+        for m in [0.5, 2.0 / 3.0, 1.0] {
+            let (s, h) = state(m, 0.0);
+            for force in [5.0, 8.0, 12.5] {
+                let q = touchdown_factor(&s, force).unwrap();
+                let predicted = s.depth + q * s.past[0].depth;
+                assert!(
+                    (predicted - h(force)).abs() <= 1e-13 * h(force),
+                    "m {m}, F {force}: {predicted} vs {}",
+                    h(force)
+                );
+            }
+            // a hold, an unloading
+            assert_eq!(touchdown_factor(&s, 4.0), None);
+            assert_eq!(touchdown_factor(&s, 3.0), None);
+            // the last step started from 2 N: not the trigger's
+            let (s, _) = state(m, 2.0);
+            assert_eq!(touchdown_factor(&s, 8.0), None);
+        }
+        // h ~ F^2: out of range
+        let (s, _) = state(2.0, 0.0);
+        assert_eq!(touchdown_factor(&s, 8.0), None);
     }
 
     /// Without two states in contact the depth follows the last step's depth per newton;

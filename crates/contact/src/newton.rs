@@ -110,6 +110,10 @@ pub(crate) struct State {
     pub(crate) depth: f64,
     /// Punch force of the state (N): the sum of the active candidates' vertical reactions.
     pub(crate) force: f64,
+    /// The contact stiffness `dF/dU` (N/mm) of the last bordered solve of the step that
+    /// reached the state under a prescribed force (0 otherwise): the drive's restart after
+    /// the trigger reads the force-depth exponent from it (`drive.rs`).
+    pub(crate) stiffness: f64,
     /// Coulomb friction (empty without): the arc coordinate of every candidate's closest
     /// point at this state (the stick points of the next step).
     pub(crate) xi: Vec<f64>,
@@ -154,6 +158,7 @@ impl State {
             order: 1,
             depth: depth0,
             force: 0.0,
+            stiffness: 0.0,
             xi: if model.contact.friction() > 0.0 {
                 let u0 = vec![0.0; model.disc.n_dofs()];
                 (0..nc).map(|k| model.project(k, &u0, depth0).s).collect()
@@ -375,14 +380,15 @@ pub(crate) struct Newton<'m> {
     v: Vec<f64>,
     kv: Vec<f64>,
     col: Vec<f64>,
-    /// The depth column's solve `w` of the last Newton iterate of the step and its `v`
-    /// (the start of the next column's CG while `v` is unchanged), and whether it is set.
+    /// The depth column's solve `w` of the last Newton iterate of the step (the start of
+    /// the next column's CG), and whether it is set.
     w_prev: Vec<f64>,
-    v_prev: Vec<f64>,
     w_ok: bool,
     /// The depth increment `dU` (mm) of the last bordered update: with `self.col` the
     /// depth's part of the update in `self.rhs` (the line search's to shorten).
     d_depth: f64,
+    /// The contact stiffness `s` of the last bordered update (N/mm; 0 before one).
+    stiffness: f64,
 }
 
 impl<'m> Newton<'m> {
@@ -406,9 +412,9 @@ impl<'m> Newton<'m> {
             kv: Vec::new(),
             col: Vec::new(),
             w_prev: Vec::new(),
-            v_prev: Vec::new(),
             w_ok: false,
             d_depth: 0.0,
+            stiffness: 0.0,
         })
     }
 
@@ -425,6 +431,7 @@ impl<'m> Newton<'m> {
         let dt = spec.t1 - state.t;
         self.system.begin_step(spec.load.is_some());
         self.w_ok = false;
+        self.stiffness = 0.0;
         let mut it = Iteration {
             u: state.u.clone(),
             depth: spec.depth,
@@ -441,16 +448,37 @@ impl<'m> Newton<'m> {
         // segment, scaled as the drive scaled the depth)
         let last = &state.past[0];
         let restart = spec.load.and_then(|l| l.restart);
+        let force_prescribed = spec.load.is_some_and(|l| l.is_force());
         let ratio = match restart {
             Some(q) => q,
             None if last.dt > 0.0 => dt / last.dt,
             None => 0.0,
         };
+        // under a prescribed force (not at a restart) the nodes are activated at a depth no
+        // deeper than the run's mean depth rate over its last load-controlled steps
+        // gives: a coarse contact's depth increments alternate as nodes touch down (R2's
+        // reference mesh: 3.3e-3 to 1.0e-2 mm per step), and a node activated by an
+        // overshooting guess costs more than one that joins at the set check (Newton
+        // stalls against it under the line search: the 13th Pdot/P step 17 iterations
+        // against 10, docs/validation-load-control.md §12)
+        let pdepth = if restart.is_none() && force_prescribed && last.dt > 0.0 {
+            let (sum, n) = state
+                .past
+                .iter()
+                .take_while(|p| p.dt > 0.0 && p.load)
+                .fold((0.0, 0usize), |(s, n), p| (s + p.depth / p.dt, n + 1));
+            if n > 0 {
+                spec.depth.min(state.depth + sum / n as f64 * dt)
+            } else {
+                spec.depth
+            }
+        } else {
+            spec.depth
+        };
         self.constraint
-            .predict(&mut it.set, &it.u, &last.du, ratio, spec.depth);
+            .predict(&mut it.set, &it.u, &last.du, ratio, pdepth);
         // a force prescribed out of contact needs the trigger; the frame's spring
         // (a compliant depth drive) carries the step from anywhere
-        let force_prescribed = spec.load.is_some_and(|l| l.is_force());
         let triggered = force_prescribed && !it.set.active.contains(&true);
         if triggered {
             // load control out of contact: the trigger moves the punch to where its first
@@ -908,6 +936,11 @@ impl<'m> Newton<'m> {
             order,
             depth: it.depth,
             force,
+            stiffness: if spec.load.is_some_and(|l| l.is_force()) {
+                self.stiffness
+            } else {
+                0.0
+            },
             xi: self.constraint.stick_points(),
         };
         (next, rec)
@@ -1029,10 +1062,19 @@ impl Newton<'_> {
                 self.v[e] = 1.0;
             }
         }
+        // `K v`: the sum of the active vertical equations' columns of `K` (a handful of
+        // entries, not a product over the whole matrix)
         self.kv.fill(0.0);
-        model
-            .pattern
-            .sym_mul_add(self.system.k_values(), &self.v, &mut self.kv);
+        let values = self.system.k_values();
+        for k in it.set.active() {
+            if let Some(e) = model.dofs.equation(2 * model.candidates[k] + 1) {
+                let kv = &mut self.kv;
+                kv[e] += values[model.pattern.diag[e]];
+                model
+                    .pattern
+                    .for_each_off_diagonal(e, |i, p| kv[i] += values[p]);
+            }
+        }
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         let vkv = dot(&self.v, &self.kv);
         // the depth column `du_2 = w - v` into `self.col`: from the capacitance mode's
@@ -1055,11 +1097,13 @@ impl Newton<'_> {
                 let energy = !self.system.has_frames();
                 let tol = if energy { eta.min(1e-2) } else { eta.min(1e-9) };
                 self.aux.fill(0.0);
-                // CG starts from the last iterate's column while the active set holds
-                // (the tangent moves little between iterates; R2's load and hold under
-                // Norton-Hoff with the refresh of `refresh.rs`: 651 CG iterations and 228
-                // Newton iterations against 975 and 236 from the preconditioner's solution)
-                if self.w_ok && self.v == self.v_prev {
+                // CG starts from the last iterate's column of the step (the tangent moves
+                // little between iterates; R2's load and hold under Norton-Hoff with the
+                // refresh of `refresh.rs`: 651 CG iterations and 228 Newton iterations
+                // against 975 and 236 from the preconditioner's solution), also after a
+                // set change, whose newly held equations the solve sets to zero (R2's
+                // reference mesh, trigger and Pdot/P: 352 CG iterations against 365)
+                if self.w_ok {
                     self.system.solve_inexact_from(
                         model,
                         &mut self.col,
@@ -1073,22 +1117,18 @@ impl Newton<'_> {
                 }
                 .map_err(|e: FeError| StepFailure::Linear(e.to_string()))?;
                 self.w_prev.copy_from_slice(&self.col);
-                self.v_prev.copy_from_slice(&self.v);
                 self.w_ok = true;
                 let s = vkv - dot(&self.kv, &self.col);
+                // the energy `du_2 . K du_2` of the solved column: `K du_2 = -r` on the
+                // free equations (`r` the residual CG left) and its reactions sum to `-s`
+                // on the constrained ones, so `du_2 . K du_2 = s - w . r` (`w` zero on
+                // the constrained equations): the same number without a product over the
+                // whole matrix (0 after a direct solve, exact to round-off)
+                let e = s - self.system.last_residual_dot(&self.col);
                 for (c, v) in self.col.iter_mut().zip(&self.v) {
                     *c -= v;
                 }
-                if energy {
-                    model
-                        .pattern
-                        .sym_mul_add(self.system.k_values(), &self.col, &mut self.aux);
-                    let e = dot(&self.col, &self.aux);
-                    self.aux.fill(0.0);
-                    e
-                } else {
-                    s
-                }
+                if energy { e } else { s }
             }
         };
         let g_du1 = -dot(&self.kv, &self.rhs);
@@ -1101,6 +1141,7 @@ impl Newton<'_> {
             gap: model.gap_length(),
             n_active: it.set.active().count(),
         };
+        self.stiffness = s;
         let du = border.depth_increment(g_du1, s, vkv)?;
         for (x, c) in self.rhs.iter_mut().zip(&self.col) {
             *x += du * c;
@@ -1144,13 +1185,20 @@ impl Newton<'_> {
             gap: model.gap_length(),
             n_active: it.set.active().count(),
         };
+        let mut stiffness = 0.0;
         let solved = self.system.solve_bordered(
             model,
             &self.v,
             &mut self.rhs,
             &self.aux,
-            |g_du1, s, vkv| border.depth_increment(g_du1, s, vkv),
+            |g_du1, s, vkv| {
+                stiffness = s;
+                border.depth_increment(g_du1, s, vkv)
+            },
         );
+        if solved.is_some() {
+            self.stiffness = stiffness;
+        }
         let du = match solved {
             None => return Ok(false),
             Some(du) => du?,
@@ -1173,7 +1221,6 @@ impl Newton<'_> {
             self.kv = vec![0.0; n];
             self.col = vec![0.0; n];
             self.w_prev = vec![0.0; n];
-            self.v_prev = vec![0.0; n];
             self.w_ok = false;
         }
     }

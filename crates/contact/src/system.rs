@@ -75,6 +75,9 @@ pub struct ConstrainedSystem {
     refresh: Refresh,
     /// PCG work vectors: r, z, p, q and a copy of the right-hand side.
     work: [Vec<f64>; 5],
+    /// The last inexact solve ended in CG (its residual is `work[0]`), not in a direct
+    /// solve (whose residual is round-off).
+    cg_residual: bool,
     /// Preconditioned CG iterations.
     pub pcg_iterations: usize,
     /// Preconditioned CG solves (each Newton solve of a nonlinear law that did not
@@ -161,6 +164,7 @@ impl ConstrainedSystem {
             pcg: false,
             refresh: Refresh::default(),
             work: std::array::from_fn(|_| vec![0.0; model.dofs.n_eq]),
+            cg_residual: false,
             pcg_iterations: 0,
             pcg_solves: 0,
             pcg_fallbacks: 0,
@@ -684,6 +688,7 @@ impl ConstrainedSystem {
         xbar: &[f64],
         eta: f64,
     ) -> Result<usize, FeError> {
+        self.cg_residual = false;
         if !self.pcg {
             self.solve_dirichlet(model, b, xbar);
             return Ok(0);
@@ -713,6 +718,18 @@ impl ConstrainedSystem {
             return self.solve_inexact(model, b, xbar, eta);
         }
         self.solve_pcg(model, b, xbar, eta, Some(guess))
+    }
+
+    /// `x . r` with `r = b - A x` the residual CG left on the free equations of the last
+    /// inexact solve (vertical contact: no frames), or 0 where that solve was direct (its
+    /// residual is round-off). Load control's depth column reads its energy from it
+    /// without a product over the whole matrix (`newton.rs`, `Newton::border`).
+    pub(crate) fn last_residual_dot(&self, x: &[f64]) -> f64 {
+        if self.cg_residual && self.frames.is_empty() {
+            dot(x, &self.work[0])
+        } else {
+            0.0
+        }
     }
 
     /// Preconditioned CG on the constrained (rotated) matrix, `b` rotated.
@@ -792,6 +809,7 @@ impl ConstrainedSystem {
         self.pcg_solves += 1;
         self.refresh.solved(iterations, converged);
         self.seconds[2] += t0.elapsed().as_secs_f64();
+        self.cg_residual = converged;
         if converged {
             return Ok(iterations);
         }

@@ -165,3 +165,112 @@ fn only_configured_segment_boundaries_restart() {
     let record = LoadHistory::from_force_record(t, &forces).unwrap();
     assert!((1..t.len() - 1).all(|j| !record.starts_configured_segment(t[j], t[j + 1])));
 }
+
+/// R2's reference mesh: the step after the trigger's starts from the power law whose
+/// exponent the trigger step's contact stiffness gives (`drive.rs`, `touchdown_factor`),
+/// not from the time extrapolation of a step that began at zero force. Fails on the commit
+/// before it: the first iterate sat 35% too deep, two nodes too many were activated and
+/// released one set check at a time (14 Newton iterations against the depth-controlled
+/// run's 6; now 9). The depths still give back the prescribed forces.
+#[test]
+fn step_after_the_trigger_starts_on_the_power_law() {
+    let m = Model::with_contact(
+        CylinderMesher::REFERENCE.build().unwrap(),
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+        ContactKind::Vertical,
+    )
+    .unwrap()
+    .with_kinematics(Kinematics::Small)
+    .unwrap();
+    let p0 = 32.0;
+    let history = LoadHistory::from_specs(&[
+        linear(0.1, p0, 2),
+        SegmentSpec {
+            duration: None,
+            depth: None,
+            force: Some(2.0 * p0),
+            pdot_over_p: Some(0.5),
+            steps: 2,
+        },
+    ])
+    .unwrap();
+    let mut solver = DirectSolver::new(&m).unwrap();
+    let mat = LawMaterial(&NortonHoff);
+    let by_force = solver.run_history(&mat, &R2, &history, &opts()).unwrap();
+    let by_depth = solver
+        .run(&mat, &R2, &depths_of(&by_force), &opts())
+        .unwrap();
+    let its = |t: &Trajectory| t.steps.iter().map(|s| s.iterations).collect::<Vec<_>>();
+    println!(
+        "Newton per step: load {:?}, depth {:?}",
+        its(&by_force),
+        its(&by_depth)
+    );
+    assert_eq!(by_force.steps.len(), 4, "no cut step");
+    let (load2, depth2) = (by_force.steps[1].iterations, by_depth.steps[1].iterations);
+    assert!(
+        load2 <= depth2 + 4,
+        "the step after the trigger: {load2} Newton iterations against {depth2}"
+    );
+    let worst = by_force
+        .steps
+        .iter()
+        .zip(&by_depth.steps)
+        .map(|(a, b)| (a.force - b.force).abs() / (2.0 * p0))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-7, "max |dF| / F_max = {worst:e}");
+}
+
+/// R2's reference mesh, the whole trigger, Pdot/P and hold history (`examples/pdotp_cost.rs
+/// reference`): no load-controlled step takes more than 4 Newton iterations over the
+/// depth-controlled run of its depths. Fails without the predictor's activation depth
+/// under a prescribed force (`newton.rs`: no deeper than the run's mean depth rate gives):
+/// the 13th step activated a node it ends without and took 17 iterations against 7.
+#[test]
+fn reference_pdotp_steps_stay_near_the_depth_controlled_ones() {
+    let m = Model::with_contact(
+        CylinderMesher::REFERENCE.build().unwrap(),
+        Punch::Cone {
+            half_angle_deg: 68.0,
+        },
+        ContactKind::Vertical,
+    )
+    .unwrap()
+    .with_kinematics(Kinematics::Small)
+    .unwrap();
+    let (p0, r) = (32.0, 0.5);
+    let history = LoadHistory::from_specs(&[
+        linear(0.1, p0, 2),
+        SegmentSpec {
+            duration: None,
+            depth: None,
+            force: Some(16.0 * p0),
+            pdot_over_p: Some(r),
+            steps: 12,
+        },
+        linear(1.0, 16.0 * p0, 4),
+    ])
+    .unwrap();
+    let mut solver = DirectSolver::new(&m).unwrap();
+    let mat = LawMaterial(&NortonHoff);
+    let by_force = solver.run_history(&mat, &R2, &history, &opts()).unwrap();
+    let by_depth = solver
+        .run(&mat, &R2, &depths_of(&by_force), &opts())
+        .unwrap();
+    let its = |t: &Trajectory| t.steps.iter().map(|s| s.iterations).collect::<Vec<_>>();
+    let (load, depth) = (its(&by_force), its(&by_depth));
+    println!("Newton per step: load {load:?}, depth {depth:?}");
+    assert_eq!(load.len(), 18, "no cut step");
+    for (k, (a, b)) in load.iter().zip(&depth).enumerate() {
+        assert!(a <= &(b + 4), "step {k}: {a} Newton iterations against {b}");
+    }
+    let worst = by_force
+        .steps
+        .iter()
+        .zip(&by_depth.steps)
+        .map(|(a, b)| (a.force - b.force).abs() / (16.0 * p0))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-7, "max |dF| / F_max = {worst:e}");
+}
