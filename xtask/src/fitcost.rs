@@ -29,7 +29,8 @@
 //! `--c2f N` runs each fit coarse to fine (`study::coarse_to_fine`: at most N iterations
 //! on the 2x coarser model, then the full-fidelity fit from its optimum); the fit's time
 //! then includes the coarse phase, and the coarse phase's iterations and solves are
-//! printed beside the fine ones. `--proposed-step` fits each case with the stop on the
+//! printed beside the fine ones (`--c2f-tight`: the coarse phase without the statistical
+//! stops, to its own gradient or relative-decrease stop). `--proposed-step` fits each case with the stop on the
 //! proposed step and, where it fired, without it, back to back, and prints every
 //! parameter's shift in standard deviations and both outcomes (`propstep.rs`; without
 //! `--only` the further Levenberg-Marquardt examples too; `--both` makes the run without
@@ -63,6 +64,10 @@ fn valley_option(valley: &mut Option<ValleyStop>, a: &str, v: &str) -> Result<()
     Ok(())
 }
 
+/// `--c2f-tight`: the coarse phase without the statistical stops (`step_sigma`,
+/// `proposed_step`), to its own gradient or relative-decrease stop.
+static C2F_TIGHT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// The cases, in the order they run.
 const CASES: [&str; 6] = [
     "r1-map",
@@ -74,7 +79,7 @@ const CASES: [&str; 6] = [
 ];
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N]
+/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
 /// [--no-proposed-step]`.
 pub fn run(args: &[String]) -> Result<()> {
@@ -131,6 +136,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "--both" => both = true,
             "--no-proposed-step" => proposed = Some(false),
             "--c2f" => c2f = Some(val().parse().context("--c2f: coarse iterations, >= 1")?),
+            "--c2f-tight" => C2F_TIGHT.store(true, std::sync::atomic::Ordering::Relaxed),
             other => bail!("unknown option {other}"),
         }
     }
@@ -357,7 +363,20 @@ fn measure(
             .install(|| indentify_identify::identify(&s.problem, &s.id_cfg, &mut observer))?,
         Some(n) => {
             let (r, phase) = s.problem.install(|| {
-                indentify_study::coarse_to_fine::identify(&s, &s.id_cfg, n, &mut observer)
+                if C2F_TIGHT.load(std::sync::atomic::Ordering::Relaxed) {
+                    use indentify_study::coarse_to_fine as c2f;
+                    let mut cc = s.id_cfg.clone();
+                    cc.stop.step_sigma = None;
+                    cc.stop.proposed_step = false;
+                    let (mut fine, phase) =
+                        c2f::coarse_phase(&s, c2f::coarse_problem(&s), &cc, n, &mut observer);
+                    fine.stop = s.id_cfg.stop;
+                    indentify_identify::identify(&s.problem, &fine, &mut observer)
+                        .map(|r| (r, phase))
+                        .map_err(anyhow::Error::from)
+                } else {
+                    indentify_study::coarse_to_fine::identify(&s, &s.id_cfg, n, &mut observer)
+                }
             })?;
             coarse = Some(json!({
                 "model": phase.model,

@@ -207,21 +207,54 @@ pub struct CoarsePhase {
     pub seconds: f64,
 }
 
-/// Runs the coarse phase (at most `coarse_iterations` iterations, the configuration's
-/// other stopping rules, no identifiability summary), then the full-fidelity fit from
-/// its optimum on `s.problem`; a coarse phase that cannot be built or fails is reported
-/// in [`CoarsePhase::fallback`] and the fine fit starts from the configuration's start.
-/// Both phases run on the current rayon pool: call it inside `s.problem.install` for the
-/// problem's own.
-///
-/// # Errors
-/// The full-fidelity fit's errors.
-pub fn identify(
+impl CoarsePhase {
+    /// What the report says: the coarse phase's counts, stop and end point, or why the fit
+    /// ran at full fidelity from the configuration's start.
+    pub fn summary(&self) -> String {
+        let model = self.model.as_deref().unwrap_or("none built");
+        match (&self.result, &self.fallback) {
+            (_, Some(why)) => format!(
+                "The fit was to run coarse to fine, but {why}: it ran at full fidelity from \
+                 the configuration's start (coarse model: {model})."
+            ),
+            (Some(r), None) => {
+                let at: Vec<String> = r
+                    .params
+                    .iter()
+                    .filter(|p| p.free)
+                    .map(|p| format!("{} = {:.6e}", p.name, p.value))
+                    .collect();
+                format!(
+                    "The fit ran coarse to fine: {} iterations ({} forward and {} sensitivity \
+                     solves, {:.1} s; stop: {}) on the 2x coarser model ({model}) from the \
+                     configuration's start, ending at {}; then the full-fidelity fit from \
+                     there, whose iterations, stop, deviations and discretization check are \
+                     the ones reported.",
+                    r.iterations,
+                    r.forward_solves,
+                    r.sensitivity_solves,
+                    self.seconds,
+                    r.stop_reason,
+                    at.join(", ")
+                )
+            }
+            (None, None) => "The coarse phase did not run.".to_string(),
+        }
+    }
+}
+
+/// The coarse phase: at most `coarse_iterations` iterations (the configuration's other
+/// stopping rules, no identifiability summary) of `coarse` (from [`coarse_problem`]; an
+/// error is reported as the fallback), from `config`'s start. Returns `config` with the
+/// free parameters' starts moved to the coarse optimum (unchanged on a fallback) and what
+/// the phase did. Runs on the current rayon pool.
+pub fn coarse_phase(
     s: &Setup,
+    coarse: Result<(Problem, String)>,
     config: &IdentifyConfig,
     coarse_iterations: usize,
     observer: &mut dyn FnMut(&IterationRecord),
-) -> Result<(IdentifyResult, CoarsePhase)> {
+) -> (IdentifyConfig, CoarsePhase) {
     let clock = std::time::Instant::now();
     let mut phase = CoarsePhase {
         model: None,
@@ -230,7 +263,7 @@ pub fn identify(
         seconds: 0.0,
     };
     let mut fine_cfg = config.clone();
-    match coarse_problem(s) {
+    match coarse {
         Err(e) => phase.fallback = Some(format!("no coarse model: {e:#}")),
         Ok((coarse, text)) => {
             phase.model = Some(text);
@@ -256,6 +289,24 @@ pub fn identify(
         }
     }
     phase.seconds = clock.elapsed().as_secs_f64();
+    (fine_cfg, phase)
+}
+
+/// Runs the coarse phase ([`coarse_phase`]), then the full-fidelity fit from its optimum
+/// on `s.problem`; a coarse phase that cannot be built or fails is reported in
+/// [`CoarsePhase::fallback`] and the fine fit starts from the configuration's start.
+/// Both phases run on the current rayon pool: call it inside `s.problem.install` for the
+/// problem's own.
+///
+/// # Errors
+/// The full-fidelity fit's errors.
+pub fn identify(
+    s: &Setup,
+    config: &IdentifyConfig,
+    coarse_iterations: usize,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<(IdentifyResult, CoarsePhase)> {
+    let (fine_cfg, phase) = coarse_phase(s, coarse_problem(s), config, coarse_iterations, observer);
     let fine = indentify_identify::identify(&s.problem, &fine_cfg, observer)?;
     Ok((fine, phase))
 }

@@ -242,6 +242,9 @@ pub struct IdentifyOutcome {
     /// The closed-form start, when asked for ([`IdentifyOptions::closed_form_start`]): the
     /// values it set, or why none.
     pub start: Option<crate::closed_form_start::ClosedFormStart>,
+    /// The coarse phase of a fit run coarse to fine (`identify.coarse_to_fine`): its
+    /// counts and end point, or why the fit fell back to full fidelity.
+    pub coarse: Option<crate::coarse_to_fine::CoarsePhase>,
 }
 
 /// One test of a joint fit.
@@ -696,6 +699,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         // the profiles' threshold needs s^2 from the identifiability summary
         s.id_cfg.identifiability = true;
     }
+    let coarse = coarse_plan(&s, opts)?;
 
     // the folder marked as holding a run in progress (the earlier run moved aside under
     // --force), then the history, once every input is known good
@@ -722,10 +726,10 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
         },
         ..run_info(&s.name, &s.law, &s.names, &s.id_cfg, opts)
     });
-    let (result, multistart) = fit(
+    let (result, multistart, coarse) = fit(
         &s,
         opts,
-        resume_from.as_ref(),
+        (resume_from.as_ref(), coarse),
         &mut history,
         paths.as_ref(),
         observer,
@@ -735,6 +739,7 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
     outcome.multistart = multistart;
     outcome.profiles = profiles;
     outcome.start = start;
+    outcome.coarse = coarse;
     let s = std::sync::Arc::new(s);
     if opts.refine {
         discretization_check(&mut outcome, &s, &opts.cancel);
@@ -750,15 +755,21 @@ pub fn run(opts: &IdentifyOptions, observer: &mut dyn Observer) -> Result<Identi
 
 /// The fit: the optimizer from the start (or the resumed iterate), or the multi-start's
 /// best run (each start a fit of every test) with its summary; the history written.
+#[allow(clippy::type_complexity)]
 fn fit(
     s: &Setup,
     opts: &IdentifyOptions,
-    resume_from: Option<&IterationRecord>,
+    (resume_from, coarse): (Option<&IterationRecord>, Option<CoarsePlan>),
     history: &mut Option<HistoryWriter>,
     paths: Option<&Paths>,
     observer: &mut dyn Observer,
-) -> Result<(IdentifyResult, Option<crate::explore::MultiStartOutcome>)> {
+) -> Result<(
+    IdentifyResult,
+    Option<crate::explore::MultiStartOutcome>,
+    Option<crate::coarse_to_fine::CoarsePhase>,
+)> {
     let name = &s.name;
+    let mut phase = None;
     let (result, multistart) = match &opts.starts {
         Some(starts) => {
             let (summary, best) = crate::explore::multistart(&s.problem, &s.id_cfg, starts)
@@ -772,16 +783,25 @@ fn fit(
             }
             (Ok(best), Some(summary))
         }
-        None => (
-            optimize(
-                &s.problem,
-                &s.id_cfg,
-                resume_from,
-                history.as_mut(),
-                observer,
+        None => match coarse {
+            Some(plan) => {
+                let (fine_cfg, p) = coarse_phase(s, plan);
+                let r = optimize(&s.problem, &fine_cfg, None, history.as_mut(), observer)
+                    .map(|r| with_configured_start(r, &s.id_cfg, &p));
+                phase = Some(p);
+                (r, None)
+            }
+            None => (
+                optimize(
+                    &s.problem,
+                    &s.id_cfg,
+                    resume_from,
+                    history.as_mut(),
+                    observer,
+                ),
+                None,
             ),
-            None,
-        ),
+        },
     };
     let result = result.map_err(|e| {
         let kept = match (history, paths) {
@@ -799,7 +819,102 @@ fn fit(
         };
         e.context(format!("the {what} of `{name}` failed{kept}"))
     })?;
-    Ok((result, multistart))
+    Ok((result, multistart, phase))
+}
+
+/// The coarse phase of a fit run coarse to fine: its iteration limit and coarse problem.
+struct CoarsePlan {
+    iterations: usize,
+    problem: Problem,
+    model: String,
+}
+
+/// The coarse phase `identify.coarse_to_fine` asks for, its coarse model built before any
+/// solve (`None`: full fidelity; skipped, with a note, when resuming).
+///
+/// # Errors
+/// A schedule that cannot be honoured (a coarse mesh below the contact resolution, a
+/// load-controlled test, a mesh that cannot be coarsened) or combined with `--starts`,
+/// naming the field.
+fn coarse_plan(s: &Setup, opts: &IdentifyOptions) -> Result<Option<CoarsePlan>> {
+    let Some(c) = s.cfg.identify.as_ref().and_then(|i| i.coarse_to_fine) else {
+        return Ok(None);
+    };
+    if opts.starts.is_some() {
+        return Err(Error::msg(
+            ErrorKind::Config,
+            "identify.coarse_to_fine cannot be combined with --starts: a multi-start runs \
+             every start at full fidelity (set identify.coarse_to_fine: None)",
+        ));
+    }
+    if opts.resume {
+        tracing::info!(
+            "  identify.coarse_to_fine: resuming, the fit continues at full fidelity (no \
+             coarse phase)"
+        );
+        return Ok(None);
+    }
+    let (problem, model) = crate::coarse_to_fine::coarse_problem(s)
+        .context(
+            "identify.coarse_to_fine: the fidelity schedule cannot be honoured (set \
+             identify.coarse_to_fine: None for a fit at full fidelity)",
+        )
+        .kind(ErrorKind::Config)?;
+    Ok(Some(CoarsePlan {
+        iterations: c.iterations,
+        problem,
+        model,
+    }))
+}
+
+/// Runs the coarse phase of `plan` (its iterations logged, not in the history): the
+/// fine phase's configuration and what the phase did.
+fn coarse_phase(
+    s: &Setup,
+    plan: CoarsePlan,
+) -> (IdentifyConfig, crate::coarse_to_fine::CoarsePhase) {
+    let mut log = |r: &IterationRecord| {
+        tracing::info!(
+            "  coarse iteration {}: J = {:.6e} ({:.1} s)",
+            r.iteration,
+            r.cost,
+            r.seconds
+        );
+    };
+    let (cfg, phase) = crate::coarse_to_fine::coarse_phase(
+        s,
+        Ok((plan.problem, plan.model)),
+        &s.id_cfg,
+        plan.iterations,
+        &mut log,
+    );
+    tracing::info!("  {}", phase.summary());
+    (cfg, phase)
+}
+
+/// The fine phase's result with the configuration's start as its start (the report's
+/// start curve is then solved again at it, one forward run) when the coarse phase moved
+/// the start.
+fn with_configured_start(
+    mut r: IdentifyResult,
+    id_cfg: &IdentifyConfig,
+    phase: &crate::coarse_to_fine::CoarsePhase,
+) -> IdentifyResult {
+    if phase.result.is_none() {
+        return r;
+    }
+    for p in r.params.iter_mut() {
+        if let Some(v) = id_cfg
+            .params
+            .iter()
+            .find(|q| q.name == p.name)
+            .and_then(|q| q.value)
+        {
+            p.start = v;
+        }
+    }
+    r.initial_forces.clear();
+    r
 }
 
 /// The profile likelihoods after the fit, when asked and not interrupted (each profile
@@ -891,6 +1006,7 @@ fn outcome(s: &Setup, result: IdentifyResult, resumed: bool) -> Result<IdentifyO
         tests: if joint { fits } else { Vec::new() },
         oliver_pharr,
         start: None,
+        coarse: None,
     })
 }
 
@@ -1579,6 +1695,9 @@ fn explorations(paths: &Paths, outcome: &IdentifyOutcome) -> (String, Vec<PathBu
     let mut figures = Vec::new();
     if let Some(c) = &outcome.start {
         markdown.push_str(&format!("## Start\n\n{}\n\n", c.summary()));
+    }
+    if let Some(c) = &outcome.coarse {
+        markdown.push_str(&format!("## Coarse to fine\n\n{}\n\n", c.summary()));
     }
     if let Some(b) = &outcome.oliver_pharr {
         markdown.push_str(&crate::op_beside::markdown(b));

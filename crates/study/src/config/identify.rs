@@ -58,6 +58,23 @@ pub struct IdentifySection {
     /// default `Residual`.
     #[serde(default, skip_serializing_if = "NoiseSetting::is_residual")]
     pub noise: NoiseSetting,
+    /// The fidelity schedule: the fit's first iterations on the 2x coarser model, then the
+    /// full-fidelity fit from the coarse optimum (`None`, the default: full fidelity
+    /// throughout; see [`CoarseToFineSetting`] and `crate::coarse_to_fine`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coarse_to_fine: Option<CoarseToFineSetting>,
+}
+
+/// `identify.coarse_to_fine: Some((iterations: N))`: at most `iterations` iterations on
+/// the model 2x coarser in space (and in time where the schedule allows it), with the
+/// section's other stopping rules, then the full-fidelity fit from the coarse optimum.
+/// Measured in docs/performance.md ("Coarse to fine on R2, its noisy copy and an R1 map
+/// indent").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoarseToFineSetting {
+    /// The coarse phase's iteration limit (>= 1).
+    pub iterations: usize,
 }
 
 /// The noise model of the standard deviations (`identify.noise`), as written in
@@ -161,6 +178,7 @@ impl Default for IdentifySection {
             stop: StopSection::default(),
             identifiability: true,
             noise: NoiseSetting::Residual,
+            coarse_to_fine: None,
         }
     }
 }
@@ -765,6 +783,16 @@ impl IdentifySection {
                     "stop.lm_radius",
                     r.to_string(),
                     "a finite length > 0 in the scaled variables (1: a factor e), or None (off)",
+                ));
+            }
+        }
+        if let Some(c) = self.coarse_to_fine {
+            if c.iterations == 0 {
+                return Err(field(
+                    "coarse_to_fine.iterations",
+                    "0".into(),
+                    "an integer >= 1 (the coarse phase's iteration limit), or \
+                     coarse_to_fine: None (full fidelity throughout)",
                 ));
             }
         }
