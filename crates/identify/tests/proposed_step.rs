@@ -160,12 +160,20 @@ fn the_proposed_step_cuts_the_plain_run_short_by_the_one_step_it_proposed() {
         fast.stop_reason,
         StopReason::ProposedBelowSigma { .. }
     ));
-    assert!(matches!(plain.stop_reason, StopReason::StepBelowSigma { .. }));
+    assert!(matches!(
+        plain.stop_reason,
+        StopReason::StepBelowSigma { .. }
+    ));
     assert!(fast.history.len() < plain.history.len());
     for (a, b) in fast.history.iter().zip(&plain.history) {
         assert_eq!(a.iteration, b.iteration);
         assert_eq!(a.params, b.params, "iteration {}", a.iteration);
-        assert_eq!(a.cost.to_bits(), b.cost.to_bits(), "iteration {}", a.iteration);
+        assert_eq!(
+            a.cost.to_bits(),
+            b.cost.to_bits(),
+            "iteration {}",
+            a.iteration
+        );
     }
     assert_eq!(fast.c, fast.history.last().unwrap().params);
     assert_eq!(plain.iterations, fast.iterations + 1, "one step more");
