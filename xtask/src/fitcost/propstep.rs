@@ -21,7 +21,7 @@ use serde_json::{Value, json};
 pub type Case = (&'static str, &'static str, Option<(f64, u64)>, bool);
 
 /// The further cases.
-pub const EXTRA: [Case; 14] = [
+pub const EXTRA: [Case; 16] = [
     ("r1-noisy", "examples/r1-maxwell.ron", Some((0.02, 1)), true),
     (
         "pdotp-maxwell",
@@ -73,6 +73,18 @@ pub const EXTRA: [Case; 14] = [
     (
         "ht-power-norton-joint",
         "examples/real/ht-power-norton-joint.ron",
+        None,
+        false,
+    ),
+    (
+        "ht-nh-load-joint",
+        "examples/real/ht-nh-load-joint.ron",
+        None,
+        false,
+    ),
+    (
+        "ht-voce-norton-joint",
+        "examples/real/ht-voce-norton-joint.ron",
         None,
         false,
     ),
