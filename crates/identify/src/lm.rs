@@ -830,6 +830,38 @@ mod tests {
         assert!(both[1] < both[0], "trials + iterations: {both:?}");
     }
 
+    /// The bound of a trial's cost: every `J` from it on gives an internal cost at least
+    /// the threshold, and the `J` one unit lower does not (checked on scales over many
+    /// decades, against the internal cost computed as `Fit::cost` does).
+    #[test]
+    fn reject_bound_is_the_smallest_rejected_cost() {
+        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let kappa = 10f64.powf(8.0 * next() - 4.0);
+            let j_ref = 10f64.powf(12.0 * next() - 6.0);
+            let reject = 10f64.powf(6.0 * next() - 3.0);
+            let b = reject_bound(kappa, j_ref, reject).expect("finite scales");
+            let scaled = |j: f64| kappa * j / j_ref;
+            assert!(scaled(b) >= reject, "{kappa} {j_ref} {reject}");
+            assert!(scaled(b.next_down()) < reject, "{kappa} {j_ref} {reject}");
+            // monotone: a few larger values are rejected too
+            let mut j = b;
+            for _ in 0..8 {
+                j = j.next_up();
+                assert!(scaled(j) >= reject);
+            }
+        }
+        assert_eq!(reject_bound(1.0, 1.0, 0.0), Some(0.0));
+        assert_eq!(reject_bound(0.0, 1.0, 1.0), None);
+        assert_eq!(reject_bound(1.0, f64::NAN, 1.0), None);
+    }
+
     #[test]
     fn line_model_factor_is_the_minimizer_of_the_quadratic() {
         // phi(t) = 1 - t + 2 t^2: phi(1) = 2, minimum at t = 1/4
