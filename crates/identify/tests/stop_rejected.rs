@@ -133,7 +133,6 @@ fn assert_fired(off: &IdentifyResult, on: &IdentifyResult, tests: usize) {
         off.schedule_steps,
         "steps run + skipped = the full fit's steps"
     );
-    assert!(on.newton_iterations < off.newton_iterations);
 }
 
 #[test]
@@ -175,6 +174,7 @@ fn joint_fit_is_bit_identical_on_one_and_two_threads() {
     // per-test bounds: what stops does not depend on the threads
     assert_eq!(on1.stopped_runs, on2.stopped_runs);
     assert_eq!(on1.steps_skipped, on2.steps_skipped);
+    assert_eq!(on1.schedule_steps, on2.schedule_steps);
     assert_eq!(on1.newton_iterations, on2.newton_iterations);
 }
 
