@@ -35,6 +35,9 @@
 //! parameter's shift in standard deviations and both outcomes (`propstep.rs`; without
 //! `--only` the further Levenberg-Marquardt examples too; `--both` makes the run without
 //! it also where it did not fire); `--no-proposed-step` turns it off for the other modes.
+//! Each fit also prints the schedule steps its forward runs ran, the rejected trials'
+//! runs stopped early (`LmStrategy::stop_rejected`, on in configurations) and the steps
+//! they skipped; `--no-stop-rejected` runs every trial in full, for before/after counts.
 
 mod batch;
 mod columns;
@@ -81,7 +84,7 @@ const CASES: [&str; 6] = [
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
 /// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
-/// [--no-proposed-step]`.
+/// [--no-proposed-step] [--no-stop-rejected]`.
 pub fn run(args: &[String]) -> Result<()> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
@@ -98,6 +101,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut profile = false;
     let mut op = false;
     let mut lm: Option<LmStrategy> = None;
+    let mut stop_rejected: Option<bool> = None;
     let mut c2f: Option<usize> = None;
     let mut proposed: Option<bool> = None;
     let mut pairs_mode = false;
@@ -132,6 +136,7 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
             "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
+            "--no-stop-rejected" => stop_rejected = Some(false),
             "--proposed-step" => pairs_mode = true,
             "--both" => both = true,
             "--no-proposed-step" => proposed = Some(false),
@@ -143,6 +148,12 @@ pub fn run(args: &[String]) -> Result<()> {
     if rounds == 0 {
         bail!("--rounds takes a number >= 1");
     }
+    // a strategy given replaces the configuration's: its stop of rejected trials kept
+    let lm = lm.map(|mut l| {
+        l.stop_rejected = stop_rejected.unwrap_or(true);
+        l
+    });
+    let lm_stop = stop_rejected;
     if let Some(o) = &only {
         let known = |c: &str| CASES.contains(&c) || propstep::EXTRA.iter().any(|e| e.0 == c);
         if let Some(bad) = o.iter().find(|c| !known(c)) {
@@ -197,19 +208,35 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     if pairs_mode {
         let run = |case: &str, on: bool| {
-            measure(&root, case, rounds, cold, (chi2, valley, Some(on)), lm, c2f)
+            measure(
+                &root,
+                case,
+                rounds,
+                cold,
+                (chi2, valley, Some(on)),
+                (lm, lm_stop),
+                c2f,
+            )
         };
         return propstep::sweep(&cases, both, json_out.as_deref(), run);
     }
     let mut results = Vec::new();
     println!(
-        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | stop |"
+        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | schedule steps run | runs stopped | steps skipped | stop |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
-        let m = measure(&root, case, rounds, cold, (chi2, valley, proposed), lm, c2f)?;
+        let m = measure(
+            &root,
+            case,
+            rounds,
+            cold,
+            (chi2, valley, proposed),
+            (lm, lm_stop),
+            c2f,
+        )?;
         println!(
-            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
             m["fit_s"].as_f64().unwrap_or(f64::NAN),
             m["ratio"].as_f64().unwrap_or(f64::NAN),
@@ -220,6 +247,9 @@ pub fn run(args: &[String]) -> Result<()> {
             m["sensitivity_solves"],
             m["newton_iterations"],
             m["factorizations"],
+            m["schedule_steps"],
+            m["stopped_runs"],
+            m["steps_skipped"],
             m["stop"].as_str().unwrap_or("")
         );
         if !m["coarse"].is_null() {
@@ -323,7 +353,7 @@ fn measure(
     rounds: usize,
     cold: bool,
     (chi2, valley, proposed): (bool, Option<ValleyStop>, Option<bool>),
-    lm: Option<LmStrategy>,
+    (lm, lm_stop): (Option<LmStrategy>, Option<bool>),
     c2f: Option<usize>,
 ) -> Result<Value> {
     let opts = options(root, case)?;
@@ -336,6 +366,9 @@ fn measure(
     }
     if let Some(lm) = lm {
         s.id_cfg.stop.lm = lm;
+    }
+    if let Some(on) = lm_stop {
+        s.id_cfg.stop.lm.stop_rejected = on;
     }
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
@@ -422,6 +455,9 @@ fn measure(
         "rejected_trials": r.rejected_trials,
         "newton_iterations": r.newton_iterations,
         "factorizations": r.factorizations,
+        "schedule_steps": r.schedule_steps,
+        "stopped_runs": r.stopped_runs,
+        "steps_skipped": r.steps_skipped,
         "stop": r.stop_reason.to_string(),
         "converged": r.stop_reason.is_converged(),
         "fired": propstep::fired(&r),

@@ -262,6 +262,25 @@ impl std::fmt::Debug for Checkpoint {
     }
 }
 
+/// What a run tells the watch it runs under ([`DirectSolver::watched`]) after each
+/// converged step: whether to stop there. A caller that needs only part of a run (an
+/// optimizer's trial whose cost has already passed the value at which it is rejected)
+/// ends it between steps this way, without a failing step and its cuts.
+pub trait StepWatch {
+    /// Called with the record of every converged step (sub-steps included), in time
+    /// order; `true` ends the run after this step with [`ContactError::Stopped`].
+    fn stop_after(&mut self, step: &StepRecord) -> bool;
+}
+
+/// The watch of the runs inside [`DirectSolver::watched`].
+struct Watch<'m>(Box<dyn StepWatch + Send + 'm>);
+
+impl std::fmt::Debug for Watch<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Watch")
+    }
+}
+
 /// The direct solver on one model (borrowed once, at construction): time stepping with
 /// step cutting, checkpoints and replay around the Newton driver of one step
 /// (`newton.rs`), which keeps the symbolic factorization and the work space, so that
@@ -270,6 +289,8 @@ impl std::fmt::Debug for Checkpoint {
 pub struct DirectSolver<'m> {
     model: &'m Model,
     newton: Newton<'m>,
+    /// The watch of the runs inside [`DirectSolver::watched`] (none outside).
+    watch: Option<Watch<'m>>,
 }
 
 impl<'m> DirectSolver<'m> {
@@ -294,7 +315,24 @@ impl<'m> DirectSolver<'m> {
         Ok(DirectSolver {
             model,
             newton: Newton::new(model)?,
+            watch: None,
         })
+    }
+
+    /// Calls `run` (one or more runs or replays of this solver) under `watch`: after each
+    /// converged step the watch may stop the run, which then ends with
+    /// [`ContactError::Stopped`]. The steps a watched run takes are those of the same run
+    /// without the watch, bit for bit, up to where it stops. Runs after this call (and
+    /// before it) are not watched.
+    pub fn watched<R>(
+        &mut self,
+        watch: Box<dyn StepWatch + Send + 'm>,
+        run: impl FnOnce(&mut Self) -> R,
+    ) -> R {
+        let outer = self.watch.replace(Watch(watch));
+        let r = run(self);
+        self.watch = outer;
+        r
     }
 
     /// Sets the rule that decides when a nonlinear law's inexact Newton solves refresh
@@ -646,11 +684,7 @@ impl<'m> DirectSolver<'m> {
                 regime: state.internal.regime.clone(),
             });
         }
-        let factorizations0 = self.newton.system.factorizations();
-        let cg0 = self.newton.system.pcg_iterations;
-        let solves0 = self.newton.system.pcg_solves;
-        let fallbacks0 = self.newton.system.pcg_fallbacks;
-        let seconds0 = self.newton.system.seconds;
+        let counters = self.counters();
         self.newton.system.begin_run(run.law.as_law().is_some());
         for j in j0 + 1..=j1 {
             if j == j0 + 1 || (every > 0 && (j - 1 - j0) % every == 0) {
@@ -711,6 +745,18 @@ impl<'m> DirectSolver<'m> {
                             });
                         }
                         traj.steps.push(rec);
+                        let stop = match (self.watch.as_mut(), traj.steps.last()) {
+                            (Some(w), Some(rec)) => w.0.stop_after(rec),
+                            _ => false,
+                        };
+                        if stop {
+                            self.account(traj, start, counters);
+                            return Err(ContactError::Stopped {
+                                step: j,
+                                t: t1,
+                                steps: traj.steps.len(),
+                            });
+                        }
                     }
                     Err(fail) => {
                         // a failed step may have assembled non-finite tangents
@@ -746,16 +792,45 @@ impl<'m> DirectSolver<'m> {
                 }
             }
         }
-        traj.timing.factorizations += self.newton.system.factorizations() - factorizations0;
-        traj.timing.cg_iterations += self.newton.system.pcg_iterations - cg0;
-        traj.timing.pcg_solves += self.newton.system.pcg_solves - solves0;
-        traj.timing.pcg_fallbacks += self.newton.system.pcg_fallbacks - fallbacks0;
-        traj.timing.assembly += self.newton.system.seconds[0] - seconds0[0];
-        traj.timing.factorization += self.newton.system.seconds[1] - seconds0[1];
-        traj.timing.solve += self.newton.system.seconds[2] - seconds0[2];
-        traj.timing.total += start.elapsed().as_secs_f64();
+        self.account(traj, start, counters);
         Ok(())
     }
+
+    /// The system's counters at the start of a stretch ([`DirectSolver::account`]).
+    fn counters(&self) -> Counters {
+        let s = &self.newton.system;
+        Counters {
+            factorizations: s.factorizations(),
+            cg: s.pcg_iterations,
+            solves: s.pcg_solves,
+            fallbacks: s.pcg_fallbacks,
+            seconds: s.seconds,
+        }
+    }
+
+    /// Adds what the system did since `c` and the wall time since `start` to the
+    /// trajectory's timing.
+    fn account(&self, traj: &mut Trajectory, start: std::time::Instant, c: Counters) {
+        let s = &self.newton.system;
+        traj.timing.factorizations += s.factorizations() - c.factorizations;
+        traj.timing.cg_iterations += s.pcg_iterations - c.cg;
+        traj.timing.pcg_solves += s.pcg_solves - c.solves;
+        traj.timing.pcg_fallbacks += s.pcg_fallbacks - c.fallbacks;
+        traj.timing.assembly += s.seconds[0] - c.seconds[0];
+        traj.timing.factorization += s.seconds[1] - c.seconds[1];
+        traj.timing.solve += s.seconds[2] - c.seconds[2];
+        traj.timing.total += start.elapsed().as_secs_f64();
+    }
+}
+
+/// The system's counters at the start of a stretch of steps.
+#[derive(Clone, Copy)]
+struct Counters {
+    factorizations: usize,
+    cg: usize,
+    solves: usize,
+    fallbacks: usize,
+    seconds: [f64; 3],
 }
 
 /// A run's fixed inputs: the law and its parameters, the schedule's times and the drive

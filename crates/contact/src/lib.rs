@@ -23,7 +23,7 @@ pub mod system;
 
 pub use constraint::{ForceCotangent, RecordedContact, StepTangent};
 pub use direct::{
-    Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, Timing, Trajectory,
+    Checkpoint, DirectSolver, SolverOptions, StepFields, StepRecord, StepWatch, Timing, Trajectory,
     nodal_pressures,
 };
 pub use drive::Frame;
@@ -70,5 +70,16 @@ pub enum ContactError {
         reason: String,
         /// The trajectory up to the last converged step.
         partial: Box<Trajectory>,
+    },
+    /// The run's watch ([`direct::StepWatch`]) stopped it after a converged step.
+    #[error("the run was stopped by its watch after step {step} (t = {t} s, {steps} steps run)")]
+    Stopped {
+        /// Schedule index of the step the run stopped after (the one it was heading to,
+        /// for a sub-step).
+        step: usize,
+        /// End time of that step (s).
+        t: f64,
+        /// Converged steps run (sub-steps included).
+        steps: usize,
     },
 }

@@ -144,6 +144,15 @@ pub struct LmStrategy {
     /// `a = -(A^T A + lambda D)^-1 A^T r''`; the trial is `y + v + a / 2`, refused (as a
     /// rejected trial, without its forward run) when `2 |a| / |v| > 0.75`.
     pub geodesic: bool,
+    /// A trial's forward runs stop between steps once the cost summed over the schedule
+    /// times they have reached is already at least the current iterate's: the trial is
+    /// rejected whatever the remaining steps give (the cost's terms are `>= 0`), so they
+    /// are not run ([`crate::Evaluator::cost_below`]). The accepted and rejected trials,
+    /// the damping and every result are those of the run without it, bit for bit; only
+    /// the rejected trials' forward runs are shorter (docs/performance.md, "Rejected
+    /// trials stopped early"). Ignored with [`LmStrategy::line_model`], whose next trial
+    /// needs the rejected one's whole cost.
+    pub stop_rejected: bool,
 }
 
 /// The finite-difference step of [`LmStrategy::geodesic`] along the damped step.
@@ -301,6 +310,13 @@ pub(crate) trait LeastSquares {
     fn linearize(&mut self, y: &[f64]) -> Result<Linearization, IdentifyError>;
     /// `f` at `y` (a trial: one forward run).
     fn cost(&mut self, y: &[f64]) -> Result<f64, IdentifyError>;
+    /// `f` at `y` as [`LeastSquares::cost`] gives it when it is below `reject`; `None`
+    /// when it is known to be at least `reject` (the trial is rejected) before the
+    /// forward run has ended ([`LmStrategy::stop_rejected`]).
+    fn cost_below(&mut self, y: &[f64], reject: f64) -> Result<Option<f64>, IdentifyError> {
+        let _ = reject;
+        self.cost(y).map(Some)
+    }
     /// The residuals `r` at `y` (one forward run; [`LmStrategy::geodesic`] only). `None`
     /// where the forward run failed.
     fn residuals(&mut self, y: &[f64]) -> Result<Option<Vec<f64>>, IdentifyError>;
@@ -357,6 +373,36 @@ pub(crate) fn geodesic_acceleration(
     damping.solve(ata, &rhs)
 }
 
+/// The smallest `J` (found from `reject J_ref / kappa` by steps of one unit in the last
+/// place) whose internal cost `kappa J / J_ref`, computed as [`LeastSquares::cost`] does,
+/// is at least `reject`: since rounded multiplication and division by positive numbers
+/// are monotone, every larger `J` gives an internal cost `>= reject` too, a rejected
+/// trial. `None` when the scales are not finite and positive.
+pub(crate) fn reject_bound(kappa: f64, j_ref: f64, reject: f64) -> Option<f64> {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    if !(ok(kappa) && ok(j_ref) && reject.is_finite() && reject >= 0.0) {
+        return None;
+    }
+    let scaled = |j: f64| kappa * j / j_ref;
+    let mut bound = (reject * j_ref / kappa).max(0.0);
+    // at most a few units in the last place off
+    for _ in 0..64 {
+        if scaled(bound) >= reject {
+            // and the smallest such value: one unit lower is below `reject`
+            for _ in 0..64 {
+                let lower = bound.next_down();
+                if !(lower >= 0.0 && scaled(lower) >= reject) {
+                    break;
+                }
+                bound = lower;
+            }
+            return Some(bound);
+        }
+        bound = bound.next_up();
+    }
+    None
+}
+
 /// Runs LM from `y0`: each accepted iterate goes to [`LeastSquares::iterate`]; gives up
 /// after `max_trials` rejected trials in a row.
 pub(crate) fn minimize(
@@ -373,6 +419,8 @@ pub(crate) fn minimize(
     if let Some(radius) = strategy.first_radius {
         damping.cap = radius;
     }
+    // the line model reads the rejected trial's whole cost
+    let stop_rejected = strategy.stop_rejected && !strategy.line_model;
     let mut iter = 0usize;
     loop {
         if ls.iterate(iter, &y, f, &g) {
@@ -421,8 +469,13 @@ pub(crate) fn minimize(
             let trial = ls.project(&trial);
             let s: Vec<f64> = trial.iter().zip(&y).map(|(t, v)| t - v).collect();
             let len = norm_inf(&s);
-            let ft = ls.cost(&trial)?;
-            if ft < f {
+            // `None`: at least `f`, rejected whatever the rest of its forward run gives
+            let ft = if stop_rejected {
+                ls.cost_below(&trial, f)?
+            } else {
+                Some(ls.cost(&trial)?)
+            };
+            if let Some(ft) = ft.filter(|ft| *ft < f) {
                 let pred = predicted_decrease(&ata, &g, &s);
                 let rho = if pred > 0.0 { (f - ft) / pred } else { 0.0 };
                 let (f1, r1, a1, g1) = ls.linearize(&trial)?;
@@ -438,7 +491,7 @@ pub(crate) fn minimize(
                 break;
             }
             ls.rejected();
-            if strategy.line_model && len > 0.0 {
+            if let (true, Some(ft)) = (strategy.line_model && len > 0.0, ft) {
                 damping.cap = line_model_factor(f, dot(&g, &s), ft) * len;
             } else {
                 damping.rejected(len);
@@ -493,6 +546,16 @@ impl LeastSquares for Fit<'_, '_, '_> {
         let c = o.param.to_physical(y);
         let jt = o.eval.borrow_mut().cost(&c)?;
         Ok(o.kappa.get() * jt / o.j_ref)
+    }
+
+    fn cost_below(&mut self, y: &[f64], reject: f64) -> Result<Option<f64>, IdentifyError> {
+        let o = self.monitor.objective;
+        let Some(bound) = reject_bound(o.kappa.get(), o.j_ref, reject) else {
+            return self.cost(y).map(Some);
+        };
+        let c = o.param.to_physical(y);
+        let jt = o.eval.borrow_mut().cost_below(&c, bound)?;
+        Ok(jt.map(|jt| o.kappa.get() * jt / o.j_ref))
     }
 
     fn project(&self, y: &[f64]) -> Vec<f64> {
@@ -765,6 +828,38 @@ mod tests {
             total[1]
         );
         assert!(both[1] < both[0], "trials + iterations: {both:?}");
+    }
+
+    /// The bound of a trial's cost: every `J` from it on gives an internal cost at least
+    /// the threshold, and the `J` one unit lower does not (checked on scales over many
+    /// decades, against the internal cost computed as `Fit::cost` does).
+    #[test]
+    fn reject_bound_is_the_smallest_rejected_cost() {
+        let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let kappa = 10f64.powf(8.0 * next() - 4.0);
+            let j_ref = 10f64.powf(12.0 * next() - 6.0);
+            let reject = 10f64.powf(6.0 * next() - 3.0);
+            let b = reject_bound(kappa, j_ref, reject).expect("finite scales");
+            let scaled = |j: f64| kappa * j / j_ref;
+            assert!(scaled(b) >= reject, "{kappa} {j_ref} {reject}");
+            assert!(scaled(b.next_down()) < reject, "{kappa} {j_ref} {reject}");
+            // monotone: a few larger values are rejected too
+            let mut j = b;
+            for _ in 0..8 {
+                j = j.next_up();
+                assert!(scaled(j) >= reject);
+            }
+        }
+        assert_eq!(reject_bound(1.0, 1.0, 0.0), Some(0.0));
+        assert_eq!(reject_bound(0.0, 1.0, 1.0), None);
+        assert_eq!(reject_bound(1.0, f64::NAN, 1.0), None);
     }
 
     #[test]

@@ -557,6 +557,14 @@ pub struct IdentifyResult {
     pub newton_iterations: u64,
     /// Numeric factorizations of this run's forward solves (this run only).
     pub factorizations: usize,
+    /// Forward solves of rejected Levenberg-Marquardt trials stopped between steps
+    /// ([`crate::LmStrategy::stop_rejected`]; this run only).
+    pub stopped_runs: usize,
+    /// Schedule steps this run's forward solves ran (stopped ones up to where they
+    /// stopped, failed ones left out).
+    pub schedule_steps: u64,
+    /// Schedule steps the stopped forward solves did not run (this run only).
+    pub steps_skipped: u64,
     /// Requests (cost, gradient, forces, Jacobian) answered by the evaluation cache.
     pub cache_hits: usize,
     /// Distinct parameter points requested by this run (excluding a resumed run's past).
@@ -1346,6 +1354,9 @@ fn run(
         rejected_trials: monitor_rejected,
         newton_iterations: counts.newton_iterations,
         factorizations: counts.factorizations,
+        stopped_runs: counts.stopped,
+        schedule_steps: counts.schedule_steps,
+        steps_skipped: counts.steps_skipped,
         cache_hits: counts.cache_hits,
         distinct_points: counts.distinct_points,
         stop_reason: reason,

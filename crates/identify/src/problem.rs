@@ -11,7 +11,8 @@ use std::time::Instant;
 
 use indentify_adjoint::{Adjoint, LoadReplay, Replay};
 use indentify_contact::{
-    ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, Target, Trajectory,
+    ContactError, DirectSolver, LoadHistory, Model, Schedule, SolverOptions, StepRecord, StepWatch,
+    Target, Trajectory,
 };
 use indentify_laws::{Law, LawMaterial, Material};
 
@@ -530,6 +531,14 @@ pub struct Counts {
     /// Distinct parameter points requested (forward solves can only exceed this when the
     /// optimizer comes back to a point it left: the cache holds one point).
     pub distinct_points: usize,
+    /// Forward solves stopped between steps because the test's partial cost had reached
+    /// the bound of [`Evaluator::cost_below`] (counted in [`Counts::forward`] too).
+    pub stopped: usize,
+    /// Schedule steps the forward solves ran (the completed ones' and the stopped ones'
+    /// up to where they stopped; failed solves left out).
+    pub schedule_steps: u64,
+    /// Schedule steps the stopped forward solves did not run.
+    pub steps_skipped: u64,
     /// Adjoint sweeps or sensitivity passes computed ahead of a request on a core that
     /// would otherwise have waited ([`Evaluator::set_prefetch`]); unlike the other counts
     /// this one depends on timing, and those of points the optimizer leaves are wasted.
@@ -569,6 +578,9 @@ enum Kind {
 struct TestEntry {
     forces: Option<Vec<f64>>,
     traj: Option<Trajectory>,
+    /// The forward run was stopped at this schedule index by its cost bound
+    /// ([`CostWatch`]).
+    stopped: Option<usize>,
     /// Why the forward run failed (taken when the evaluation is assembled).
     forward_error: Option<ContactError>,
     gradient: Option<Vec<f64>>,
@@ -593,6 +605,10 @@ impl TestEntry {
 struct Entry {
     key: Vec<u64>,
     cost: f64,
+    /// A test's forward run was stopped by the bound of [`Evaluator::cost_below`]: the
+    /// cost is only known to be at least the bound, and no request but a bounded cost's
+    /// at a bound as high may use the entry.
+    stopped: Option<f64>,
     /// Every test's forces end to end (`None` when a forward solve failed).
     forces: Option<Vec<f64>>,
     tests: Vec<TestEntry>,
@@ -646,12 +662,73 @@ fn key_of(c: &[f64]) -> Vec<u64> {
     c.iter().map(|v| v.to_bits()).collect()
 }
 
-/// Test `k`'s forward run at `c` into its cache entry; false when it failed.
-fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEntry) -> bool {
+/// The watch of a forward run bounded by [`Evaluator::cost_below`]: the test's cost
+/// `J_k = 1/2 sum_i w_i (y_i - y_exp,i)^2` summed over the schedule times reached so far,
+/// in the order and with the operations of [`Problem::cost_of`] (row 0, the initial state's
+/// `y = 0`, first). Its terms are `>= 0` and rounded addition and multiplication by a
+/// positive number are monotone, so the partial value never exceeds the whole run's
+/// `J_k`, nor that the joint `J` of all tests: once it reaches the bound the run is
+/// stopped, its cost at least the bound whatever the remaining steps give.
+struct CostWatch<'p> {
+    target: &'p [f64],
+    weights: &'p [f64],
+    /// Load control: the observable is the depth.
+    load: bool,
+    bound: f64,
+    /// `sum w_i (y_i - y_exp,i)^2` over the rows so far.
+    sum: f64,
+    /// The next row (schedule time).
+    row: usize,
+}
+
+impl<'p> CostWatch<'p> {
+    fn new(t: &'p Test, bound: f64) -> CostWatch<'p> {
+        let mut w = CostWatch {
+            target: &t.target,
+            weights: &t.weights,
+            load: t.load.is_some(),
+            bound,
+            sum: 0.0,
+            row: 0,
+        };
+        w.add(0.0);
+        w
+    }
+
+    /// Adds the next row's observable `y`; true once `J_k` so far reaches the bound (or
+    /// is NaN: the whole run's would be too, and NaN is rejected as the bound is).
+    fn add(&mut self, y: f64) -> bool {
+        let (Some(w), Some(d)) = (self.weights.get(self.row), self.target.get(self.row)) else {
+            return false;
+        };
+        self.row += 1;
+        self.sum += w * (y - d).powi(2);
+        !(0.5 * self.sum < self.bound)
+    }
+}
+
+impl StepWatch for CostWatch<'_> {
+    fn stop_after(&mut self, step: &StepRecord) -> bool {
+        step.on_schedule && self.add(if self.load { step.depth } else { step.force })
+    }
+}
+
+/// Test `k`'s forward run at `c` into its cache entry; false when it failed or was
+/// stopped by the cost `bound` ([`CostWatch`]; not for an instrumented problem, whose
+/// observables the instrument's frame changes).
+fn forward_task<'p>(
+    p: &'p Problem,
+    c: &[f64],
+    k: usize,
+    w: &mut Work<'p>,
+    te: &mut TestEntry,
+    bound: Option<f64>,
+) -> bool {
     let t = &p.tests[k];
     let (law, cl) = (&*p.material, p.law_part(c));
-    let run = match (&t.load, &w.warm) {
-        (Some(h), _) => w.solver.run_history(law, cl, h, &t.solver_options),
+    let warm = &w.warm;
+    let run = |solver: &mut DirectSolver<'p>| match (&t.load, warm) {
+        (Some(h), _) => solver.run_history(law, cl, h, &t.solver_options),
         // depth control through the instrument's frame (docs/theory.md §13.7)
         (None, _) if p.applied.is_some() => {
             let frame = p
@@ -659,20 +736,26 @@ fn forward_task(p: &Problem, c: &[f64], k: usize, w: &mut Work, te: &mut TestEnt
                 .as_ref()
                 .map(|a| a.frame(k, c))
                 .unwrap_or_default();
-            w.solver
-                .run_compliant(law, cl, &t.schedule, &frame, &t.solver_options)
+            solver.run_compliant(law, cl, &t.schedule, &frame, &t.solver_options)
         }
         (None, Some(g)) if p.warm_start => {
-            w.solver
-                .run_warm(law, cl, &t.schedule, &t.solver_options, g)
+            solver.run_warm(law, cl, &t.schedule, &t.solver_options, g)
         }
-        (None, _) => w.solver.run(law, cl, &t.schedule, &t.solver_options),
+        (None, _) => solver.run(law, cl, &t.schedule, &t.solver_options),
+    };
+    let run = match bound.filter(|_| p.applied.is_none()) {
+        Some(b) => w.solver.watched(Box::new(CostWatch::new(t, b)), run),
+        None => run(&mut w.solver),
     };
     match run {
         Ok(traj) => {
             te.forces = Some(p.observables_of(k, c, &traj));
             te.traj = Some(traj);
             true
+        }
+        Err(ContactError::Stopped { step, .. }) => {
+            te.stopped = Some(step);
+            false
         }
         Err(e) => {
             te.forward_error = Some(e);
@@ -934,14 +1017,16 @@ fn jacobian_task(
 /// Runs the forward runs (`forward`) and follow-ups of `kind` of every test through the
 /// task scheduler; `needed`: the follow-ups are asked for, otherwise speculative.
 /// Returns how many speculative follow-ups ran.
-fn run_tests(
-    p: &Problem,
+#[allow(clippy::too_many_arguments)]
+fn run_tests<'p>(
+    p: &'p Problem,
     c: &[f64],
-    work: &mut [Work],
+    work: &mut [Work<'p>],
     entries: &mut [TestEntry],
     forward: bool,
     kind: Option<Kind>,
     needed: bool,
+    bound: Option<f64>,
 ) -> usize {
     let slot = |k: Kind| match k {
         Kind::Gradient => 1,
@@ -966,7 +1051,7 @@ fn run_tests(
         p.pool.as_deref(),
         &mut slots,
         &todo,
-        |k, (w, te)| forward_task(p, c, k, w, te),
+        |k, (w, te)| forward_task(p, c, k, w, te, bound),
         |k, (w, te)| match kind {
             Some(Kind::Gradient) => match gradient_task(p, c, k, w, te) {
                 Ok(g) => te.gradient = Some(g),
@@ -980,8 +1065,9 @@ fn run_tests(
         },
     );
     let mut speculated = 0;
-    for ((w, d), t) in work.iter_mut().zip(&done).zip(&todo) {
-        if let Some(s) = d.forward {
+    for (((w, d), t), te) in work.iter_mut().zip(&done).zip(&todo).zip(entries.iter()) {
+        // a stopped run's time says nothing of a whole run's
+        if let (Some(s), None) = (d.forward, te.stopped) {
             w.seconds[0] = Some(s);
         }
         if let (Some(s), Some(k)) = (d.follow, kind) {
@@ -1083,28 +1169,35 @@ impl<'p> Evaluator<'p> {
     /// Makes sure the cache holds point `c` with its trajectories (one forward solve per
     /// test unless already there), and, with `want`, every test's follow-up of that kind
     /// (scheduled together with the forwards). A failed forward solve caches `J = +inf`.
+    ///
+    /// With a `bound` (a cost request of [`Evaluator::cost_below`]) each test's forward run
+    /// stops once its partial cost reaches it ([`CostWatch`]); the entry is then marked
+    /// stopped.
     fn ensure(
         &mut self,
         c: &[f64],
         need_traj: bool,
         want: Option<Kind>,
+        bound: Option<f64>,
     ) -> Result<&mut Entry, IdentifyError> {
         let key = key_of(c);
         if self.seen.insert(key.clone()) {
             self.counts.distinct_points += 1;
         }
         let p = self.problem;
-        let hit = self
-            .entry
-            .as_ref()
-            .is_some_and(|e| e.key == key && (!need_traj || e.forces.is_some()));
+        let hit = self.entry.as_ref().is_some_and(|e| {
+            e.key == key
+                && (!need_traj || e.forces.is_some())
+                // a stopped entry answers a bounded cost at a bound no higher only
+                && e.stopped.is_none_or(|b0| bound.is_some_and(|b| b <= b0))
+        });
         if hit {
             self.counts.cache_hits += 1;
             if let (Some(kind), Some(e)) = (want, self.entry.as_mut())
                 && e.forces.is_some()
                 && e.tests.iter().any(|t| !t.has(kind))
             {
-                run_tests(p, c, &mut self.work, &mut e.tests, false, want, true);
+                run_tests(p, c, &mut self.work, &mut e.tests, false, want, true, None);
             }
         } else {
             let n = p.tests.len();
@@ -1121,10 +1214,22 @@ impl<'p> Evaluator<'p> {
                 (None, Prefetch::None) => (None, false),
             };
             self.counts.prefetched +=
-                run_tests(p, c, &mut self.work, &mut tests, true, kind, needed);
+                run_tests(p, c, &mut self.work, &mut tests, true, kind, needed, bound);
             for t in tests.iter().filter_map(|te| te.traj.as_ref()) {
                 self.counts.newton_iterations += t.total_iterations();
                 self.counts.factorizations += t.timing.factorizations;
+            }
+            let mut stopped = false;
+            for (t, te) in p.tests.iter().zip(&tests) {
+                let n = t.schedule.t.len().saturating_sub(1) as u64;
+                if let Some(j) = te.stopped {
+                    stopped = true;
+                    self.counts.stopped += 1;
+                    self.counts.schedule_steps += j as u64;
+                    self.counts.steps_skipped += n.saturating_sub(j as u64);
+                } else if te.traj.is_some() {
+                    self.counts.schedule_steps += n;
+                }
             }
             let mut failed = None;
             let mut error = None;
@@ -1157,6 +1262,18 @@ impl<'p> Evaluator<'p> {
                 Entry {
                     key,
                     cost: f64::INFINITY,
+                    stopped: None,
+                    forces: None,
+                    tests,
+                    gradient: None,
+                    jacobian: None,
+                }
+            } else if let (true, Some(b)) = (stopped, bound) {
+                // at least the bound: never the lowest cost, never a warm start
+                Entry {
+                    key,
+                    cost: f64::INFINITY,
+                    stopped: Some(b),
                     forces: None,
                     tests,
                     gradient: None,
@@ -1174,6 +1291,7 @@ impl<'p> Evaluator<'p> {
                 Entry {
                     key,
                     cost,
+                    stopped: None,
                     forces: Some(forces),
                     tests,
                     gradient: None,
@@ -1246,7 +1364,29 @@ impl<'p> Evaluator<'p> {
     /// # Errors
     /// [`IdentifyError::Forward`] for inadmissible parameters.
     pub fn cost(&mut self, c: &[f64]) -> Result<f64, IdentifyError> {
-        Ok(self.ensure(c, false, None)?.cost)
+        Ok(self.ensure(c, false, None, None)?.cost)
+    }
+
+    /// `J(c)` when it is below `bound`, else possibly only that it is not: `Some(J)` as
+    /// [`Evaluator::cost`] gives it (bit for bit; `+inf` for a failed run), or `None`
+    /// when `J(c) >= bound` was established before the forward runs ended (a caller that
+    /// rejects any point whose cost is at least `bound`, as a Levenberg-Marquardt trial,
+    /// saves their remaining steps). Each test's run stops between steps once its own
+    /// partial cost reaches the bound: the other tests' costs are `>= 0`, so the joint one
+    /// is then at least the bound too, and what stops does not depend on the number of
+    /// threads. The bound used is raised to the lowest cost seen so far, so that a stopped
+    /// point could never have been the lowest one (nor the warm start of later runs). A
+    /// problem with an instrument ([`Problem::joint_instrumented`]) runs in full.
+    ///
+    /// # Errors
+    /// As [`Evaluator::cost`].
+    pub fn cost_below(&mut self, c: &[f64], bound: f64) -> Result<Option<f64>, IdentifyError> {
+        let bound = match &self.best {
+            Some((b, _)) => bound.max(*b),
+            None => bound,
+        };
+        let e = self.ensure(c, false, None, Some(bound))?;
+        Ok(e.stopped.is_none().then_some(e.cost))
     }
 
     /// Forces `F_i(c)` at the schedule times (index 0 = initial state), every test's laid
@@ -1256,7 +1396,7 @@ impl<'p> Evaluator<'p> {
     /// # Errors
     /// [`IdentifyError::Forward`] when the direct problem fails.
     pub fn forces(&mut self, c: &[f64]) -> Result<Vec<f64>, IdentifyError> {
-        let e = self.ensure(c, true, None)?;
+        let e = self.ensure(c, true, None, None)?;
         Ok(e.forces.clone().unwrap_or_default())
     }
 
@@ -1282,7 +1422,7 @@ impl<'p> Evaluator<'p> {
                 why: format!("test index {k} is out of range: the problem has {n} tests"),
             });
         }
-        let e = self.ensure(c, true, None)?;
+        let e = self.ensure(c, true, None, None)?;
         e.tests[k]
             .traj
             .as_ref()
@@ -1297,7 +1437,7 @@ impl<'p> Evaluator<'p> {
     /// when the adjoint does (e.g. Norton-Hoff with `m <= 1`).
     pub fn cost_and_gradient(&mut self, c: &[f64]) -> Result<(f64, Vec<f64>), IdentifyError> {
         // hit or miss, `ensure` counts it; a gradient already there is a second hit
-        self.ensure(c, true, Some(Kind::Gradient))?;
+        self.ensure(c, true, Some(Kind::Gradient), None)?;
         // counted once the forward runs succeeded (a failed forward sweeps nothing)
         self.count_request(c, Kind::Gradient);
         let e = self.entry_mut()?;
@@ -1332,7 +1472,7 @@ impl<'p> Evaluator<'p> {
     /// As [`Evaluator::cost_and_gradient`].
     pub fn jacobian(&mut self, c: &[f64]) -> Result<Vec<Vec<f64>>, IdentifyError> {
         let p = self.problem;
-        self.ensure(c, true, Some(Kind::Jacobian))?;
+        self.ensure(c, true, Some(Kind::Jacobian), None)?;
         self.count_request(c, Kind::Jacobian);
         let e = self.entry_mut()?;
         if let Some(j) = &e.jacobian {

@@ -752,6 +752,10 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
                 format!("proposed_step: {},", st.proposed_step),
                 "Lm: also stop when the next Gauss-Newton step is < step_sigma x every std. dev. after a step the model predicted".into(),
             ),
+            (
+                format!("lm_stop_rejected: {},", st.lm_stop_rejected),
+                "Lm: stop a trial's forward run once its cost so far rejects it (same results)".into(),
+            ),
         ],
     );
     out.push_str("        ),\n");
