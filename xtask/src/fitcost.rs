@@ -81,11 +81,32 @@ const CASES: [&str; 6] = [
     "ht-nh-joint",
 ];
 
-/// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
-/// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
-/// [--no-proposed-step] [--no-stop-rejected]`.
-pub fn run(args: &[String]) -> Result<()> {
+/// The options of `cargo xtask fit-cost` (see [`run`]).
+struct Opts {
+    only: Option<Vec<String>>,
+    quick: bool,
+    rounds: usize,
+    json_out: Option<PathBuf>,
+    compare: Option<PathBuf>,
+    cold: bool,
+    chi2: bool,
+    valley: Option<ValleyStop>,
+    columns_mode: bool,
+    batch_mode: bool,
+    jobs: usize,
+    map_n: usize,
+    profile: bool,
+    op: bool,
+    lm: Option<LmStrategy>,
+    stop_rejected: Option<bool>,
+    c2f: Option<usize>,
+    proposed: Option<bool>,
+    pairs_mode: bool,
+    both: bool,
+}
+
+/// Parses `cargo xtask fit-cost`'s options.
+fn parse(args: &[String]) -> Result<Opts> {
     let mut only: Option<Vec<String>> = None;
     let mut quick = false;
     let mut rounds = 3usize;
@@ -145,6 +166,57 @@ pub fn run(args: &[String]) -> Result<()> {
             other => bail!("unknown option {other}"),
         }
     }
+    Ok(Opts {
+        only,
+        quick,
+        rounds,
+        json_out,
+        compare,
+        cold,
+        chi2,
+        valley,
+        columns_mode,
+        batch_mode,
+        jobs,
+        map_n,
+        profile,
+        op,
+        lm,
+        stop_rejected,
+        c2f,
+        proposed,
+        pairs_mode,
+        both,
+    })
+}
+
+/// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
+/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
+/// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
+/// [--no-proposed-step] [--no-stop-rejected]`.
+pub fn run(args: &[String]) -> Result<()> {
+    let Opts {
+        only,
+        quick,
+        mut rounds,
+        json_out,
+        compare,
+        cold,
+        chi2,
+        valley,
+        columns_mode,
+        batch_mode,
+        jobs,
+        map_n,
+        profile,
+        op,
+        lm,
+        stop_rejected,
+        c2f,
+        proposed,
+        pairs_mode,
+        both,
+    } = parse(args)?;
     if rounds == 0 {
         bail!("--rounds takes a number >= 1");
     }

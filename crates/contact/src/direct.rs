@@ -755,6 +755,8 @@ impl<'m> DirectSolver<'m> {
                                 step: j,
                                 t: t1,
                                 steps: traj.steps.len(),
+                                newton_iterations: traj.total_iterations(),
+                                factorizations: traj.timing.factorizations,
                             });
                         }
                     }

@@ -81,5 +81,9 @@ pub enum ContactError {
         t: f64,
         /// Converged steps run (sub-steps included).
         steps: usize,
+        /// Newton iterations of the steps run.
+        newton_iterations: u64,
+        /// Numeric factorizations of the steps run.
+        factorizations: usize,
     },
 }

@@ -516,10 +516,11 @@ pub struct Counts {
     /// Forward solves that failed, or points the law does not admit (the cost is then
     /// `+inf`).
     pub forward_failed: usize,
-    /// Newton iterations (linear solves) of the forward solves that converged, summed
-    /// over their steps.
+    /// Newton iterations (linear solves) of the forward solves that converged or were
+    /// stopped by their cost bound ([`Counts::stopped`]), summed over the steps they ran.
     pub newton_iterations: u64,
-    /// Numeric factorizations of the forward solves that converged.
+    /// Numeric factorizations of the forward solves that converged or were stopped by
+    /// their cost bound.
     pub factorizations: usize,
     /// Adjoint sweeps asked for (one per test and gradient request not in the cache,
     /// whether the sweep ran then or had been computed ahead: [`Counts::prefetched`]).
@@ -581,6 +582,8 @@ struct TestEntry {
     /// The forward run was stopped at this schedule index by its cost bound
     /// ([`CostWatch`]).
     stopped: Option<usize>,
+    /// The stopped run's Newton iterations and factorizations.
+    stopped_work: (u64, usize),
     /// Why the forward run failed (taken when the evaluation is assembled).
     forward_error: Option<ContactError>,
     gradient: Option<Vec<f64>>,
@@ -753,8 +756,14 @@ fn forward_task<'p>(
             te.traj = Some(traj);
             true
         }
-        Err(ContactError::Stopped { step, .. }) => {
+        Err(ContactError::Stopped {
+            step,
+            newton_iterations,
+            factorizations,
+            ..
+        }) => {
             te.stopped = Some(step);
+            te.stopped_work = (newton_iterations, factorizations);
             false
         }
         Err(e) => {
@@ -1225,6 +1234,8 @@ impl<'p> Evaluator<'p> {
                 if let Some(j) = te.stopped {
                     stopped = true;
                     self.counts.stopped += 1;
+                    self.counts.newton_iterations += te.stopped_work.0;
+                    self.counts.factorizations += te.stopped_work.1;
                     self.counts.schedule_steps += j as u64;
                     self.counts.steps_skipped += n.saturating_sub(j as u64);
                 } else if te.traj.is_some() {

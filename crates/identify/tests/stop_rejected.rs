@@ -266,9 +266,20 @@ fn a_watched_run_is_the_run_up_to_its_stop_and_leaves_the_next_run_unchanged() {
         .run(&LawMaterial(&NortonHoff), &other, &s, &opts)
         .unwrap();
     match stopped {
-        Err(ContactError::Stopped { step, steps, .. }) => {
+        Err(ContactError::Stopped {
+            step,
+            steps,
+            newton_iterations,
+            factorizations,
+            ..
+        }) => {
             assert_eq!(step, 5);
-            assert_eq!(steps, seen.lock().unwrap().len());
+            let seen = seen.lock().unwrap();
+            assert_eq!(steps, seen.len());
+            // the stopped run's work is reported, not dropped
+            let iterations: u64 = seen.iter().map(|r| r.iterations as u64).sum();
+            assert_eq!(newton_iterations, iterations);
+            assert!(factorizations >= 1, "{factorizations} factorizations");
         }
         other => panic!("not stopped: {other:?}"),
     }
