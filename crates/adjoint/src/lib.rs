@@ -848,9 +848,7 @@ impl ParamStep<'_> {
             let (pat, k) = (&model.pattern, self.contact.tangent_values());
             let mut kdu = 0.0;
             for &c in cons {
-                let mut r = k[pat.diag[c]] * w.eq[c];
-                pat.for_each_off_diagonal(c, |j, pos| r += k[pos] * w.eq[j]);
-                kdu += r;
+                kdu += pat.row_dot(k, c, &w.eq);
             }
             *dfk = rhs_a - kdu;
             if let Some(du) = shift {

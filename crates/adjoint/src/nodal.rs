@@ -250,9 +250,7 @@ impl Adjoint<'_> {
         let k = self.contact.tangent_values();
         let pat = &model.pattern;
         for &c in &nd.cons {
-            let mut kv = k[pat.diag[c]] * v[c];
-            pat.for_each_off_diagonal(c, |r, pos| kv += k[pos] * v[r]);
-            nd.p[c] += nd.g[c] - kv;
+            nd.p[c] += nd.g[c] - pat.row_dot(k, c, v);
         }
         // Q = (cs_p + cs_q) Q - (c_p + c_q) K_J V, and the sums against the step's
         // stresses at its start (a0, b0) and end (a1, b1), in one pass

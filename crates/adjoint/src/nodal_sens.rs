@@ -102,9 +102,7 @@ impl NodalStep<'_> {
         let pat = self.pattern;
         let mut df = 0.0;
         for &c in self.cons {
-            let mut kdu = self.k[pat.diag[c]] * w.eq[c];
-            pat.for_each_off_diagonal(c, |r, pos| kdu += self.k[pos] * w.eq[r]);
-            df += w.kq[c] + kdu + f * w.kjq[c];
+            df += w.kq[c] + pat.row_dot(self.k, c, &w.eq) + f * w.kjq[c];
         }
         for e in 0..w.y.len() {
             let du = w.eq[e];

@@ -1051,11 +1051,7 @@ impl ConstrainedSystem {
         // the cotangents of the sticking nodes' prescribed tangential values
         for (s, f) in stick.iter_mut().zip(&self.frames) {
             if let (true, Some(er)) = (f.stick, f.er) {
-                let mut kw = self.k_rot[model.pattern.diag[er]] * b[er];
-                model
-                    .pattern
-                    .for_each_off_diagonal(er, |i, p| kw += self.k_rot[p] * b[i]);
-                *s = g[er] - kw;
+                *s = g[er] - model.pattern.row_dot(&self.k_rot, er, b);
             }
         }
         rotate_out(&self.frames, b);

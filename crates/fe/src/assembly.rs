@@ -247,6 +247,15 @@ impl Pattern {
         }
     }
 
+    /// Row `k` of the symmetric matrix stored as its lower triangle in `values` times `x`:
+    /// the diagonal's product, then the off-diagonal entries' in
+    /// [`Pattern::for_each_off_diagonal`]'s order (a handful of entries: one reaction).
+    pub fn row_dot(&self, values: &[f64], k: usize, x: &[f64]) -> f64 {
+        let mut acc = values[self.diag[k]] * x[k];
+        self.for_each_off_diagonal(k, |i, p| acc += values[p] * x[i]);
+        acc
+    }
+
     /// `y += K x` for the symmetric matrix stored as its lower triangle in `values`.
     /// Paired columns (the two dofs of a node share their rows) go through their rows
     /// together: one index, one `x` and one `y` access for two entries.

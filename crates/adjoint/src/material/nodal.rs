@@ -698,9 +698,7 @@ impl Adjoint<'_> {
         let pat = &model.pattern;
         for &cand in &rec.active {
             if let Some(e) = model.dofs.equation(2 * model.candidates[cand as usize] + 1) {
-                let mut x = k[pat.diag[e]] * eq[e];
-                pat.for_each_off_diagonal(e, |r, pos| x += k[pos] * eq[r]);
-                kv[e] = x;
+                kv[e] = pat.row_dot(k, e, &eq);
             }
         }
         let kjv = &mut nd.kjv[..n_eq];
