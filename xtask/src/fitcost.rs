@@ -599,23 +599,34 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
                 p["value"].as_f64().unwrap_or(f64::NAN),
                 q["value"].as_f64().unwrap_or(f64::NAN),
             );
+            // an undetermined parameter has no deviation (null in the JSON): said so, and
+            // its shift is not measured in one
             let sd = p["sd"]
                 .as_f64()
-                .filter(|v| v.is_finite())
-                .or_else(|| q["sd"].as_f64())
-                .unwrap_or(f64::NAN);
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .or_else(|| q["sd"].as_f64().filter(|v| v.is_finite() && *v > 0.0));
             let _ = writeln!(
                 s,
-                "| {case} | {} | {} | {} | {} | {:.3} |",
+                "| {case} | {} | {} | {} | {} | {} |",
                 p["name"].as_str().unwrap_or(""),
                 sig(vb),
                 sig(va),
-                sig(sd),
-                (va - vb).abs() / sd
+                sd_cell(sd),
+                shift_cell(sd.map(|sd| (va - vb).abs() / sd))
             );
         }
     }
     s
+}
+
+/// A deviation's cell: six significant digits, or "undetermined" where the fit gave none.
+fn sd_cell(sd: Option<f64>) -> String {
+    sd.map_or_else(|| "undetermined".to_owned(), sig)
+}
+
+/// A shift's cell in deviations: three decimals, or "-" where there is no deviation.
+fn shift_cell(z: Option<f64>) -> String {
+    z.map_or_else(|| "-".to_owned(), |z| format!("{z:.3}"))
 }
 
 /// Six significant digits.
@@ -625,5 +636,38 @@ fn sig(v: f64) -> String {
         format!("{v:.d$}")
     } else {
         format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An undetermined parameter (no deviation, null in the JSON) prints as such, not NaN.
+    #[test]
+    fn an_undetermined_parameter_prints_no_deviation_and_no_shift() {
+        let case = |k: f64, sd: Option<f64>| {
+            json!({ "case": "ht-nh", "ratio": 1.0, "params": [
+                { "name": "E", "value": 84627.4, "sd": 1483.0 },
+                { "name": "K", "value": k, "sd": sd },
+            ]})
+        };
+        let before = json!([case(220727.0, None)]);
+        let table = compare_table(&before, &[case(219172.0, None)]);
+        assert!(!table.contains("NaN"), "{table}");
+        let k_row = table
+            .lines()
+            .find(|l| l.starts_with("| ht-nh | K |"))
+            .unwrap();
+        assert!(k_row.ends_with("| undetermined | - |"), "{k_row}");
+        let e_row = table
+            .lines()
+            .find(|l| l.starts_with("| ht-nh | E |"))
+            .unwrap();
+        assert!(e_row.ends_with("| 1483.00 | 0.000 |"), "{e_row}");
+        // the before run's deviation stands in where the after run has none
+        let before = json!([case(220727.0, Some(1000.0))]);
+        let table = compare_table(&before, &[case(219172.0, None)]);
+        assert!(table.contains("| 1000.00 | 1.555 |"), "{table}");
     }
 }

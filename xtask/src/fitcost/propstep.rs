@@ -274,15 +274,15 @@ pub fn table(pairs: &[Value]) -> String {
             let g = |k: &str| z[k].as_f64().unwrap_or(f64::NAN);
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} | {:.3} | {:.3} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
                 p["case"].as_str().unwrap_or(""),
                 z["name"].as_str().unwrap_or(""),
                 super::sig(g("off")),
                 super::sig(g("on")),
-                super::sig(g("sd_off")),
-                super::sig(g("sd_on")),
-                g("shift_sigma"),
-                g("shift_sigma_on"),
+                super::sd_cell(z["sd_off"].as_f64()),
+                super::sd_cell(z["sd_on"].as_f64()),
+                super::shift_cell(z["shift_sigma"].as_f64()),
+                super::shift_cell(z["shift_sigma_on"].as_f64()),
             );
         }
     }
