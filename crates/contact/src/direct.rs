@@ -690,7 +690,7 @@ impl<'m> DirectSolver<'m> {
             if j == j0 + 1 || (every > 0 && (j - 1 - j0) % every == 0) {
                 // a run, and every stretch a replay may start from, begins with a fresh
                 // factorization: the replay then repeats its steps bit for bit
-                self.newton.system.forget_preconditioner();
+                self.newton.forget_carried();
             }
             if every > 0 && (j - 1 - j0) % every == 0 {
                 traj.checkpoints.push(Checkpoint {
