@@ -684,6 +684,7 @@ impl<'m> Newton<'m> {
         let mut f = 1.0;
         for _ in 0..4 {
             f *= 0.5;
+            timing.halvings += 1;
             if keep {
                 self.keep_aside(it);
             }
@@ -764,6 +765,7 @@ impl<'m> Newton<'m> {
         timing: &mut Timing,
     ) -> Result<Residual, StepFailure> {
         let model = self.model;
+        timing.passes += 1;
         let tl = std::time::Instant::now();
         self.body
             .evaluate(model, law, &it.u, &mut it.sigma, &mut it.internal)
