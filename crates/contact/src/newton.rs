@@ -439,7 +439,8 @@ impl<'m> Newton<'m> {
     /// factor and refresh history ([`ConstrainedSystem::forget_preconditioner`]) and the
     /// last depth column (the start of the next column's CG). A run, and every stretch
     /// a replay may start from, begins with it: what follows then depends on the state
-    /// alone, and a replay from a checkpoint repeats the run bit for bit.
+    /// alone. (The first solve after it factorizes, and a direct solve does not read the
+    /// carried column: forgetting the column is a safeguard, should that change.)
     pub(crate) fn forget_carried(&mut self) {
         self.system.forget_preconditioner();
         self.w_ok = false;

@@ -289,7 +289,9 @@ fn reference_pdotp_steps_stay_near_the_depth_controlled_ones() {
 ///   the bounds below failing).
 /// - That column is carried like the preconditioner and forgotten with it: a run repeats
 ///   its bits after another run on the same solver, and a replay from a checkpoint
-///   repeats the checkpointed run's steps (to round-off, as before).
+///   repeats the checkpointed run's steps (to round-off, as before). Guards only: they
+///   pass without the reset too, since the first solve after a forgotten factor
+///   factorizes and a direct solve does not read the carried column.
 #[test]
 fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
     let m = Model::with_contact(
