@@ -109,7 +109,38 @@ pub(crate) struct Body {
     element_forces: Vec<[f64; 16]>,
 }
 
+/// What a Gauss-point pass leaves in the [`Body`] besides the iterate's stresses and
+/// internal variables: the internal force, the laws' tangents and (finite strain) each
+/// point's deformation. The line search keeps an evaluated iterate's aside by swapping
+/// buffers ([`Body::swap_pass`]) and returns to it without evaluating it again
+/// (`newton.rs`, `Newton::backtrack`).
+#[derive(Debug, Default)]
+pub(crate) struct PassOutputs {
+    f_int: Vec<f64>,
+    tangents: Vec<Mat4>,
+    finite_points: Vec<kinematics::Point>,
+}
+
 impl Body {
+    /// Exchanges the last pass's outputs with `kept` (no copy once `kept` has the
+    /// body's sizes: the first call sizes it). A pass overwrites every entry it leaves
+    /// (the internal force, the tangent of every point of a non-affine law, every
+    /// finite-strain point), so the buffers swapped in need no clearing.
+    pub(crate) fn swap_pass(&mut self, kept: &mut PassOutputs) {
+        if kept.f_int.len() != self.f_int.len() {
+            kept.f_int.clone_from(&self.f_int);
+        }
+        if kept.tangents.len() != self.tangents.len() {
+            kept.tangents.clone_from(&self.tangents);
+        }
+        if kept.finite_points.len() != self.finite_points.len() {
+            kept.finite_points.clone_from(&self.finite_points);
+        }
+        std::mem::swap(&mut self.f_int, &mut kept.f_int);
+        std::mem::swap(&mut self.tangents, &mut kept.tangents);
+        std::mem::swap(&mut self.finite_points, &mut kept.finite_points);
+    }
+
     /// Buffers for `model`.
     pub(crate) fn new(model: &Model) -> Body {
         Body {

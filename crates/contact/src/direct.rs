@@ -210,21 +210,29 @@ pub struct Timing {
     /// Preconditioned CG solves that did not converge within their cap and factorized
     /// instead (fallbacks).
     pub pcg_fallbacks: usize,
+    /// Gauss-point passes (evaluations of an iterate: one per Newton pass, and one per
+    /// shortened iterate the line search tried).
+    pub passes: usize,
+    /// Shortened iterates the line search tried (docs/solver.md, "The line search").
+    pub halvings: usize,
 }
 
 impl std::fmt::Display for Timing {
-    /// `F factorizations, C CG iterations in S PCG solves (B fell back); local .. ms,
-    /// assembly .. ms, factorization .. ms, solve .. ms, total .. ms`.
+    /// `F factorizations, C CG iterations in S PCG solves (B fell back), P passes (H
+    /// halvings); local .. ms, assembly .. ms, factorization .. ms, solve .. ms, total
+    /// .. ms`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} factorizations, {} CG iterations in {} PCG solves ({} fell back); local \
-             {:.1} ms, assembly {:.1} ms, factorization {:.1} ms, solve {:.1} ms, total \
-             {:.1} ms",
+            "{} factorizations, {} CG iterations in {} PCG solves ({} fell back), {} passes \
+             ({} halvings); local {:.1} ms, assembly {:.1} ms, factorization {:.1} ms, solve \
+             {:.1} ms, total {:.1} ms",
             self.factorizations,
             self.cg_iterations,
             self.pcg_solves,
             self.pcg_fallbacks,
+            self.passes,
+            self.halvings,
             1e3 * self.local,
             1e3 * self.assembly,
             1e3 * self.factorization,
@@ -690,7 +698,7 @@ impl<'m> DirectSolver<'m> {
             if j == j0 + 1 || (every > 0 && (j - 1 - j0) % every == 0) {
                 // a run, and every stretch a replay may start from, begins with a fresh
                 // factorization: the replay then repeats its steps bit for bit
-                self.newton.system.forget_preconditioner();
+                self.newton.forget_carried();
             }
             if every > 0 && (j - 1 - j0) % every == 0 {
                 traj.checkpoints.push(Checkpoint {

@@ -17,7 +17,7 @@ use indentify_fe::dofs::NO_EQ;
 use indentify_fe::{FeError, QP_PER_ELEMENT};
 use indentify_laws::{Material, Regime, Vec4};
 
-use crate::body::{Body, Internal, StepLaw};
+use crate::body::{Body, Internal, PassOutputs, StepLaw};
 use crate::constraint::{self, Constraint, ContactSet, Iterate, StatusFlip, Tolerances};
 use crate::direct::{SolverOptions, StepRecord, Timing};
 use crate::drive::Load;
@@ -380,8 +380,10 @@ pub(crate) struct Newton<'m> {
     v: Vec<f64>,
     kv: Vec<f64>,
     col: Vec<f64>,
-    /// The depth column's solve `w` of the last Newton iterate of the step (the start of
-    /// the next column's CG), and whether it is set.
+    /// The depth column's solve `w` of the last load-controlled Newton iterate (the start
+    /// of the next column's CG, in the same step or the next one), and whether it is
+    /// set: carried across steps like the preconditioner's factor and forgotten with it
+    /// ([`Newton::forget_carried`]), so that a replay from a checkpoint repeats the run.
     w_prev: Vec<f64>,
     w_ok: bool,
     /// The depth increment `dU` (mm) of the last bordered update: with `self.col` the
@@ -389,6 +391,20 @@ pub(crate) struct Newton<'m> {
     d_depth: f64,
     /// The contact stiffness `s` of the last bordered update (N/mm; 0 before one).
     stiffness: f64,
+    /// The line search's evaluated iterate kept aside while a shorter one is tried
+    /// (under a prescribed force, [`Newton::backtrack`]).
+    kept: Kept,
+}
+
+/// An evaluated iterate kept aside by the line search: its displacement and depth, its
+/// stresses and internal variables, and the body's pass outputs (swapped, not copied).
+#[derive(Debug, Default)]
+struct Kept {
+    u: Vec<f64>,
+    depth: f64,
+    sigma: Vec<Vec4>,
+    internal: Internal,
+    pass: PassOutputs,
 }
 
 impl<'m> Newton<'m> {
@@ -415,7 +431,19 @@ impl<'m> Newton<'m> {
             w_ok: false,
             d_depth: 0.0,
             stiffness: 0.0,
+            kept: Kept::default(),
         })
+    }
+
+    /// Forgets what one step hands the next besides its state: the preconditioner's
+    /// factor and refresh history ([`ConstrainedSystem::forget_preconditioner`]) and the
+    /// last depth column (the start of the next column's CG). A run, and every stretch
+    /// a replay may start from, begins with it: what follows then depends on the state
+    /// alone. (The first solve after it factorizes, and a direct solve does not read the
+    /// carried column: forgetting the column is a safeguard, should that change.)
+    pub(crate) fn forget_carried(&mut self) {
+        self.system.forget_preconditioner();
+        self.w_ok = false;
     }
 
     /// Solves one step: from `spec.state` to `spec.t1` at the depth `spec.depth`.
@@ -430,7 +458,6 @@ impl<'m> Newton<'m> {
         let state = spec.state;
         let dt = spec.t1 - state.t;
         self.system.begin_step(spec.load.is_some());
-        self.w_ok = false;
         self.stiffness = 0.0;
         let mut it = Iteration {
             u: state.u.clone(),
@@ -648,14 +675,28 @@ impl<'m> Newton<'m> {
         if !eligible || it.changes != prev.1 || merit(&r) <= m0 {
             return Ok(r);
         }
+        // under a prescribed force the evaluated iterate is kept aside while a shorter
+        // one is tried, and swapped back when that one is worse: one Gauss-point pass
+        // fewer per rejected halving (R2's reference mesh, trigger and Pdot/P: about
+        // half of the halvings tried, docs/validation-load-control.md §12). Elsewhere
+        // the iterate is moved back and evaluated again (its bits kept).
+        let keep = spec.load.is_some_and(|l| l.is_force());
         let mut best = r;
         let mut f = 1.0;
         for _ in 0..4 {
             f *= 0.5;
+            timing.halvings += 1;
+            if keep {
+                self.keep_aside(it);
+            }
             self.shorten(spec, it, f);
             let r1 = self.evaluate(spec, law, it, timing)?;
             if merit(&r1) >= merit(&best) {
                 // undo this halving: the longer step was better
+                if keep {
+                    self.take_back(it);
+                    return Ok(self.measure(spec, it));
+                }
                 self.shorten(spec, it, -f);
                 return self.evaluate(spec, law, it, timing);
             }
@@ -725,6 +766,7 @@ impl<'m> Newton<'m> {
         timing: &mut Timing,
     ) -> Result<Residual, StepFailure> {
         let model = self.model;
+        timing.passes += 1;
         let tl = std::time::Instant::now();
         self.body
             .evaluate(model, law, &it.u, &mut it.sigma, &mut it.internal)
@@ -737,6 +779,43 @@ impl<'m> Newton<'m> {
                 other => other,
             })?;
         timing.local += tl.elapsed().as_secs_f64();
+        Ok(self.measure(spec, it))
+    }
+
+    /// Keeps the evaluated iterate `it` aside ([`Kept`]): its displacement and depth
+    /// copied, its stresses, internal variables and the body's pass outputs swapped out
+    /// (the next evaluation overwrites the buffers swapped in).
+    fn keep_aside(&mut self, it: &mut Iteration) {
+        let k = &mut self.kept;
+        k.u.clone_from(&it.u);
+        k.depth = it.depth;
+        if k.sigma.len() != it.sigma.len() {
+            k.sigma.clone_from(&it.sigma);
+        }
+        if k.internal.alpha.len() != it.internal.alpha.len()
+            || k.internal.regime.len() != it.internal.regime.len()
+        {
+            k.internal.clone_from(&it.internal);
+        }
+        std::mem::swap(&mut it.sigma, &mut k.sigma);
+        std::mem::swap(&mut it.internal, &mut k.internal);
+        self.body.swap_pass(&mut k.pass);
+    }
+
+    /// Returns to the iterate kept aside by [`Newton::keep_aside`], as it was evaluated.
+    fn take_back(&mut self, it: &mut Iteration) {
+        let k = &mut self.kept;
+        std::mem::swap(&mut it.u, &mut k.u);
+        it.depth = k.depth;
+        std::mem::swap(&mut it.sigma, &mut k.sigma);
+        std::mem::swap(&mut it.internal, &mut k.internal);
+        self.body.swap_pass(&mut k.pass);
+    }
+
+    /// The rest of [`Newton::evaluate`] after the Gauss-point pass: the constraint's gaps
+    /// and the residual, recorded in `self.residuals`.
+    fn measure(&mut self, spec: &StepSpec<'_>, it: &Iteration) -> Residual {
+        let model = self.model;
         let view = iterate(&self.body.f_int, spec, it);
         self.constraint.update(&it.set, &view);
         // residual on free, unconstrained equations (normal contact: the tangential
@@ -772,12 +851,12 @@ impl<'m> Newton<'m> {
         let scale = fmax.max(spec.state.f_scale);
         let rel = if scale > 0.0 { res / scale } else { res };
         self.residuals.push((rel, it.changes));
-        Ok(Residual {
+        Residual {
             res,
             fmax,
             rel,
             norm: sq.sqrt(),
-        })
+        }
     }
 
     /// The complementarity check of a pass: tensile reactions and penetrating gaps change
@@ -1097,12 +1176,16 @@ impl Newton<'_> {
                 let energy = !self.system.has_frames();
                 let tol = if energy { eta.min(1e-2) } else { eta.min(1e-9) };
                 self.aux.fill(0.0);
-                // CG starts from the last iterate's column of the step (the tangent moves
-                // little between iterates; R2's load and hold under Norton-Hoff with the
-                // refresh of `refresh.rs`: 651 CG iterations and 228 Newton iterations
-                // against 975 and 236 from the preconditioner's solution), also after a
-                // set change, whose newly held equations the solve sets to zero (R2's
-                // reference mesh, trigger and Pdot/P: 352 CG iterations against 365)
+                // CG starts from the last iterate's column (the tangent moves little
+                // between iterates; R2's load and hold under Norton-Hoff with the refresh
+                // of `refresh.rs`: 651 CG iterations and 228 Newton iterations against 975
+                // and 236 from the preconditioner's solution), also after a set change,
+                // whose newly held equations the solve sets to zero (R2's reference mesh,
+                // trigger and Pdot/P: 352 CG iterations against 365), and at a step's
+                // first iterate from the last step's column (the same mesh: 21
+                // factorizations, 303 CG iterations and 120 Newton iterations against 25,
+                // 335 and 123 from the preconditioner's solution; the column's CG counts
+                // in the refresh policy, `refresh.rs`)
                 if self.w_ok {
                     self.system.solve_inexact_from(
                         model,
