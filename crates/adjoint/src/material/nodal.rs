@@ -535,12 +535,10 @@ impl Adjoint<'_> {
                 }
             }
         }
-        // the parameter derivative is the probed linear form at recorded points: the
-        // point of largest stress of the last state and of the state of largest stress
-        // (each with the step into it)
-        std::iter::once(n)
-            .chain((peak != n).then_some(peak))
-            .all(|j| self.linear_at_state(nd, mat, c, traj, j))
+        // the parameter derivative is the probed linear form at a recorded point: the
+        // point of largest stress of the state of largest stress, with the step into it
+        // (the last state's, at rest, would measure round-off)
+        self.linear_at_state(nd, mat, c, traj, peak)
     }
 
     /// Whether the material's parameter derivative at the point of largest stress of the
