@@ -18,7 +18,9 @@
 //! -- LAW [ROUNDS] [load|frame] [finite]` prints the median of each and its ratio to the
 //! forward, and the largest difference of the columns (`dh/dc`, `dF/dc`) against the
 //! passes', relative to each column's largest entry (the `dF/dc` rows of load-controlled
-//! steps apart: their force is prescribed, the passes give it to round-off).
+//! steps apart: their force is prescribed, the passes give it to round-off). With
+//! `LOAD_SENS_BITS` set, the first round's columns (both passes) are hashed to stderr, to
+//! compare two builds.
 use std::time::Instant;
 
 use indentify_adjoint::{Adjoint, FrameIndex, LoadSensitivities};
@@ -200,6 +202,19 @@ fn main() {
             for (kk, v) in row.iter().enumerate() {
                 df_noise = df_noise.max((v - rows.df_dc[i][kk]).abs());
             }
+        }
+        if round == 0 && std::env::var_os("LOAD_SENS_BITS").is_some() {
+            // FNV-1a of the columns' bits (both passes), to compare two builds
+            let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+            for s in [&rows, &passes] {
+                for v in s.dh_dc.iter().chain(&s.df_dc).flatten() {
+                    for b in v.to_bits().to_le_bytes() {
+                        h ^= u64::from(b);
+                        h = h.wrapping_mul(0x0100_0000_01b3);
+                    }
+                }
+            }
+            eprintln!("{name}: columns' bits {h:016x}");
         }
         if round > 0 {
             for (v, x) in t.iter_mut().zip([fwd, t_rows, t_passes]) {

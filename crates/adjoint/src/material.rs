@@ -493,6 +493,9 @@ impl Adjoint<'_> {
         let rows = !matches!(drive, SensDrive::Depth) && self.reactions_from_rows();
         self.reaction_rows = rows;
         let mut cons = Vec::new();
+        // the last point's `A` before its elimination: a linear material's repeats at
+        // every point of a step, whose inverse is then copied (the same bits)
+        let mut a_last: Vec<f64> = Vec::with_capacity(m * m);
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -502,6 +505,7 @@ impl Adjoint<'_> {
                 reason,
             };
             self.step_strains(f0, f1, &mut sw.deps).map_err(fail)?;
+            a_last.clear();
             for q in 0..nq {
                 sw.load(f0, f1, q);
                 let deps = sw.deps[q];
@@ -520,13 +524,25 @@ impl Adjoint<'_> {
                     &mut eblk[q * m * 4..(q + 1) * m * 4],
                     &mut pblk[q * m * np..(q + 1) * m * np],
                 );
-                // A^-1 in one elimination with m right-hand sides
-                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
-                inv.fill(0.0);
-                for j in 0..m {
-                    inv[j * m + j] = 1.0;
+                // A^-1 in one elimination with m right-hand sides, or the previous
+                // point's where its `A` has the same bits (a linear material's)
+                let same = q > 0
+                    && a_last.len() == m * m
+                    && (sw.a[..m * m].iter().zip(&a_last)).all(|(x, y)| x.to_bits() == y.to_bits());
+                if same {
+                    ainv.copy_within((q - 1) * m * m..q * m * m, q * m * m);
+                } else {
+                    a_last.clear();
+                    a_last.extend_from_slice(&sw.a[..m * m]);
                 }
-                if !dense_solve_many(&mut sw.a, m, inv, m) {
+                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
+                if !same {
+                    inv.fill(0.0);
+                    for j in 0..m {
+                        inv[j * m + j] = 1.0;
+                    }
+                }
+                if !same && !dense_solve_many(&mut sw.a, m, inv, m) {
                     return Err(AdjointError::Step {
                         step: i,
                         t: rec.t,
