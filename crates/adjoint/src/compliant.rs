@@ -422,6 +422,13 @@ impl Adjoint<'_> {
         for (k, w) in work.iter_mut().enumerate() {
             drive.seed(model, k, &mut w.du_prev);
         }
+        // the force at the depth held (which sets the depth's variation through the
+        // spring) and the step's force from the force dofs' rows of the step's tangent
+        // (`ParamStep::solve`)
+        let reactions = self.reactions_from_rows();
+        self.nodal_sens = false;
+        self.reaction_rows = reactions;
+        let mut cons = Vec::new();
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -434,6 +441,9 @@ impl Adjoint<'_> {
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             let load = drive.step(&mut self.contact, rec, &mut carry);
+            if reactions {
+                crate::nodal_sens::active_equations(model, rec, &mut cons);
+            }
             let step = crate::ParamStep {
                 model,
                 tangents: &self.tangents,
@@ -443,12 +453,13 @@ impl Adjoint<'_> {
                 r_field: &r_field,
                 np,
                 rec,
-                reactions: None,
+                reactions: reactions.then_some(cons.as_slice()),
                 border: Some(crate::load::Border {
                     col: &carry.col.col,
                     s: carry.s,
                     load,
                     given: &carry.given,
+                    force_prescribed: false,
                 }),
             };
             for (k, ((yk, dfk), w)) in y

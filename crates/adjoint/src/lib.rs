@@ -610,6 +610,15 @@ impl<'m> Adjoint<'m> {
         out
     }
 
+    /// Whether a Gauss-point sensitivity pass reads the force variations from the force
+    /// dofs' rows of the step's tangent ([`ParamStep::solve`]): `Adjoint::set_fused` on
+    /// and every candidate's vertical dof with an equation (`set_fused(false)` keeps the
+    /// third pass over the Gauss points: `pinned.rs`).
+    fn reactions_from_rows(&self) -> bool {
+        let model = self.model;
+        self.fuse && (model.candidates.iter()).all(|&n| model.dofs.equation(2 * n + 1).is_some())
+    }
+
     /// Whether the running sensitivity pass skips parameter `k`.
     fn skips(&self, k: usize) -> bool {
         self.skip.get(k).copied().unwrap_or(false)
@@ -649,8 +658,7 @@ impl<'m> Adjoint<'m> {
         let mut df = vec![vec![0.0; np]; n];
         // `dF_i/dc_k` from the force dofs' rows of the step's tangent where every one has
         // an equation (`set_fused(false)` keeps the Gauss-point pass: `pinned.rs`)
-        let reactions = self.fuse
-            && (model.candidates.iter()).all(|&n| model.dofs.equation(2 * n + 1).is_some());
+        let reactions = self.reactions_from_rows();
         self.reaction_rows = reactions;
         let mut cons = Vec::new();
         for i in 0..n {
@@ -799,8 +807,10 @@ struct ParamStep<'a> {
     /// The equations of the step's force dofs (the active candidates' vertical dofs),
     /// when `dF_i/dc_k` is read from their rows of the step's tangent (`K du` there less
     /// the right-hand side: [`ParamStep::solve`]) instead of from a third pass over the
-    /// Gauss points; `None` keeps that pass (`Adjoint::set_fused(false)`, load control,
-    /// an active dof without an equation).
+    /// Gauss points; under load control and through the frame also the force variation
+    /// at the depth held, which sets the depth's ([`load::Border::shift`]). `None` keeps
+    /// the passes over the points (`Adjoint::set_fused(false)`, an active dof without an
+    /// equation).
     reactions: Option<&'a [usize]>,
 }
 
@@ -827,7 +837,7 @@ impl ParamStep<'_> {
         model.dofs.restrict(&w.full, &mut w.eq);
         self.contact
             .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
-        let shift = self.border.as_ref().map(|b| b.shift(self, k, yk, w));
+        let shift = self.border.as_ref().map(|b| b.shift(self, k, rhs_a, w));
         expand_into(model, &w.eq, &mut w.full);
         if !w.du_prev.is_empty() {
             w.du_prev.copy_from_slice(&w.full);
@@ -843,14 +853,11 @@ impl ParamStep<'_> {
             *y = self.s.mul_vec(&dsig) - bv;
         }
         if let (Some(cons), Some(rhs_a)) = (self.reactions, rhs_a) {
-            // `delta f = sum w B^T C (B du + q) = K du + sum w B^T C q = K du - rhs` (the
-            // geometric part in `K` under finite strain): the rows of the force dofs only
-            let (pat, k) = (&model.pattern, self.contact.tangent_values());
-            let mut kdu = 0.0;
-            for &c in cons {
-                kdu += pat.row_dot(k, c, &w.eq);
-            }
-            *dfk = rhs_a - kdu;
+            *dfk = match &self.border {
+                // a prescribed force varies as prescribed (`dF_i = dP_i`): nothing to form
+                Some(b) if b.force_prescribed => b.given[k],
+                _ => rhs_a - self.force_rows(cons, &w.eq),
+            };
             if let Some(du) = shift {
                 w.du_depth = du;
             }
@@ -869,6 +876,23 @@ impl ParamStep<'_> {
         if let Some(du) = shift {
             w.du_depth = du;
         }
+    }
+}
+
+impl ParamStep<'_> {
+    /// `(K du)_A`: the rows `cons` of the step's tangent against the displacement
+    /// variation `du` (equations). With the right-hand side `rhs` of the step's solve,
+    /// `delta f = sum w B^T C (B du + q) = K du + sum w B^T C q = K du - rhs` on every
+    /// row (the geometric part in `K` under finite strain), so `dF_i/dc_k = rhs_A -
+    /// (K du)_A`: the rows of the force dofs only, instead of a pass over the Gauss
+    /// points.
+    fn force_rows(&self, cons: &[usize], du: &[f64]) -> f64 {
+        let (pat, k) = (&self.model.pattern, self.contact.tangent_values());
+        let mut kdu = 0.0;
+        for &c in cons {
+            kdu += pat.row_dot(k, c, du);
+        }
+        kdu
     }
 }
 

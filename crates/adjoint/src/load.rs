@@ -555,19 +555,29 @@ pub(crate) struct Border<'a> {
     pub load: bool,
     /// `dP_i/dc_k` (load) or `dU_i/dc_k` (depth), one per parameter.
     pub given: &'a [f64],
+    /// Whether the step's force is prescribed (load control: `dF_i/dc_k = dP_i/dc_k`,
+    /// `given`, with nothing to form), or computed (a depth-controlled step, the frame's
+    /// spring).
+    pub force_prescribed: bool,
 }
 
 impl Border<'_> {
     /// Adds `dU_i/dc_k du_U` to the displacement variation `w.eq` (on entry: at the
-    /// depth held) and returns `dU_i/dc_k`.
+    /// depth held) and returns `dU_i/dc_k`. Under load control the force variation at
+    /// the depth held comes from the force dofs' rows of the step's tangent, `rhs_A -
+    /// (K du)_A` with `rhs_a` the right-hand side's sum over the force dofs (given where
+    /// the step reads its rows, [`crate::ParamStep::solve`]), else from a pass over the
+    /// Gauss points.
     pub(crate) fn shift(
         &self,
         step: &crate::ParamStep<'_>,
         k: usize,
-        _yk: &[Vec4],
+        rhs_a: Option<f64>,
         w: &mut crate::ParamWork,
     ) -> f64 {
-        let du = if self.load {
+        let du = if let (true, Some(cons), Some(rhs_a)) = (self.load, step.reactions, rhs_a) {
+            (self.given[k] - (rhs_a - step.force_rows(cons, &w.eq))) / self.s
+        } else if self.load {
             let model = step.model;
             crate::expand_into(model, &w.eq, &mut w.full);
             crate::strains_into(model, step.finite, &w.full, &mut w.strain);
@@ -654,6 +664,13 @@ impl Adjoint<'_> {
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];
         let mut carry = SegmentCarry::new(np, model.dofs.n_eq);
+        // the force at the depth held (which sets the depth's variation) and a
+        // depth-controlled step's force from the force dofs' rows of the step's tangent
+        // (`ParamStep::solve`); a load-controlled step's force is prescribed
+        let reactions = self.reactions_from_rows();
+        self.nodal_sens = false;
+        self.reaction_rows = reactions;
+        let mut cons = Vec::new();
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -665,6 +682,9 @@ impl Adjoint<'_> {
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
             crate::residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
             let border = carry.step(&mut self.contact, history, traj, i, (&df, &dh))?;
+            if reactions {
+                crate::nodal_sens::active_equations(model, rec, &mut cons);
+            }
             let step = crate::ParamStep {
                 model,
                 tangents: &self.tangents,
@@ -674,12 +694,13 @@ impl Adjoint<'_> {
                 r_field: &r_field,
                 np,
                 rec,
-                reactions: None,
+                reactions: reactions.then_some(cons.as_slice()),
                 border: border.map(|load| Border {
                     col: &carry.col.col,
                     s: carry.s,
                     load,
                     given: &carry.given,
+                    force_prescribed: load,
                 }),
             };
             for (k, ((yk, dfk), w)) in y

@@ -486,6 +486,16 @@ impl Adjoint<'_> {
                 f.seed(model, k, &mut w.du_prev);
             }
         }
+        // a bordered drive's force variations (at the depth held, and the step's) from
+        // the force dofs' rows of the step's tangent: `rhs_A - (K du)_A` with the
+        // right-hand side `rhs = -sum w B^T Pi A^-1 q` (`lib.rs`, `ParamStep::solve`);
+        // a load-controlled step's force is prescribed. (Depth control keeps its pass.)
+        let rows = !matches!(drive, SensDrive::Depth) && self.reactions_from_rows();
+        self.reaction_rows = rows;
+        let mut cons = Vec::new();
+        // the last point's `A` before its elimination: a linear material's repeats at
+        // every point of a step, whose inverse is then copied (the same bits)
+        let mut a_last: Vec<f64> = Vec::with_capacity(m * m);
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -495,6 +505,7 @@ impl Adjoint<'_> {
                 reason,
             };
             self.step_strains(f0, f1, &mut sw.deps).map_err(fail)?;
+            a_last.clear();
             for q in 0..nq {
                 sw.load(f0, f1, q);
                 let deps = sw.deps[q];
@@ -513,13 +524,25 @@ impl Adjoint<'_> {
                     &mut eblk[q * m * 4..(q + 1) * m * 4],
                     &mut pblk[q * m * np..(q + 1) * m * np],
                 );
-                // A^-1 in one elimination with m right-hand sides
-                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
-                inv.fill(0.0);
-                for j in 0..m {
-                    inv[j * m + j] = 1.0;
+                // A^-1 in one elimination with m right-hand sides, or the previous
+                // point's where its `A` has the same bits (a linear material's)
+                let same = q > 0
+                    && a_last.len() == m * m
+                    && (sw.a[..m * m].iter().zip(&a_last)).all(|(x, y)| x.to_bits() == y.to_bits());
+                if same {
+                    ainv.copy_within((q - 1) * m * m..q * m * m, q * m * m);
+                } else {
+                    a_last.clear();
+                    a_last.extend_from_slice(&sw.a[..m * m]);
                 }
-                if !dense_solve_many(&mut sw.a, m, inv, m) {
+                let inv = &mut ainv[q * m * m..(q + 1) * m * m];
+                if !same {
+                    inv.fill(0.0);
+                    for j in 0..m {
+                        inv[j * m + j] = 1.0;
+                    }
+                }
+                if !same && !dense_solve_many(&mut sw.a, m, inv, m) {
                     return Err(AdjointError::Step {
                         step: i,
                         t: rec.t,
@@ -552,6 +575,19 @@ impl Adjoint<'_> {
                 (None, _) => None,
             };
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            if rows {
+                crate::nodal_sens::active_equations(model, rec, &mut cons);
+            }
+            // whether the step's force is prescribed (load control)
+            let prescribed = matches!((drive, border), (SensDrive::Load(_), Some(true)));
+            let kvals = self.contact.tangent_values();
+            let force_rows = |du: &[f64]| {
+                let mut kdu = 0.0;
+                for &e in &cons {
+                    kdu += model.pattern.row_dot(kvals, e, du);
+                }
+                kdu
+            };
             for k in 0..np {
                 if self.skips(k) {
                     continue;
@@ -579,13 +615,20 @@ impl Adjoint<'_> {
                 }
                 let w = &mut works[k];
                 crate::force_into(model, finite, &self.field_b, &mut w.full);
+                let rhs_a = rows.then(|| {
+                    crate::force_dofs(model, rec)
+                        .map(|d| w.full[d])
+                        .sum::<f64>()
+                });
                 model.dofs.restrict(&w.full, &mut w.eq);
                 self.contact
                     .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
                 if let Some(load) = border {
                     // the depth's variation: from the force's at the depth held
                     // (`dF^U = -e_A . (K du + B* Pi A^-1 q)`) under load control
-                    let du_u = if load {
+                    let du_u = if let (true, Some(rhs_a)) = (load, rhs_a) {
+                        (carry.given[k] - (rhs_a - force_rows(&w.eq))) / carry.s
+                    } else if load {
                         crate::expand_into(model, &w.eq, &mut w.full);
                         crate::strains_into(model, finite, &w.full, &mut w.strain);
                         for q in 0..nq {
@@ -625,6 +668,14 @@ impl Adjoint<'_> {
                         dyk[q * m + r] = (0..m).map(|j| inv[r * m + j] * sw.x[j]).sum();
                     }
                     bduk[q] = b.0;
+                }
+                if let Some(rhs_a) = rhs_a {
+                    df[i][k] = if prescribed {
+                        carry.given[k]
+                    } else {
+                        rhs_a - force_rows(&w.eq)
+                    };
+                    continue;
                 }
                 match finite {
                     None => model.disc.internal_force(&self.field_b, &mut w.full),

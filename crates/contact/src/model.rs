@@ -155,17 +155,29 @@ impl Model {
     /// `lambda` and the displacement `u` (all dofs) at depth `depth`. The adjoint and the
     /// sensitivities transpose the system these frames define.
     pub fn frames(&self, active: &[u32], lambda: &[f64], u: &[f64], depth: f64) -> Vec<NodeFrame> {
+        let mut out = Vec::new();
+        self.frames_into(active, lambda, u, depth, &mut out);
+        out
+    }
+
+    /// [`Model::frames`] into `out` (cleared first; its capacity kept, so a caller that
+    /// keeps `out` from step to step allocates nothing once it holds a step's frames).
+    pub fn frames_into(
+        &self,
+        active: &[u32],
+        lambda: &[f64],
+        u: &[f64],
+        depth: f64,
+        out: &mut Vec<NodeFrame>,
+    ) {
+        out.clear();
         if self.surface.is_none() {
-            return Vec::new();
+            return;
         }
-        active
-            .iter()
-            .zip(lambda)
-            .filter_map(|(&k, &lam)| {
-                let p = self.project(k as usize, u, depth).in_contact();
-                self.frame(k as usize, &p, lam)
-            })
-            .collect()
+        out.extend(active.iter().zip(lambda).filter_map(|(&k, &lam)| {
+            let p = self.project(k as usize, u, depth).in_contact();
+            self.frame(k as usize, &p, lam)
+        }));
     }
 
     /// The frames of the active candidates of a converged step with Coulomb friction
@@ -183,20 +195,33 @@ impl Model {
         u: &[f64],
         depth: f64,
     ) -> Vec<NodeFrame> {
+        let mut out = Vec::new();
+        self.friction_frames_into(active, slip, f_int, u, depth, &mut out);
+        out
+    }
+
+    /// [`Model::friction_frames`] into `out` (cleared first; its capacity kept, as
+    /// [`Model::frames_into`]).
+    pub fn friction_frames_into(
+        &self,
+        active: &[u32],
+        slip: &[Status],
+        f_int: &[f64],
+        u: &[f64],
+        depth: f64,
+        out: &mut Vec<NodeFrame>,
+    ) {
+        out.clear();
         if self.surface.is_none() {
-            return Vec::new();
+            return;
         }
         let mu = self.contact.friction();
-        active
-            .iter()
-            .zip(slip)
-            .filter_map(|(&k, &st)| {
-                let k = k as usize;
-                let n = self.candidates[k];
-                let p = self.project(k, u, depth).in_contact();
-                friction::frame(self, k, &p, [f_int[2 * n], f_int[2 * n + 1]], st, mu)
-            })
-            .collect()
+        out.extend(active.iter().zip(slip).filter_map(|(&k, &st)| {
+            let k = k as usize;
+            let n = self.candidates[k];
+            let p = self.project(k, u, depth).in_contact();
+            friction::frame(self, k, &p, [f_int[2 * n], f_int[2 * n + 1]], st, mu)
+        }));
     }
 
     /// The frame of candidate `k` with projection `p` and normal reaction `lambda`

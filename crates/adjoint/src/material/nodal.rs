@@ -26,7 +26,9 @@
 //! Per step: one sparse product with `K_J`, the reactions of the constrained rows and
 //! vector operations on `nb = m / 4` blocks, instead of `B du`, `B V`, `B^T` and the
 //! material's products at every Gauss point. The nodal states are checked against the
-//! recorded last state at every point once per sweep (else the Gauss-point pass sweeps).
+//! recorded last state and the state of largest stress at every point once per sweep,
+//! each to 1e-9 of each block's largest over the run (else the Gauss-point pass sweeps):
+//! a run held until relaxed ends with states of round-off, which alone measure nothing.
 //! Sequential: the same bits on any number of threads.
 //!
 //! Under load control (`load.rs`) and through the frame (`compliant.rs`) the step is
@@ -337,8 +339,8 @@ impl Adjoint<'_> {
     /// Starts the all-nodal sweep of `traj` when it applies: `Adjoint::set_fused` on, a
     /// linear material with isotropic blocks under small strain and vertical contact
     /// without friction's shift, every step's fields recorded from rest, the fixed dofs
-    /// at zero, and the nodal states matching the recorded last state at every point;
-    /// otherwise `false` (the Gauss-point pass sweeps).
+    /// at zero, and the nodal states matching the recorded last state and the state of
+    /// largest stress at every point; otherwise `false` (the Gauss-point pass sweeps).
     pub(crate) fn begin_nodal_material(
         &mut self,
         mat: &dyn Material,
@@ -467,12 +469,15 @@ impl Adjoint<'_> {
         true
     }
 
-    /// The nodal form of the last recorded state against the recorded one at every
-    /// point, block by block (1e-9 of each block's largest), and the probed parameter
-    /// derivative against the material's at the point of largest stress.
+    /// The nodal form of the recorded states against the recorded ones at every point,
+    /// block by block, of the last state and of the state of largest stress, each to
+    /// 1e-9 of the block's largest over the run (a run unloaded and held until relaxed
+    /// ends with states of round-off, which alone would measure nothing: a body back at
+    /// rest matches any isotropic material), and the probed parameter derivative against
+    /// the material's at the point of largest stress of the state of largest stress.
     fn nodal_states_match(
         &mut self,
-        nd: &NodalMat,
+        nd: &mut NodalMat,
         mat: &dyn Material,
         c: &[f64],
         traj: &Trajectory,
@@ -480,68 +485,110 @@ impl Adjoint<'_> {
         let model = self.model;
         let (nb, n_eq, n) = (nd.nb, model.dofs.n_eq, traj.steps.len());
         let nq = model.disc.n_qp();
-        let last = &traj.fields[n];
         let na = nb * 4 - 4;
-        let mut full = vec![0.0; model.disc.n_dofs()];
-        let (mut ea, mut eh) = (vec![[0.0; 4]; nq], vec![[0.0; 4]; nq]);
-        for bi in 0..nb {
-            let at = (n * nb + bi) * n_eq;
-            crate::expand_into(model, &nd.a[at..at + n_eq], &mut full);
-            model.disc.strains(&full, &mut ea);
-            crate::expand_into(model, &nd.h[at..at + n_eq], &mut full);
-            model.disc.strains(&full, &mut eh);
-            let rec = |q: usize, k: usize| {
-                if bi == 0 {
-                    last.sigma[q].0[k]
-                } else {
-                    last.alpha[q * na + 4 * (bi - 1) + k]
-                }
-            };
-            let (mut scale, mut worst) = (0.0f64, 0.0f64);
-            for q in 0..nq {
-                let (x, y) = (&ea[q], &eh[q]);
-                let t = (y[0] + y[1] + y[2] - x[0] - x[1] - x[2]) / 3.0;
-                let v = [x[0] + t, x[1] + t, x[2] + t, x[3]];
-                for (k, vk) in v.iter().enumerate() {
-                    scale = scale.max(rec(q, k).abs());
-                    worst = worst.max((vk - rec(q, k)).abs());
-                }
+        // each block's largest entry over the run, and the state of largest stress
+        let mut scale = vec![0.0f64; nb];
+        let (mut peak, mut peak_sigma) = (n, 0.0f64);
+        for (j, f) in traj.fields.iter().enumerate() {
+            let sig = f.sigma.iter().fold(0.0f64, |m, x| m.max(x.max_abs()));
+            scale[0] = scale[0].max(sig);
+            if sig > peak_sigma {
+                (peak, peak_sigma) = (j, sig);
             }
-            if !(worst <= 1e-9 * scale) {
-                return false;
+            if na > 0 {
+                for a in f.alpha.chunks_exact(na) {
+                    for (bi, blk) in a.chunks_exact(4).enumerate() {
+                        let m = blk.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                        scale[bi + 1] = scale[bi + 1].max(m);
+                    }
+                }
             }
         }
-        // the parameter derivative is the probed linear form at a recorded point
-        let (f0, f1) = (&traj.fields[n - 1], &traj.fields[n]);
-        let Some(qbig) =
-            (0..nq).max_by(|&x, &y| f1.sigma[x].max_abs().total_cmp(&f1.sigma[y].max_abs()))
+        let mut full = vec![0.0; model.disc.n_dofs()];
+        let (mut ea, mut eh) = (vec![[0.0; 4]; nq], vec![[0.0; 4]; nq]);
+        for j in std::iter::once(n).chain((peak != n).then_some(peak)) {
+            let state = &traj.fields[j];
+            for (bi, &scale) in scale.iter().enumerate() {
+                let at = (j * nb + bi) * n_eq;
+                crate::expand_into(model, &nd.a[at..at + n_eq], &mut full);
+                model.disc.strains(&full, &mut ea);
+                crate::expand_into(model, &nd.h[at..at + n_eq], &mut full);
+                model.disc.strains(&full, &mut eh);
+                let rec = |q: usize, k: usize| {
+                    if bi == 0 {
+                        state.sigma[q].0[k]
+                    } else {
+                        state.alpha[q * na + 4 * (bi - 1) + k]
+                    }
+                };
+                let mut worst = 0.0f64;
+                for q in 0..nq {
+                    let (x, y) = (&ea[q], &eh[q]);
+                    let t = (y[0] + y[1] + y[2] - x[0] - x[1] - x[2]) / 3.0;
+                    let v = [x[0] + t, x[1] + t, x[2] + t, x[3]];
+                    for (k, vk) in v.iter().enumerate() {
+                        worst = worst.max((vk - rec(q, k)).abs());
+                    }
+                }
+                if !(worst <= 1e-9 * scale) {
+                    return false;
+                }
+            }
+        }
+        // the parameter derivative is the probed linear form at a recorded point: the
+        // point of largest stress of the state of largest stress, with the step into it
+        // (the last state's, at rest, would measure round-off)
+        self.linear_at_state(nd, mat, c, traj, peak)
+    }
+
+    /// Whether the material's parameter derivative at the point of largest stress of the
+    /// recorded state `j >= 1`, with the step into it, is the probed linear form.
+    fn linear_at_state(
+        &self,
+        nd: &mut NodalMat,
+        mat: &dyn Material,
+        c: &[f64],
+        traj: &Trajectory,
+        j: usize,
+    ) -> bool {
+        let model = self.model;
+        let na = nd.nb * 4 - 4;
+        let Some(into) = j.checked_sub(1) else {
+            return false;
+        };
+        let (f0, f1) = (&traj.fields[into], &traj.fields[j]);
+        let Some(qbig) = (0..f1.sigma.len())
+            .max_by(|&x, &y| f1.sigma[x].max_abs().total_cmp(&f1.sigma[y].max_abs()))
         else {
             return false;
         };
-        let mut du = vec![0.0; full.len()];
+        let mut du = vec![0.0; model.disc.n_dofs()];
         for ((d, a), b) in du.iter_mut().zip(&f1.u).zip(&f0.u) {
             *d = a - b;
         }
-        model.disc.strains(&du, &mut ea);
+        let mut eps = vec![[0.0; 4]; model.disc.n_qp()];
+        model.disc.strains(&du, &mut eps);
         let state = |f: &StepFields| {
             let mut y = f.sigma[qbig].0.to_vec();
             y.extend_from_slice(&f.alpha[qbig * na..(qbig + 1) * na]);
             y
         };
         let (y0, y1) = (state(f0), state(f1));
-        let deps = Vec4(ea[qbig]);
+        let deps = Vec4(eps[qbig]);
         let step = Step {
             y0: &y0,
             y1: &y1,
             deps: &deps,
-            dt: traj.steps[n - 1].dt,
+            dt: traj.steps[into].dt,
             regime: Regime::Smooth,
         };
-        // (the states' loop left the last step's operators in `nd.ops`)
-        let Some(ops) = nd.ops.as_ref().filter(|o| o.dt_bits == step.dt.to_bits()) else {
+        // (the sweep sets each step's operators again: `ops_for` keeps them by length)
+        if !nd.ops_for(mat, c, step.dt) {
             return false;
-        };
-        ops.linear_at(mat, c, &step)
+        }
+        nd.ops
+            .as_ref()
+            .is_some_and(|ops| ops.linear_at(mat, c, &step))
     }
 
     /// One step of the all-nodal sweep (the module's recursion), in place of

@@ -199,10 +199,11 @@ impl Constraint for Coulomb<'_> {
         rec: &StepRecord,
         u: &[f64],
         f_int: Option<&[f64]>,
-    ) -> Result<Vec<NodeFrame>, String> {
+        frames: &mut Vec<NodeFrame>,
+    ) -> Result<(), String> {
         let f_int = f_int.expect("the frames with friction need the internal force");
         let model = self.normal.model;
-        let frames = model.friction_frames(&rec.active, &rec.slip, f_int, u, rec.depth);
+        model.friction_frames_into(&rec.active, &rec.slip, f_int, u, rec.depth, frames);
         // one frame per active node, in order (the adjoint pairs them by index)
         for (j, &k) in rec.active.iter().enumerate() {
             let ez = model.dofs.equation(2 * model.candidates[k as usize] + 1);
@@ -217,7 +218,7 @@ impl Constraint for Coulomb<'_> {
                 rec.active.len()
             ));
         }
-        Ok(frames)
+        Ok(())
     }
 
     fn force_cotangent(&self) -> ForceCotangent {

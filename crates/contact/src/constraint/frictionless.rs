@@ -152,8 +152,10 @@ impl Constraint for Frictionless<'_> {
         rec: &StepRecord,
         u: &[f64],
         _f_int: Option<&[f64]>,
-    ) -> Result<Vec<NodeFrame>, String> {
-        Ok(self.model.frames(&rec.active, &rec.lambda, u, rec.depth))
+        frames: &mut Vec<NodeFrame>,
+    ) -> Result<(), String> {
+        (self.model).frames_into(&rec.active, &rec.lambda, u, rec.depth, frames);
+        Ok(())
     }
 
     /// `m . V = rho m_z` on the active nodes, and the source `rho d t_z` along `t` on

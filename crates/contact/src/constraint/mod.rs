@@ -214,8 +214,9 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
 
     /// The frames of the active nodes of a converged recorded step `rec` at its
     /// displacement `u` (all dofs), with its internal force `f_int` (all dofs; given when
-    /// [`Constraint::frames_need_force`]): the system the adjoint and the sensitivities
-    /// transpose. Empty for vertical contact.
+    /// [`Constraint::frames_need_force`]), into the caller's `frames` (cleared first; its
+    /// capacity kept from step to step, so no allocation per step): the system the
+    /// adjoint and the sensitivities transpose. Empty for vertical contact.
     ///
     /// # Errors
     /// A message when the record does not fit the constraint (friction: an active node
@@ -225,7 +226,8 @@ pub(crate) trait Constraint: std::fmt::Debug + Send + Sync {
         rec: &StepRecord,
         u: &[f64],
         f_int: Option<&[f64]>,
-    ) -> Result<Vec<NodeFrame>, String>;
+        frames: &mut Vec<NodeFrame>,
+    ) -> Result<(), String>;
 
     /// How the cost's `dJ/dF_i` enters the adjoint of a step ([`ForceCotangent`]).
     fn force_cotangent(&self) -> ForceCotangent {

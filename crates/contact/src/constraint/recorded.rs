@@ -223,7 +223,7 @@ impl<'m> RecordedContact<'m> {
             self.active[k as usize] = true;
         }
         self.system.set_active(model, &self.active);
-        self.frames = self.constraint.recorded_frames(rec, u, f_int)?;
+        (self.constraint).recorded_frames(rec, u, f_int, &mut self.frames)?;
         self.system.set_frames(&self.frames);
         self.system.factorize(model).map_err(|e| e.to_string())
     }
@@ -379,6 +379,76 @@ impl<'m> RecordedContact<'m> {
             .solve_dirichlet_with(self.model, b, xbar, scratch);
         for t in &self.ties {
             xbar[t.eq] = 0.0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ContactKind, DirectSolver, Punch, Schedule, SolverOptions, trapezoid};
+    use indentify_laws::{Elastic, Law, LawMaterial, Vec4};
+    use indentify_mesh::CylinderMesher;
+
+    /// A recorded step's frames go into the workspace's own buffer
+    /// ([`Constraint::recorded_frames`]): preparing the steps of a run a second time, the
+    /// buffer holds every step's frames at the same address (no allocation per step),
+    /// and the same frames as the first time; frictionless normal contact and Coulomb
+    /// friction (vertical contact has none).
+    #[test]
+    fn recorded_frames_fill_the_workspace_buffer() {
+        for kind in [
+            ContactKind::Normal,
+            ContactKind::normal_with_friction(0.2).unwrap(),
+        ] {
+            let mesh = CylinderMesher {
+                radius: 4.0,
+                height: 4.0,
+                nr: 6,
+                nz: 6,
+                grading_r: 1.45,
+                grading_z: 1.45,
+            }
+            .build()
+            .unwrap();
+            let model = Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind).unwrap();
+            let c = [1e5, 0.3];
+            let schedule = Schedule::from_segments(&trapezoid(0.05, 1.0, 1.0, 1.0, 3)).unwrap();
+            let opts = SolverOptions {
+                record_fields: true,
+                ..SolverOptions::default()
+            };
+            let traj = DirectSolver::new(&model)
+                .unwrap()
+                .run(&LawMaterial(&Elastic), &c, &schedule, &opts)
+                .unwrap();
+            let mut rc = RecordedContact::new(&model).unwrap();
+            let mut f_int = vec![0.0; model.disc.n_dofs()];
+            let mut pass = |rc: &mut RecordedContact<'_>| {
+                let mut out = Vec::new();
+                for (i, rec) in traj.steps.iter().enumerate() {
+                    let f = &traj.fields[i + 1];
+                    let ct = Elastic.tangent(&c, &Vec4::ZERO, rec.dt).unwrap();
+                    model.disc.internal_force(&f.sigma, &mut f_int);
+                    let tangent = StepTangent::Uniform {
+                        tangent: &ct,
+                        params: &c,
+                        dt: rec.dt,
+                    };
+                    rc.prepare(rec, &f.u, Some(&f_int), tangent).unwrap();
+                    out.push((rc.frames.as_ptr(), rc.frames.clone()));
+                }
+                out
+            };
+            let first = pass(&mut rc);
+            let again = pass(&mut rc);
+            let most = again.iter().map(|(_, f)| f.len()).max().unwrap_or(0);
+            assert!(most > 1, "{kind:?}: no step with frames");
+            let at = again[0].0;
+            for (i, ((p, f), (_, f0))) in again.iter().zip(&first).enumerate() {
+                assert_eq!(*p, at, "{kind:?}: step {i}'s frames in a new buffer");
+                assert!(f == f0, "{kind:?}: step {i}'s frames differ");
+            }
         }
     }
 }

@@ -81,8 +81,10 @@ impl Constraint for Vertical<'_> {
         _rec: &StepRecord,
         _u: &[f64],
         _f_int: Option<&[f64]>,
-    ) -> Result<Vec<NodeFrame>, String> {
-        Ok(Vec::new())
+        frames: &mut Vec<NodeFrame>,
+    ) -> Result<(), String> {
+        frames.clear();
+        Ok(())
     }
 
     /// The adjoint's vertical displacement of an active node is the cost's `dJ/dF_i`.
