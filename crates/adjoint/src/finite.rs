@@ -122,14 +122,18 @@ impl FiniteStep {
                 let qp = &disc.qp[q];
                 let def = Deformation::new(qp, &ue);
                 let det = def.det();
-                let ls = (det > 0.0)
-                    .then(|| LogStrain::from_difference(&def.c_minus_one()))
-                    .flatten()
-                    .ok_or_else(|| {
-                        format!(
-                            "finite strain: det F = {det} at Gauss point {q} of a recorded step"
-                        )
-                    })?;
+                // bound in place: the `Option` and `Result` adaptors moved the log strain
+                // (41 numbers) through three copies per point
+                let log = if det > 0.0 {
+                    LogStrain::from_difference(&def.c_minus_one())
+                } else {
+                    None
+                };
+                let Some(ls) = log else {
+                    return Err(format!(
+                        "finite strain: det F = {det} at Gauss point {q} of a recorded step"
+                    ));
+                };
                 let dm = ls.material_tangent(&a[q], &t[q]);
                 def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
                 if self.compact {
