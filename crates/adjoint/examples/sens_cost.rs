@@ -12,7 +12,10 @@
 //! - `gauss`: the pass with the all-nodal recursion off (`Adjoint::set_fused(false)`;
 //!   for R2 the Gauss-point pass with its third pass over the points for `dF_i/dc_k`
 //!   instead of the force dofs' rows of the tangent), the forward's factor taken from a
-//!   second forward run at the same point (not timed).
+//!   second forward run at the same point (not timed);
+//! - `full`: `fresh` with the finite-strain operators `B_L` and `P` formed per point
+//!   (`Adjoint::set_compact_finite(false)`, the pass before the compact `G = P L(F)`),
+//!   run before or after `fresh` by turns (under small strain the same pass as `fresh`).
 //!
 //! `r2f` is R2 under finite strain (frictionless normal contact).
 //!
@@ -112,6 +115,7 @@ fn main() {
     if let Some(only) = std::env::args().nth(3) {
         let traj = solver.run(&mat, &base, &schedule, &opts).expect("forward");
         adjoint.set_fused(only != "gauss");
+        adjoint.set_compact_finite(only != "full");
         let t0 = Clock::now();
         for _ in 0..rounds {
             if only == "forward" {
@@ -127,7 +131,8 @@ fn main() {
         println!("{only}: {:.2} ms each", 1e3 * t0.elapsed() / rounds as f64);
         return;
     }
-    let mut t = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
+    let mut t = [Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()];
+    let mut full_worst = 0.0f64;
     let mut facts = [0usize; 3];
     let mut worst = 0.0f64;
     for round in 0..=rounds {
@@ -146,12 +151,27 @@ fn main() {
             .expect("sensitivities");
         let t_take = t0.elapsed();
         let f1 = adjoint.factorizations();
-        let t0 = Clock::now();
-        let fresh = adjoint
-            .sensitivities_of(&mat, &c, &traj, &free)
-            .expect("sensitivities");
-        let t_fresh = t0.elapsed();
-        let f2 = adjoint.factorizations();
+        // `fresh` and `full` by turns first
+        let mut timed = |compact: bool| {
+            adjoint.set_compact_finite(compact);
+            let f = adjoint.factorizations();
+            let t0 = Clock::now();
+            let out = adjoint
+                .sensitivities_of(&mat, &c, &traj, &free)
+                .expect("sensitivities");
+            let t = t0.elapsed();
+            adjoint.set_compact_finite(true);
+            (out, t, adjoint.factorizations() - f)
+        };
+        let ((fresh, t_fresh, n_fresh), (full, t_full, _)) = if round % 2 == 0 {
+            let a = timed(true);
+            (a, timed(false))
+        } else {
+            let b = timed(false);
+            (timed(true), b)
+        };
+        let f2 = f1 + n_fresh;
+        let f2b = adjoint.factorizations();
         solver.run(&mat, &c, &schedule, &opts).expect("forward");
         adjoint.set_fused(false);
         let t0 = Clock::now();
@@ -162,7 +182,7 @@ fn main() {
         let t_gauss = t0.elapsed();
         adjoint.set_fused(true);
         let f3 = adjoint.factorizations();
-        facts = [f1 - f0, f2 - f1, f3 - f2];
+        facts = [f1 - f0, f2 - f1, f3 - f2b];
         for &k in &free {
             let scale = gauss.df_dc.iter().fold(0.0f64, |m, r| m.max(r[k].abs()));
             for ((a, b), g) in take.df_dc.iter().zip(&fresh.df_dc).zip(&gauss.df_dc) {
@@ -170,10 +190,13 @@ fn main() {
                     .max((a[k] - g[k]).abs() / scale)
                     .max((b[k] - g[k]).abs() / scale);
             }
+            for (a, b) in fresh.df_dc.iter().zip(&full.df_dc) {
+                full_worst = full_worst.max((a[k] - b[k]).abs() / scale);
+            }
         }
         if round > 0 {
             // the first round warms the caches up
-            for (v, x) in t.iter_mut().zip([fwd, t_take, t_fresh, t_gauss]) {
+            for (v, x) in t.iter_mut().zip([fwd, t_take, t_fresh, t_gauss, t_full]) {
                 v.push(x);
             }
         }
@@ -182,7 +205,9 @@ fn main() {
     println!(
         "{case}: forward {:.1} ms; sensitivities of {} parameters: with the forward's factor \
          {:.1} ms ({:.3}x, {} factorizations), fresh {:.1} ms ({:.3}x, {}), Gauss-point pass \
-         {:.1} ms ({:.3}x, {}); columns against the Gauss-point pass's: {worst:.1e}",
+         {:.1} ms ({:.3}x, {}); columns against the Gauss-point pass's: {worst:.1e}; \
+         B_L and P {:.1} ms ({:.3}x; compact / B_L and P {:.3}; columns apart by \
+         {full_worst:.1e})",
         1e3 * m[0],
         free.len(),
         1e3 * m[1],
@@ -194,5 +219,8 @@ fn main() {
         1e3 * m[3],
         m[3] / m[0],
         facts[2],
+        1e3 * m[4],
+        m[4] / m[0],
+        m[2] / m[4],
     );
 }

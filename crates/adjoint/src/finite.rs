@@ -10,18 +10,61 @@
 //! re-derived.
 
 use indentify_contact::Model;
-use indentify_fe::{Deformation, QP_PER_ELEMENT};
+use indentify_fe::{Deformation, QP_PER_ELEMENT, QuadPoint};
 use indentify_laws::{LogStrain, Mat4, Vec4};
 
 /// `B_L` of one Gauss point in the compact per-node form of [`Deformation::b_l`].
 type CompactB = [[[f64; 2]; 4]; 8];
 
-/// The finite-strain operators of one step: per Gauss point `B_L(u_i)` and `P(u_i)`, per
-/// element the consistent tangent `K_e` (lower triangle, as the forward assembles it).
+/// `G = P L(F)` of one Gauss point (the compact form, [`FiniteStep::set_compact`]): with
+/// `gamma = [du_r,R, du_r,Z, du_z,R, du_z,Z, du_r/R]` the gradient of the displacement
+/// variation, `B_L = L(F) gamma` ([`Deformation::add_tangent`]) and `G_i du = G gamma`.
+/// `P` couples the in-plane components `[RR, ZZ, sqrt2*RZ]` among themselves and `L`'s
+/// in-plane rows read `gamma`'s first four entries only, its hoop row the fifth only: so
+/// `G` is an in-plane 3 x 4 block and one hoop scalar (13 numbers for the 80 of `B_L`
+/// and `P`).
+#[derive(Clone, Copy, Debug, Default)]
+struct PointG {
+    /// Rows `RR`, `ZZ`, `sqrt2*RZ` over `gamma[0..4]`.
+    plane: [[f64; 4]; 3],
+    /// `P_tt F_tt`, over `gamma[4]`.
+    tt: f64,
+}
+
+impl PointG {
+    /// `G = P L(F)`.
+    fn new(def: &Deformation, p: &Mat4) -> PointG {
+        let [[frr, frz], [fzr, fzz]] = def.f;
+        let r2 = std::f64::consts::FRAC_1_SQRT_2;
+        // the in-plane rows of L (RR, ZZ, sqrt2*RZ) over gamma[0..4]
+        let l = [
+            [frr, 0.0, fzr, 0.0],
+            [0.0, frz, 0.0, fzz],
+            [frz * r2, frr * r2, fzz * r2, fzr * r2],
+        ];
+        const PLANE: [usize; 3] = [0, 1, 3];
+        let p = &p.0;
+        let plane = PLANE.map(|i| {
+            std::array::from_fn(|j| p[i][0] * l[0][j] + p[i][1] * l[1][j] + p[i][3] * l[2][j])
+        });
+        PointG {
+            plane,
+            tt: p[2][2] * def.ftt,
+        }
+    }
+}
+
+/// The finite-strain operators of one step: per Gauss point `B_L(u_i)` and `P(u_i)` (or,
+/// in the compact form, `G = P L(F)`), per element the consistent tangent `K_e` (lower
+/// triangle, as the forward assembles it).
 #[derive(Debug)]
 pub(crate) struct FiniteStep {
     b: Vec<CompactB>,
     p: Vec<Mat4>,
+    g: Vec<PointG>,
+    /// Whether [`FiniteStep::prepare`] forms `g` (and the products read it) instead of
+    /// `b` and `p`.
+    compact: bool,
     /// Element tangents `K_e` (lower triangles, row >= column).
     pub(crate) ke: Vec<[[f64; 16]; 16]>,
 }
@@ -29,16 +72,28 @@ pub(crate) struct FiniteStep {
 impl FiniteStep {
     /// Workspace for `model`.
     pub(crate) fn new(model: &Model) -> FiniteStep {
-        let (nq, ne) = (model.disc.n_qp(), model.disc.elements.len());
+        let ne = model.disc.elements.len();
         FiniteStep {
-            b: vec![[[[0.0; 2]; 4]; 8]; nq],
-            p: vec![Mat4::ZERO; nq],
+            b: Vec::new(),
+            p: Vec::new(),
+            g: Vec::new(),
+            compact: false,
             ke: vec![[[0.0; 16]; 16]; ne],
         }
     }
 
-    /// Forms `B_L`, `P` and the element tangents at the step's displacement `u` (all
-    /// dofs), stresses `t` and law tangents `a = dT/dE` (every Gauss point).
+    /// Whether the next steps are formed in the compact form: per point `G = P L(F)` (13
+    /// numbers) instead of `B_L` and `P` (80), so that the products over the points read
+    /// `gamma` from the element's shape-function derivatives as the small-strain ones
+    /// do (the forward sensitivities' default pass: `multi.rs`). The two forms give the
+    /// same operator in another order of the products (round-off); sweeps and the pinned
+    /// arithmetic (`Adjoint::set_fused(false)`) keep `B_L` and `P`.
+    pub(crate) fn set_compact(&mut self, on: bool) {
+        self.compact = on;
+    }
+
+    /// Forms `B_L`, `P` (or `G`) and the element tangents at the step's displacement `u`
+    /// (all dofs), stresses `t` and law tangents `a = dT/dE` (every Gauss point).
     ///
     /// # Errors
     /// A message naming the Gauss point if `det F <= 0` there (the recorded state of a
@@ -51,6 +106,13 @@ impl FiniteStep {
         a: &[Mat4],
     ) -> Result<(), String> {
         let disc = &model.disc;
+        let nq = disc.n_qp();
+        if self.compact {
+            self.g.resize(nq, PointG::default());
+        } else {
+            self.b.resize(nq, [[[0.0; 2]; 4]; 8]);
+            self.p.resize(nq, Mat4::ZERO);
+        }
         for e in 0..disc.elements.len() {
             let ue = disc.gather(e, u);
             let ke = &mut self.ke[e];
@@ -60,19 +122,26 @@ impl FiniteStep {
                 let qp = &disc.qp[q];
                 let def = Deformation::new(qp, &ue);
                 let det = def.det();
-                let ls = (det > 0.0)
-                    .then(|| LogStrain::from_difference(&def.c_minus_one()))
-                    .flatten()
-                    .ok_or_else(|| {
-                        format!(
-                            "finite strain: det F = {det} at Gauss point {q} of a recorded step"
-                        )
-                    })?;
-                let b = def.b_l(qp);
+                // bound in place: the `Option` and `Result` adaptors moved the log strain
+                // (41 numbers) through three copies per point
+                let log = if det > 0.0 {
+                    LogStrain::from_difference(&def.c_minus_one())
+                } else {
+                    None
+                };
+                let Some(ls) = log else {
+                    return Err(format!(
+                        "finite strain: det F = {det} at Gauss point {q} of a recorded step"
+                    ));
+                };
                 let dm = ls.material_tangent(&a[q], &t[q]);
                 def.add_tangent(qp, &dm, &ls.pk2(&t[q]), qp.w, ke);
-                self.b[q] = b;
-                self.p[q] = ls.p;
+                if self.compact {
+                    self.g[q] = PointG::new(&def, &ls.p);
+                } else {
+                    self.b[q] = def.b_l(qp);
+                    self.p[q] = ls.p;
+                }
             }
         }
         Ok(())
@@ -87,8 +156,7 @@ impl FiniteStep {
             let mut fe = [0.0; 16];
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
-                let pv = self.p[q].mul_vec(&v[q]);
-                Deformation::add_bt(&self.b[q], &pv, disc.qp[q].w, &mut fe);
+                self.add_force_at(&disc.qp[q], q, &v[q], disc.qp[q].w, &mut fe);
             }
             for (d, x) in disc.element_dofs(e).iter().zip(fe) {
                 f[*d] += x;
@@ -104,15 +172,69 @@ impl FiniteStep {
             let ue = disc.gather(e, du);
             for g in 0..QP_PER_ELEMENT {
                 let q = QP_PER_ELEMENT * e + g;
-                let mut gl = [0.0; 4];
-                for (a, ba) in self.b[q].iter().enumerate() {
-                    for (row, v) in gl.iter_mut().enumerate() {
-                        *v += ba[row][0] * ue[2 * a] + ba[row][1] * ue[2 * a + 1];
-                    }
-                }
-                out[q] = self.p[q].mul_vec(&Vec4(gl)).0;
+                out[q] = self.strain_at(&disc.qp[q], q, &ue);
             }
         }
+    }
+
+    /// Adds `w G_q^T v` (`G_q = P B_L` of Gauss point `q`, `qp`) to the element vector
+    /// `fe`: one point's term of [`FiniteStep::force`].
+    #[inline]
+    pub(crate) fn add_force_at(
+        &self,
+        qp: &QuadPoint,
+        q: usize,
+        v: &Vec4,
+        w: f64,
+        fe: &mut [f64; 16],
+    ) {
+        if !self.compact {
+            let pv = self.p[q].mul_vec(v);
+            Deformation::add_bt(&self.b[q], &pv, w, fe);
+            return;
+        }
+        // `w G^T v` over gamma, then each node's `gamma` columns
+        let (g, v) = (&self.g[q], &v.0);
+        let c: [f64; 4] = std::array::from_fn(|j| {
+            w * (g.plane[0][j] * v[0] + g.plane[1][j] * v[1] + g.plane[2][j] * v[3])
+        });
+        let c4 = w * g.tt * v[2];
+        for (a, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+            fe[2 * a] += dr * c[0] + dz * c[1] + nr * c4;
+            fe[2 * a + 1] += dr * c[2] + dz * c[3];
+        }
+    }
+
+    /// `G_q ue` at Gauss point `q` (`qp`) for its element's displacement variation `ue`:
+    /// one point's term of [`FiniteStep::strains`].
+    #[inline]
+    pub(crate) fn strain_at(&self, qp: &QuadPoint, q: usize, ue: &[f64; 16]) -> [f64; 4] {
+        if !self.compact {
+            let mut gl = [0.0; 4];
+            for (a, ba) in self.b[q].iter().enumerate() {
+                for (row, v) in gl.iter_mut().enumerate() {
+                    *v += ba[row][0] * ue[2 * a] + ba[row][1] * ue[2 * a + 1];
+                }
+            }
+            return self.p[q].mul_vec(&Vec4(gl)).0;
+        }
+        let mut gm = [0.0; 5];
+        for (a, [dr, dz, nr]) in qp.dn.iter().enumerate() {
+            let (ur, uz) = (ue[2 * a], ue[2 * a + 1]);
+            gm[0] += dr * ur;
+            gm[1] += dz * ur;
+            gm[2] += dr * uz;
+            gm[3] += dz * uz;
+            gm[4] += nr * ur;
+        }
+        let g = &self.g[q];
+        let row = |r: &[f64; 4]| r[0] * gm[0] + r[1] * gm[1] + r[2] * gm[2] + r[3] * gm[3];
+        [
+            row(&g.plane[0]),
+            row(&g.plane[1]),
+            g.tt * gm[4],
+            row(&g.plane[2]),
+        ]
     }
 
     /// Adds `K du` (the assembled element tangents times `du`, all dofs) to `f`.
@@ -140,5 +262,79 @@ impl FiniteStep {
         du.extend_from_slice(f);
         self.force(model, cq, f);
         self.add_k_times(model, du, f);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use indentify_contact::{ContactKind, Kinematics, Punch};
+    use indentify_mesh::CylinderMesher;
+
+    fn model() -> Model {
+        let mesh = CylinderMesher {
+            radius: 2.0,
+            height: 3.0,
+            nr: 3,
+            nz: 3,
+            grading_r: 1.2,
+            grading_z: 1.4,
+        }
+        .build()
+        .unwrap();
+        Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, ContactKind::Normal)
+            .unwrap()
+            .with_kinematics(Kinematics::Finite)
+            .unwrap()
+    }
+
+    /// A deterministic field of order `scale`.
+    fn field(n: usize, scale: f64, seed: usize) -> Vec<f64> {
+        (0..n)
+            .map(|k| scale * ((((k + seed) * 7919 + 13) % 101) as f64 / 50.0 - 1.0))
+            .collect()
+    }
+
+    /// The compact `G = P L(F)` gives the force `sum w G^T v` and the strains `G du` of
+    /// `B_L` and `P` (to round-off: 1e-14 of the largest entry), at a large deformation
+    /// (displacement gradients of order 0.1), with the same element tangents.
+    #[test]
+    fn compact_operator_equals_b_l_and_p() {
+        let m = model();
+        let (nd, nq) = (m.disc.n_dofs(), m.disc.n_qp());
+        let u = field(nd, 0.02, 1);
+        let t: Vec<Vec4> = (0..nq)
+            .map(|q| Vec4(std::array::from_fn(|i| field(4, 300.0, 4 * q + i)[i])))
+            .collect();
+        let a = vec![Mat4::one_one() * 1000.0 + Mat4::IDENTITY * 1400.0; nq];
+        let (mut full, mut compact) = (FiniteStep::new(&m), FiniteStep::new(&m));
+        compact.set_compact(true);
+        full.prepare(&m, &u, &t, &a).unwrap();
+        compact.prepare(&m, &u, &t, &a).unwrap();
+        assert_eq!(full.ke, compact.ke, "the element tangents differ");
+        let v: Vec<Vec4> = (0..nq)
+            .map(|q| Vec4(std::array::from_fn(|i| field(4, 50.0, 3 * q + i)[i])))
+            .collect();
+        let (mut f0, mut f1) = (vec![0.0; nd], vec![0.0; nd]);
+        full.force(&m, &v, &mut f0);
+        compact.force(&m, &v, &mut f1);
+        let scale = f0.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+        assert!(scale > 0.0);
+        for (x, y) in f0.iter().zip(&f1) {
+            assert!((x - y).abs() <= 1e-14 * scale, "force {x} vs {y}");
+        }
+        let du = field(nd, 1e-3, 5);
+        let (mut e0, mut e1) = (vec![[0.0; 4]; nq], vec![[0.0; 4]; nq]);
+        full.strains(&m, &du, &mut e0);
+        compact.strains(&m, &du, &mut e1);
+        let scale = e0.iter().flatten().fold(0.0f64, |s, x| s.max(x.abs()));
+        assert!(scale > 0.0);
+        let mut differ = false;
+        for (x, y) in e0.iter().flatten().zip(e1.iter().flatten()) {
+            assert!((x - y).abs() <= 1e-14 * scale, "strain {x} vs {y}");
+            differ |= x != y;
+        }
+        // another order of the products: some bits differ, so both forms ran
+        assert!(differ || f0 != f1, "the compact form gave the same bits");
     }
 }

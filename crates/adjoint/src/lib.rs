@@ -174,6 +174,11 @@ pub struct Adjoint<'m> {
     /// Whether the last Gauss-point sensitivity pass read `dF_i/dc_k` from the force
     /// dofs' rows of the step's tangent ([`ParamStep::solve`]).
     reaction_rows: bool,
+    /// Whether a Gauss-point sensitivity pass that reads `dF_i/dc_k` from the tangent's
+    /// rows forms the compact finite-strain operators ([`Adjoint::set_compact_finite`]).
+    compact_finite: bool,
+    /// Whether the last sensitivity pass did.
+    compact_used: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -203,6 +208,8 @@ impl<'m> Adjoint<'m> {
             depth_ties: true,
             nodal_sens: false,
             reaction_rows: false,
+            compact_finite: true,
+            compact_used: false,
         })
     }
 
@@ -223,6 +230,22 @@ impl<'m> Adjoint<'m> {
     #[doc(hidden)]
     pub fn set_friction_depth_term(&mut self, on: bool) {
         self.depth_ties = on;
+    }
+
+    /// Whether a Gauss-point sensitivity pass under finite strain that reads `dF_i/dc_k`
+    /// from the tangent's rows forms per point the compact `G = P L(F)` (`true`, the
+    /// default: `finite.rs`) or `B_L` and `P` as the sweeps do (for comparisons and
+    /// measurements: the columns agree to round-off).
+    #[doc(hidden)]
+    pub fn set_compact_finite(&mut self, on: bool) {
+        self.compact_finite = on;
+    }
+
+    /// Whether the last sensitivity pass formed the compact finite-strain operators (for
+    /// tests and measurements).
+    #[doc(hidden)]
+    pub fn last_pass_compact_finite(&self) -> bool {
+        self.compact_used
     }
 
     /// Starts a reversed-time sweep: `mu = 0`, nothing kept from an earlier one.
@@ -641,6 +664,7 @@ impl<'m> Adjoint<'m> {
         // a law with one isotropic tangent under vertical contact: no Gauss-point pass
         self.nodal_sens = false;
         self.reaction_rows = false;
+        self.compact_used = false;
         if let Some(df_dc) = self.sensitivities_nodal(law, c, traj)? {
             self.nodal_sens = true;
             return Ok(Sensitivities {
@@ -650,18 +674,46 @@ impl<'m> Adjoint<'m> {
         }
         let s = law.compliance(c);
         let np = c.len();
-        let SensBuffers {
-            mut y,
-            mut r_field,
-            mut work,
-        } = self.sens_buffers(np);
+        let mut bufs = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
         // `dF_i/dc_k` from the force dofs' rows of the step's tangent where every one has
         // an equation (`set_fused(false)` keeps the Gauss-point pass: `pinned.rs`)
         let reactions = self.reactions_from_rows();
         self.reaction_rows = reactions;
+        // the compact finite-strain operators where the tangent's rows give `dF_i/dc_k`
+        // (`finite.rs`); every other pass keeps `B_L` and `P`
+        let compact = reactions && self.compact_finite;
+        if let Some(fs) = self.finite.as_mut() {
+            fs.set_compact(compact);
+        }
+        let done = self.sensitivity_steps(law, c, traj, (&s, reactions), &mut bufs, &mut df);
+        if let Some(fs) = self.finite.as_mut() {
+            fs.set_compact(false);
+        }
+        done?;
+        self.compact_used = compact && self.finite.is_some();
+        Ok(Sensitivities {
+            df_dc: df,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The steps of a Gauss-point sensitivity pass (`sensitivities_masked`): `s` the
+    /// compliance, `reactions` whether `dF_i/dc_k` come from the tangent's rows.
+    fn sensitivity_steps(
+        &mut self,
+        law: &dyn Law,
+        c: &[f64],
+        traj: &Trajectory,
+        (s, reactions): (&Mat4, bool),
+        bufs: &mut SensBuffers,
+        df: &mut [Vec<f64>],
+    ) -> Result<(), AdjointError> {
+        let model = self.model;
+        let np = c.len();
+        let SensBuffers { y, r_field, work } = bufs;
         let mut cons = Vec::new();
-        for i in 0..n {
+        for i in 0..traj.steps.len() {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, false)?;
@@ -671,7 +723,7 @@ impl<'m> Adjoint<'m> {
                 .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
             self.contact.prepare_sensitivities(rec, &f1.u, prev);
             let (sig0, sig1) = (&traj.fields[i].sigma, &f1.sigma);
-            residual_param_field(law, c, sig0, sig1, rec.dt, &mut r_field);
+            residual_param_field(law, c, sig0, sig1, rec.dt, r_field);
             if reactions {
                 nodal_sens::active_equations(model, rec, &mut cons);
             }
@@ -680,8 +732,8 @@ impl<'m> Adjoint<'m> {
                 tangents: &self.tangents,
                 contact: &self.contact,
                 finite: self.finite.as_ref(),
-                s: &s,
-                r_field: &r_field,
+                s,
+                r_field: r_field.as_slice(),
                 np,
                 rec,
                 border: None,
@@ -714,10 +766,7 @@ impl<'m> Adjoint<'m> {
                     .for_each(one);
             }
         }
-        Ok(Sensitivities {
-            df_dc: df,
-            seconds: start.elapsed().as_secs_f64(),
-        })
+        Ok(())
     }
 }
 
