@@ -5,7 +5,8 @@
 //! points, before and again after the fit: back to back), then the fit itself (the
 //! optimizer and its final identifiability summary, as `indentify identify` runs it,
 //! without the discretization check or the report), and prints the fit's wall time over
-//! the median forward run with the iterations, the forward, adjoint and sensitivity solves,
+//! the median forward run (also in CPU time, `/proc/self/stat`, which the machine's load
+//! moves less) with the iterations, the forward, adjoint and sensitivity solves,
 //! the rejected Levenberg-Marquardt trials (forward solves spent without progress), the
 //! forward runs' Newton iterations and factorizations, and the stop reason. The fit's
 //! forward runs are warm started from the accepted point's trajectory
