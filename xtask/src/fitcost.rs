@@ -5,7 +5,8 @@
 //! points, before and again after the fit: back to back), then the fit itself (the
 //! optimizer and its final identifiability summary, as `indentify identify` runs it,
 //! without the discretization check or the report), and prints the fit's wall time over
-//! the median forward run with the iterations, the forward, adjoint and sensitivity solves,
+//! the median forward run (also in CPU time, `/proc/self/stat`, which the machine's load
+//! moves less) with the iterations, the forward, adjoint and sensitivity solves,
 //! the rejected Levenberg-Marquardt trials (forward solves spent without progress), the
 //! forward runs' Newton iterations and factorizations, and the stop reason. The fit's
 //! forward runs are warm started from the accepted point's trajectory
@@ -30,7 +31,11 @@
 //! on the 2x coarser model, then the full-fidelity fit from its optimum); the fit's time
 //! then includes the coarse phase, and the coarse phase's iterations and solves are
 //! printed beside the fine ones (`--c2f-tight`: the coarse phase without the statistical
-//! stops, to its own gradient or relative-decrease stop). `--proposed-step` fits each case with the stop on the
+//! stops, to its own gradient or relative-decrease stop; `--c2f-space F` the coarse mesh F x
+//! coarser instead of 2x, 1 the fine mesh; `--c2f-keep-time` the fine time grid;
+//! `--c2f-correct K` K output corrections after the coarse fit, each a fine forward run at
+//! its end point and a coarse fit of the targets corrected by the discrepancy there).
+//! `--proposed-step` fits each case with the stop on the
 //! proposed step and, where it fired, without it, back to back, and prints every
 //! parameter's shift in standard deviations and both outcomes (`propstep.rs`; without
 //! `--only` the further Levenberg-Marquardt examples too; `--both` makes the run without
@@ -71,6 +76,42 @@ fn valley_option(valley: &mut Option<ValleyStop>, a: &str, v: &str) -> Result<()
 /// `proposed_step`), to its own gradient or relative-decrease stop.
 static C2F_TIGHT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
+/// `--c2f N` with `--c2f-space F`, `--c2f-keep-time` and `--c2f-correct K`: at most N
+/// coarse iterations on the model F x coarser in space (and 2x in time unless kept), then
+/// K output corrections (`coarse_to_fine::coarse_phase_corrected`).
+#[derive(Clone, Copy, Debug)]
+struct C2f {
+    iterations: usize,
+    how: indentify_study::coarse_to_fine::Coarsening,
+    corrections: usize,
+    /// `--c2f-fine-radius R`: the fine phase's `lm_radius` (0: off), else the
+    /// configuration's.
+    fine_radius: Option<f64>,
+}
+
+/// Sets the `--c2f*` option `a` (with its value `v` where it takes one).
+fn c2f_option(c2f: &mut Option<C2f>, a: &str, v: &mut dyn FnMut() -> String) -> Result<()> {
+    let c = c2f.get_or_insert(C2f {
+        iterations: 20,
+        how: Default::default(),
+        corrections: 0,
+        fine_radius: None,
+    });
+    match a {
+        "--c2f" => c.iterations = v().parse().context("--c2f: coarse iterations, >= 1")?,
+        "--c2f-space" => {
+            c.how.space = v().parse().context("--c2f-space: a factor in [1, 4]")?;
+        }
+        "--c2f-keep-time" => c.how.time = false,
+        "--c2f-fine-radius" => {
+            let r: f64 = v().parse().context("--c2f-fine-radius: a length >= 0")?;
+            c.fine_radius = Some(r);
+        }
+        _ => c.corrections = v().parse().context("--c2f-correct: corrections, >= 0")?,
+    }
+    Ok(())
+}
+
 /// The cases, in the order they run.
 const CASES: [&str; 6] = [
     "r1-map",
@@ -99,7 +140,7 @@ struct Opts {
     op: bool,
     lm: Option<LmStrategy>,
     stop_rejected: Option<bool>,
-    c2f: Option<usize>,
+    c2f: Option<C2f>,
     proposed: Option<bool>,
     pairs_mode: bool,
     both: bool,
@@ -123,7 +164,7 @@ fn parse(args: &[String]) -> Result<Opts> {
     let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut stop_rejected: Option<bool> = None;
-    let mut c2f: Option<usize> = None;
+    let mut c2f: Option<C2f> = None;
     let mut proposed: Option<bool> = None;
     let mut pairs_mode = false;
     let mut both = false;
@@ -161,7 +202,9 @@ fn parse(args: &[String]) -> Result<Opts> {
             "--proposed-step" => pairs_mode = true,
             "--both" => both = true,
             "--no-proposed-step" => proposed = Some(false),
-            "--c2f" => c2f = Some(val().parse().context("--c2f: coarse iterations, >= 1")?),
+            "--c2f" | "--c2f-space" | "--c2f-keep-time" | "--c2f-correct" | "--c2f-fine-radius" => {
+                c2f_option(&mut c2f, a, &mut val)?;
+            }
             "--c2f-tight" => C2F_TIGHT.store(true, std::sync::atomic::Ordering::Relaxed),
             other => bail!("unknown option {other}"),
         }
@@ -191,7 +234,8 @@ fn parse(args: &[String]) -> Result<Opts> {
 }
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
-/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
+/// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic]
+/// [--c2f N [--c2f-tight] [--c2f-space F] [--c2f-keep-time] [--c2f-correct K]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
 /// [--no-proposed-step] [--no-stop-rejected]`.
 pub fn run(args: &[String]) -> Result<()> {
@@ -294,9 +338,9 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     let mut results = Vec::new();
     println!(
-        "| case | forward (s) | fit (s) | fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | schedule steps run | runs stopped | steps skipped | stop |"
+        "| case | forward (s) | fit (s) | fit / forward | CPU fit / forward | iterations | forward solves | rejected trials | adjoint | sensitivity | Newton iterations | factorizations | schedule steps run | runs stopped | steps skipped | stop |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for case in cases {
         let m = measure(
             &root,
@@ -308,10 +352,11 @@ pub fn run(args: &[String]) -> Result<()> {
             c2f,
         )?;
         println!(
-            "| {case} | {:.3} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {case} | {:.3} | {:.2} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             m["forward_s"].as_f64().unwrap_or(f64::NAN),
             m["fit_s"].as_f64().unwrap_or(f64::NAN),
             m["ratio"].as_f64().unwrap_or(f64::NAN),
+            m["cpu_ratio"].as_f64().unwrap_or(f64::NAN),
             m["iterations"],
             m["forward_solves"],
             m["rejected_trials"],
@@ -381,28 +426,49 @@ fn options(root: &Path, case: &str) -> Result<IdentifyOptions> {
     Ok(o)
 }
 
+/// The process's CPU time (s, user + system, every thread), from `/proc/self/stat`
+/// (clock ticks of 10 ms); `NaN` where it cannot be read.
+fn cpu_seconds() -> f64 {
+    let Ok(text) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // the fields after the command name (which may hold spaces) in parentheses
+    let Some(rest) = text.rsplit_once(')').map(|(_, r)| r) else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of stat, 12 and 13 after the name
+    match (
+        f.get(11).and_then(|v| v.parse::<f64>().ok()),
+        f.get(12).and_then(|v| v.parse::<f64>().ok()),
+    ) {
+        (Some(u), Some(k)) => (u + k) / 100.0,
+        _ => f64::NAN,
+    }
+}
+
 /// Times `rounds` forward runs at new points near `start` (after a warm-up) on `problem`'s
-/// pool.
+/// pool: wall and CPU seconds of each.
 fn forward_times(
     problem: &indentify_identify::Problem,
     start: &[f64],
     rounds: usize,
     first: usize,
-) -> Result<Vec<f64>> {
+) -> Result<Vec<(f64, f64)>> {
     let point = |r: usize| -> Vec<f64> {
         start
             .iter()
             .map(|v| v * (1.0 + 1e-6 * (r as f64 + 1.0)))
             .collect()
     };
-    problem.install(|| -> Result<Vec<f64>> {
+    problem.install(|| -> Result<Vec<(f64, f64)>> {
         let mut ev = Evaluator::new(problem)?;
         ev.cost(&point(first + rounds))?;
         let mut t = Vec::with_capacity(rounds);
         for r in 0..rounds {
-            let clock = Instant::now();
+            let (clock, cpu) = (Instant::now(), cpu_seconds());
             ev.cost(&point(first + r))?;
-            t.push(clock.elapsed().as_secs_f64());
+            t.push((clock.elapsed().as_secs_f64(), cpu_seconds() - cpu));
         }
         Ok(t)
     })
@@ -426,7 +492,7 @@ fn measure(
     cold: bool,
     (chi2, valley, proposed): (bool, Option<ValleyStop>, Option<bool>),
     (lm, lm_stop): (Option<LmStrategy>, Option<bool>),
-    c2f: Option<usize>,
+    c2f: Option<C2f>,
 ) -> Result<Value> {
     let opts = options(root, case)?;
     let resolved = identify::resolve(&opts)?;
@@ -454,11 +520,15 @@ fn measure(
         .collect();
     let mut fwd = forward_times(&s.problem, &start, rounds, 0)?;
     s.problem.set_warm_start(!cold);
-    let clock = Instant::now();
+    let (clock, cpu) = (Instant::now(), cpu_seconds());
     let mut observer = |rec: &indentify_identify::IterationRecord| {
+        let at: Vec<String> = rec.params.iter().map(|v| format!("{v:.5e}")).collect();
         eprintln!(
-            "  {case}: iteration {} J = {:.6e} ({:.1} s)",
-            rec.iteration, rec.cost, rec.seconds
+            "  {case}: iteration {} J = {:.6e} ({:.1} s) at {}",
+            rec.iteration,
+            rec.cost,
+            rec.seconds,
+            at.join(" ")
         );
     };
     let mut coarse = None;
@@ -466,41 +536,17 @@ fn measure(
         None => s
             .problem
             .install(|| indentify_identify::identify(&s.problem, &s.id_cfg, &mut observer))?,
-        Some(n) => {
-            let (r, phase) = s.problem.install(|| {
-                if C2F_TIGHT.load(std::sync::atomic::Ordering::Relaxed) {
-                    use indentify_study::coarse_to_fine as c2f;
-                    let mut cc = s.id_cfg.clone();
-                    cc.stop.step_sigma = None;
-                    cc.stop.proposed_step = false;
-                    let (mut fine, phase) =
-                        c2f::coarse_phase(&s, c2f::coarse_problem(&s), &cc, n, &mut observer);
-                    fine.stop = s.id_cfg.stop;
-                    indentify_identify::identify(&s.problem, &fine, &mut observer)
-                        .map(|r| (r, phase))
-                        .map_err(anyhow::Error::from)
-                } else {
-                    indentify_study::coarse_to_fine::identify(&s, &s.id_cfg, n, &mut observer)
-                }
-            })?;
-            coarse = Some(json!({
-                "model": phase.model,
-                "fallback": phase.fallback,
-                "seconds": phase.seconds,
-                "iterations": phase.result.as_ref().map(|r| r.iterations),
-                "forward_solves": phase.result.as_ref().map(|r| r.forward_solves),
-                "sensitivity_solves": phase.result.as_ref().map(|r| r.sensitivity_solves),
-                "rejected_trials": phase.result.as_ref().map(|r| r.rejected_trials),
-                "stop": phase.result.as_ref().map(|r| r.stop_reason.to_string()),
-                "c": phase.result.as_ref().map(|r| r.c.clone()),
-            }));
+        Some(c) => {
+            let (r, phase) = s.problem.install(|| coarse_to_fine(&s, c, &mut observer))?;
+            coarse = Some(coarse_json(&phase));
             r
         }
     };
-    let fit = clock.elapsed().as_secs_f64();
+    let (fit, fit_cpu) = (clock.elapsed().as_secs_f64(), cpu_seconds() - cpu);
     s.problem.set_warm_start(false);
     fwd.extend(forward_times(&s.problem, &start, rounds, rounds + 1)?);
-    let forward = median(&mut fwd);
+    let forward = median(&mut fwd.iter().map(|t| t.0).collect::<Vec<f64>>());
+    let forward_cpu = median(&mut fwd.iter().map(|t| t.1).collect::<Vec<f64>>());
     let params: Vec<Value> = r
         .params
         .iter()
@@ -520,6 +566,9 @@ fn measure(
         "forward_s": forward,
         "fit_s": fit,
         "ratio": fit / forward,
+        "forward_cpu_s": forward_cpu,
+        "fit_cpu_s": fit_cpu,
+        "cpu_ratio": fit_cpu / forward_cpu,
         "iterations": r.iterations,
         "forward_solves": r.forward_solves,
         "adjoint_solves": r.adjoint_solves,
@@ -538,6 +587,62 @@ fn measure(
         "params": params,
         "coarse": coarse,
     }))
+}
+
+/// The fit of `s` coarse to fine as `c` asks (`--c2f-tight`: the coarse phase without the
+/// statistical stops), on the current pool.
+fn coarse_to_fine(
+    s: &identify::Setup,
+    c: C2f,
+    observer: &mut dyn FnMut(&indentify_identify::IterationRecord),
+) -> Result<(IdentifyResult, indentify_study::coarse_to_fine::CoarsePhase)> {
+    use indentify_study::coarse_to_fine as c2f;
+    let mut cc = s.id_cfg.clone();
+    if C2F_TIGHT.load(std::sync::atomic::Ordering::Relaxed) {
+        cc.stop.step_sigma = None;
+        cc.stop.proposed_step = false;
+    }
+    let (mut fine, phase) = c2f::coarse_phase_corrected(
+        s,
+        c2f::coarse_problem_with(s, c.how),
+        &cc,
+        (c.iterations, c.corrections),
+        observer,
+    );
+    fine.stop = s.id_cfg.stop;
+    if let Some(r) = c.fine_radius {
+        fine.stop.lm.first_radius = (r > 0.0).then_some(r);
+    }
+    let r = indentify_identify::identify(&s.problem, &fine, observer)?;
+    Ok((r, phase))
+}
+
+/// What `--json` keeps of a coarse phase.
+fn coarse_json(phase: &indentify_study::coarse_to_fine::CoarsePhase) -> Value {
+    let first = phase.result.as_ref();
+    let (it, fw, se, rej, fine) = phase.totals();
+    json!({
+        "model": phase.model,
+        "fallback": phase.fallback,
+        "seconds": phase.seconds,
+        "iterations": first.map(|r| r.iterations),
+        "forward_solves": first.map(|r| r.forward_solves),
+        "sensitivity_solves": first.map(|r| r.sensitivity_solves),
+        "rejected_trials": first.map(|r| r.rejected_trials),
+        "stop": first.map(|r| r.stop_reason.to_string()),
+        "c_first": first.map(|r| r.c.clone()),
+        "c": phase.end().map(|r| r.c.clone()),
+        "corrections": phase.corrections.iter().map(|c| json!({
+            "discrepancy": c.discrepancy,
+            "iterations": c.result.iterations,
+            "forward_solves": c.result.forward_solves,
+            "sensitivity_solves": c.result.sensitivity_solves,
+            "stop": c.result.stop_reason.to_string(),
+            "c": c.result.c,
+        })).collect::<Vec<_>>(),
+        "total": { "iterations": it, "forward_solves": fw, "sensitivity_solves": se,
+                   "rejected_trials": rej, "fine_forward_runs": fine },
+    })
 }
 
 /// Before (an earlier `--json`) against after: the ratios, then every parameter's shift

@@ -15,6 +15,17 @@
 //! The coarse problem compares with the fine problem's own targets (never data synthesized
 //! again on the coarse model), so its optimum is the coarse model's fit of the same data.
 //!
+//! [`Coarsening`] varies the factor in space (`1.5`: `ceil(nr / 1.5)` elements, gradings to
+//! the power 1.5; `1`: the fine mesh) and keeps the time grid if asked; the default (2 in
+//! space, time coarsened) is the rules above.
+//!
+//! Output correction (`corrections`, after the coarse fit; space mapping's zeroth-order
+//! correction): one fine forward run at the coarse optimum `x_c` gives the coarse model's
+//! discrepancy there, `d = F_fine(x_c) - F_coarse(x_c)` on the coarse model's rows; the
+//! coarse model fits the targets `y - d` from `x_c`, so that its optimum is the fine
+//! model's as far as `d` does not change between `x_c` and it. Each correction costs one
+//! fine forward run and one more coarse fit.
+//!
 //! The fine phase is the ordinary fit from the coarse optimum: what it reports (stop
 //! reason, deviations, the discretization check) is that of the full-fidelity model. A
 //! coarse phase that cannot be built or fails falls back to the full-fidelity fit from the
@@ -22,7 +33,9 @@
 
 use anyhow::{Context as _, Result, anyhow, bail};
 use indentify_contact::{Model, Schedule};
-use indentify_identify::{IdentifyConfig, IdentifyResult, IterationRecord, Problem, Test};
+use indentify_identify::{
+    Evaluator, IdentifyConfig, IdentifyResult, IterationRecord, Problem, Test,
+};
 
 use crate::config::Mesher;
 use crate::identify::Setup;
@@ -35,38 +48,84 @@ pub const MIN_CONTACT_ELEMENTS: usize = 4;
 /// The largest grading the meshers accept.
 const MAX_GRADING: f64 = 3.0;
 
+/// How much coarser the coarse model is: `space`, the factor on the element sizes
+/// (`2`: half the elements along each direction, the gradings squared; `1`: the fine
+/// mesh), and whether the time grid is coarsened 2x where the schedule allows it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coarsening {
+    /// The factor on the element sizes, in `[1, 4]`.
+    pub space: f64,
+    /// Whether the time grid is coarsened (the module's rules) or kept.
+    pub time: bool,
+}
+
+impl Default for Coarsening {
+    /// 2x in space and in time: the module's rules.
+    fn default() -> Self {
+        Coarsening {
+            space: 2.0,
+            time: true,
+        }
+    }
+}
+
 /// The mesher 2x coarser in each direction (see the module's rules), before the contact
 /// resolution check.
 ///
 /// # Errors
 /// A coarse mesher the mesh crate refuses (naming the field).
 pub fn coarsen_mesher(mesher: &Mesher) -> Result<Mesher> {
+    coarsen_mesher_by(mesher, 2.0)
+}
+
+/// The mesher `factor` times coarser in each direction (`ceil(n / factor)` elements, the
+/// gradings to the power `factor`, at most 3; an `Auto` core `floor(n / factor)`
+/// elements), before the contact resolution check.
+///
+/// # Errors
+/// A factor outside `[1, 4]`, a coarse mesher the mesh crate refuses (naming the field).
+pub fn coarsen_mesher_by(mesher: &Mesher, factor: f64) -> Result<Mesher> {
+    if !(1.0..=4.0).contains(&factor) {
+        bail!("the coarse mesh's factor {factor} is outside [1, 4]");
+    }
+    // 2: the integer halving and the squares of the first version, bit for bit
+    let count = |n: usize| {
+        if factor == 2.0 {
+            n.div_ceil(2)
+        } else {
+            ((n as f64 / factor).ceil() as usize).max(1)
+        }
+    };
+    let grade = |g: f64| {
+        let c = if factor == 2.0 { g * g } else { g.powf(factor) };
+        c.min(MAX_GRADING)
+    };
     let coarse = match *mesher {
         Mesher::Cylinder(mut m) => {
-            m.nr = m.nr.div_ceil(2);
-            m.nz = m.nz.div_ceil(2);
-            m.grading_r = (m.grading_r * m.grading_r).min(MAX_GRADING);
-            m.grading_z = (m.grading_z * m.grading_z).min(MAX_GRADING);
+            m.nr = count(m.nr);
+            m.nz = count(m.nz);
+            m.grading_r = grade(m.grading_r);
+            m.grading_z = grade(m.grading_z);
             m.validate()
-                .context("the mesh cannot be coarsened 2x for the coarse phase")?;
+                .context("the mesh cannot be coarsened for the coarse phase")?;
             Mesher::Cylinder(m)
         }
         Mesher::Zoned(mut m) => {
-            if m.core_elements / 2 < MIN_CONTACT_ELEMENTS {
+            let core = (m.core_elements as f64 / factor).floor() as usize;
+            if core < MIN_CONTACT_ELEMENTS {
                 bail!(
-                    "specimen.elements_in_contact = {}: a 2x coarser mesh would have {} \
-                     elements under the contact radius, below the contact resolution of {} \
-                     (coarse to fine needs specimen.elements_in_contact >= {})",
+                    "specimen.elements_in_contact = {}: a {factor}x coarser mesh would have \
+                     {core} elements under the contact radius, below the contact resolution \
+                     of {} (coarse to fine needs specimen.elements_in_contact >= {})",
                     m.core_elements,
-                    m.core_elements / 2,
                     MIN_CONTACT_ELEMENTS,
-                    2 * MIN_CONTACT_ELEMENTS
+                    (factor * MIN_CONTACT_ELEMENTS as f64).ceil()
                 );
             }
-            m.core_elements /= 2;
-            m.grading = (m.grading * m.grading).min(MAX_GRADING);
+            m.core_elements = core;
+            m.grading = grade(m.grading);
             m.validate()
-                .context("the mesh cannot be coarsened 2x for the coarse phase")?;
+                .context("the mesh cannot be coarsened for the coarse phase")?;
             Mesher::Zoned(m)
         }
     };
@@ -132,6 +191,14 @@ fn coarsen_schedule(
 /// A load-controlled test, a coarse mesh below the contact resolution (naming the field),
 /// a coarse model or schedule that cannot be built.
 pub fn coarse_problem(s: &Setup) -> Result<(Problem, String)> {
+    coarse_problem_with(s, Coarsening::default())
+}
+
+/// The coarse problem of a set-up fit, `how` coarser, and its description.
+///
+/// # Errors
+/// As [`coarse_problem`]; a space factor outside `[1, 4]`.
+pub fn coarse_problem_with(s: &Setup, how: Coarsening) -> Result<(Problem, String)> {
     let mut tests = Vec::with_capacity(s.problem.tests.len());
     let mut texts = Vec::new();
     for (test, info) in s.problem.tests.iter().zip(&s.tests) {
@@ -141,7 +208,8 @@ pub fn coarse_problem(s: &Setup) -> Result<(Problem, String)> {
                 info.label
             );
         }
-        let mesher = coarsen_mesher(&info.mesher).with_context(|| info.label.clone())?;
+        let mesher =
+            coarsen_mesher_by(&info.mesher, how.space).with_context(|| info.label.clone())?;
         let (mesh, _, _) = mesher
             .build_for(&test.model.punch)
             .context("cannot build the coarse mesh")?;
@@ -150,24 +218,28 @@ pub fn coarse_problem(s: &Setup) -> Result<(Problem, String)> {
         let under = elements_under(&mesh, a);
         if under < MIN_CONTACT_ELEMENTS {
             bail!(
-                "{}: specimen (nr, elements_in_contact): the 2x coarser mesh has {under} \
+                "{}: specimen (nr, elements_in_contact): the {}x coarser mesh has {under} \
                  elements under the contact radius bound {a:.3e} mm, below the contact \
                  resolution of {MIN_CONTACT_ELEMENTS}",
-                info.label
+                info.label,
+                how.space
             );
         }
         let model = Model::with_contact(mesh, test.model.punch.clone(), info.config.contact)
             .and_then(|m| m.with_kinematics(info.config.kinematics))
             .context("cannot build the coarse model")?;
-        let (schedule, rows, time) =
-            match coarsen_schedule(&test.schedule, info.config.history.as_ref())? {
-                Some((sc, rows, text)) => (sc, rows, text),
-                None => (
-                    test.schedule.clone(),
-                    (0..test.schedule.t.len()).collect(),
-                    "time steps kept".to_string(),
-                ),
-            };
+        let coarser = match how.time {
+            true => coarsen_schedule(&test.schedule, info.config.history.as_ref())?,
+            false => None,
+        };
+        let (schedule, rows, time) = match coarser {
+            Some((sc, rows, text)) => (sc, rows, text),
+            None => (
+                test.schedule.clone(),
+                (0..test.schedule.t.len()).collect(),
+                "time steps kept".to_string(),
+            ),
+        };
         let factor = test.schedule.t.len() as f64 / rows.len() as f64;
         texts.push(format!(
             "{} ({under} under the contact), {time}",
@@ -199,15 +271,55 @@ pub fn coarse_problem(s: &Setup) -> Result<(Problem, String)> {
 pub struct CoarsePhase {
     /// The coarse model, described (`None`: none was built).
     pub model: Option<String>,
-    /// The coarse fit (`None`: it could not be built or failed).
+    /// The coarse fit (`None`: it could not be built or failed); with corrections, the
+    /// first one, from the configuration's start.
     pub result: Option<IdentifyResult>,
+    /// The output corrections that followed it, in order (the last one's end point is
+    /// the fine phase's start).
+    pub corrections: Vec<Correction>,
     /// Why the fit fell back to full fidelity from the configuration's start, if it did.
     pub fallback: Option<String>,
     /// Wall time of the coarse phase (s), set-up included.
     pub seconds: f64,
 }
 
+/// One output correction of the coarse phase: a fine forward run at the last coarse end
+/// point, then the coarse fit of the corrected targets from there.
+#[derive(Clone, Debug)]
+pub struct Correction {
+    /// The discrepancy `F_fine - F_coarse` at the last coarse end point, RMS over the
+    /// coarse rows with weight, over the RMS of the targets.
+    pub discrepancy: f64,
+    /// The corrected coarse fit.
+    pub result: IdentifyResult,
+}
+
 impl CoarsePhase {
+    /// The coarse phase's end point: the last correction's, else the coarse fit's.
+    pub fn end(&self) -> Option<&IdentifyResult> {
+        match self.corrections.last() {
+            Some(c) => Some(&c.result),
+            None => self.result.as_ref(),
+        }
+    }
+
+    /// The coarse phase's totals over its fits: iterations, coarse forward solves, coarse
+    /// sensitivity solves, rejected trials; and the fine forward runs of its corrections.
+    pub fn totals(&self) -> (usize, usize, usize, usize, usize) {
+        let fits = self
+            .result
+            .iter()
+            .chain(self.corrections.iter().map(|c| &c.result));
+        let mut t = (0, 0, 0, 0, self.corrections.len());
+        for r in fits {
+            t.0 += r.iterations;
+            t.1 += r.forward_solves;
+            t.2 += r.sensitivity_solves;
+            t.3 += r.rejected_trials;
+        }
+        t
+    }
+
     /// What the report says: the coarse phase's counts, stop and end point, or why the fit
     /// ran at full fidelity from the configuration's start.
     pub fn summary(&self) -> String {
@@ -218,18 +330,37 @@ impl CoarsePhase {
                  the configuration's start (coarse model: {model})."
             ),
             (Some(r), None) => {
-                let at: Vec<String> = r
+                let end = self.end().unwrap_or(r);
+                let at: Vec<String> = end
                     .params
                     .iter()
                     .filter(|p| p.free)
                     .map(|p| format!("{} = {:.6e}", p.name, p.value))
                     .collect();
+                let corrected = if self.corrections.is_empty() {
+                    String::new()
+                } else {
+                    let d: Vec<String> = self
+                        .corrections
+                        .iter()
+                        .map(|c| format!("{:.2e}", c.discrepancy))
+                        .collect();
+                    let (it, fw, se, _, _) = self.totals();
+                    format!(
+                        ", then {} output correction(s) (a full-fidelity forward run each, \
+                         relative discrepancy {}, and the coarse fit of the corrected \
+                         targets; {it} coarse iterations, {fw} forward and {se} sensitivity \
+                         solves in all)",
+                        self.corrections.len(),
+                        d.join(", ")
+                    )
+                };
                 format!(
                     "The fit ran coarse to fine: {} iterations ({} forward and {} sensitivity \
-                     solves, {:.1} s; stop: {}) on the 2x coarser model ({model}) from the \
-                     configuration's start, ending at {}; then the full-fidelity fit from \
-                     there, whose iterations, stop, deviations and discretization check are \
-                     the ones reported.",
+                     solves, {:.1} s; stop: {}) on the coarser model ({model}) from the \
+                     configuration's start{corrected}, ending at {}; then the full-fidelity \
+                     fit from there, whose iterations, stop, deviations and discretization \
+                     check are the ones reported.",
                     r.iterations,
                     r.forward_solves,
                     r.sensitivity_solves,
@@ -255,17 +386,32 @@ pub fn coarse_phase(
     coarse_iterations: usize,
     observer: &mut dyn FnMut(&IterationRecord),
 ) -> (IdentifyConfig, CoarsePhase) {
+    coarse_phase_corrected(s, coarse, config, (coarse_iterations, 0), observer)
+}
+
+/// [`coarse_phase`] followed by `corrections` output corrections (the module's text):
+/// each a fine forward run at the last coarse end point and a coarse fit (at most
+/// `coarse_iterations` iterations) of the corrected targets from there. A correction that
+/// fails ends the corrections; the phase keeps the last end point reached.
+pub fn coarse_phase_corrected(
+    s: &Setup,
+    coarse: Result<(Problem, String)>,
+    config: &IdentifyConfig,
+    (coarse_iterations, corrections): (usize, usize),
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> (IdentifyConfig, CoarsePhase) {
     let clock = std::time::Instant::now();
     let mut phase = CoarsePhase {
         model: None,
         result: None,
+        corrections: Vec::new(),
         fallback: None,
         seconds: 0.0,
     };
     let mut fine_cfg = config.clone();
     match coarse {
         Err(e) => phase.fallback = Some(format!("no coarse model: {e:#}")),
-        Ok((coarse, text)) => {
+        Ok((mut coarse, text)) => {
             phase.model = Some(text);
             let mut cc = config.clone();
             cc.stop.max_iterations = coarse_iterations;
@@ -277,19 +423,103 @@ pub fn coarse_phase(
                     phase.fallback = Some("the coarse phase ended at a non-finite point".into());
                 }
                 Ok(r) => {
-                    let names = s.problem.law.params();
-                    for p in fine_cfg.params.iter_mut().filter(|p| p.free) {
-                        if let Some(k) = names.iter().position(|n| n.name == p.name) {
-                            p.value = Some(r.c[k]);
+                    let targets = coarse.target.clone();
+                    let mut end = r.clone();
+                    phase.result = Some(r);
+                    for _ in 0..corrections {
+                        match correct(s, &mut coarse, &targets, &cc, &end, observer) {
+                            Ok(c) => {
+                                end = c.result.clone();
+                                phase.corrections.push(c);
+                            }
+                            Err(e) => {
+                                tracing::info!("  coarse to fine: a correction failed: {e:#}");
+                                break;
+                            }
                         }
                     }
-                    phase.result = Some(r);
+                    set_start(s, &mut fine_cfg, &end.c);
                 }
             }
         }
     }
     phase.seconds = clock.elapsed().as_secs_f64();
     (fine_cfg, phase)
+}
+
+/// Moves the free parameters' starts of `cfg` to `c` (the law's parameters in order).
+fn set_start(s: &Setup, cfg: &mut IdentifyConfig, c: &[f64]) {
+    let names = s.problem.law.params();
+    for p in cfg.params.iter_mut().filter(|p| p.free) {
+        if let Some(k) = names.iter().position(|n| n.name == p.name) {
+            p.value = Some(c[k]);
+        }
+    }
+}
+
+/// The coarse rows' fine rows, test by test: the fine row of the same time (the coarse
+/// schedules keep a subset of the fine times, bit for bit).
+fn fine_rows(fine: &Problem, coarse: &Problem) -> Result<Vec<usize>> {
+    let mut rows = Vec::with_capacity(coarse.target.len());
+    for (k, (f, c)) in fine.tests.iter().zip(&coarse.tests).enumerate() {
+        let base = fine.rows_of(k).start;
+        let mut j = 0;
+        for t in &c.schedule.t {
+            while j < f.schedule.t.len() && f.schedule.t[j] != *t {
+                j += 1;
+            }
+            if j == f.schedule.t.len() {
+                bail!("the coarse time {t} s of test {k} is not a fine time");
+            }
+            rows.push(base + j);
+        }
+    }
+    Ok(rows)
+}
+
+/// One output correction from the coarse fit `last`: the fine forces at its end point,
+/// the coarse targets `targets - (F_fine - F_coarse)`, the coarse fit from there.
+fn correct(
+    s: &Setup,
+    coarse: &mut Problem,
+    targets: &[f64],
+    cc: &IdentifyConfig,
+    last: &IdentifyResult,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<Correction> {
+    let rows = fine_rows(&s.problem, coarse)?;
+    let fine = Evaluator::new(&s.problem)?.forces(&last.c)?;
+    if fine.len() != s.problem.target.len() || last.forces.len() != targets.len() {
+        bail!("the forces at the coarse end point do not match the targets");
+    }
+    let (mut dd, mut yy) = (0.0, 0.0);
+    let corrected: Vec<f64> = (0..targets.len())
+        .map(|i| {
+            let d = fine[rows[i]] - last.forces[i];
+            let w = coarse.weights[i];
+            dd += w * d * d;
+            yy += w * targets[i] * targets[i];
+            targets[i] - d
+        })
+        .collect();
+    if !corrected.iter().all(|v| v.is_finite()) {
+        bail!("the fine forward run at the coarse end point failed");
+    }
+    for k in 0..coarse.tests.len() {
+        let r = coarse.rows_of(k);
+        coarse.tests[k].target = corrected[r].to_vec();
+    }
+    coarse.target = corrected;
+    let mut cfg = cc.clone();
+    set_start(s, &mut cfg, &last.c);
+    let result = indentify_identify::identify(coarse, &cfg, observer)?;
+    if !result.c.iter().all(|v| v.is_finite()) {
+        bail!("the corrected coarse fit ended at a non-finite point");
+    }
+    Ok(Correction {
+        discrepancy: (dd / yy.max(f64::MIN_POSITIVE)).sqrt(),
+        result,
+    })
 }
 
 /// Runs the coarse phase ([`coarse_phase`]), then the full-fidelity fit from its optimum
@@ -306,7 +536,32 @@ pub fn identify(
     coarse_iterations: usize,
     observer: &mut dyn FnMut(&IterationRecord),
 ) -> Result<(IdentifyResult, CoarsePhase)> {
-    let (fine_cfg, phase) = coarse_phase(s, coarse_problem(s), config, coarse_iterations, observer);
+    identify_with(
+        s,
+        config,
+        (Coarsening::default(), coarse_iterations, 0),
+        observer,
+    )
+}
+
+/// [`identify`] with the coarse model `how` coarser and `corrections` output corrections
+/// after the coarse fit ([`coarse_phase_corrected`]).
+///
+/// # Errors
+/// The full-fidelity fit's errors.
+pub fn identify_with(
+    s: &Setup,
+    config: &IdentifyConfig,
+    (how, coarse_iterations, corrections): (Coarsening, usize, usize),
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<(IdentifyResult, CoarsePhase)> {
+    let (fine_cfg, phase) = coarse_phase_corrected(
+        s,
+        coarse_problem_with(s, how),
+        config,
+        (coarse_iterations, corrections),
+        observer,
+    );
     let fine = indentify_identify::identify(&s.problem, &fine_cfg, observer)?;
     Ok((fine, phase))
 }
@@ -340,6 +595,49 @@ mod tests {
         };
         assert_eq!(f.nr, 20);
         assert!((f.grading_r - 1.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_coarsening_factor_scales_the_counts_and_powers_the_gradings() {
+        let m = Mesher::Cylinder(CylinderMesher {
+            radius: 10.0,
+            height: 10.0,
+            nr: 20,
+            nz: 21,
+            grading_r: 1.3,
+            grading_z: 1.9,
+        });
+        let Mesher::Cylinder(c) = coarsen_mesher_by(&m, 1.5).expect("coarse") else {
+            panic!("a cylinder")
+        };
+        // ceil(20 / 1.5) = 14, ceil(21 / 1.5) = 14; 1.3^1.5 = 1.48223..., 1.9^1.5 > 2.6
+        assert_eq!((c.nr, c.nz), (14, 14));
+        assert!((c.grading_r - 1.482_228_05).abs() < 1e-8, "{}", c.grading_r);
+        assert!((c.grading_z - 2.618_969_26).abs() < 1e-8, "{}", c.grading_z);
+        // 1: the fine mesh itself
+        assert_eq!(coarsen_mesher_by(&m, 1.0).expect("same"), m);
+        // 2: the rules of coarsen_mesher
+        assert_eq!(
+            coarsen_mesher_by(&m, 2.0).expect("2x"),
+            coarsen_mesher(&m).expect("2x")
+        );
+        for bad in [0.5, 4.5, f64::NAN] {
+            let e = coarsen_mesher_by(&m, bad).expect_err("refused");
+            assert!(format!("{e:#}").contains("outside [1, 4]"), "{e:#}");
+        }
+        let zoned = Mesher::Zoned(ZonedCylinderMesher {
+            radius: 1.0,
+            height: 1.0,
+            core: 0.1,
+            core_elements: 12,
+            grading: 1.5,
+        });
+        let Mesher::Zoned(z) = coarsen_mesher_by(&zoned, 1.5).expect("12 -> 8") else {
+            panic!("zoned")
+        };
+        assert_eq!(z.core_elements, 8);
+        let e = coarsen_mesher_by(&zoned, 3.5).expect_err("12 -> 3 is below 4");
+        assert!(format!("{e:#}").contains("contact resolution"), "{e:#}");
     }
 
     #[test]

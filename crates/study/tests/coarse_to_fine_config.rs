@@ -150,3 +150,103 @@ fn a_coarse_phase_that_fails_falls_back_to_the_configured_start_and_says_so() {
     );
     std::fs::remove_dir_all(path.parent().unwrap()).ok();
 }
+
+/// The set-up noisy R1 fit of `path` (as `fit` runs it), on one thread.
+fn setup(path: &std::path::Path) -> identify::Setup {
+    let mut o = IdentifyOptions::new(ConfigSource::Path(path.to_path_buf()));
+    o.overrides.method = Some(MethodName::Lm);
+    o.noise = Some((0.02, 3));
+    o.jobs = Some(1);
+    identify::setup(
+        identify::resolve(&o).unwrap_or_else(|e| panic!("{:?}", e.messages())),
+        &o,
+    )
+    .unwrap_or_else(|e| panic!("{:?}", e.messages()))
+}
+
+#[test]
+fn an_output_correction_makes_the_coarse_model_reproduce_the_fine_forces_at_its_start() {
+    use indentify_identify::Evaluator;
+    use indentify_study::coarse_to_fine::{self as c2f, Coarsening};
+    let path = config_with("coarse_to_fine: None,", "corrected");
+    let s = setup(&path);
+    let (_, phase) = s.problem.install(|| {
+        c2f::coarse_phase_corrected(
+            &s,
+            c2f::coarse_problem_with(&s, Coarsening::default()),
+            &s.id_cfg,
+            (20, 1),
+            &mut |_| {},
+        )
+    });
+    assert!(phase.fallback.is_none(), "{:?}", phase.fallback);
+    let first = phase.result.as_ref().expect("the coarse fit");
+    assert_eq!(phase.corrections.len(), 1, "one correction ran");
+    let corrected = &phase.corrections[0].result;
+    // the corrected coarse fit starts at the coarse end point, where its model is the fine
+    // model on the coarse rows: its cost there is the fine forces' misfit on those rows,
+    // with the coarse weights (every second time, twice the weight)
+    let fine = s
+        .problem
+        .install(|| Evaluator::new(&s.problem)?.forces(&first.c))
+        .expect("fine forces");
+    let (coarse, _) = c2f::coarse_problem(&s).expect("coarse problem");
+    assert_eq!(2 * (coarse.target.len() - 1), s.problem.target.len() - 1);
+    let j: f64 = (0..coarse.target.len())
+        .map(|i| {
+            let r = fine[2 * i] - s.problem.target[2 * i];
+            0.5 * coarse.weights[i] * r * r
+        })
+        .sum();
+    let rel = (corrected.initial_cost - j).abs() / j;
+    println!(
+        "corrected start cost {:.9e}, fine misfit on the coarse rows {j:.9e} ({rel:.1e}); \
+         discrepancy {:.3e}; coarse end {:?}, corrected end {:?}",
+        corrected.initial_cost, phase.corrections[0].discrepancy, first.c, corrected.c
+    );
+    assert!(rel < 1e-6, "{rel}");
+    // and the uncorrected coarse model's cost there is not: the correction did something
+    let rel0 = (first.cost - j).abs() / j;
+    assert!(rel0 > 1e-3, "{rel0}");
+    let d = phase.corrections[0].discrepancy;
+    assert!(d > 0.0 && d < 0.5, "relative discrepancy {d}");
+    let (it, fw, se, _, fine_runs) = phase.totals();
+    assert_eq!(fine_runs, 1);
+    assert_eq!(it, first.iterations + corrected.iterations);
+    assert_eq!(fw, first.forward_solves + corrected.forward_solves);
+    assert_eq!(se, first.sensitivity_solves + corrected.sensitivity_solves);
+    assert_eq!(phase.end().map(|r| &r.c), Some(&corrected.c));
+    let summary = phase.summary();
+    assert!(summary.contains("1 output correction"), "{summary}");
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+}
+
+#[test]
+fn the_discrepancy_of_a_coarse_model_that_is_the_fine_one_is_zero() {
+    use indentify_study::coarse_to_fine::{self as c2f, Coarsening};
+    let path = config_with("coarse_to_fine: None,", "same");
+    let s = setup(&path);
+    let same = Coarsening {
+        space: 1.0,
+        time: false,
+    };
+    let (_, phase) = s.problem.install(|| {
+        c2f::coarse_phase_corrected(
+            &s,
+            c2f::coarse_problem_with(&s, same),
+            &s.id_cfg,
+            (3, 1),
+            &mut |_| {},
+        )
+    });
+    assert!(phase.fallback.is_none(), "{:?}", phase.fallback);
+    let model = phase.model.as_deref().unwrap_or("");
+    assert!(model.contains("20 x 20"), "{model}");
+    assert!(model.contains("time steps kept"), "{model}");
+    assert_eq!(phase.corrections.len(), 1);
+    // the same model at the same point: the forces agree to the Newton tolerance
+    let d = phase.corrections[0].discrepancy;
+    println!("relative discrepancy {d:.3e}");
+    assert!(d < 1e-8, "relative discrepancy {d}");
+    std::fs::remove_dir_all(path.parent().unwrap()).ok();
+}
