@@ -586,8 +586,11 @@ impl<'m> DirectSolver<'m> {
 
     /// Replays the run from `checkpoint` up to schedule index `j_end`, recording fields:
     /// the returned trajectory's `fields[0]` is the checkpoint's state and its steps are
-    /// those of the original run from `checkpoint.steps_done` on (the computation is
-    /// deterministic, so they are the same steps).
+    /// those of the original run from `checkpoint.steps_done` on, bit for bit: the
+    /// computation is deterministic, and the replay forgets the preconditioner's factor
+    /// and what else the Newton driver carries across steps at the run's checkpoints, as
+    /// the run did (also at those it crosses), so the steps read the checkpoint's state
+    /// alone.
     ///
     /// # Errors
     /// As [`DirectSolver::run`]; also [`ContactError::Input`] if `j_end` is before the

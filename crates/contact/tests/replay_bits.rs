@@ -5,8 +5,8 @@
 //! frame (docs/solver.md, "The inexact solves and when their factor is refreshed").
 
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Kinematics, LoadHistory, Model, Punch, Schedule,
-    Segment, SegmentSpec, SolverOptions, Trajectory,
+    ContactKind, DirectSolver, Frame, Kinematics, LoadHistory, Model, Punch, Schedule, Segment,
+    SegmentSpec, SolverOptions, Trajectory,
 };
 use indentify_laws::{LawMaterial, NortonHoff};
 use indentify_mesh::CylinderMesher;
