@@ -250,6 +250,10 @@ pub struct Checkpoint {
     pub schedule_index: usize,
     /// Number of trajectory steps (sub-steps included) before this state.
     pub steps_done: usize,
+    /// The checkpointed run's cadence ([`SolverOptions::checkpoint_every`]): the run
+    /// forgot what its Newton driver carries across steps at every checkpoint, and a
+    /// replay forgets it at the same schedule indices (it also crosses the later ones).
+    every: usize,
     state: State,
 }
 
@@ -401,6 +405,7 @@ impl<'m> DirectSolver<'m> {
             j1: schedule.t.len() - 1,
             record: opts.record_fields,
             every: opts.checkpoint_every,
+            checkpoints: true,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -453,6 +458,7 @@ impl<'m> DirectSolver<'m> {
             j1: schedule.t.len() - 1,
             record: true,
             every: 0,
+            checkpoints: false,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -499,6 +505,7 @@ impl<'m> DirectSolver<'m> {
             j1: schedule.t.len() - 1,
             record: opts.record_fields,
             every: opts.checkpoint_every,
+            checkpoints: true,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -547,6 +554,7 @@ impl<'m> DirectSolver<'m> {
             j1: schedule.t.len() - 1,
             record: opts.record_fields,
             every: opts.checkpoint_every,
+            checkpoints: true,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -578,8 +586,11 @@ impl<'m> DirectSolver<'m> {
 
     /// Replays the run from `checkpoint` up to schedule index `j_end`, recording fields:
     /// the returned trajectory's `fields[0]` is the checkpoint's state and its steps are
-    /// those of the original run from `checkpoint.steps_done` on (the computation is
-    /// deterministic, so they are the same steps).
+    /// those of the original run from `checkpoint.steps_done` on, bit for bit: the
+    /// computation is deterministic, and the replay forgets the preconditioner's factor
+    /// and what else the Newton driver carries across steps at the run's checkpoints, as
+    /// the run did (also at those it crosses), so the steps read the checkpoint's state
+    /// alone.
     ///
     /// # Errors
     /// As [`DirectSolver::run`]; also [`ContactError::Input`] if `j_end` is before the
@@ -659,7 +670,8 @@ impl<'m> DirectSolver<'m> {
             j0: checkpoint.schedule_index,
             j1: j_end,
             record: true,
-            every: 0,
+            every: checkpoint.every,
+            checkpoints: false,
         };
         self.advance(&run, state, &stretch, &mut traj)?;
         Ok(traj)
@@ -681,6 +693,7 @@ impl<'m> DirectSolver<'m> {
             j1,
             record,
             every,
+            checkpoints,
         } = *stretch;
         let (schedule, opts) = (run.schedule, run.opts);
         let start = std::time::Instant::now();
@@ -697,15 +710,19 @@ impl<'m> DirectSolver<'m> {
         for j in j0 + 1..=j1 {
             if j == j0 + 1 || (every > 0 && (j - 1 - j0) % every == 0) {
                 // a run, and every stretch a replay may start from, begins with a fresh
-                // factorization: the replay then repeats its steps bit for bit
+                // factorization, in the run and in a replay that crosses the stretch's
+                // start alike: the replay then repeats its steps bit for bit
                 self.newton.forget_carried();
             }
             if every > 0 && (j - 1 - j0) % every == 0 {
-                traj.checkpoints.push(Checkpoint {
-                    schedule_index: j - 1,
-                    steps_done: traj.steps.len(),
-                    state: state.clone(),
-                });
+                if checkpoints {
+                    traj.checkpoints.push(Checkpoint {
+                        schedule_index: j - 1,
+                        steps_done: traj.steps.len(),
+                        every,
+                        state: state.clone(),
+                    });
+                }
             }
             // targets still to reach, last first (the step's sub-steps, then t[j]); a failed
             // step pushes an intermediate time
@@ -857,14 +874,16 @@ struct Run<'a> {
 }
 
 /// The stretch of the schedule one call of [`DirectSolver::advance`] covers: from
-/// schedule index `j0` to `j1`, recording fields when `record`, a checkpoint every `every`
-/// schedule steps (0: none).
+/// schedule index `j0` to `j1`, recording fields when `record`; every `every` schedule
+/// steps (0: never) the Newton driver forgets what it carries across steps, and saves a
+/// checkpoint there when `checkpoints` (a replay forgets where the run saved one).
 #[derive(Clone, Copy)]
 struct Stretch {
     j0: usize,
     j1: usize,
     record: bool,
     every: usize,
+    checkpoints: bool,
 }
 
 /// The displacements before and after the step of `guess` from `t0` to `t1` (the same

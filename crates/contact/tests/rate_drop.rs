@@ -288,10 +288,13 @@ fn reference_pdotp_steps_stay_near_the_depth_controlled_ones() {
 ///   CG iterations against the depth-controlled run's 19 and 218 (before: 25 and 335,
 ///   the bounds below failing).
 /// - That column is carried like the preconditioner and forgotten with it: a run repeats
-///   its bits after another run on the same solver, and a replay from a checkpoint
-///   repeats the checkpointed run's steps (to round-off, as before). Guards only: they
-///   pass without the reset too, since the first solve after a forgotten factor
-///   factorizes and a direct solve does not read the carried column.
+///   its bits after another run on the same solver, and the replay from every
+///   checkpoint to the end repeats the checkpointed run's steps bit for bit (depth,
+///   force, iterations). The repeat passes without the column's reset too (the first
+///   solve after a forgotten factor factorizes and a direct solve does not read the
+///   column); the replays fail when a replay does not forget the carried factor and
+///   column at the run's later checkpoints as the run did (up to 3.6e-13 of the largest
+///   depth, `tests/replay_bits.rs`).
 #[test]
 fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
     let m = Model::with_contact(
@@ -363,9 +366,10 @@ fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
             .collect::<Vec<_>>()
     };
     assert_eq!(bits(&again), bits(&by_force), "a run repeats itself");
-    // checkpoints every 4 steps; the replays from the second and third repeat the
-    // checkpointed run's steps (to round-off: on the commit before the carried column
-    // they did not repeat its bits either, 1e-12 relative)
+    // checkpoints every 4 steps; the replay from every checkpoint to the end repeats the
+    // checkpointed run's steps bit for bit, iteration counts included (before the replay
+    // forgot the carried factor at the run's later checkpoints too, the replays from the
+    // second and third differed by up to 3.6e-13 of the largest depth)
     let every = SolverOptions {
         checkpoint_every: 4,
         ..opts()
@@ -377,25 +381,15 @@ fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
         cp.checkpoints.len()
     );
     let j_end = history.schedule.t.len() - 1;
-    let h_max = cp.steps.iter().map(|s| s.depth).fold(0.0, f64::max);
-    for c in &cp.checkpoints[1..3] {
+    for c in &cp.checkpoints {
         let replay = solver
             .replay_history(&mat, &R2, &history, &every, c, j_end)
             .unwrap();
         assert_eq!(replay.steps.len(), cp.steps.len() - c.steps_done);
-        let worst = replay
-            .steps
-            .iter()
-            .zip(&cp.steps[c.steps_done..])
-            .map(|(a, b)| (a.depth - b.depth).abs() / h_max)
-            .fold(0.0, f64::max);
-        println!(
-            "replay from {}: max |dh| / h_max = {worst:e}",
-            c.schedule_index
-        );
-        assert!(
-            worst < 1e-10,
-            "the replay from {}: {worst:e}",
+        assert_eq!(
+            bits(&replay),
+            bits(&cp)[c.steps_done..],
+            "the replay from {}",
             c.schedule_index
         );
     }
