@@ -138,6 +138,18 @@ pub fn weights(n: usize) -> Vec<f64> {
     (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
 }
 
+/// The workspace's root folder (absolute: the parent of `crates`).
+///
+/// # Panics
+/// Never: this crate's folder is `crates/testkit` below the root.
+pub fn workspace_root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .and_then(|p| p.parent())
+        .unwrap()
+        .to_path_buf()
+}
+
 /// The bits of every value, for comparisons that must hold bit for bit (with NaN equal to
 /// itself and -0 apart from +0).
 pub fn bits(v: &[f64]) -> Vec<u64> {
@@ -150,35 +162,4 @@ pub fn rel_to_largest(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_helpers_build_what_the_tests_wrote_out() {
-        let m = small_cylinder();
-        let by_hand = CylinderMesher {
-            radius: 4.0,
-            height: 4.0,
-            nr: 8,
-            nz: 8,
-            grading_r: 1.45,
-            grading_z: 1.45,
-        }
-        .build()
-        .unwrap();
-        assert_eq!(m.nodes, by_hand.nodes);
-        assert_eq!(m.elements, by_hand.elements);
-        assert_eq!(
-            bits(&[1.0, -0.0]),
-            vec![1.0f64.to_bits(), (-0.0f64).to_bits()]
-        );
-        assert_eq!(rel_to_largest(&[2.0, -4.0], &[2.0, -3.0]), 0.25);
-        let f = force(1.0, 60.0, 6);
-        assert_eq!((f.depth, f.force, f.steps), (None, Some(60.0), 6));
-        let d = depth(1.0, 0.02, 4);
-        assert_eq!((d.depth, d.force, d.steps), (Some(0.02), None, 4));
-    }
 }
