@@ -3,9 +3,9 @@
 //! and the punch kept off the axis, the force parser, our side of every run (friction and
 //! finite strain through `--set`, also both together) and the comparison table.
 
-use indentify_contact::{ContactKind, Kinematics, Punch, Schedule, Segment};
+use indentify_contact::{ContactKind, Kinematics, Punch, Schedule};
 use indentify_laws::{Law, Maxwell, NortonHoff, Vec4};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68, cylinder_rz, depth_lhu, workspace_root as root};
 use xtask::calculix::{self, ContactType, DeckOptions, Material};
 
 /// CalculiX's creep rate in uniaxial stress: `eps_dot_zz = A <sigma - r0>^n` (the
@@ -48,31 +48,15 @@ fn creep_constants_reproduce_our_flow_rules() {
 }
 
 fn small_problem() -> (indentify_mesh::Mesh, Schedule) {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 3,
-        nz: 2,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    let schedule = Schedule::from_segments(&[seg(0.1, 4), seg(0.1, 4), seg(0.0, 4)]).unwrap();
+    let mesh = cylinder_rz(2.0, 3, 2, 1.3);
+    let schedule = depth_lhu(0.1, 0.0, 4);
     (mesh, schedule)
 }
 
 #[test]
 fn deck_holds_our_mesh_node_for_node() {
     let (mesh, schedule) = small_problem();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let punch = cone68();
     let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 500.0);
     let o = DeckOptions {
         punch_segments: 4,
@@ -150,9 +134,7 @@ fn dat_parser_reads_the_punch_force_of_the_full_circle() {
 #[test]
 fn node_to_surface_keeps_the_punch_and_the_slave_off_the_axis() {
     let (mesh, schedule) = small_problem();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let punch = cone68();
     let m = Material::maxwell(2e4, 0.3, 3e4);
     let o = DeckOptions {
         punch_segments: 4,
@@ -213,13 +195,6 @@ fn node_to_surface_keeps_the_punch_and_the_slave_off_the_axis() {
     );
     let e = ContactType::from_name("mortar").unwrap_err().to_string();
     assert!(e.contains("--contact") && e.contains("mortar"), "{e}");
-}
-
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
 }
 
 #[test]
@@ -290,9 +265,7 @@ fn table_rows_compare_ours_or_the_frictionless_reference() {
 #[test]
 fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
     let (mesh, schedule) = small_problem();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let punch = cone68();
     let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 0.0);
     let one = DeckOptions {
         punch_segments: 4,
@@ -349,9 +322,7 @@ fn split_load_writes_the_loading_and_the_rest_as_two_steps_in_total_time() {
 #[test]
 fn mooney_rivlin_deck_states_hencky_s_shear_modulus_in_both_invariants() {
     let (mesh, schedule) = small_problem();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let punch = cone68();
     let m = Material::Elastic { e: 2e4, nu: 0.3 };
     let o = DeckOptions {
         punch_segments: 4,
@@ -409,9 +380,7 @@ fn hencky_umat_constants_are_our_laws_parameters() {
 #[test]
 fn hencky_umat_deck_replaces_every_law_under_nlgeom_only() {
     let (mesh, schedule) = small_problem();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let punch = cone68();
     let o = DeckOptions {
         punch_segments: 4,
         nlgeom: true,

@@ -7,32 +7,13 @@
 //! tolerance of CalculiX's depths, so a change of our solver that moves the
 //! load-controlled depth fails this test.
 
-use indentify_contact::Punch;
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68, cylinder_rz, workspace_root as root};
 use xtask::calculix::{self, DeckOptions, FiniteElastic, Material, force};
-
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
 
 #[test]
 fn force_deck_ties_the_punch_to_its_reference_node_and_loads_it() {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 3,
-        nz: 2,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let mesh = cylinder_rz(2.0, 3, 2, 1.3);
+    let punch = cone68();
     let m = Material::maxwell(2e4, 0.3, 3e4);
     let o = DeckOptions {
         punch_segments: 4,
@@ -113,19 +94,8 @@ fn force_deck_ties_the_punch_to_its_reference_node_and_loads_it() {
 /// start in the first step only.
 #[test]
 fn force_deck_splits_the_load_under_nlgeom_with_norton_hoff_and_friction() {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 3,
-        nz: 2,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let mesh = cylinder_rz(2.0, 3, 2, 1.3);
+    let punch = cone68();
     let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 500.0);
     let o = DeckOptions {
         punch_segments: 4,
@@ -179,19 +149,8 @@ fn force_deck_splits_the_load_under_nlgeom_with_norton_hoff_and_friction() {
 /// hardening).
 #[test]
 fn force_deck_runs_our_finite_strain_law_as_the_user_material() {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 3,
-        nz: 2,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    let punch = Punch::Cone {
-        half_angle_deg: 68.0,
-    };
+    let mesh = cylinder_rz(2.0, 3, 2, 1.3);
+    let punch = cone68();
     let m = Material::norton_hoff(1e5, 0.3, 1500.0, 5.0, 500.0);
     let o = DeckOptions {
         punch_segments: 4,

@@ -11,19 +11,10 @@ use indentify_adjoint::check::relative_difference;
 use indentify_adjoint::{Adjoint, Replay};
 use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cylinder;
 
 fn check(law: &dyn Law, c: &[f64], every: usize) {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 10, 1.45);
     let model = Model::new(
         mesh,
         Punch::Cone {

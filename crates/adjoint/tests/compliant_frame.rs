@@ -22,40 +22,19 @@ use common::{finite_model, finite_model_with_friction, small_model, statuses};
 use indentify_adjoint::check::relative_difference;
 use indentify_adjoint::{Adjoint, FrameIndex};
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions, Trajectory,
+    ContactKind, DirectSolver, Frame, Model, Schedule, SolverOptions, Trajectory,
 };
 use indentify_laws::{Hardening, LawMaterial, Material, Maxwell, Plastic, Prony, Rate};
+use indentify_testkit::{coulomb as friction, depth_lhu, recording, sphere1 as sphere, weights};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
+    recording(record, 1e-12)
 }
 
 /// Machine depth: ramp to `h` mm, hold, unload to `0.6 h`, `steps` steps per segment
 /// (1 s each).
 fn lhu(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.6 * h, steps)]).unwrap()
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
-
-fn friction(mu: f64) -> ContactKind {
-    ContactKind::normal_with_friction(mu).unwrap()
-}
-
-/// The cost's weights on the forces: `J = sum_i w_i F_i` (every recorded step).
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    depth_lhu(h, 0.6 * h, steps)
 }
 
 const MAXWELL: [f64; 3] = [1e5, 0.3, 2e5];

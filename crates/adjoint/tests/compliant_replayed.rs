@@ -17,10 +17,9 @@ mod common;
 
 use common::{finite_model, small_model};
 use indentify_adjoint::{Adjoint, AdjointError, FrameGradient, LoadReplay};
-use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions,
-};
+use indentify_contact::{ContactKind, DirectSolver, Frame, Model, Schedule, SolverOptions};
 use indentify_laws::{Hardening, LawMaterial, Material, Maxwell, Plastic, Rate};
+use indentify_testkit::{cone68 as cone, depth_lhu, sphere1 as sphere, weights};
 
 fn opts(record: bool, every: usize) -> SolverOptions {
     SolverOptions {
@@ -33,31 +32,12 @@ fn opts(record: bool, every: usize) -> SolverOptions {
 
 /// Machine depth: ramp to `h` mm, hold, unload to `0.6 h`, `steps` steps per segment.
 fn lhu(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.6 * h, steps)]).unwrap()
-}
-
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    depth_lhu(h, 0.6 * h, steps)
 }
 
 const R1: [f64; 3] = [20000.0, 0.3, 30000.0];
 const MAXWELL_SPHERE: [f64; 3] = [1e5, 0.3, 2e5];
 const POWER_NORTON: [f64; 6] = [1e5, 0.3, 500.0, 0.2, 1500.0, 5.0];
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
 
 /// The largest difference between the replayed and the recorded gradient, relative to the
 /// largest entry of each part (law, frame, `dJ/dH`).

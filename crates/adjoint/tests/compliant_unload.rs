@@ -8,35 +8,22 @@
 
 mod common;
 
-use common::small_model;
+use common::{small_model, weighted_forces};
 use indentify_adjoint::{Adjoint, FrameGradient, FrameIndex};
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions, Trajectory,
+    ContactKind, DirectSolver, Frame, Model, Schedule, SolverOptions, Trajectory,
 };
 use indentify_laws::{Elastic, Hardening, LawMaterial, Material, Plastic, Rate};
+use indentify_testkit::{cone68 as cone, depth_lhu, recording, weights};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
+    recording(record, 1e-12)
 }
 
 /// Machine depth: ramp to `h` mm, hold, unload to zero, `steps` steps per segment (1 s
 /// each).
 fn to_rest(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.0, steps)]).unwrap()
-}
-
-/// The cost's weights on the forces: `J = sum_i w_i F_i`.
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    depth_lhu(h, 0.0, steps)
 }
 
 const FRAME: Frame = Frame {
@@ -44,12 +31,6 @@ const FRAME: Frame = Frame {
     drift: 0.0,
     offset: 0.0,
 };
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
 
 fn run(m: &Model, mat: &dyn Material, c: &[f64], schedule: &Schedule) -> Trajectory {
     DirectSolver::new(m)
@@ -83,12 +64,7 @@ fn cost(m: &Model, mat: &dyn Material, p: &[f64], schedule: &Schedule, n: usize)
         .unwrap()
         .run_compliant(mat, p, schedule, &FRAME, &opts(false))
         .unwrap();
-    assert_eq!(t.steps.len(), n, "a cut changed the steps");
-    t.steps
-        .iter()
-        .zip(weights(n))
-        .map(|(s, w)| w * s.force)
-        .sum()
+    weighted_forces(&t, n)
 }
 
 /// The law's gradient against central differences (relative step `h_rel`), the worst

@@ -14,40 +14,17 @@ mod common;
 use common::small_model;
 use indentify_adjoint::{Adjoint, Gradient, LoadReplay};
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, HistorySegment, LoadHistory, Model, Punch, Schedule,
-    SolverOptions, Trajectory, trapezoid,
+    ContactKind, DirectSolver, Frame, LoadHistory, Model, Punch, Schedule, SolverOptions,
+    Trajectory, trapezoid,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell};
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
+use indentify_testkit::{bits, cone68 as cone, depth, force, rel_to_largest as rel};
 
 fn opts() -> SolverOptions {
     SolverOptions {
         record_fields: true,
         residual_tol: 1e-11,
         ..SolverOptions::default()
-    }
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
     }
 }
 
@@ -72,17 +49,6 @@ fn histories() -> [LoadHistory; 2] {
 }
 
 /// The largest difference relative to the largest `|g_k|`.
-fn rel(a: &[f64], b: &[f64]) -> f64 {
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
-}
-
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
-}
-
 fn costs(n: usize) -> (Vec<f64>, Vec<f64>) {
     let dj_dh = (0..n).map(|i| 1.0 + (i % 5) as f64).collect();
     let dj_df = (0..n).map(|i| 1e-3 * (1.0 + (i % 3) as f64)).collect();

@@ -7,40 +7,12 @@
 //! (J2 with power hardening and Norton overstress, the block recursion). One column is
 //! also checked against central differences of the forces directly.
 
+mod common;
+
+use common::{shifted_forces, sphere_model as model, tight_opts as opts, trapezoid5 as schedule};
 use indentify_adjoint::{Adjoint, AdjointError};
-use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
-};
+use indentify_contact::{ContactKind, DirectSolver, Kinematics, Model};
 use indentify_laws::{Hardening, LawMaterial, Material, NortonHoff, Plastic, Rate};
-use indentify_mesh::CylinderMesher;
-
-fn model(kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn schedule() -> Schedule {
-    Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 5)).unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-12,
-        ..Default::default()
-    }
-}
 
 /// Runs `mat` at `c` on `m`, then compares the sensitivities of `columns` with every
 /// parameter's; returns the full sensitivities' rows.
@@ -132,18 +104,7 @@ fn free_column_matches_central_differences() {
             .df_dc
     };
     let h = 1e-5 * NH[4];
-    let forces = |s: f64| {
-        let mut c = NH;
-        c[4] += s;
-        DirectSolver::new(&m)
-            .unwrap()
-            .run(&law, &c, &schedule(), &opts())
-            .unwrap()
-            .steps
-            .iter()
-            .map(|s| s.force)
-            .collect::<Vec<f64>>()
-    };
+    let forces = |s: f64| shifted_forces(&m, &law, &NH, 4, s);
     let (fp, fm) = (forces(h), forces(-h));
     let scale = df.iter().map(|r| r[4].abs()).fold(0.0, f64::max);
     assert!(scale > 0.0);

@@ -10,28 +10,10 @@ mod common;
 use common::small_model;
 use indentify_adjoint::{Adjoint, LoadReplay};
 use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, Schedule, SolverOptions,
-    trapezoid,
+    ContactKind, DirectSolver, LoadHistory, Model, Punch, Schedule, SolverOptions, trapezoid,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell};
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
+use indentify_testkit::{cone68 as cone, depth, force, rel_to_largest as rel};
 
 fn opts(record: bool, every: usize) -> SolverOptions {
     SolverOptions {
@@ -39,12 +21,6 @@ fn opts(record: bool, every: usize) -> SolverOptions {
         checkpoint_every: every,
         residual_tol: 1e-11,
         ..SolverOptions::default()
-    }
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
     }
 }
 
@@ -67,13 +43,6 @@ fn histories() -> [LoadHistory; 2] {
 }
 
 /// The largest difference relative to the largest `|g_k|`.
-fn rel(a: &[f64], b: &[f64]) -> f64 {
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / scale))
-}
-
 /// A cost on every step's depth and on every step's force (each used where it is the
 /// observable).
 fn costs(n: usize) -> (Vec<f64>, Vec<f64>) {

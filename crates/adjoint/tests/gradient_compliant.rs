@@ -11,35 +11,20 @@
 
 mod common;
 
-use common::{finite_model, small_model};
+use common::{finite_model, small_model, weighted_forces};
 use indentify_adjoint::Adjoint;
-use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions,
-};
+use indentify_contact::{ContactKind, DirectSolver, Frame, Model, Schedule, SolverOptions};
 use indentify_laws::{Hardening, LawMaterial, Material, Maxwell, Plastic, Rate};
+use indentify_testkit::{cone68 as cone, depth_lhu, recording, sphere1 as sphere, weights};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
+    recording(record, 1e-12)
 }
 
 /// Machine depth: ramp to `h` mm, hold, unload to `0.6 h`, `steps` steps per segment
 /// (1 s each).
 fn lhu(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.6 * h, steps)]).unwrap()
-}
-
-/// The cost's weights on the forces: `J = sum_i w_i F_i` (every recorded step).
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    depth_lhu(h, 0.6 * h, steps)
 }
 
 /// `J(c, frame)` of a compliant run without fields (the same steps as the recorded run).
@@ -59,12 +44,7 @@ fn cost(
     let t = solver
         .run_compliant(mat, &p[..nl], schedule, &frame, &opts(false))
         .unwrap();
-    assert_eq!(t.steps.len(), n, "a cut changed the steps");
-    t.steps
-        .iter()
-        .zip(weights(n))
-        .map(|(s, w)| w * s.force)
-        .sum()
+    weighted_forces(&t, n)
 }
 
 /// Adjoint vs differences of `J = sum w_i F_i` for the law's parameters `c` and the
@@ -152,16 +132,6 @@ fn check(
 const R1: [f64; 3] = [20000.0, 0.3, 30000.0];
 const MAXWELL_SPHERE: [f64; 3] = [1e5, 0.3, 2e5];
 const POWER_NORTON: [f64; 6] = [1e5, 0.3, 500.0, 0.2, 1500.0, 5.0];
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
 
 /// Maxwell under the cone, vertical contact: the frame takes ~15% of the machine depth.
 #[test]

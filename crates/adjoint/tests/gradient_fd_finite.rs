@@ -15,16 +15,7 @@ mod common;
 use indentify_adjoint::Adjoint;
 use indentify_contact::{DirectSolver, Punch, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
+use indentify_testkit::{cone68 as cone, sphere1 as sphere};
 
 /// Adjoint vs central differences (1e-6), vs `J^T rho` (1e-10), and the checkpointed
 /// adjoint vs the recorded one (1e-10) (`common::whole_history_check`, 6 steps per

@@ -21,19 +21,10 @@ mod common;
 
 use common::FrictionCase;
 use indentify_contact::{ContactKind, Model, Punch};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cylinder;
 
 fn model(punch: Punch, mu: f64) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 10, 1.45);
     let kind = ContactKind::normal_with_friction(mu).unwrap();
     Model::with_contact(mesh, punch, kind).unwrap()
 }

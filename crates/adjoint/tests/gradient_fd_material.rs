@@ -13,23 +13,14 @@ use indentify_contact::{
     trapezoid,
 };
 use indentify_laws::{Hardening, Material, Plastic, Prony, Rate};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cylinder, weights};
 
 fn model() -> Model {
     model_with(ContactKind::Normal)
 }
 
 fn model_with(kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 10, 1.3);
     Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind).unwrap()
 }
 
@@ -42,11 +33,6 @@ fn opts() -> SolverOptions {
         residual_tol: 1e-13,
         ..Default::default()
     }
-}
-
-/// The cost's weights: `J = sum_i r_i F_i` (every recorded step, sub-steps included).
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
 }
 
 fn cost(t: &Trajectory) -> f64 {

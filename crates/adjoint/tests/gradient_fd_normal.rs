@@ -12,30 +12,11 @@ mod common;
 
 use indentify_contact::{ContactKind, Model, Punch};
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68 as cone, cylinder, sphere1 as sphere};
 
 fn model(punch: Punch) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 10, 1.45);
     Model::with_contact(mesh, punch, ContactKind::Normal).unwrap()
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
 }
 
 /// Adjoint vs central differences (1e-6), vs J^T rho (1e-8), and the checkpointed

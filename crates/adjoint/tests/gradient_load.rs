@@ -10,45 +10,14 @@ mod common;
 use common::{finite_model, small_model};
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions,
-};
+use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Model, SolverOptions};
 use indentify_laws::{Elastic, Law, LawMaterial, Material, Maxwell, NortonHoff, Prony};
+use indentify_testkit::{
+    cone68 as cone, depth, force, force_lhu as lhu, recording, sphere1 as sphere,
+};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
-
-/// Ramp to `p` N, hold, unload to `0.4 p`, `steps` steps per segment.
-fn lhu(p: f64, steps: usize) -> LoadHistory {
-    LoadHistory::from_segments(&[
-        force(1.0, p, steps),
-        force(1.0, p, steps),
-        force(1.0, 0.4 * p, steps),
-    ])
-    .unwrap()
+    recording(record, 1e-11)
 }
 
 /// The depths of the schedule's steps of a load-controlled run.
@@ -107,16 +76,6 @@ fn check(model: &Model, law: &dyn Law, c: &[f64], truth: &[f64], h: &LoadHistory
         worst = worst.max(r);
     }
     worst
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
 }
 
 #[test]

@@ -19,58 +19,14 @@ mod common;
 use common::{finite_model_with_friction, small_model, statuses};
 use indentify_adjoint::check::relative_difference;
 use indentify_adjoint::{Adjoint, LoadReplay};
-use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions, Trajectory,
-};
+use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Model, SolverOptions, Trajectory};
 use indentify_laws::{Elastic, Hardening, LawMaterial, Material, Maxwell, Plastic, Prony, Rate};
+use indentify_testkit::{
+    coulomb as friction, depth, force, force_lhu as lhu, recording, sphere1 as sphere, weights,
+};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
-
-/// Ramp to `p` N, hold, unload to `0.4 p`, `steps` steps per segment (1 s each).
-fn lhu(p: f64, steps: usize) -> LoadHistory {
-    LoadHistory::from_segments(&[
-        force(1.0, p, steps),
-        force(1.0, p, steps),
-        force(1.0, 0.4 * p, steps),
-    ])
-    .unwrap()
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
-
-fn friction(mu: f64) -> ContactKind {
-    ContactKind::normal_with_friction(mu).unwrap()
-}
-
-/// The cost's weights on the depths (every recorded step).
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    recording(record, 1e-12)
 }
 
 /// The sticking and slipping node-steps (off the axis) of a run.
@@ -286,17 +242,8 @@ fn checkpointed_equals_recorded() {
 #[test]
 #[ignore = "a measurement: run it on an idle machine"]
 fn cost_ratios() {
-    use indentify_mesh::CylinderMesher;
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 24,
-        nz: 24,
-        grading_r: 1.2,
-        grading_z: 1.2,
-    }
-    .build()
-    .unwrap();
+    use indentify_testkit::cylinder;
+    let mesh = cylinder(4.0, 24, 1.2);
     let h = lhu(300.0, 10);
     let mat = LawMaterial(&Maxwell);
     let median = |mut v: Vec<f64>| {

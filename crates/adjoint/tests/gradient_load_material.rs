@@ -13,54 +13,12 @@ mod common;
 use common::{finite_model, small_model};
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{central_difference, relative_difference};
-use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions, Trajectory,
-};
+use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Model, SolverOptions, Trajectory};
 use indentify_laws::{Hardening, Material, Plastic, Prony, Rate};
+use indentify_testkit::{depth, force, force_lhu as lhu, recording, sphere1 as sphere, weights};
 
 fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
-
-/// Ramp to `p` N, hold, unload to `0.4 p`, `steps` steps per segment (1 s each).
-fn lhu(p: f64, steps: usize) -> LoadHistory {
-    LoadHistory::from_segments(&[
-        force(1.0, p, steps),
-        force(1.0, p, steps),
-        force(1.0, 0.4 * p, steps),
-    ])
-    .unwrap()
-}
-
-fn sphere() -> Punch {
-    Punch::Sphere { radius: 1.0 }
-}
-
-/// The cost's weights on the depths: `J = sum_i w_i U_i` (every recorded step).
-fn weights(n: usize) -> Vec<f64> {
-    (0..n).map(|i| 1.0 + 0.37 * ((i * 7) % 5) as f64).collect()
+    recording(record, 1e-12)
 }
 
 fn run(solver: &mut DirectSolver, mat: &dyn Material, c: &[f64], h: &LoadHistory) -> Trajectory {

@@ -12,19 +12,10 @@ use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::{relative_difference, scan};
 use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cylinder;
 
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 10, 1.45);
     Model::new(
         mesh,
         Punch::Cone {

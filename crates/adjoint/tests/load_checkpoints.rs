@@ -14,28 +14,9 @@ mod common;
 
 use common::small_model;
 use indentify_adjoint::{Adjoint, LoadReplay};
-use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions,
-};
+use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Model, Punch, SolverOptions};
 use indentify_laws::{LawMaterial, Material, Maxwell, NortonHoff, Prony};
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
+use indentify_testkit::{depth, force};
 
 /// The checkpointed gradient against the recorded one; returns the largest relative
 /// difference (to the largest `|dJ/dc_k c_k|`).

@@ -17,7 +17,7 @@ use indentify_laws::{
     Hardening, InternalInfo, LocalFailure, Material, MaterialUpdate, ParamInfo, Plastic, Prony,
     Rate, Step, Vec4,
 };
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cylinder;
 
 /// Which block a sweep asked for.
 #[derive(Clone, Copy, Debug)]
@@ -129,16 +129,7 @@ impl Material for Counting<'_> {
 }
 
 fn model(kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 8, 1.3);
     Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind)
         .unwrap()
         .with_kinematics(kin)

@@ -15,6 +15,7 @@ use indentify_contact::{
     trapezoid,
 };
 use indentify_laws::{Material, Prony};
+use indentify_testkit::cone68 as cone;
 
 /// One to three terms: the bench's parameters on R2 and a fast third term.
 fn prony(n: usize) -> (Prony, Vec<f64>) {
@@ -24,12 +25,6 @@ fn prony(n: usize) -> (Prony, Vec<f64>) {
         c.extend([g, tau]);
     }
     (Prony::new(n).unwrap(), c)
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
 }
 
 fn schedules() -> [Schedule; 2] {

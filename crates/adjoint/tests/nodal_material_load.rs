@@ -13,10 +13,9 @@ mod common;
 use common::small_model;
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::central_difference;
-use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Punch, SolverOptions, Trajectory,
-};
+use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Punch, SolverOptions, Trajectory};
 use indentify_laws::{Material, Prony};
+use indentify_testkit::{cone68 as cone, depth, force};
 
 /// One to three terms (the bench's parameters on R2 and a fast third term).
 fn prony(n: usize) -> (Prony, Vec<f64>) {
@@ -26,30 +25,6 @@ fn prony(n: usize) -> (Prony, Vec<f64>) {
         c.extend([g, tau]);
     }
     (Prony::new(n).unwrap(), c)
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
 }
 
 /// The histories (peak 1000 N, about 0.08 mm under the cone):

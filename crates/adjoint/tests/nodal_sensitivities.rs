@@ -19,16 +19,11 @@ mod common;
 use common::small_model;
 use indentify_adjoint::{Adjoint, Sensitivities};
 use indentify_contact::{
-    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Punch, Schedule, Segment,
+    ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Schedule, Segment,
     SolverOptions, Trajectory,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell};
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
+use indentify_testkit::cone68 as cone;
 
 fn opts() -> SolverOptions {
     SolverOptions {

@@ -15,16 +15,9 @@
 mod common;
 
 use indentify_adjoint::Adjoint;
-use indentify_contact::{
-    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid,
-};
+use indentify_contact::{ContactKind, DirectSolver, Model, Schedule, SolverOptions, trapezoid};
 use indentify_laws::{Law, Maxwell, NortonHoff};
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
+use indentify_testkit::cone68 as cone;
 
 /// FNV-1a over the bits of `xs`.
 fn fnv(xs: impl IntoIterator<Item = f64>) -> u64 {

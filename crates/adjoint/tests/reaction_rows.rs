@@ -8,40 +8,12 @@
 //! Coulomb), every parameter and a subset; and two columns against central differences
 //! of the direct solver's forces, a reference this code did not produce.
 
+mod common;
+
+use common::{shifted_forces, sphere_model as model, tight_opts as opts, trapezoid5 as schedule};
 use indentify_adjoint::Adjoint;
-use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
-};
+use indentify_contact::{ContactKind, DirectSolver, Kinematics, Model};
 use indentify_laws::{Law, LawMaterial, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-fn model(kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn schedule() -> Schedule {
-    Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 5)).unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-12,
-        ..Default::default()
-    }
-}
 
 const NH: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
 const MAXWELL: [f64; 3] = [2e4, 0.3, 3e4];
@@ -134,18 +106,7 @@ fn tangent_rows_match_central_differences() {
     assert!(adj.last_pass_reaction_rows());
     for k in [3, 4] {
         let h = 1e-5 * NH[k];
-        let forces = |s: f64| {
-            let mut c = NH;
-            c[k] += s;
-            DirectSolver::new(&m)
-                .unwrap()
-                .run(&law, &c, &schedule(), &opts())
-                .unwrap()
-                .steps
-                .iter()
-                .map(|s| s.force)
-                .collect::<Vec<_>>()
-        };
+        let forces = |s: f64| shifted_forces(&m, &law, &NH, k, s);
         let (fp, fm) = (forces(h), forces(-h));
         let scale = df.iter().fold(0.0f64, |s, r| s.max(r[k].abs()));
         assert!(scale > 0.0);

@@ -13,15 +13,10 @@ mod common;
 
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
-    ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, Trajectory, trapezoid,
+    ContactKind, DirectSolver, Model, Schedule, SolverOptions, Trajectory, trapezoid,
 };
 use indentify_laws::{Law, Maxwell, NortonHoff};
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
+use indentify_testkit::cone68 as cone;
 
 fn run(model: &Model, law: &dyn Law, c: &[f64]) -> Trajectory {
     let schedule = Schedule::from_segments(&trapezoid(0.1, 0.5, 0.5, 0.5, 6)).unwrap();

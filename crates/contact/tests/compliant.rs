@@ -7,52 +7,23 @@
 //! forces (a different statement of the same discrete problem) for every law and both
 //! contact kinds and kinematics; a bad frame names its field.
 
+mod common;
+
+use common::model_2mm_kin as model;
+use common::testkit::{cone68 as cone, depth_lhu};
 use indentify_contact::{
-    ContactError, ContactKind, DirectSolver, Frame, Kinematics, Model, Punch, Schedule, Segment,
+    ContactError, ContactKind, DirectSolver, Frame, Kinematics, Model, Punch, Schedule,
     SolverOptions, Trajectory,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-/// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3 towards the axis and the top.
-fn model(punch: Punch, kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
 
 fn sphere() -> Punch {
     Punch::Sphere { radius: 0.5 }
 }
 
-fn seg(duration: f64, depth: f64, steps: usize) -> Segment {
-    Segment {
-        duration,
-        depth,
-        steps,
-    }
-}
-
 /// Machine depth: ramp to 0.06 mm, hold, unload to 0.03 mm, 8 steps each.
 fn schedule() -> Schedule {
-    Schedule::from_segments(&[seg(1.0, 0.06, 8), seg(1.0, 0.06, 8), seg(1.0, 0.03, 8)]).unwrap()
+    depth_lhu(0.06, 0.03, 8)
 }
 
 fn opts() -> SolverOptions {

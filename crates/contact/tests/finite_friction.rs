@@ -8,44 +8,13 @@
 
 mod common;
 
+use common::{model_2mm_kin as model, ramp, testkit::coulomb as friction};
 use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, Segment, SolverOptions,
-    Trajectory, trapezoid,
+    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
+    trapezoid,
 };
 use indentify_fe::{Deformation, QP_PER_ELEMENT};
 use indentify_laws::{Elastic, Law, LogStrain, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-/// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3 towards the axis and the top.
-fn model(punch: Punch, kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn friction(mu: f64) -> ContactKind {
-    ContactKind::normal_with_friction(mu).unwrap()
-}
-
-fn ramp(depth: f64, steps: usize) -> Schedule {
-    Schedule::from_segments(&[Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    }])
-    .unwrap()
-}
 
 const NH: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
 
@@ -104,18 +73,7 @@ fn newton_converges_quadratically_with_friction_under_finite_strain() {
         println!("mu = {mu}, stick (0) / slip (+-1): {:?}", last.slip);
         assert!(last.active.len() >= 4);
         assert!(last.slip.iter().any(|&s| s != 0), "no slipping node");
-        let mut checked = 0;
-        for w in r.windows(2).skip(1) {
-            if w[0].1 == w[1].1 && w[1].0 > 1e-13 && w[0].0 < 1e-2 {
-                assert!(
-                    w[1].0 <= 10.0 * w[0].0 * w[0].0,
-                    "{:e} -> {:e} in {r:?}",
-                    w[0].0,
-                    w[1].0
-                );
-                checked += 1;
-            }
-        }
+        let checked = common::quadratic_pairs(r);
         assert!(checked >= 1, "{r:?}");
         let (st, sl) = common::check_coulomb(&model, &traj, mu, |i| finite_force(&model, &traj, i));
         println!("{}: {st} sticking and {sl} slipping node-steps", law.name());

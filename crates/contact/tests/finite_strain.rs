@@ -4,26 +4,19 @@
 //! strain, the refusal of vertical contact, and the parallel Gauss-point passes giving the
 //! same bits for any number of threads.
 
+mod common;
+
+use common::testkit::{cylinder, small_cylinder};
 use indentify_contact::{
     ContactError, ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, Segment,
     SolverOptions, Trajectory, trapezoid,
 };
 use indentify_laws::{Elastic, NortonHoff};
-use indentify_mesh::CylinderMesher;
 
 /// A cylinder of radius 1 mm and height 1 mm, 2 x 2 Q8, under a flat punch wider than it
 /// (frictionless top and bottom, free side: homogeneous uniaxial compression).
 fn block() -> Model {
-    let mesh = CylinderMesher {
-        radius: 1.0,
-        height: 1.0,
-        nr: 2,
-        nz: 2,
-        grading_r: 1.0,
-        grading_z: 1.0,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(1.0, 2, 1.0);
     Model::with_contact(mesh, Punch::Flat { radius: 3.0 }, ContactKind::Normal)
         .unwrap()
         .with_kinematics(Kinematics::Finite)
@@ -138,16 +131,7 @@ fn norton_hoff_compression_matches_the_log_strain_ode() {
 }
 
 fn cone_model(kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(2.0, 10, 1.3);
     Model::with_contact(
         mesh,
         Punch::Cone {
@@ -240,16 +224,7 @@ fn the_small_depth_limit_is_small_strain() {
 /// normal contact and friction it is accepted.
 #[test]
 fn finite_strain_needs_normal_contact() {
-    let mesh = CylinderMesher {
-        radius: 1.0,
-        height: 1.0,
-        nr: 2,
-        nz: 2,
-        grading_r: 1.0,
-        grading_z: 1.0,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(1.0, 2, 1.0);
     let err = Model::new(mesh.clone(), Punch::Flat { radius: 3.0 })
         .unwrap()
         .with_kinematics(Kinematics::Finite)
@@ -278,16 +253,7 @@ fn finite_strain_needs_normal_contact() {
 #[test]
 fn an_inverted_element_is_reported() {
     // a 1 x 1 block of a single element squashed to 1% of its height
-    let mesh = CylinderMesher {
-        radius: 1.0,
-        height: 1.0,
-        nr: 1,
-        nz: 1,
-        grading_r: 1.0,
-        grading_z: 1.0,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(1.0, 1, 1.0);
     let model = Model::with_contact(mesh, Punch::Flat { radius: 3.0 }, ContactKind::Normal)
         .unwrap()
         .with_kinematics(Kinematics::Finite)
@@ -395,16 +361,7 @@ fn the_finite_forward_is_the_same_for_any_number_of_threads() {
 /// for `E = 17000, nu = 0.27`.)
 #[test]
 fn the_release_at_depth_zero_does_not_depend_on_round_off() {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = small_cylinder();
     let sched = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
     let opts = SolverOptions {
         residual_tol: 1e-12,

@@ -5,39 +5,17 @@
 
 mod common;
 
+use common::{model_2mm, ramp, testkit::coulomb as friction, testkit::cylinder};
 use indentify_contact::{
-    ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions,
-    Trajectory, trapezoid,
+    ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, Trajectory,
+    trapezoid,
 };
 use indentify_laws::{Elastic, Law, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
 /// A 2 x 2 mm cylinder, 12 x 12 Q8 graded 1.3 towards the axis and the top.
 fn model(punch: Punch, kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 12,
-        nz: 12,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, kind).unwrap()
-}
-
-fn ramp(depth: f64, steps: usize) -> Schedule {
-    Schedule::from_segments(&[Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    }])
-    .unwrap()
-}
-
-fn friction(mu: f64) -> ContactKind {
-    ContactKind::normal_with_friction(mu).unwrap()
+    model_2mm(12, punch, kind)
 }
 
 fn norton() -> (NortonHoff, Vec<f64>) {
@@ -88,18 +66,7 @@ fn newton_converges_quadratically_with_friction() {
         assert!(last.slip.iter().any(|&s| s != 0), "no slipping node");
         // consecutive passes with the same sets (contact and stick/slip), after the first
         // pass (which precedes any solve), down to round-off (1e-13)
-        let mut checked = 0;
-        for w in r.windows(2).skip(1) {
-            if w[0].1 == w[1].1 && w[1].0 > 1e-13 && w[0].0 < 1e-2 {
-                assert!(
-                    w[1].0 <= 10.0 * w[0].0 * w[0].0,
-                    "{:e} -> {:e}",
-                    w[0].0,
-                    w[1].0
-                );
-                checked += 1;
-            }
-        }
+        let checked = common::quadratic_pairs(r);
         assert!(checked >= 1, "{r:?}");
         let (st, sl) = common::check_coulomb(&model, &traj, mu, |i| traj_force(&model, &traj, i));
         println!("{}: {st} sticking and {sl} slipping node-steps", law.name());
@@ -194,16 +161,7 @@ fn bad_friction_is_refused() {
             msg.contains("contact.friction") && msg.contains(">= 0"),
             "{msg}"
         );
-        let mesh = CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 2,
-            nz: 2,
-            grading_r: 1.0,
-            grading_z: 1.0,
-        }
-        .build()
-        .unwrap();
+        let mesh = cylinder(1.0, 2, 1.0);
         let e = Model::with_contact(
             mesh,
             Punch::Sphere { radius: 0.5 },

@@ -5,36 +5,15 @@
 //! depth); a load-controlled start out of contact; a force the contact cannot carry is
 //! refused with the reason; bad segments name their field.
 
+mod common;
+
+use common::model_2mm_kin as model;
+use common::testkit::{cone68 as cone, depth_lhu};
 use indentify_contact::{
     ContactKind, DirectSolver, HistorySegment, Kinematics, LoadHistory, Model, Punch, Schedule,
     Segment, SolverOptions, Trajectory,
 };
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-/// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3 towards the axis and the top.
-fn model(punch: Punch, kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
 
 fn sphere() -> Punch {
     Punch::Sphere { radius: 0.5 }
@@ -50,7 +29,7 @@ fn seg(duration: f64, depth: f64, steps: usize) -> Segment {
 
 /// Ramp to 0.06 mm, hold, unload to 0.03 mm, 8 steps each.
 fn depth_schedule() -> Schedule {
-    Schedule::from_segments(&[seg(1.0, 0.06, 8), seg(1.0, 0.06, 8), seg(1.0, 0.03, 8)]).unwrap()
+    depth_lhu(0.06, 0.03, 8)
 }
 
 fn opts() -> SolverOptions {

@@ -9,6 +9,9 @@
 //! joins the nodes its depth makes penetrate as the depth moves (`Newton::
 //! join_penetrating`). Counts only, no timing.
 
+mod common;
+
+use common::testkit::cylinder;
 use indentify_contact::{
     DirectSolver, LoadHistory, Model, Punch, Schedule, Segment, SolverOptions, Trajectory,
 };
@@ -18,16 +21,7 @@ use indentify_mesh::CylinderMesher;
 /// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3 towards the axis and the top, a 68 deg
 /// cone, vertical contact, small strain.
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(2.0, 10, 1.3);
     Model::new(
         mesh,
         Punch::Cone {

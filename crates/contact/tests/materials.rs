@@ -5,6 +5,9 @@
 //! are recorded, checkpointed and replayed bit for bit; a failed local update cuts the
 //! step and says where; under finite strain the same Norton-Hoff agreement holds.
 
+mod common;
+
+use common::testkit::cylinder;
 use indentify_contact::{
     ContactError, ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions,
     trapezoid,
@@ -17,16 +20,7 @@ use indentify_laws::{
 use indentify_mesh::CylinderMesher;
 
 fn model(kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 14,
-        nz: 14,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(4.0, 14, 1.3);
     Model::with_contact(
         mesh,
         Punch::Cone {

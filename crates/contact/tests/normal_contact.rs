@@ -2,35 +2,19 @@
 //! a sphere, the solver on every punch profile, clear errors beyond a surface's end, and
 //! vertical contact left as it was.
 
+mod common;
+
+use common::{model_2mm, ramp, testkit::cylinder};
 use indentify_contact::{
-    ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions,
-    Trajectory, trapezoid,
+    ContactError, ContactKind, DirectSolver, Model, Punch, Schedule, SolverOptions, Trajectory,
+    trapezoid,
 };
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
 /// A 2 x 2 mm cylinder, 12 x 12 Q8 graded 1.3 towards the axis and the top.
 fn model(punch: Punch, kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 12,
-        nz: 12,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, punch, kind).unwrap()
-}
-
-fn ramp(depth: f64, steps: usize) -> Schedule {
-    Schedule::from_segments(&[Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    }])
-    .unwrap()
+    model_2mm(12, punch, kind)
 }
 
 /// At every converged step, active nodes sit on the surface (|g| <= 1e-12 mm) with a
@@ -244,20 +228,7 @@ fn tabulated_profile_too_short_is_a_clear_error() {
 /// `Model::new` is vertical contact, and `ContactKind` reads `Normal` and `Vertical`.
 #[test]
 fn vertical_is_the_default() {
-    let m = Model::new(
-        CylinderMesher {
-            radius: 1.0,
-            height: 1.0,
-            nr: 4,
-            nz: 4,
-            grading_r: 1.0,
-            grading_z: 1.0,
-        }
-        .build()
-        .unwrap(),
-        Punch::Sphere { radius: 1.0 },
-    )
-    .unwrap();
+    let m = Model::new(cylinder(1.0, 4, 1.0), Punch::Sphere { radius: 1.0 }).unwrap();
     assert_eq!(m.contact, ContactKind::Vertical);
     assert_eq!(ContactKind::default(), ContactKind::Vertical);
 }

@@ -4,26 +4,19 @@
 //! same discrete problem stated the other way round), for every law, Norton-Hoff's
 //! nonlinear predictor included.
 
+mod common;
+
+use common::testkit::cylinder;
 use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, LoadHistory, Model, Punch, Schedule, SegmentSpec,
     SolverOptions,
 };
 use indentify_laws::{Elastic, Law, LawMaterial, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
 use std::time::Instant;
 
 /// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3, under the 68 deg cone.
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+    let mesh = cylinder(2.0, 10, 1.3);
     Model::with_contact(
         mesh,
         Punch::Cone {

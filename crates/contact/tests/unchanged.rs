@@ -4,8 +4,11 @@
 //! finite-strain paths (normal contact, with and without friction) hash to the values
 //! recorded at e461c8d, on 1 and 2 threads.
 
+mod common;
+
+use common::testkit::cone68 as cone;
 use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
+    ContactKind, DirectSolver, Kinematics, Model, Schedule, SolverOptions, trapezoid,
 };
 use indentify_laws::{Elastic, Law, Maxwell, NortonHoff};
 use indentify_mesh::CylinderMesher;
@@ -53,12 +56,6 @@ fn reference_problems_are_unchanged() {
             .unwrap()
     });
     assert_eq!(got, EXPECTED);
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
 }
 
 /// R0, R1 and R2 (docs/theory.md §11) on each of the `models`, hashed on a pool of one thread

@@ -16,82 +16,24 @@
 //!      Maxwell E = 20000 MPa, nu = 0.3 (fixed), eta = 30000 MPa s
 //! ```
 
-use indentify_contact::{DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions};
-use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Instrument, Method, ParamSpec, Problem,
-    Scaling, SplitMix64, Test, identify,
+mod common;
+
+use common::{
+    assert_gradient_entry, assert_within_two_sigma, cost_difference, depth_lhu as lhu,
+    frame_forces, jt_r, tight_opts as opts,
 };
-use indentify_laws::{Elastic, LawMaterial, Material, Maxwell};
-use indentify_mesh::CylinderMesher;
+use indentify_contact::{Frame, Model, Punch};
+use indentify_identify::{
+    Evaluator, IdentifyConfig, IdentifyError, Instrument, Method, ParamSpec, Problem, Scaling,
+    Test, identify,
+};
+use indentify_laws::{Elastic, LawMaterial, Maxwell};
+use indentify_testkit::{cone68 as cone, small_cylinder};
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
 
 fn model(punch: Punch) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(mesh, punch).unwrap()
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-/// Machine depth to `h`, hold, unload to `0.6 h`, `steps` per segment (1 s each).
-fn lhu(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.6 * h, steps)]).unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
-}
-
-/// The forces a compliant run at `c` through `frame` gives at the schedule times, with
-/// uniform noise of half-width `noise` (N, seed `seed`; none at the initial state).
-fn measured(
-    m: &Model,
-    mat: &dyn Material,
-    c: &[f64],
-    schedule: &Schedule,
-    frame: &Frame,
-    noise: f64,
-    seed: u64,
-) -> ForceRecord {
-    let traj = DirectSolver::new(m)
-        .unwrap()
-        .run_compliant(mat, c, schedule, frame, &opts())
-        .unwrap();
-    let mut rng = SplitMix64::new(seed);
-    let f: Vec<f64> = traj
-        .forces()
-        .iter()
-        .enumerate()
-        .map(|(i, f)| {
-            if i == 0 {
-                0.0
-            } else {
-                f + noise * rng.next_symmetric()
-            }
-        })
-        .collect();
-    ForceRecord::new(schedule.t.clone(), f).unwrap()
+    Model::new(small_cylinder(), punch).unwrap()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -110,7 +52,7 @@ fn gradient_and_jacobian_of_a_depth_controlled_test_match_differences() {
         drift: 1e-3,
         offset: 2e-3,
     };
-    let record = measured(
+    let record = frame_forces(
         &m,
         &LawMaterial(&Maxwell),
         &TRUTH,
@@ -141,36 +83,9 @@ fn gradient_and_jacobian_of_a_depth_controlled_test_match_differences() {
         (4, 1e-5 * c[4].abs()),
         (5, 1e-5 * c[5]),
     ] {
-        let mut cp = c;
-        cp[k] += step;
-        let mut cm = c;
-        cm[k] -= step;
-        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * step);
-        let jt_r: f64 = jac
-            .iter()
-            .zip(&f_sim)
-            .zip(p.target.iter().zip(&p.weights))
-            .map(|((row, f), (tg, w))| w * (f - tg) * row[k])
-            .sum();
-        println!(
-            "dJ/d{}: adjoint {:.10e}, FD {fd:.10e} (rel {:.1e}), J^T r {jt_r:.10e} (rel {:.1e})",
-            names[k],
-            g[k],
-            rel(g[k], fd),
-            rel(jt_r, g[k])
-        );
-        assert!(
-            rel(g[k], fd) < 1e-6,
-            "{}: adjoint {} vs FD {fd}",
-            names[k],
-            g[k]
-        );
-        assert!(
-            rel(jt_r, g[k]) < 1e-8,
-            "{}: J^T r {jt_r} vs adjoint {}",
-            names[k],
-            g[k]
-        );
+        let fd = cost_difference(&mut ev, &c, k, step);
+        let jt = jt_r(&p, &jac, &f_sim, k);
+        assert_gradient_entry("", names[k], g[k], fd, jt, rel);
     }
 }
 
@@ -187,7 +102,7 @@ fn fit_recovers_compliance_and_offset_within_two_sigma() {
         drift: 0.0,
         offset: h0,
     };
-    let clean = measured(
+    let clean = frame_forces(
         &m,
         &LawMaterial(&Maxwell),
         &TRUTH,
@@ -198,7 +113,7 @@ fn fit_recovers_compliance_and_offset_within_two_sigma() {
     );
     let f_max = clean.force.iter().copied().fold(0.0, f64::max);
     let noise = 3e-3 * f_max;
-    let record = measured(
+    let record = frame_forces(
         &m,
         &LawMaterial(&Maxwell),
         &TRUTH,
@@ -237,22 +152,7 @@ fn fit_recovers_compliance_and_offset_within_two_sigma() {
     assert!(r.stop_reason.is_converged(), "{}", r.stop_reason);
     assert!(id.undetermined.is_empty(), "{:?}", id.undetermined);
     let truth = [TRUTH[0], TRUTH[2], cf, h0];
-    for (i, (k, t)) in [0usize, 2, 3, 4].into_iter().zip(truth).enumerate() {
-        let dev = (r.c[k] - t).abs();
-        println!(
-            "{}: {:.6e} vs {t:.6e}: {:.2} sigma",
-            id.names[i],
-            r.c[k],
-            dev / id.std_dev[i]
-        );
-        assert!(
-            dev <= 2.0 * id.std_dev[i],
-            "{}: |{} - {t}| = {dev:.3e} > 2 sigma = {:.3e}",
-            id.names[i],
-            r.c[k],
-            2.0 * id.std_dev[i]
-        );
-    }
+    assert_within_two_sigma(id, &r.c, &[0, 2, 3, 4], &truth);
     // the compliance is resolved: its deviation is a small part of its value
     assert!(id.std_dev[2] < 0.5 * cf, "sigma(Cf) = {}", id.std_dev[2]);
 }
@@ -269,7 +169,7 @@ fn compliance_and_modulus_of_a_flat_punch_are_not_separable_under_depth_control(
         compliance: 1e-5,
         ..Frame::default()
     };
-    let record = measured(
+    let record = frame_forces(
         &m,
         &LawMaterial(&Elastic),
         &[20000.0, 0.3],

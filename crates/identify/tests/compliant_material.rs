@@ -15,31 +15,30 @@
 //!      J2 E = 1e5 MPa, nu = 0.3, sY = 500 MPa, n = 0.2, K = 1500 MPa s^(1/m), m = 5
 //! ```
 
-use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions,
+mod common;
+
+use common::{
+    assert_within_two_sigma, cost_difference, depth_lhu as lhu, frame_forces, jt_r,
+    tight_opts as opts,
 };
+use indentify_contact::{ContactKind, Frame, Model, Punch, Schedule, SolverOptions};
 use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, Instrument, Method, ParamSpec, Problem, Scaling,
-    SplitMix64, Test, identify,
+    Evaluator, ForceRecord, IdentifyConfig, Instrument, Method, ParamSpec, Problem, Scaling, Test,
+    identify,
 };
 use indentify_laws::{Hardening, Material, Plastic, Rate};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::small_cylinder;
 use std::sync::Arc;
 
 const TRUTH: [f64; 6] = [1e5, 0.3, 500.0, 0.2, 1500.0, 5.0];
 
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, ContactKind::Normal).unwrap()
+    Model::with_contact(
+        small_cylinder(),
+        Punch::Sphere { radius: 1.0 },
+        ContactKind::Normal,
+    )
+    .unwrap()
 }
 
 fn plastic() -> Plastic {
@@ -50,45 +49,10 @@ fn material() -> Arc<dyn Material> {
     Arc::new(plastic())
 }
 
-/// Machine depth to `h`, hold, unload to `0.6 h`, `steps` per segment (1 s each).
-fn lhu(h: f64, steps: usize) -> Schedule {
-    let seg = |depth, steps| Segment {
-        duration: 1.0,
-        depth,
-        steps,
-    };
-    Schedule::from_segments(&[seg(h, steps), seg(h, steps), seg(0.6 * h, steps)]).unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
-}
-
 /// The forces a compliant run at `c` through `frame` gives at the schedule times, with
 /// uniform noise of half-width `noise` (N, seed `seed`; none at the initial state).
 fn measured(c: &[f64], schedule: &Schedule, frame: &Frame, noise: f64, seed: u64) -> ForceRecord {
-    let m = model();
-    let traj = DirectSolver::new(&m)
-        .unwrap()
-        .run_compliant(&plastic(), c, schedule, frame, &opts())
-        .unwrap();
-    let mut rng = SplitMix64::new(seed);
-    let f: Vec<f64> = traj
-        .forces()
-        .iter()
-        .enumerate()
-        .map(|(i, f)| {
-            if i == 0 {
-                0.0
-            } else {
-                f + noise * rng.next_symmetric()
-            }
-        })
-        .collect();
-    ForceRecord::new(schedule.t.clone(), f).unwrap()
+    frame_forces(&model(), &plastic(), c, schedule, frame, noise, seed)
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -136,17 +100,8 @@ fn plastic_gradient_and_jacobian_through_the_frame_match_differences() {
     let (mut worst_fd, mut worst_jt) = (0.0f64, 0.0f64);
     for k in 0..c.len() {
         let step = 1e-5 * c[k].abs();
-        let mut cp = c;
-        cp[k] += step;
-        let mut cm = c;
-        cm[k] -= step;
-        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * step);
-        let jt_r: f64 = jac
-            .iter()
-            .zip(&f_sim)
-            .zip(p.target.iter().zip(&p.weights))
-            .map(|((row, f), (tg, w))| w * (f - tg) * row[k])
-            .sum();
+        let fd = cost_difference(&mut ev, &c, k, step);
+        let jt_r = jt_r(&p, &jac, &f_sim, k);
         println!(
             "dJ/d{}: adjoint {:.12e}, FD {fd:.12e} (rel {:.1e}), J^T r {jt_r:.12e} (rel {:.1e})",
             names[k],
@@ -248,23 +203,7 @@ fn lm_fit_with_a_plastic_law_recovers_the_compliance() {
     assert!(r.stop_reason.is_converged(), "{}", r.stop_reason);
     assert!(id.undetermined.is_empty(), "{:?}", id.undetermined);
     let truth = [TRUTH[0], TRUTH[2], cf];
-    for (i, (k, t)) in [0usize, 2, 6].into_iter().zip(truth).enumerate() {
-        let dev = (r.c[k] - t).abs();
-        println!(
-            "{}: {:.6e} vs {t:.6e}: {:.2} sigma (sigma {:.3e})",
-            id.names[i],
-            r.c[k],
-            dev / id.std_dev[i],
-            id.std_dev[i]
-        );
-        assert!(
-            dev <= 2.0 * id.std_dev[i],
-            "{}: |{} - {t}| = {dev:.3e} > 2 sigma = {:.3e}",
-            id.names[i],
-            r.c[k],
-            2.0 * id.std_dev[i]
-        );
-    }
+    assert_within_two_sigma(id, &r.c, &[0, 2, 6], &truth);
     // the compliance is resolved: its deviation is a small part of its value
     assert!(id.std_dev[2] < 0.5 * cf, "sigma(Cf) = {}", id.std_dev[2]);
 }

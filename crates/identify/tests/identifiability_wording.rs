@@ -9,35 +9,19 @@
 //! sensitivity is exactly 0), while `E` does.
 
 use indentify_contact::{
-    DirectSolver, HistorySegment, LoadHistory, Model, Punch, Schedule, Segment, SolverOptions,
+    DirectSolver, HistorySegment, LoadHistory, Model, Schedule, Segment, SolverOptions,
 };
 use indentify_identify::{
     ForceRecord, IdentifyConfig, Method, Observed, ParamSpec, Problem, Test, identify,
 };
 use indentify_laws::{LawMaterial, NortonHoff};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68, cylinder};
 
 /// E, nu, K, m, sY: sY beyond any stress of the run.
 const TRUTH: [f64; 5] = [20000.0, 0.3, 1500.0, 5.0, 1e7];
 
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 6,
-        nz: 6,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
+    Model::new(cylinder(4.0, 6, 1.45), cone68()).unwrap()
 }
 
 fn opts() -> SolverOptions {

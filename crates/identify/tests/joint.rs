@@ -18,34 +18,21 @@
 //! ```
 //! Parameters: E = 20000 MPa, nu = 0.3 (fixed), eta = 30000 MPa s.
 
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, Segment, SolverOptions};
+mod common;
+
+use common::maxwell_specs as specs;
+use indentify_contact::{DirectSolver, Model, Schedule, Segment, SolverOptions};
 use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, ParamSpec, Prefetch, Problem,
-    Test, identify,
+    Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, Prefetch, Problem, Test,
+    identify,
 };
 use indentify_laws::Maxwell;
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68, cylinder};
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
 
 fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 6,
-        nz: 6,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
+    Model::new(cylinder(4.0, 6, 1.45), cone68()).unwrap()
 }
 
 fn schedule(load_time: f64, depth: f64) -> Schedule {
@@ -95,14 +82,6 @@ fn joint() -> (Problem, Vec<f64>) {
         tests.push(Test::new(model(), s, &r, None, SolverOptions::default(), w).unwrap());
     }
     (Problem::joint(&Maxwell, tests).unwrap(), weights)
-}
-
-fn specs(e: f64, eta: f64) -> Vec<ParamSpec> {
-    vec![
-        ParamSpec::free("E", e, 1000.0, 1e6),
-        ParamSpec::fixed("nu", 0.3),
-        ParamSpec::free("eta", eta, 1000.0, 1e7),
-    ]
 }
 
 fn rel(a: f64, b: f64) -> f64 {

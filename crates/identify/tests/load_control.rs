@@ -14,59 +14,20 @@
 //!      eta = 30000 MPa s
 //! ```
 
-use indentify_contact::{DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions};
+mod common;
+
+use common::{
+    assert_gradient_entry, cost_difference, jt_r, load_hold_unload as history,
+    maxwell_specs as specs, schedule_depths, tight_opts as opts,
+};
+use indentify_contact::DirectSolver;
 use indentify_identify::{
-    Evaluator, ForceRecord, IdentifyConfig, Method, ParamSpec, Problem, SplitMix64, Test, identify,
+    Evaluator, ForceRecord, IdentifyConfig, Method, Problem, SplitMix64, Test, identify,
 };
 use indentify_laws::{LawMaterial, Maxwell};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cone_model as model;
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn history() -> LoadHistory {
-    LoadHistory::from_segments(&[
-        force(1.0, 60.0, 6),
-        force(1.0, 60.0, 6),
-        force(1.0, 24.0, 6),
-    ])
-    .unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
-}
 
 /// The truth's depths at the history's times (index 0: the initial state, 0).
 fn exact_depths() -> (Vec<f64>, Vec<f64>) {
@@ -76,9 +37,7 @@ fn exact_depths() -> (Vec<f64>, Vec<f64>) {
         .unwrap()
         .run_history(&LawMaterial(&Maxwell), &TRUTH, &h, &opts())
         .unwrap();
-    let d: Vec<f64> = std::iter::once(0.0)
-        .chain(traj.schedule_steps().map(|s| s.depth))
-        .collect();
+    let d = schedule_depths(&traj);
     (h.schedule.t.clone(), d)
 }
 
@@ -86,14 +45,6 @@ fn problem(t: Vec<f64>, depths: Vec<f64>) -> Problem {
     let record = ForceRecord::new(t, depths).unwrap();
     let test = Test::new_load(model(), history(), &record, None, opts(), 1.0).unwrap();
     Problem::joint(&Maxwell, vec![test]).unwrap()
-}
-
-fn specs(e: f64, eta: f64) -> Vec<ParamSpec> {
-    vec![
-        ParamSpec::free("E", e, 1000.0, 1e6),
-        ParamSpec::fixed("nu", 0.3),
-        ParamSpec::free("eta", eta, 1000.0, 1e7),
-    ]
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -114,24 +65,9 @@ fn load_controlled_gradient_and_jacobian_match_differences() {
     let h_sim = ev.forces(&c).unwrap();
     let jac = ev.jacobian(&c).unwrap();
     for k in [0usize, 2] {
-        let dc = 1e-5 * c[k];
-        let mut cp = c;
-        cp[k] += dc;
-        let mut cm = c;
-        cm[k] -= dc;
-        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * dc);
-        let jt_r: f64 = jac
-            .iter()
-            .zip(&h_sim)
-            .zip(p.target.iter().zip(&p.weights))
-            .map(|((row, h), (tg, w))| w * (h - tg) * row[k])
-            .sum();
-        println!(
-            "dJ/dc{k}: adjoint {:.10e}, FD {fd:.10e}, J^T r {jt_r:.10e}",
-            g[k]
-        );
-        assert!(rel(g[k], fd) < 1e-6, "adjoint {} vs FD {fd}", g[k]);
-        assert!(rel(jt_r, g[k]) < 1e-8, "J^T r {jt_r} vs adjoint {}", g[k]);
+        let fd = cost_difference(&mut ev, &c, k, 1e-5 * c[k]);
+        let jt = jt_r(&p, &jac, &h_sim, k);
+        assert_gradient_entry("", &format!("c{k}"), g[k], fd, jt, rel);
     }
 }
 

@@ -13,59 +13,20 @@
 
 use std::sync::Arc;
 
-use indentify_contact::{DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions};
+mod common;
+
+use common::{
+    assert_gradient_entry, cost_difference, jt_r, load_hold_unload as history, schedule_depths,
+    tight_opts as opts,
+};
+use indentify_contact::DirectSolver;
 use indentify_identify::{
     Evaluator, ForceRecord, IdentifyConfig, Method, ParamSpec, Problem, Test, identify,
 };
 use indentify_laws::{Material, Prony};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cone_model as model;
 
 const TRUTH: [f64; 4] = [20000.0, 0.3, 0.4, 0.5];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn history() -> LoadHistory {
-    LoadHistory::from_segments(&[
-        force(1.0, 60.0, 6),
-        force(1.0, 60.0, 6),
-        force(1.0, 24.0, 6),
-    ])
-    .unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
-}
 
 fn prony() -> Arc<dyn Material> {
     Arc::new(Prony::new(1).unwrap())
@@ -78,9 +39,7 @@ fn problem() -> Problem {
         .unwrap()
         .run_history(&*prony(), &TRUTH, &h, &opts())
         .unwrap();
-    let d: Vec<f64> = std::iter::once(0.0)
-        .chain(traj.schedule_steps().map(|s| s.depth))
-        .collect();
+    let d = schedule_depths(&traj);
     let record = ForceRecord::new(h.schedule.t.clone(), d).unwrap();
     let test = Test::new_load(model(), history(), &record, None, opts(), 1.0).unwrap();
     Problem::joint(prony(), vec![test]).unwrap()
@@ -100,24 +59,9 @@ fn prony_load_controlled_gradient_and_jacobian_match_differences() {
     let h_sim = ev.forces(&c).unwrap();
     let jac = ev.jacobian(&c).unwrap();
     for k in [0usize, 2, 3] {
-        let dc = 1e-5 * c[k];
-        let mut cp = c;
-        cp[k] += dc;
-        let mut cm = c;
-        cm[k] -= dc;
-        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * dc);
-        let jt_r: f64 = jac
-            .iter()
-            .zip(&h_sim)
-            .zip(p.target.iter().zip(&p.weights))
-            .map(|((row, h), (tg, w))| w * (h - tg) * row[k])
-            .sum();
-        println!(
-            "dJ/dc{k}: adjoint {:.10e}, FD {fd:.10e}, J^T r {jt_r:.10e}",
-            g[k]
-        );
-        assert!(rel(g[k], fd) < 1e-6, "adjoint {} vs FD {fd}", g[k]);
-        assert!(rel(jt_r, g[k]) < 1e-8, "J^T r {jt_r} vs adjoint {}", g[k]);
+        let fd = cost_difference(&mut ev, &c, k, 1e-5 * c[k]);
+        let jt = jt_r(&p, &jac, &h_sim, k);
+        assert_gradient_entry("", &format!("c{k}"), g[k], fd, jt, rel);
     }
 }
 

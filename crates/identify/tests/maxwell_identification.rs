@@ -16,35 +16,18 @@
 //! ```
 //! Parameters: E = 20000 MPa, nu = 0.3 (fixed), eta = 30000 MPa s.
 
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+mod common;
+
+use common::maxwell_specs as specs;
+use indentify_contact::{DirectSolver, Schedule, SolverOptions, trapezoid};
 use indentify_identify::{
     Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Method, ParamSpec, Problem, Scaling,
     StopReason, identify, multiplicative_noise, multistart, resume,
 };
 use indentify_laws::Maxwell;
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::cone_model as model;
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
 
 fn schedule() -> Schedule {
     Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap()
@@ -77,14 +60,6 @@ fn problem(record: &ForceRecord) -> Problem {
         SolverOptions::default(),
     )
     .unwrap()
-}
-
-fn specs(e: f64, eta: f64) -> Vec<ParamSpec> {
-    vec![
-        ParamSpec::free("E", e, 1000.0, 1e6),
-        ParamSpec::fixed("nu", 0.3),
-        ParamSpec::free("eta", eta, 1000.0, 1e7),
-    ]
 }
 
 fn rel(a: f64, b: f64) -> f64 {

@@ -17,67 +17,30 @@
 //!      eta = 30000 MPa s
 //! ```
 
-use indentify_contact::{
-    DirectSolver, HistorySegment, LoadHistory, Model, Punch, SolverOptions, Trajectory,
+mod common;
+
+use common::{
+    assert_gradient_entry, assert_within_two_sigma, cost_difference, jt_r, schedule_depths,
+    tight_opts as opts,
 };
+use indentify_contact::{DirectSolver, LoadHistory, Model, Punch, Trajectory};
 use indentify_identify::{
     Evaluator, ForceRecord, IdentifyConfig, IdentifyError, Instrument, Method, ParamSpec,
     Parameterization, Problem, Scaling, SplitMix64, Test, identify,
 };
 use indentify_laws::{Elastic, LawMaterial, Maxwell};
-use indentify_mesh::CylinderMesher;
+use indentify_testkit::{cone68 as cone, depth, force, small_cylinder};
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
 
 fn model(punch: Punch) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(mesh, punch).unwrap()
-}
-
-fn cone() -> Punch {
-    Punch::Cone {
-        half_angle_deg: 68.0,
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
+    Model::new(small_cylinder(), punch).unwrap()
 }
 
 /// Load to `p`, hold, unload to `0.4 p`, 6 steps per segment.
 fn lhu(p: f64) -> LoadHistory {
     LoadHistory::from_segments(&[force(1.0, p, 6), force(1.0, p, 6), force(1.0, 0.4 * p, 6)])
         .unwrap()
-}
-
-fn opts() -> SolverOptions {
-    SolverOptions {
-        residual_tol: 1e-11,
-        ..SolverOptions::default()
-    }
 }
 
 fn run(m: &Model, h: &LoadHistory, c: &[f64]) -> Trajectory {
@@ -101,8 +64,8 @@ fn measured(
     let t = h.schedule.t.clone();
     let f = traj.forces();
     let mut rng = SplitMix64::new(seed);
-    let d: Vec<f64> = std::iter::once(0.0)
-        .chain(traj.schedule_steps().map(|s| s.depth))
+    let d: Vec<f64> = schedule_depths(&traj)
+        .into_iter()
         .enumerate()
         .map(|(i, d)| d + cf * f[i] + vd * (t[i] - t[0]) + h0 + noise * rng.next_symmetric())
         .collect();
@@ -146,36 +109,9 @@ fn check_gradient(history: LoadHistory, label: &str) {
         (4, 1e-6),
         (5, 1e-6),
     ] {
-        let mut cp = c;
-        cp[k] += step;
-        let mut cm = c;
-        cm[k] -= step;
-        let fd = (ev.cost(&cp).unwrap() - ev.cost(&cm).unwrap()) / (2.0 * step);
-        let jt_r: f64 = jac
-            .iter()
-            .zip(&h_sim)
-            .zip(p.target.iter().zip(&p.weights))
-            .map(|((row, h), (tg, w))| w * (h - tg) * row[k])
-            .sum();
-        println!(
-            "{label} dJ/d{}: adjoint {:.10e}, FD {fd:.10e} (rel {:.1e}), J^T r {jt_r:.10e} (rel {:.1e})",
-            names[k],
-            g[k],
-            rel(g[k], fd),
-            rel(jt_r, g[k])
-        );
-        assert!(
-            rel(g[k], fd) < 1e-6,
-            "{label} {}: adjoint {} vs FD {fd}",
-            names[k],
-            g[k]
-        );
-        assert!(
-            rel(jt_r, g[k]) < 1e-8,
-            "{label} {}: J^T r {jt_r} vs adjoint {}",
-            names[k],
-            g[k]
-        );
+        let fd = cost_difference(&mut ev, &c, k, step);
+        let jt = jt_r(&p, &jac, &h_sim, k);
+        assert_gradient_entry(label, names[k], g[k], fd, jt, rel);
     }
 }
 
@@ -240,16 +176,7 @@ fn joint_fit_recovers_drift_and_per_test_offsets_within_two_sigma() {
     );
     assert!(r.stop_reason.is_converged(), "{}", r.stop_reason);
     let truth = [TRUTH[0], TRUTH[2], vd, h0[0], h0[1]];
-    for (i, (k, t)) in [0usize, 2, 3, 4, 5].into_iter().zip(truth).enumerate() {
-        let dev = (r.c[k] - t).abs();
-        assert!(
-            dev <= 2.0 * id.std_dev[i],
-            "{}: |{} - {t}| = {dev:.3e} > 2 sigma = {:.3e}",
-            id.names[i],
-            r.c[k],
-            2.0 * id.std_dev[i]
-        );
-    }
+    assert_within_two_sigma(id, &r.c, &[0, 2, 3, 4, 5], &truth);
     // the drift is resolved: its deviation is a small part of its value
     assert!(id.std_dev[2] < 0.2 * vd, "sigma(vd) = {}", id.std_dev[2]);
 }

@@ -8,44 +8,16 @@
 //!
 //! Reference: the same fit run to the tight rules, and its Gauss-Newton deviations.
 
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
+mod common;
+
+use common::maxwell_problem;
 use indentify_identify::{
-    ForceRecord, IdentifyConfig, Method, PROPOSED_GAIN_TOL, ParamSpec, Problem, StopReason,
-    identify, multiplicative_noise,
+    IdentifyConfig, Method, PROPOSED_GAIN_TOL, ParamSpec, Problem, StopReason, identify,
 };
-use indentify_laws::{LawMaterial, Maxwell};
-use indentify_mesh::CylinderMesher;
 
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
-
+/// The small R1-like problem at `truth` with 2% noise.
 fn problem(truth: &[f64]) -> Problem {
-    let s = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap();
-    let f = DirectSolver::new(&model())
-        .unwrap()
-        .run(&LawMaterial(&Maxwell), truth, &s, &SolverOptions::default())
-        .unwrap()
-        .forces();
-    let f = multiplicative_noise(&f, 0.02, 7);
-    let rec = ForceRecord::new(s.t.clone(), f).unwrap();
-    Problem::new(model(), &Maxwell, s, &rec, None, SolverOptions::default()).unwrap()
+    maxwell_problem(truth, 0.02)
 }
 
 /// `step_sigma` 0.1 or off, `proposed_step` on or off, from `start` (E, eta).

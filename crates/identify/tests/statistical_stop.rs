@@ -8,61 +8,12 @@
 //! Reference: the same fit run to the tight default rules (relative decrease 1e-10,
 //! gradient 1e-9), and its Gauss-Newton standard deviations.
 
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
-use indentify_identify::{
-    ForceRecord, IdentifyConfig, IdentifyResult, Method, ParamSpec, Problem, StopReason, identify,
-    multiplicative_noise,
-};
-use indentify_laws::Maxwell;
-use indentify_mesh::CylinderMesher;
+mod common;
+
+use common::maxwell_problem as problem;
+use indentify_identify::{IdentifyConfig, IdentifyResult, Method, ParamSpec, StopReason, identify};
 
 const TRUTH: [f64; 3] = [20000.0, 0.3, 30000.0];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
-
-fn schedule() -> Schedule {
-    Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 6)).unwrap()
-}
-
-/// The problem of data simulated at `truth`, with multiplicative noise of `noise` (seed 7).
-fn problem(truth: &[f64], noise: f64) -> Problem {
-    let s = schedule();
-    let f = DirectSolver::new(&model())
-        .unwrap()
-        .run(
-            &indentify_laws::LawMaterial(&Maxwell),
-            truth,
-            &s,
-            &SolverOptions::default(),
-        )
-        .unwrap()
-        .forces();
-    let f = if noise > 0.0 {
-        multiplicative_noise(&f, noise, 7)
-    } else {
-        f
-    };
-    let rec = ForceRecord::new(s.t.clone(), f).unwrap();
-    Problem::new(model(), &Maxwell, s, &rec, None, SolverOptions::default()).unwrap()
-}
 
 fn lm(e: f64, eta: f64, step_sigma: Option<f64>) -> IdentifyConfig {
     let mut cfg = IdentifyConfig::new(vec![

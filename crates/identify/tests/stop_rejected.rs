@@ -10,38 +10,18 @@
 //! solver's watch (`DirectSolver::watched`) is checked against the unwatched run: the
 //! same steps bit for bit up to the stop, and the next run unchanged.
 
+mod common;
+
+use common::{NH_TRUTH as TRUTH, load_hold_unload, nh_data, nh_lm, schedule_depths};
 use indentify_contact::{
-    ContactError, DirectSolver, HistorySegment, LoadHistory, Model, Punch, Schedule, SolverOptions,
-    StepRecord, StepWatch, trapezoid,
+    ContactError, DirectSolver, Schedule, SolverOptions, StepRecord, StepWatch, trapezoid,
 };
 use indentify_identify::{
     ForceRecord, IdentifyConfig, IdentifyResult, Method, ParamSpec, Problem, Test, identify,
     multiplicative_noise,
 };
 use indentify_laws::{LawMaterial, Maxwell, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-const TRUTH: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
+use indentify_testkit::{bits, cone_model as model};
 
 fn schedule(rise: f64) -> Schedule {
     Schedule::from_segments(&trapezoid(0.1, rise, 1.0, 1.0, 8)).unwrap()
@@ -49,37 +29,14 @@ fn schedule(rise: f64) -> Schedule {
 
 /// A depth-controlled Norton-Hoff test at the truth with 2% noise (seed `seed`).
 fn nh_test(rise: f64, seed: u64) -> Test {
-    let s = schedule(rise);
-    let f = DirectSolver::new(&model())
-        .unwrap()
-        .run(
-            &LawMaterial(&NortonHoff),
-            &TRUTH,
-            &s,
-            &SolverOptions::default(),
-        )
-        .unwrap()
-        .forces();
-    let f = multiplicative_noise(&f, 0.02, seed);
-    let rec = ForceRecord::new(s.t.clone(), f).unwrap();
+    let (s, rec) = nh_data(rise, seed);
     Test::new(model(), s, &rec, None, SolverOptions::default(), 1.0).unwrap()
 }
 
 fn nh_config(stop: bool) -> IdentifyConfig {
-    let mut cfg = IdentifyConfig::new(vec![
-        ParamSpec::free("E", 7e4, 1e3, 1e7),
-        ParamSpec::fixed("nu", 0.3),
-        ParamSpec::free("K", 2500.0, 10.0, 1e6),
-        ParamSpec::fixed("m", 5.0),
-        ParamSpec::free("sY", 350.0, 1.0, 1e5),
-    ]);
-    cfg.method = Method::LevenbergMarquardt;
+    let mut cfg = nh_lm();
     cfg.stop.lm.stop_rejected = stop;
     cfg
-}
-
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
 }
 
 /// Everything a fit reports but the work counts, bit for bit.
@@ -178,23 +135,9 @@ fn joint_fit_is_bit_identical_on_one_and_two_threads() {
     assert_eq!(on1.newton_iterations, on2.newton_iterations);
 }
 
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
 #[test]
 fn load_controlled_fit_is_bit_identical_with_rejected_trials_stopped() {
-    let h = LoadHistory::from_segments(&[
-        force(1.0, 60.0, 6),
-        force(1.0, 60.0, 6),
-        force(1.0, 24.0, 6),
-    ])
-    .unwrap();
+    let h = load_hold_unload();
     let truth = [20000.0, 0.3, 30000.0];
     let traj = DirectSolver::new(&model())
         .unwrap()
@@ -205,10 +148,7 @@ fn load_controlled_fit_is_bit_identical_with_rejected_trials_stopped() {
             &SolverOptions::default(),
         )
         .unwrap();
-    let d: Vec<f64> = std::iter::once(0.0)
-        .chain(traj.schedule_steps().map(|s| s.depth))
-        .collect();
-    let d = multiplicative_noise(&d, 0.01, 7);
+    let d = multiplicative_noise(&schedule_depths(&traj), 0.01, 7);
     let rec = ForceRecord::new(h.schedule.t.clone(), d).unwrap();
     let test = Test::new_load(model(), h, &rec, None, SolverOptions::default(), 1.0).unwrap();
     let p = Problem::joint(&Maxwell, vec![test]).unwrap();

@@ -6,50 +6,16 @@
 //! Reference: the same fit with every forward run started cold (the time extrapolation),
 //! and its Gauss-Newton standard deviations.
 
-use indentify_contact::{DirectSolver, Model, Punch, Schedule, SolverOptions, trapezoid};
-use indentify_identify::{
-    ForceRecord, IdentifyConfig, IdentifyResult, Method, ParamSpec, Problem, identify,
-    multiplicative_noise,
-};
-use indentify_laws::{LawMaterial, NortonHoff};
-use indentify_mesh::CylinderMesher;
+mod common;
 
-const TRUTH: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
-
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::new(
-        mesh,
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-    )
-    .unwrap()
-}
+use common::{nh_data, nh_lm as lm};
+use indentify_contact::SolverOptions;
+use indentify_identify::{IdentifyResult, Problem, identify};
+use indentify_laws::NortonHoff;
+use indentify_testkit::cone_model as model;
 
 fn problem() -> Problem {
-    let s = Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 8)).unwrap();
-    let f = DirectSolver::new(&model())
-        .unwrap()
-        .run(
-            &LawMaterial(&NortonHoff),
-            &TRUTH,
-            &s,
-            &SolverOptions::default(),
-        )
-        .unwrap()
-        .forces();
-    let f = multiplicative_noise(&f, 0.02, 3);
-    let rec = ForceRecord::new(s.t.clone(), f).unwrap();
+    let (s, rec) = nh_data(1.0, 3);
     Problem::new(
         model(),
         &NortonHoff,
@@ -59,18 +25,6 @@ fn problem() -> Problem {
         SolverOptions::default(),
     )
     .unwrap()
-}
-
-fn lm() -> IdentifyConfig {
-    let mut cfg = IdentifyConfig::new(vec![
-        ParamSpec::free("E", 7e4, 1e3, 1e7),
-        ParamSpec::fixed("nu", 0.3),
-        ParamSpec::free("K", 2500.0, 10.0, 1e6),
-        ParamSpec::fixed("m", 5.0),
-        ParamSpec::free("sY", 350.0, 1.0, 1e5),
-    ]);
-    cfg.method = Method::LevenbergMarquardt;
-    cfg
 }
 
 fn sd(r: &IdentifyResult, name: &str) -> f64 {

@@ -5,15 +5,14 @@
 //! column keeps the configuration's starts, a row whose configuration has no record fails
 //! alone with the reason, and an unknown start is refused naming the line.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::examples;
+use std::path::Path;
 
 use indentify_study::ConfigSource;
 use indentify_study::batch::{self, BatchOptions, State};
 use indentify_study::start_from_analysis::starts;
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
 
 /// result.json's start values of an indent, by parameter name.
 fn json_starts(out: &Path, id: &str) -> Vec<(String, f64)> {

@@ -3,16 +3,12 @@
 //! variables, so a fit replayed stretch by stretch takes the recorded run's path, iteration
 //! by iteration, to the same parameters.
 
-use std::path::PathBuf;
+mod common;
+
+use common::example;
 
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
-
-fn example(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
 
 fn options(config: &str, sets: &[&str], starts: &[(&str, f64)]) -> IdentifyOptions {
     let mut o = IdentifyOptions::new(ConfigSource::Path(example(config)));

@@ -7,29 +7,15 @@
 //! form applies (a sphero-cone, a joint fit, a record without a hold for `eta`) the note
 //! says so and the fit starts from the configuration, never a panic.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{example, noisy_example as options};
 
 use indentify_study::ConfigSource;
 use indentify_study::batch::{self, BatchOptions, State};
 use indentify_study::closed_form_start::apply;
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome};
 use indentify_study::synthetic::{MapOptions, make_map};
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
-
-fn options(name: &str, sets: &[&str]) -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Path(example(name)));
-    o.sets = sets.iter().map(|s| s.to_string()).collect();
-    o.noise = Some((0.02, 1));
-    o.refine = false;
-    o.figures = false;
-    o.jobs = Some(1);
-    o
-}
 
 /// The pre-fit alone: its outcome and the configuration's starts it leaves.
 fn prefit(o: &IdentifyOptions) -> indentify_study::closed_form_start::ClosedFormStart {

@@ -5,27 +5,13 @@
 //! what it set and what it kept; a fit from it ends where the fit from the configuration's
 //! start ends.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{example, noisy_example as options};
 
 use indentify_study::ConfigSource;
 use indentify_study::closed_form_start::{ClosedFormStart, apply};
 use indentify_study::identify::{self, IdentifyOptions, IdentifyOutcome};
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
-
-fn options(name: &str, sets: &[&str]) -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Path(example(name)));
-    o.sets = sets.iter().map(|s| s.to_string()).collect();
-    o.noise = Some((0.02, 1));
-    o.refine = false;
-    o.figures = false;
-    o.jobs = Some(1);
-    o
-}
 
 /// `plastic-power-cone.ron` on a smaller mesh with its unloading resolved where the force
 /// falls (to 0.08 mm in 10 steps, then to 0 in 2): the unloading slope and the work ratio

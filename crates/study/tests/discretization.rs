@@ -2,20 +2,15 @@
 //! the 2x refined mesh with halved steps, and the parameter shift it implies, checked
 //! against a second identification made with the refined discretization.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{coarse as coarse_opts, examples};
+use std::path::Path;
 
 use indentify_contact::DirectSolver;
 use indentify_study::identify::{self, IdentifyOptions};
 use indentify_study::solve::forward;
 use indentify_study::{ConfigSource, discretization};
-
-const COARSE: [&str; 5] = [
-    "specimen.nr=6",
-    "specimen.nz=6",
-    "history.segments.0.steps=4",
-    "history.segments.1.steps=4",
-    "history.segments.2.steps=4",
-];
 
 /// An `n x n` mesh graded `g`, `steps` per segment.
 fn sets(n: usize, g: f64, steps: usize) -> Vec<String> {
@@ -27,16 +22,6 @@ fn sets(n: usize, g: f64, steps: usize) -> Vec<String> {
     ];
     s.extend((0..3).map(|i| format!("history.segments.{i}.steps={steps}")));
     s
-}
-
-fn coarse_opts() -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Default);
-    o.sets = COARSE.iter().map(|s| s.to_string()).collect();
-    o
-}
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
 }
 
 fn result_json(dir: &Path) -> serde_json::Value {

@@ -2,23 +2,16 @@
 //! steps per segment): deterministic for any thread count, intervals against the
 //! Gauss-Newton ones, maps against direct evaluation, and the bad-input errors.
 
+mod common;
+
+use common::coarse;
 use indentify_identify::profile::ProfileSettings;
-use indentify_study::ConfigSource;
 use indentify_study::costmap::{self, MapOptions, Through};
 use indentify_study::explore::StartsOptions;
 use indentify_study::identify::{self, IdentifyOptions};
 
-const COARSE: [&str; 5] = [
-    "specimen.nr=6",
-    "specimen.nz=6",
-    "history.segments.0.steps=4",
-    "history.segments.1.steps=4",
-    "history.segments.2.steps=4",
-];
-
 fn opts() -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Default);
-    o.sets = COARSE.iter().map(|s| s.to_string()).collect();
+    let mut o = coarse();
     o.refine = false;
     o.figures = false;
     o

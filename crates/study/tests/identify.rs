@@ -2,23 +2,12 @@
 //! sees every iteration, a cancel flag that ends the run after the current iteration with
 //! its report written, and error kinds that front ends map onto their own classes.
 
+mod common;
+
+use common::coarse as opts;
 use indentify_identify::{IterationRecord, StopReason};
 use indentify_study::identify::{self, IdentifyOptions, Observer, RunInfo};
 use indentify_study::{ConfigSource, ErrorKind};
-
-const COARSE: [&str; 5] = [
-    "specimen.nr=6",
-    "specimen.nz=6",
-    "history.segments.0.steps=4",
-    "history.segments.1.steps=4",
-    "history.segments.2.steps=4",
-];
-
-fn opts() -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Default);
-    o.sets = COARSE.iter().map(|s| s.to_string()).collect();
-    o
-}
 
 /// Counts iterations and raises the cancel flag after the second.
 struct StopAfterTwo {

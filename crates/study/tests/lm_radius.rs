@@ -2,13 +2,14 @@
 //! length that is not finite and > 0 is refused before any solve with the field named; a
 //! value reaches `StopCriteria::lm.first_radius`; the templates show it and it reads back.
 
+mod common;
+
+use common::default_with;
 use indentify_study::identify::{self, IdentifyOptions};
 use indentify_study::{ConfigSource, ErrorKind};
 
 fn opts(set: &str) -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Default);
-    o.sets = vec![set.to_string()];
-    o
+    default_with(&[set])
 }
 
 #[test]

@@ -5,16 +5,14 @@
 //! beta 1.034); report.md has the section; a record without unloading is skipped with the
 //! reason.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::examples;
 
 use indentify_analysis::Tip;
 use indentify_study::ConfigSource;
 use indentify_study::analyze::{self, AnalyzeOptions};
 use indentify_study::identify::{self, IdentifyOptions};
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
 
 #[test]
 fn identify_reports_oliver_pharr_beside_the_fe_result() {

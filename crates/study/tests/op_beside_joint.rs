@@ -7,16 +7,14 @@
 //! of the file's `_data.TXT` (within 5 %: the vendor uses `epsilon` from `m`, the
 //! configuration's analysis the sphere's 0.75).
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::examples;
 
 use indentify_analysis::{AreaFunction, Tip};
 use indentify_study::ConfigSource;
 use indentify_study::analyze::{self, AnalyzeOptions};
 use indentify_study::identify::{self, IdentifyOptions};
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
 
 #[test]
 fn a_joint_fit_reports_each_tests_oliver_pharr() {

@@ -2,13 +2,14 @@
 //! not finite and > 0 is refused before any solve with the field named; `None` turns it
 //! off; the default (0.1) is what `indentify check` and the templates show.
 
+mod common;
+
+use common::default_with;
 use indentify_study::identify::{self, IdentifyOptions};
 use indentify_study::{ConfigSource, ErrorKind};
 
 fn opts(set: &str) -> IdentifyOptions {
-    let mut o = IdentifyOptions::new(ConfigSource::Default);
-    o.sets = vec![set.to_string()];
-    o
+    default_with(&[set])
 }
 
 #[test]

@@ -10,8 +10,8 @@ use indentify_contact::{
     ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, Trajectory,
     trapezoid,
 };
-use indentify_laws::Law;
-use indentify_mesh::CylinderMesher;
+use indentify_laws::{Law, Material};
+use indentify_testkit::{small_cylinder, weights};
 
 /// The gradient of the run of `solver` with `ck_opts` (checkpointed), replayed segment by
 /// segment from its checkpoints.
@@ -62,17 +62,60 @@ pub fn finite_model_with_friction(punch: Punch, mu: f64) -> Model {
 /// `punch` with contact `kind`, small strain.
 #[allow(dead_code)]
 pub fn small_model(punch: Punch, kind: ContactKind) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
+    let mesh = small_cylinder();
     Model::with_contact(mesh, punch, kind).unwrap()
+}
+
+/// The test cylinder under the 1 mm sphere with contact `kind` and kinematics `kin`.
+#[allow(dead_code)]
+pub fn sphere_model(kind: ContactKind, kin: Kinematics) -> Model {
+    Model::with_contact(small_cylinder(), Punch::Sphere { radius: 1.0 }, kind)
+        .unwrap()
+        .with_kinematics(kin)
+        .unwrap()
+}
+
+/// The trapezoid 0 -> 0.1 mm -> hold -> 0, 1 s and 5 steps per segment.
+#[allow(dead_code)]
+pub fn trapezoid5() -> Schedule {
+    Schedule::from_segments(&trapezoid(0.1, 1.0, 1.0, 1.0, 5)).unwrap()
+}
+
+/// Newton to a residual of 1e-12, the other solver options at their defaults.
+#[allow(dead_code)]
+pub fn tight_opts() -> SolverOptions {
+    SolverOptions {
+        residual_tol: 1e-12,
+        ..Default::default()
+    }
+}
+
+/// The forces of every step of `mat` at `c` with `c[k]` shifted by `s`, on `m` over
+/// [`trapezoid5`] with [`tight_opts`]: one side of a central difference of the forces.
+#[allow(dead_code)]
+pub fn shifted_forces(m: &Model, mat: &dyn Material, c: &[f64], k: usize, s: f64) -> Vec<f64> {
+    let mut c = c.to_vec();
+    c[k] += s;
+    DirectSolver::new(m)
+        .unwrap()
+        .run(mat, &c, &trapezoid5(), &tight_opts())
+        .unwrap()
+        .steps
+        .iter()
+        .map(|s| s.force)
+        .collect()
+}
+
+/// `J = sum_i w_i F_i` of a run that must have `n` steps (a cut would change them), with
+/// the weights of `indentify_testkit::weights`.
+#[allow(dead_code)]
+pub fn weighted_forces(t: &Trajectory, n: usize) -> f64 {
+    assert_eq!(t.steps.len(), n, "a cut changed the steps");
+    t.steps
+        .iter()
+        .zip(weights(n))
+        .map(|(s, w)| w * s.force)
+        .sum()
 }
 
 /// On `model`, the trapezoid 0 -> 0.1 mm -> hold -> 0 in `steps` steps per segment with

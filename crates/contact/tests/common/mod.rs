@@ -1,6 +1,59 @@
-//! Test helpers shared by the contact crate's friction tests (small and finite strain).
+//! Test helpers shared by the contact crate's tests: the Coulomb conditions of the friction
+//! tests (small and finite strain), and the workspace's test support (`crates/testkit`)
+//! compiled in as a module: `testkit` depends on `contact`, so the contact crate cannot
+//! take it as a dev-dependency without a cycle; its source is read here instead.
 
-use indentify_contact::{Model, Trajectory};
+use indentify_contact::{ContactKind, Kinematics, Model, Punch, Schedule, Segment, Trajectory};
+
+// Each test target uses a part of it.
+#[allow(dead_code)]
+#[path = "../../../testkit/src/lib.rs"]
+pub mod testkit;
+
+/// A 2 x 2 mm cylinder, `n` x `n` Q8 graded 1.3 towards the axis and the top, under
+/// `punch` with contact `kind`.
+#[allow(dead_code)]
+pub fn model_2mm(n: usize, punch: Punch, kind: ContactKind) -> Model {
+    Model::with_contact(testkit::cylinder(2.0, n, 1.3), punch, kind).unwrap()
+}
+
+/// [`model_2mm`] in 10 x 10 Q8 with kinematics `kin`.
+#[allow(dead_code)]
+pub fn model_2mm_kin(punch: Punch, kind: ContactKind, kin: Kinematics) -> Model {
+    model_2mm(10, punch, kind).with_kinematics(kin).unwrap()
+}
+
+/// One segment: the punch to `depth` (mm) in 1 s, `steps` steps.
+#[allow(dead_code)]
+pub fn ramp(depth: f64, steps: usize) -> Schedule {
+    Schedule::from_segments(&[Segment {
+        duration: 1.0,
+        depth,
+        steps,
+    }])
+    .unwrap()
+}
+
+/// Newton's quadratic rate in the residuals `r` of a step's passes (residual, sets' key):
+/// each pair of consecutive passes with the same contact and stick/slip sets, after the
+/// first pass (which precedes any solve), above round-off (1e-13) and from below 1e-2,
+/// shall have `r_next <= 10 r^2`. Returns how many pairs were checked.
+#[allow(dead_code)]
+pub fn quadratic_pairs(r: &[(f64, u32)]) -> usize {
+    let mut checked = 0;
+    for w in r.windows(2).skip(1) {
+        if w[0].1 == w[1].1 && w[1].0 > 1e-13 && w[0].0 < 1e-2 {
+            assert!(
+                w[1].0 <= 10.0 * w[0].0 * w[0].0,
+                "{:e} -> {:e} in {r:?}",
+                w[0].0,
+                w[1].0
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
 
 /// At every converged step: active nodes on the surface with `lambda >= 0` and that reaction
 /// the normal component of the node's internal force; sticking off-axis nodes inside the
@@ -9,6 +62,7 @@ use indentify_contact::{Model, Trajectory};
 /// `f_int(i)` is the internal force (all dofs) of the recorded state `i` (0 the initial
 /// one), recomputed by the caller from its stresses. Returns (sticking, slipping)
 /// node-steps.
+#[allow(dead_code)]
 pub fn check_coulomb(
     model: &Model,
     traj: &Trajectory,
