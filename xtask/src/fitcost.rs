@@ -38,6 +38,9 @@
 //! Each fit also prints the schedule steps its forward runs ran, the rejected trials'
 //! runs stopped early (`LmStrategy::stop_rejected`, on in configurations) and the steps
 //! they skipped; `--no-stop-rejected` runs every trial in full, for before/after counts.
+//! `--lm-damping NAME` sets Levenberg-Marquardt's damping update on top of the
+//! configuration's strategy (`classic`, `nielsen`, `marquardt-fletcher`, `gain-capped`,
+//! `delayed`: `LmStrategy::damping`), for before/after counts and shifts.
 
 mod batch;
 mod columns;
@@ -48,7 +51,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_identify::{Evaluator, IdentifyResult, LmStrategy, ValleyStop};
+use indentify_identify::{Evaluator, IdentifyResult, LmDamping, LmStrategy, ValleyStop};
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
@@ -99,6 +102,7 @@ struct Opts {
     op: bool,
     lm: Option<LmStrategy>,
     stop_rejected: Option<bool>,
+    damping: Option<LmDamping>,
     c2f: Option<usize>,
     proposed: Option<bool>,
     pairs_mode: bool,
@@ -123,6 +127,7 @@ fn parse(args: &[String]) -> Result<Opts> {
     let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut stop_rejected: Option<bool> = None;
+    let mut damping: Option<LmDamping> = None;
     let mut c2f: Option<usize> = None;
     let mut proposed: Option<bool> = None;
     let mut pairs_mode = false;
@@ -158,6 +163,13 @@ fn parse(args: &[String]) -> Result<Opts> {
             "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
             "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
             "--no-stop-rejected" => stop_rejected = Some(false),
+            "--lm-damping" => {
+                let v = val();
+                let names: Vec<&str> = LmDamping::ALL.iter().map(|d| d.name()).collect();
+                damping = Some(LmDamping::parse(&v).with_context(|| {
+                    format!("--lm-damping: one of {} (got `{v}`)", names.join(", "))
+                })?);
+            }
             "--proposed-step" => pairs_mode = true,
             "--both" => both = true,
             "--no-proposed-step" => proposed = Some(false),
@@ -183,6 +195,7 @@ fn parse(args: &[String]) -> Result<Opts> {
         op,
         lm,
         stop_rejected,
+        damping,
         c2f,
         proposed,
         pairs_mode,
@@ -193,7 +206,7 @@ fn parse(args: &[String]) -> Result<Opts> {
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
 /// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic] [--c2f N [--c2f-tight]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
-/// [--no-proposed-step] [--no-stop-rejected]`.
+/// [--no-proposed-step] [--no-stop-rejected] [--lm-damping NAME]`.
 pub fn run(args: &[String]) -> Result<()> {
     let Opts {
         only,
@@ -212,6 +225,7 @@ pub fn run(args: &[String]) -> Result<()> {
         op,
         lm,
         stop_rejected,
+        damping,
         c2f,
         proposed,
         pairs_mode,
@@ -286,7 +300,7 @@ pub fn run(args: &[String]) -> Result<()> {
                 rounds,
                 cold,
                 (chi2, valley, Some(on)),
-                (lm, lm_stop),
+                (lm, lm_stop, damping),
                 c2f,
             )
         };
@@ -304,7 +318,7 @@ pub fn run(args: &[String]) -> Result<()> {
             rounds,
             cold,
             (chi2, valley, proposed),
-            (lm, lm_stop),
+            (lm, lm_stop, damping),
             c2f,
         )?;
         println!(
@@ -425,7 +439,7 @@ fn measure(
     rounds: usize,
     cold: bool,
     (chi2, valley, proposed): (bool, Option<ValleyStop>, Option<bool>),
-    (lm, lm_stop): (Option<LmStrategy>, Option<bool>),
+    (lm, lm_stop, damping): (Option<LmStrategy>, Option<bool>, Option<LmDamping>),
     c2f: Option<usize>,
 ) -> Result<Value> {
     let opts = options(root, case)?;
@@ -441,6 +455,9 @@ fn measure(
     }
     if let Some(on) = lm_stop {
         s.id_cfg.stop.lm.stop_rejected = on;
+    }
+    if let Some(d) = damping {
+        s.id_cfg.stop.lm.damping = d;
     }
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start

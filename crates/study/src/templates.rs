@@ -756,6 +756,10 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
                 format!("lm_stop_rejected: {},", st.lm_stop_rejected),
                 "Lm: stop a trial's forward run once its cost so far rejects it (same results)".into(),
             ),
+            (
+                format!("lm_damping: {:?},", st.lm_damping),
+                "Lm: damping update Classic, Nielsen, MarquardtFletcher, GainCapped or Delayed".into(),
+            ),
         ],
     );
     out.push_str("        ),\n");
