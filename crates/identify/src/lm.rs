@@ -183,7 +183,11 @@ impl LmDamping {
             LmDamping::MarquardtFletcher if rho < 0.25 => 2.0,
             LmDamping::MarquardtFletcher => 1.0,
             LmDamping::GainCapped => {
-                let r = if rho.is_nan() { 0.0 } else { rho.clamp(0.0, 1.0) };
+                let r = if rho.is_nan() {
+                    0.0
+                } else {
+                    rho.clamp(0.0, 1.0)
+                };
                 1.0 / (1.0 + 2.0 * r)
             }
             LmDamping::Delayed => 0.5,
@@ -880,7 +884,13 @@ mod tests {
         d.update = LmDamping::Delayed;
         d.rejected(1.0);
         assert_eq!(d.lambda, 3e-3);
-        for name in ["classic", "Nielsen", " marquardt-fletcher", "GAIN-CAPPED", "delayed"] {
+        for name in [
+            "classic",
+            "Nielsen",
+            " marquardt-fletcher",
+            "GAIN-CAPPED",
+            "delayed",
+        ] {
             let u = LmDamping::parse(name).expect(name);
             assert_eq!(LmDamping::parse(u.name()), Some(u));
         }

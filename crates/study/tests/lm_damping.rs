@@ -73,7 +73,10 @@ fn lm_damping_reaches_the_strategy_and_reads_back_from_the_template() {
     for (n, d) in [
         (LmDampingName::Classic, LmDamping::Classic),
         (LmDampingName::Nielsen, LmDamping::Nielsen),
-        (LmDampingName::MarquardtFletcher, LmDamping::MarquardtFletcher),
+        (
+            LmDampingName::MarquardtFletcher,
+            LmDamping::MarquardtFletcher,
+        ),
         (LmDampingName::GainCapped, LmDamping::GainCapped),
         (LmDampingName::Delayed, LmDamping::Delayed),
     ] {

@@ -19,8 +19,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Instrument, LmDamping, LmStrategy, Method, NoiseModel,
-    ParamSpec, Parameterization, Scaling, StopCriteria,
+    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Instrument, LmDamping, LmStrategy, Method,
+    NoiseModel, ParamSpec, Parameterization, Scaling, StopCriteria,
 };
 use indentify_laws::Material;
 use serde::{Deserialize, Serialize};
