@@ -43,6 +43,9 @@
 //! Each fit also prints the schedule steps its forward runs ran, the rejected trials'
 //! runs stopped early (`LmStrategy::stop_rejected`, on in configurations) and the steps
 //! they skipped; `--no-stop-rejected` runs every trial in full, for before/after counts.
+//! `--lm-damping NAME` sets Levenberg-Marquardt's damping update on top of the
+//! configuration's strategy (`classic`, `nielsen`, `marquardt-fletcher`, `gain-capped`,
+//! `delayed`: `LmStrategy::damping`), for before/after counts and shifts.
 
 mod batch;
 mod columns;
@@ -53,7 +56,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indentify_identify::{Evaluator, IdentifyResult, LmStrategy, ValleyStop};
+use indentify_identify::{Evaluator, IdentifyResult, LmDamping, LmStrategy, ValleyStop};
 use indentify_study::ConfigSource;
 use indentify_study::identify::{self, IdentifyOptions};
 use serde_json::{Value, json};
@@ -140,6 +143,7 @@ struct Opts {
     op: bool,
     lm: Option<LmStrategy>,
     stop_rejected: Option<bool>,
+    damping: Option<LmDamping>,
     c2f: Option<C2f>,
     proposed: Option<bool>,
     pairs_mode: bool,
@@ -164,6 +168,7 @@ fn parse(args: &[String]) -> Result<Opts> {
     let mut op = false;
     let mut lm: Option<LmStrategy> = None;
     let mut stop_rejected: Option<bool> = None;
+    let mut damping: Option<LmDamping> = None;
     let mut c2f: Option<C2f> = None;
     let mut proposed: Option<bool> = None;
     let mut pairs_mode = false;
@@ -199,6 +204,13 @@ fn parse(args: &[String]) -> Result<Opts> {
             "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
             "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
             "--no-stop-rejected" => stop_rejected = Some(false),
+            "--lm-damping" => {
+                let v = val();
+                let names: Vec<&str> = LmDamping::ALL.iter().map(|d| d.name()).collect();
+                damping = Some(LmDamping::parse(&v).with_context(|| {
+                    format!("--lm-damping: one of {} (got `{v}`)", names.join(", "))
+                })?);
+            }
             "--proposed-step" => pairs_mode = true,
             "--both" => both = true,
             "--no-proposed-step" => proposed = Some(false),
@@ -226,6 +238,7 @@ fn parse(args: &[String]) -> Result<Opts> {
         op,
         lm,
         stop_rejected,
+        damping,
         c2f,
         proposed,
         pairs_mode,
@@ -237,7 +250,7 @@ fn parse(args: &[String]) -> Result<Opts> {
 /// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic]
 /// [--c2f N [--c2f-tight] [--c2f-space F] [--c2f-keep-time] [--c2f-correct K]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
-/// [--no-proposed-step] [--no-stop-rejected]`.
+/// [--no-proposed-step] [--no-stop-rejected] [--lm-damping NAME]`.
 pub fn run(args: &[String]) -> Result<()> {
     let Opts {
         only,
@@ -256,6 +269,7 @@ pub fn run(args: &[String]) -> Result<()> {
         op,
         lm,
         stop_rejected,
+        damping,
         c2f,
         proposed,
         pairs_mode,
@@ -330,7 +344,7 @@ pub fn run(args: &[String]) -> Result<()> {
                 rounds,
                 cold,
                 (chi2, valley, Some(on)),
-                (lm, lm_stop),
+                (lm, lm_stop, damping),
                 c2f,
             )
         };
@@ -348,7 +362,7 @@ pub fn run(args: &[String]) -> Result<()> {
             rounds,
             cold,
             (chi2, valley, proposed),
-            (lm, lm_stop),
+            (lm, lm_stop, damping),
             c2f,
         )?;
         println!(
@@ -491,7 +505,7 @@ fn measure(
     rounds: usize,
     cold: bool,
     (chi2, valley, proposed): (bool, Option<ValleyStop>, Option<bool>),
-    (lm, lm_stop): (Option<LmStrategy>, Option<bool>),
+    (lm, lm_stop, damping): (Option<LmStrategy>, Option<bool>, Option<LmDamping>),
     c2f: Option<C2f>,
 ) -> Result<Value> {
     let opts = options(root, case)?;
@@ -507,6 +521,9 @@ fn measure(
     }
     if let Some(on) = lm_stop {
         s.id_cfg.stop.lm.stop_rejected = on;
+    }
+    if let Some(d) = damping {
+        s.id_cfg.stop.lm.damping = d;
     }
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start

@@ -87,8 +87,8 @@ pub use instrument::{Instrument, Instrumented};
 pub use noise::{SplitMix64, multiplicative_noise};
 pub use optimize::{
     BfgsStart, Cancel, DEFAULT_STEP_SIGMA, IdentifyConfig, IdentifyResult, IterationRecord,
-    LmStrategy, Method, MultiStart, PROPOSED_GAIN_TOL, ParamOutcome, StopCriteria, StopReason,
-    identify, multistart, resume,
+    LmDamping, LmStrategy, Method, MultiStart, PROPOSED_GAIN_TOL, ParamOutcome, StopCriteria,
+    StopReason, identify, multistart, resume,
 };
 pub use params::{ParamSpec, Parameterization, Scaling};
 pub use problem::{Evaluator, IntoMaterial, Prefetch, Problem, Test};

@@ -31,7 +31,7 @@ use crate::IdentifyError;
 use crate::argmin_glue::{ArgminObjective, Monitored};
 use crate::identifiability::{Column, Forces, Identifiability, NoiseModel};
 use crate::linalg::{norm_inf, norm2};
-pub use crate::lm::LmStrategy;
+pub use crate::lm::{LmDamping, LmStrategy};
 use crate::params::{ParamSpec, Parameterization};
 use crate::problem::{Evaluator, Prefetch, Problem};
 

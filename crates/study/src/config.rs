@@ -27,9 +27,9 @@ use serde_json::Value;
 
 pub use design::{Candidate, DesignSection};
 pub use identify::{
-    BfgsStartName, CoarseToFineSetting, DEFAULT_LM_RADIUS, DEFAULT_PROPOSED_STEP, IdentifySection,
-    MethodName, NoiseSetting, Overrides, ParamSetting, ScalingName, fixed_item, instrument_of,
-    instrumented, name_value,
+    BfgsStartName, CoarseToFineSetting, DEFAULT_LM_DAMPING, DEFAULT_LM_RADIUS,
+    DEFAULT_PROPOSED_STEP, IdentifySection, LmDampingName, MethodName, NoiseSetting, Overrides,
+    ParamSetting, ScalingName, fixed_item, instrument_of, instrumented, name_value,
 };
 pub use law::{BuiltLaw, LawSpec, law_forms, spec_text};
 

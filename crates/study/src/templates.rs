@@ -619,19 +619,9 @@ fn ron_section<T: serde::Serialize>(name: &str, comment: &str, value: &T) -> Str
     )
 }
 
-/// The annotated `identify: (...)` section.
-fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
-    out.push_str(
-        "    // Optional: what `indentify identify` identifies, and how. A parameter listed in `params`\n\
-         \x20   // is Free (identified from `start` within [lower, upper]; the optimizer sees Log: ln c,\n\
-         \x20   // Bounds: (c - lower)/(upper - lower), or Linear: c/|start|) or Fixed (held at `value`).\n\
-         \x20   // An omitted start or value is the `law` value, omitted bounds the law's admissible range,\n\
-         \x20   // an omitted scaling Log (Linear if the lower bound is negative); a parameter not listed\n\
-         \x20   // is held at its `law` value; without this section every parameter but nu is identified\n\
-         \x20   // from its `law` value. Without --data, the data are this file's curve simulated at its\n\
-         \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
-         \x20   identify: (\n        params: {\n",
-    );
+/// The `params` lines of the `identify` section, in the law's order (names the law does
+/// not have last), each with its description.
+fn param_lines(cfg: &Config, id: &IdentifySection) -> Vec<(String, String)> {
     let infos = cfg.law.param_infos();
     let mut listed: Vec<&str> = cfg
         .law
@@ -678,6 +668,23 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
             .map_or_else(String::new, |i| format!("{} ({})", i.description, i.unit));
         lines.push((code, note));
     }
+    lines
+}
+
+/// The annotated `identify: (...)` section.
+fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
+    out.push_str(
+        "    // Optional: what `indentify identify` identifies, and how. A parameter listed in `params`\n\
+         \x20   // is Free (identified from `start` within [lower, upper]; the optimizer sees Log: ln c,\n\
+         \x20   // Bounds: (c - lower)/(upper - lower), or Linear: c/|start|) or Fixed (held at `value`).\n\
+         \x20   // An omitted start or value is the `law` value, omitted bounds the law's admissible range,\n\
+         \x20   // an omitted scaling Log (Linear if the lower bound is negative); a parameter not listed\n\
+         \x20   // is held at its `law` value; without this section every parameter but nu is identified\n\
+         \x20   // from its `law` value. Without --data, the data are this file's curve simulated at its\n\
+         \x20   // `law` values. --free, --fixed, --start, --method and --max-iter override this section.\n\
+         \x20   identify: (\n        params: {\n",
+    );
+    let lines = param_lines(cfg, id);
     block(out, "            ", &lines);
     out.push_str("        },\n");
     let st = &id.stop;
@@ -755,6 +762,10 @@ fn identify_block(out: &mut String, cfg: &Config, id: &IdentifySection) {
             (
                 format!("lm_stop_rejected: {},", st.lm_stop_rejected),
                 "Lm: stop a trial's forward run once its cost so far rejects it (same results)".into(),
+            ),
+            (
+                format!("lm_damping: {:?},", st.lm_damping),
+                "Lm: damping update Classic, Nielsen, MarquardtFletcher, GainCapped or Delayed".into(),
             ),
         ],
     );

@@ -19,8 +19,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indentify_identify::{
-    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Instrument, LmStrategy, Method, NoiseModel,
-    ParamSpec, Parameterization, Scaling, StopCriteria,
+    BfgsStart, DEFAULT_STEP_SIGMA, IdentifyConfig, Instrument, LmDamping, LmStrategy, Method,
+    NoiseModel, ParamSpec, Parameterization, Scaling, StopCriteria,
 };
 use indentify_laws::Material;
 use serde::{Deserialize, Serialize};
@@ -323,6 +323,71 @@ pub const DEFAULT_PROPOSED_STEP: bool = true;
 /// docs/performance.md, "Rejected trials stopped early").
 pub const DEFAULT_LM_STOP_REJECTED: bool = true;
 
+/// The damping updates of Levenberg-Marquardt, as named in configs
+/// (`identify.stop.lm_damping`; see `indentify_identify::LmDamping`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum LmDampingName {
+    /// `lambda /= 3` after an accepted trial, `x 4` after a rejected one.
+    #[default]
+    Classic,
+    /// Nielsen's update from the gain ratio, `nu` doubling after a rejection.
+    Nielsen,
+    /// `/3` only when the gain ratio is above 0.75, `x 2` below 0.25.
+    MarquardtFletcher,
+    /// The classic decrease capped by the gain ratio: `lambda /= 1 + 2 rho`.
+    GainCapped,
+    /// `/2` after an accepted trial, `x 3` after a rejected one.
+    Delayed,
+}
+
+/// [`LmDampingName`] as read, for an error that names the field.
+#[derive(Deserialize)]
+#[serde(rename = "LmDampingName")]
+enum LmDampingRead {
+    Classic,
+    Nielsen,
+    MarquardtFletcher,
+    GainCapped,
+    Delayed,
+}
+
+impl<'de> Deserialize<'de> for LmDampingName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error;
+        let read = LmDampingRead::deserialize(d).map_err(|e| {
+            D::Error::custom(format!(
+                "stop.lm_damping: {e} (expected Classic, Nielsen, MarquardtFletcher, \
+                 GainCapped or Delayed)"
+            ))
+        })?;
+        Ok(match read {
+            LmDampingRead::Classic => LmDampingName::Classic,
+            LmDampingRead::Nielsen => LmDampingName::Nielsen,
+            LmDampingRead::MarquardtFletcher => LmDampingName::MarquardtFletcher,
+            LmDampingRead::GainCapped => LmDampingName::GainCapped,
+            LmDampingRead::Delayed => LmDampingName::Delayed,
+        })
+    }
+}
+
+impl LmDampingName {
+    /// The library's update.
+    pub fn damping(self) -> LmDamping {
+        match self {
+            LmDampingName::Classic => LmDamping::Classic,
+            LmDampingName::Nielsen => LmDamping::Nielsen,
+            LmDampingName::MarquardtFletcher => LmDamping::MarquardtFletcher,
+            LmDampingName::GainCapped => LmDamping::GainCapped,
+            LmDampingName::Delayed => LmDamping::Delayed,
+        }
+    }
+}
+
+/// The default `identify.stop.lm_damping` of configurations: the classic update. The
+/// gain-ratio updates were measured on the fit-cost cases and none paid on all of them
+/// (docs/performance.md, "Gain-ratio damping updates without a trust radius").
+pub const DEFAULT_LM_DAMPING: LmDampingName = LmDampingName::Classic;
+
 /// Stopping rules (see `indentify_identify::StopCriteria`); costs relative to
 /// `J_ref = 1/2 sum F_exp,i^2`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -363,6 +428,10 @@ pub struct StopSection {
     /// `indentify_identify::LmStrategy::stop_rejected`; the same results bit for bit).
     /// Default true in configurations ([`DEFAULT_LM_STOP_REJECTED`]; off in the library).
     pub lm_stop_rejected: bool,
+    /// Levenberg-Marquardt only: the update of the damping after each trial (`Classic`,
+    /// `Nielsen`, `MarquardtFletcher`, `GainCapped`, `Delayed`; see
+    /// `indentify_identify::LmDamping`). Default [`DEFAULT_LM_DAMPING`].
+    pub lm_damping: LmDampingName,
 }
 
 impl Default for StopSection {
@@ -379,6 +448,7 @@ impl Default for StopSection {
             lm_radius: DEFAULT_LM_RADIUS,
             proposed_step: DEFAULT_PROPOSED_STEP,
             lm_stop_rejected: DEFAULT_LM_STOP_REJECTED,
+            lm_damping: DEFAULT_LM_DAMPING,
         }
     }
 }
@@ -397,6 +467,7 @@ impl StopSection {
             lm: LmStrategy {
                 first_radius: self.lm_radius,
                 stop_rejected: self.lm_stop_rejected,
+                damping: self.lm_damping.damping(),
                 ..LmStrategy::default()
             },
             ..StopCriteria::default()
