@@ -414,13 +414,14 @@ impl WithSimd for Solve<'_> {
     }
 }
 
-/// [`SparseCholesky::solve_multi_with`] as one SIMD-dispatched operation: the unknowns of
-/// the `k` columns interleaved by row (`kp` per row, `k` rounded up to the SIMD width,
-/// the padding zero), so that each factor entry is broadcast once and meets the `k`
-/// columns in one vector operation. Per column, the operations of [`Solve`] in its order:
-/// the fused multiply-adds where [`block_product`] and [`block_transpose_product`] take
-/// the rows in SIMD vectors, their separate products and sums on the rows of the SIMD
-/// tail, the lanes of a dot product reduced by the same `reduce_sum`.
+/// [`SparseCholesky::solve_multi_with`] as one SIMD-dispatched operation: the columns in
+/// groups of the SIMD width, each group's unknowns interleaved by row (one SIMD vector per
+/// row, the padding lanes zero), so that each factor entry is broadcast once and meets
+/// the group's columns in one vector operation. Per column, the operations of [`Solve`]
+/// in its order: the fused multiply-adds where [`block_product`] and
+/// [`block_transpose_product`] take the rows in SIMD vectors, their separate products and
+/// sums on the rows of the SIMD tail, the lanes of a dot product reduced by the same
+/// `reduce_sum`.
 struct SolveMulti<'a> {
     layout: &'a Layout,
     l: &'a [f64],
@@ -442,170 +443,159 @@ impl WithSimd for SolveMulti<'_> {
             work,
         } = self;
         let lanes = S::F64_LANES;
-        let kp = k.div_ceil(lanes) * lanes;
         let n = this.fwd.len();
-        let need = kp * (n + this.max_pattern + this.max_ncols + lanes);
+        let need = lanes * (n + this.max_pattern + this.max_ncols);
         if work.len() < need {
             work.resize(need, 0.0);
         }
-        let (x, rest) = work.split_at_mut(n * kp);
-        let (tmp, rest) = rest.split_at_mut(this.max_pattern * kp);
-        let (dots, acc) = rest.split_at_mut(this.max_ncols * kp);
-        let acc = &mut acc[..lanes * kp];
-        for (i, &f) in this.fwd.iter().enumerate() {
-            let xi = &mut x[i * kp..(i + 1) * kp];
-            for (c, v) in xi[..k].iter_mut().enumerate() {
-                *v = b[c * n + f];
+        let (x, rest) = work.split_at_mut(n * lanes);
+        let (tmp, rest) = rest.split_at_mut(this.max_pattern * lanes);
+        let dots = &mut rest[..this.max_ncols * lanes];
+        for c0 in (0..k).step_by(lanes) {
+            let kg = lanes.min(k - c0);
+            let bg = &mut b[c0 * n..(c0 + kg) * n];
+            for (i, &f) in this.fwd.iter().enumerate() {
+                let xi = &mut x[i * lanes..(i + 1) * lanes];
+                for (c, v) in xi[..kg].iter_mut().enumerate() {
+                    *v = bg[c * n + f];
+                }
+                xi[kg..].fill(0.0);
             }
-            xi[k..].fill(0.0);
-        }
-        let zero = simd.splat_f64s(0.0);
-        // forward, L y = P b
-        for sn in &this.supernodes {
-            let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
-            let (nr, m) = (nc + pat.len(), pat.len());
-            let head = m / lanes * lanes;
-            let block = &l[sn.offset..sn.offset + nr * nc];
-            let xs = &mut x[sn.start * kp..(sn.start + nc) * kp];
-            for j in 0..nc {
-                let col = &block[j * nr..j * nr + nc];
-                let (xj, below) = xs[j * kp..].split_at_mut(kp);
-                let xj = S::as_mut_simd_f64s(xj).0;
-                let d = simd.splat_f64s(col[j]);
-                for v in xj.iter_mut() {
-                    *v = simd.div_f64s(*v, d);
+            solve_group(simd, this, l, x, tmp, dots);
+            for (i, &p) in this.inv.iter().enumerate() {
+                for c in 0..kg {
+                    bg[c * n + i] = x[p * lanes + c];
                 }
-                for (ii, &lij) in col[j + 1..].iter().enumerate() {
-                    let a = simd.splat_f64s(lij);
-                    for (xv, jv) in row_mut::<S>(below, ii, kp).iter_mut().zip(xj.iter()) {
-                        *xv = simd.sub_f64s(*xv, simd.mul_f64s(a, *jv));
-                    }
-                }
-            }
-            let t = &mut tmp[..m * kp];
-            t.fill(0.0);
-            let off = &block[nc..];
-            let mut j = 0;
-            while j + 4 <= nc {
-                let xq = |q: usize| S::as_simd_f64s(&xs[(j + q) * kp..(j + q + 1) * kp]).0;
-                let (x0, x1, x2, x3) = (xq(0), xq(1), xq(2), xq(3));
-                for i in 0..m {
-                    let a = |q: usize| off[(j + q) * nr + i];
-                    let (a0, a1, a2, a3) = (a(0), a(1), a(2), a(3));
-                    let ti = row_mut::<S>(t, i, kp);
-                    if i < head {
-                        let [a0, a1, a2, a3] = [a0, a1, a2, a3].map(|v| simd.splat_f64s(v));
-                        for (v, tv) in ti.iter_mut().enumerate() {
-                            let s = simd.mul_add_e_f64s(a0, x0[v], *tv);
-                            let s = simd.mul_add_e_f64s(a1, x1[v], s);
-                            let s = simd.mul_add_e_f64s(a2, x2[v], s);
-                            *tv = simd.mul_add_e_f64s(a3, x3[v], s);
-                        }
-                    } else {
-                        let [a0, a1, a2, a3] = [a0, a1, a2, a3].map(|v| simd.splat_f64s(v));
-                        for (v, tv) in ti.iter_mut().enumerate() {
-                            let s = simd.add_f64s(simd.mul_f64s(a0, x0[v]), simd.mul_f64s(a1, x1[v]));
-                            let s = simd.add_f64s(s, simd.mul_f64s(a2, x2[v]));
-                            let s = simd.add_f64s(s, simd.mul_f64s(a3, x3[v]));
-                            *tv = simd.add_f64s(*tv, s);
-                        }
-                    }
-                }
-                j += 4;
-            }
-            while j < nc {
-                let xv = S::as_simd_f64s(&xs[j * kp..(j + 1) * kp]).0;
-                for i in 0..m {
-                    let a = simd.splat_f64s(off[j * nr + i]);
-                    let ti = row_mut::<S>(t, i, kp);
-                    if i < head {
-                        for (tv, xj) in ti.iter_mut().zip(xv) {
-                            *tv = simd.mul_add_e_f64s(a, *xj, *tv);
-                        }
-                    } else {
-                        for (tv, xj) in ti.iter_mut().zip(xv) {
-                            *tv = simd.add_f64s(*tv, simd.mul_f64s(a, *xj));
-                        }
-                    }
-                }
-                j += 1;
-            }
-            for (i, &r) in pat.iter().enumerate() {
-                let ti = S::as_simd_f64s(&t[i * kp..(i + 1) * kp]).0;
-                for (xv, tv) in row_mut::<S>(x, r, kp).iter_mut().zip(ti) {
-                    *xv = simd.sub_f64s(*xv, *tv);
-                }
-            }
-        }
-        // backward, L^T z = y
-        for sn in this.supernodes.iter().rev() {
-            let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
-            let (nr, m) = (nc + pat.len(), pat.len());
-            let head = m / lanes * lanes;
-            let block = &l[sn.offset..sn.offset + nr * nc];
-            let t = &mut tmp[..m * kp];
-            for (i, &r) in pat.iter().enumerate() {
-                t[i * kp..(i + 1) * kp].copy_from_slice(&x[r * kp..(r + 1) * kp]);
-            }
-            let d = &mut dots[..nc * kp];
-            let off = &block[nc..];
-            for j in 0..nc {
-                let a = &off[j * nr..j * nr + m];
-                // lane `q` of the single solve's accumulator: the head rows `i = q mod lanes`
-                for (q, accq) in acc.chunks_exact_mut(kp).enumerate() {
-                    let accq = S::as_mut_simd_f64s(accq).0;
-                    accq.fill(zero);
-                    for i in (q..head).step_by(lanes) {
-                        let av = simd.splat_f64s(a[i]);
-                        let ti = S::as_simd_f64s(&t[i * kp..(i + 1) * kp]).0;
-                        for (s, tv) in accq.iter_mut().zip(ti) {
-                            *s = simd.mul_add_e_f64s(av, *tv, *s);
-                        }
-                    }
-                }
-                let mut lane = [0.0f64; 16];
-                for c in 0..k {
-                    for (q, v) in lane[..lanes].iter_mut().enumerate() {
-                        *v = acc[q * kp + c];
-                    }
-                    let tail: f64 = (head..m).map(|i| a[i] * t[i * kp + c]).sum();
-                    let s = simd.reduce_sum_f64s(simd.partial_load_f64s(&lane[..lanes]));
-                    d[j * kp + c] = s + tail;
-                }
-            }
-            let xs = &mut x[sn.start * kp..(sn.start + nc) * kp];
-            for j in (0..nc).rev() {
-                let col = &block[j * nr..(j + 1) * nr];
-                let (xj, below) = xs[j * kp..].split_at_mut(kp);
-                let xj = S::as_mut_simd_f64s(xj).0;
-                let dj = S::as_simd_f64s(&d[j * kp..(j + 1) * kp]).0;
-                for (v, dv) in xj.iter_mut().zip(dj) {
-                    *v = simd.sub_f64s(*v, *dv);
-                }
-                for (ii, &lij) in col[j + 1..nc].iter().enumerate() {
-                    let a = simd.splat_f64s(lij);
-                    for (v, bv) in xj.iter_mut().zip(row_mut::<S>(below, ii, kp).iter()) {
-                        *v = simd.sub_f64s(*v, simd.mul_f64s(a, *bv));
-                    }
-                }
-                let dg = simd.splat_f64s(col[j]);
-                for v in xj.iter_mut() {
-                    *v = simd.div_f64s(*v, dg);
-                }
-            }
-        }
-        for (i, &p) in this.inv.iter().enumerate() {
-            for c in 0..k {
-                b[c * n + i] = x[p * kp + c];
             }
         }
     }
 }
 
-/// Row `r` of an interleaved block of `kp` values per row, as SIMD vectors.
+/// One group of [`SolveMulti`]: `x` (`n` SIMD vectors, row-major) in the factor's
+/// ordering; `tmp` and `dots` scratch.
 #[inline(always)]
-fn row_mut<S: Simd>(v: &mut [f64], r: usize, kp: usize) -> &mut [S::f64s] {
-    S::as_mut_simd_f64s(&mut v[r * kp..(r + 1) * kp]).0
+fn solve_group<S: Simd>(
+    simd: S,
+    this: &Layout,
+    l: &[f64],
+    x: &mut [f64],
+    tmp: &mut [f64],
+    dots: &mut [f64],
+) {
+    let lanes = S::F64_LANES;
+    let x = S::as_mut_simd_f64s(x).0;
+    let zero = simd.splat_f64s(0.0);
+    // forward, L y = P b
+    for sn in &this.supernodes {
+        let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
+        let (nr, m) = (nc + pat.len(), pat.len());
+        let head = m / lanes * lanes;
+        let block = &l[sn.offset..sn.offset + nr * nc];
+        let xs = &mut x[sn.start..sn.start + nc];
+        for j in 0..nc {
+            let col = &block[j * nr..j * nr + nc];
+            let (xj, below) = xs[j..].split_first_mut().expect("a column");
+            *xj = simd.div_f64s(*xj, simd.splat_f64s(col[j]));
+            for (xi, &lij) in below.iter_mut().zip(&col[j + 1..]) {
+                *xi = simd.sub_f64s(*xi, simd.mul_f64s(simd.splat_f64s(lij), *xj));
+            }
+        }
+        let t = &mut S::as_mut_simd_f64s(&mut tmp[..m * lanes]).0[..m];
+        t.fill(zero);
+        let off = &block[nc..];
+        let col = |j: usize| &off[j * nr..j * nr + m];
+        let mut j = 0;
+        while j + 4 <= nc {
+            let (x0, x1, x2, x3) = (xs[j], xs[j + 1], xs[j + 2], xs[j + 3]);
+            let (c0, c1, c2, c3) = (col(j), col(j + 1), col(j + 2), col(j + 3));
+            let (th, tt) = t.split_at_mut(head);
+            for ((((ti, a0), a1), a2), a3) in th.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3) {
+                let v = simd.mul_add_e_f64s(simd.splat_f64s(*a0), x0, *ti);
+                let v = simd.mul_add_e_f64s(simd.splat_f64s(*a1), x1, v);
+                let v = simd.mul_add_e_f64s(simd.splat_f64s(*a2), x2, v);
+                *ti = simd.mul_add_e_f64s(simd.splat_f64s(*a3), x3, v);
+            }
+            let tails = (&c0[head..], &c1[head..], &c2[head..], &c3[head..]);
+            for (i, ti) in tt.iter_mut().enumerate() {
+                let p0 = simd.mul_f64s(simd.splat_f64s(tails.0[i]), x0);
+                let p1 = simd.mul_f64s(simd.splat_f64s(tails.1[i]), x1);
+                let p2 = simd.mul_f64s(simd.splat_f64s(tails.2[i]), x2);
+                let p3 = simd.mul_f64s(simd.splat_f64s(tails.3[i]), x3);
+                let s = simd.add_f64s(simd.add_f64s(simd.add_f64s(p0, p1), p2), p3);
+                *ti = simd.add_f64s(*ti, s);
+            }
+            j += 4;
+        }
+        while j < nc {
+            let (xj, c) = (xs[j], col(j));
+            let (th, tt) = t.split_at_mut(head);
+            for (ti, a) in th.iter_mut().zip(c) {
+                *ti = simd.mul_add_e_f64s(simd.splat_f64s(*a), xj, *ti);
+            }
+            for (ti, a) in tt.iter_mut().zip(&c[head..]) {
+                *ti = simd.add_f64s(*ti, simd.mul_f64s(simd.splat_f64s(*a), xj));
+            }
+            j += 1;
+        }
+        for (&r, ti) in pat.iter().zip(t.iter()) {
+            x[r] = simd.sub_f64s(x[r], *ti);
+        }
+    }
+    // backward, L^T z = y
+    let mut lane = [0.0f64; 64];
+    for sn in this.supernodes.iter().rev() {
+        let (nc, pat) = (sn.ncols, &this.pattern[sn.p0..sn.p1]);
+        let (nr, m) = (nc + pat.len(), pat.len());
+        let head = m / lanes * lanes;
+        let block = &l[sn.offset..sn.offset + nr * nc];
+        {
+            let t = &mut S::as_mut_simd_f64s(&mut tmp[..m * lanes]).0[..m];
+            for (ti, &r) in t.iter_mut().zip(pat) {
+                *ti = x[r];
+            }
+        }
+        let tf = &tmp[..m * lanes];
+        let t = &S::as_simd_f64s(tf).0[..m];
+        let d = &mut S::as_mut_simd_f64s(&mut dots[..nc * lanes]).0[..nc];
+        let off = &block[nc..];
+        for (j, dj) in d.iter_mut().enumerate() {
+            let a = &off[j * nr..j * nr + m];
+            // lane `q` of the single solve's accumulator: the head rows `i = q mod lanes`
+            let mut acc = [zero; 8];
+            for (ah, th) in a[..head].chunks_exact(lanes).zip(t[..head].chunks_exact(lanes)) {
+                for q in 0..lanes {
+                    acc[q] = simd.mul_add_e_f64s(simd.splat_f64s(ah[q]), th[q], acc[q]);
+                }
+            }
+            S::as_mut_simd_f64s(&mut lane[..lanes * lanes])
+                .0
+                .copy_from_slice(&acc[..lanes]);
+            let mut out = [0.0f64; 8];
+            for (c, o) in out[..lanes].iter_mut().enumerate() {
+                let mut v = [0.0f64; 8];
+                for (q, vq) in v[..lanes].iter_mut().enumerate() {
+                    *vq = lane[q * lanes + c];
+                }
+                let tail: f64 = a[head..]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, ai)| ai * tf[(head + i) * lanes + c])
+                    .sum();
+                *o = simd.reduce_sum_f64s(simd.partial_load_f64s(&v[..lanes])) + tail;
+            }
+            *dj = simd.partial_load_f64s(&out[..lanes]);
+        }
+        let xs = &mut x[sn.start..sn.start + nc];
+        for j in (0..nc).rev() {
+            let col = &block[j * nr..(j + 1) * nr];
+            let (xj, below) = xs[j..].split_first_mut().expect("a column");
+            let mut v = simd.sub_f64s(*xj, d[j]);
+            for (xi, &lij) in below.iter().zip(&col[j + 1..nc]) {
+                v = simd.sub_f64s(v, simd.mul_f64s(simd.splat_f64s(lij), *xi));
+            }
+            *xj = simd.div_f64s(v, simd.splat_f64s(col[j]));
+        }
+    }
 }
 
 /// `t += A x` for the column-major block `A` of `t.len()` rows and `x.len()` columns, with
