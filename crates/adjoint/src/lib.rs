@@ -786,11 +786,12 @@ impl<'m> Adjoint<'m> {
                         y: &mut [Vec<Vec4>],
                         dfi: &mut [f64],
                         work: &mut [ParamWork]| {
-                let one = |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
-                    if active(k) {
-                        f(k, yk, dfk, w);
-                    }
-                };
+                let one =
+                    |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
+                        if active(k) {
+                            f(k, yk, dfk, w);
+                        }
+                    };
                 if par {
                     use rayon::prelude::*;
                     y.par_iter_mut()
@@ -808,7 +809,12 @@ impl<'m> Adjoint<'m> {
                 }
             };
             if multi.cols.len() < 2 {
-                each(&|k, yk, dfk, w| step.solve(k, yk, dfk, w), y, &mut df[i], work);
+                each(
+                    &|k, yk, dfk, w| step.solve(k, yk, dfk, w),
+                    y,
+                    &mut df[i],
+                    work,
+                );
                 continue;
             }
             // the parameters' right-hand sides, their solves in one pass over the factor
@@ -829,7 +835,12 @@ impl<'m> Adjoint<'m> {
             for (col, &k) in multi.block.chunks_exact(ne).zip(&multi.cols) {
                 work[k].eq.copy_from_slice(col);
             }
-            each(&|k, yk, dfk, w| step.finish(k, yk, dfk, w), y, &mut df[i], work);
+            each(
+                &|k, yk, dfk, w| step.finish(k, yk, dfk, w),
+                y,
+                &mut df[i],
+                work,
+            );
         }
         Ok(())
     }

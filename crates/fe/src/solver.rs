@@ -562,7 +562,10 @@ fn solve_group<S: Simd>(
             let a = &off[j * nr..j * nr + m];
             // lane `q` of the single solve's accumulator: the head rows `i = q mod lanes`
             let mut acc = [zero; 8];
-            for (ah, th) in a[..head].chunks_exact(lanes).zip(t[..head].chunks_exact(lanes)) {
+            for (ah, th) in a[..head]
+                .chunks_exact(lanes)
+                .zip(t[..head].chunks_exact(lanes))
+            {
                 for q in 0..lanes {
                     acc[q] = simd.mul_add_e_f64s(simd.splat_f64s(ah[q]), th[q], acc[q]);
                 }
@@ -811,9 +814,10 @@ mod tests {
     #[test]
     fn multi_column_solve_is_each_single_solve_bit_for_bit() {
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        for (case, (nr, nz, perturb)) in [(1, 1, false), (4, 3, false), (9, 7, true), (16, 12, false)]
-            .into_iter()
-            .enumerate()
+        for (case, (nr, nz, perturb)) in
+            [(1, 1, false), (4, 3, false), (9, 7, true), (16, 12, false)]
+                .into_iter()
+                .enumerate()
         {
             let (pattern, mut kv) = graded_stiffness(nr, nz);
             if perturb {
@@ -861,7 +865,10 @@ mod tests {
             if case == 3 {
                 let sns = &chol.layout.supernodes;
                 assert!(sns.iter().any(|s| s.ncols > 4 && s.ncols % 4 != 0));
-                assert!(sns.iter().any(|s| (s.p1 - s.p0) % 4 != 0 && s.p1 - s.p0 > 4));
+                assert!(
+                    sns.iter()
+                        .any(|s| (s.p1 - s.p0) % 4 != 0 && s.p1 - s.p0 > 4)
+                );
             }
         }
     }
