@@ -782,7 +782,7 @@ impl<'m> Adjoint<'m> {
             // short to gain from being handed to the pool (measured: no gain on 2 threads)
             let on_pool = rayon::current_thread_index().is_some();
             let par = np > 1 && on_pool && rayon::current_num_threads() > 1;
-            let each = |f: &(dyn Fn(usize, &mut Vec<Vec4>, &mut f64, &mut ParamWork) + Sync),
+            let each = |f: &ParamFn<'_>,
                         y: &mut [Vec<Vec4>],
                         dfi: &mut [f64],
                         work: &mut [ParamWork]| {
@@ -845,6 +845,9 @@ impl<'m> Adjoint<'m> {
         Ok(())
     }
 }
+
+/// One parameter's part of a step of the sensitivity pass: `(k, y_k, dF_i/dc_k, work)`.
+type ParamFn<'a> = dyn Fn(usize, &mut Vec<Vec4>, &mut f64, &mut ParamWork) + Sync + 'a;
 
 /// The work space of one parameter's forward sensitivity in a step.
 struct ParamWork {
