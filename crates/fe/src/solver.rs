@@ -11,6 +11,9 @@
 //! value positions: a numeric factorization gathers the values through it and calls faer's
 //! supernodal kernel directly, instead of faer permuting the whole matrix every time (the
 //! same matrix reaches the same kernel, so the factor is the same, bit for bit).
+//! Several right-hand sides go through one pass over the factor
+//! ([`SparseCholesky::solve_multi_with`]): each factor entry broadcast to a SIMD vector of
+//! columns, each column with the bits of its own solve.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SparseColMatRef;
