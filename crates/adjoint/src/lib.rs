@@ -179,6 +179,11 @@ pub struct Adjoint<'m> {
     compact_finite: bool,
     /// Whether the last sensitivity pass did.
     compact_used: bool,
+    /// Whether a Gauss-point sensitivity pass solves a step's parameters together
+    /// ([`Adjoint::set_multi_solve`]).
+    multi_solve: bool,
+    /// Whether the last one did.
+    multi_used: bool,
 }
 
 impl<'m> Adjoint<'m> {
@@ -210,6 +215,8 @@ impl<'m> Adjoint<'m> {
             reaction_rows: false,
             compact_finite: true,
             compact_used: false,
+            multi_solve: true,
+            multi_used: false,
         })
     }
 
@@ -239,6 +246,21 @@ impl<'m> Adjoint<'m> {
     #[doc(hidden)]
     pub fn set_compact_finite(&mut self, on: bool) {
         self.compact_finite = on;
+    }
+
+    /// Whether a Gauss-point sensitivity pass solves the parameters' systems of a step in
+    /// one pass over the factor (`true`, the default: each parameter's column the same
+    /// bits) or one parameter after the other (for comparisons and measurements).
+    #[doc(hidden)]
+    pub fn set_multi_solve(&mut self, on: bool) {
+        self.multi_solve = on;
+    }
+
+    /// Whether the last sensitivity pass solved the parameters of its steps together
+    /// (for tests and measurements).
+    #[doc(hidden)]
+    pub fn last_pass_multi_solve(&self) -> bool {
+        self.multi_used
     }
 
     /// Whether the last sensitivity pass formed the compact finite-strain operators (for
@@ -656,7 +678,6 @@ impl<'m> Adjoint<'m> {
         let Some(law) = mat.as_law() else {
             return self.sensitivities_material(mat, c, traj);
         };
-        let model = self.model;
         let start = std::time::Instant::now();
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
@@ -665,6 +686,7 @@ impl<'m> Adjoint<'m> {
         self.nodal_sens = false;
         self.reaction_rows = false;
         self.compact_used = false;
+        self.multi_used = false;
         if let Some(df_dc) = self.sensitivities_nodal(law, c, traj)? {
             self.nodal_sens = true;
             return Ok(Sensitivities {
@@ -711,7 +733,21 @@ impl<'m> Adjoint<'m> {
     ) -> Result<(), AdjointError> {
         let model = self.model;
         let np = c.len();
-        let SensBuffers { y, r_field, work } = bufs;
+        let SensBuffers {
+            y,
+            r_field,
+            work,
+            multi,
+        } = bufs;
+        multi.cols.clear();
+        if self.multi_solve {
+            multi.cols.extend((0..np).filter(|&k| !self.skips(k)));
+        }
+        self.multi_used = multi.cols.len() > 1;
+        let ne = model.dofs.n_eq;
+        multi.block.resize(ne * multi.cols.len(), 0.0);
+        multi.xbar.clear();
+        multi.xbar.resize(ne * multi.cols.len(), 0.0);
         let mut cons = Vec::new();
         for i in 0..traj.steps.len() {
             let rec = &traj.steps[i];
@@ -740,35 +776,78 @@ impl<'m> Adjoint<'m> {
                 reactions: reactions.then_some(cons.as_slice()),
             };
             let skip = &self.skip;
-            let one =
-                |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
-                    if !skip.get(k).copied().unwrap_or(false) {
-                        step.solve(k, yk, dfk, w);
-                    }
-                };
+            let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
             // in parallel on a pool's worker (an identification's tasks, or a caller's
-            // `ThreadPool::install`); from any other thread the parameters' solves are too
+            // `ThreadPool::install`); from any other thread the parameters' work is too
             // short to gain from being handed to the pool (measured: no gain on 2 threads)
             let on_pool = rayon::current_thread_index().is_some();
-            if np > 1 && on_pool && rayon::current_num_threads() > 1 {
-                use rayon::prelude::*;
-                y.par_iter_mut()
-                    .zip(df[i].par_iter_mut())
-                    .zip(work.par_iter_mut())
-                    .enumerate()
-                    .with_max_len(1)
-                    .for_each(one);
-            } else {
-                y.iter_mut()
-                    .zip(df[i].iter_mut())
-                    .zip(work.iter_mut())
-                    .enumerate()
-                    .for_each(one);
+            let par = np > 1 && on_pool && rayon::current_num_threads() > 1;
+            let each = |f: &ParamFn<'_>,
+                        y: &mut [Vec<Vec4>],
+                        dfi: &mut [f64],
+                        work: &mut [ParamWork]| {
+                let one =
+                    |(k, ((yk, dfk), w)): (usize, ((&mut Vec<Vec4>, &mut f64), &mut ParamWork))| {
+                        if active(k) {
+                            f(k, yk, dfk, w);
+                        }
+                    };
+                if par {
+                    use rayon::prelude::*;
+                    y.par_iter_mut()
+                        .zip(dfi.par_iter_mut())
+                        .zip(work.par_iter_mut())
+                        .enumerate()
+                        .with_max_len(1)
+                        .for_each(one);
+                } else {
+                    y.iter_mut()
+                        .zip(dfi.iter_mut())
+                        .zip(work.iter_mut())
+                        .enumerate()
+                        .for_each(one);
+                }
+            };
+            if multi.cols.len() < 2 {
+                each(
+                    &|k, yk, dfk, w| step.solve(k, yk, dfk, w),
+                    y,
+                    &mut df[i],
+                    work,
+                );
+                continue;
             }
+            // the parameters' right-hand sides, their solves in one pass over the factor
+            // (each column the bits of its own solve), then each parameter's remainder
+            each(&|k, yk, _, w| step.rhs(k, yk, w), y, &mut df[i], work);
+            let ne = model.dofs.n_eq;
+            for (col, &k) in multi.block.chunks_exact_mut(ne).zip(&multi.cols) {
+                col.copy_from_slice(&work[k].eq);
+            }
+            let works = &*work;
+            let cols = &multi.cols;
+            self.contact.sensitivity_solve_multi(
+                &mut multi.block,
+                |c| works[cols[c]].du_prev.as_slice(),
+                &mut multi.xbar,
+                &mut multi.solve,
+            );
+            for (col, &k) in multi.block.chunks_exact(ne).zip(&multi.cols) {
+                work[k].eq.copy_from_slice(col);
+            }
+            each(
+                &|k, yk, dfk, w| step.finish(k, yk, dfk, w),
+                y,
+                &mut df[i],
+                work,
+            );
         }
         Ok(())
     }
 }
+
+/// One parameter's part of a step of the sensitivity pass: `(k, y_k, dF_i/dc_k, work)`.
+type ParamFn<'a> = dyn Fn(usize, &mut Vec<Vec4>, &mut f64, &mut ParamWork) + Sync + 'a;
 
 /// The work space of one parameter's forward sensitivity in a step.
 struct ParamWork {
@@ -786,6 +865,8 @@ struct ParamWork {
     xbar: Vec<f64>,
     /// Load control: the step's depth variation `dU_i/dc_k` (mm per unit parameter).
     du_depth: f64,
+    /// The force dofs' sum of the step's right-hand side ([`ParamStep::rhs`]).
+    rhs_a: Option<f64>,
     solve: indentify_fe::SolveScratch,
 }
 
@@ -798,6 +879,20 @@ pub(crate) struct SensBuffers {
     /// One work space per parameter: given a step's factorized system, the parameters'
     /// solves are independent (the same arithmetic on any thread, so the same bits).
     pub work: Vec<ParamWork>,
+    /// The parameters' solves of a step together ([`RecordedContact::sensitivity_solve_multi`]).
+    pub multi: MultiCols,
+}
+
+/// The block of a step's sensitivity solves, one column per parameter computed.
+#[derive(Default)]
+pub(crate) struct MultiCols {
+    /// The parameters computed (not skipped), in order: column `c` is parameter `cols[c]`.
+    cols: Vec<usize>,
+    /// The right-hand sides, then the displacement variations (`n_eq x cols.len()`).
+    block: Vec<f64>,
+    /// The prescribed values (zero between solves).
+    xbar: Vec<f64>,
+    solve: indentify_fe::SolveScratch,
 }
 
 impl Adjoint<'_> {
@@ -810,6 +905,7 @@ impl Adjoint<'_> {
             work: (0..np)
                 .map(|_| ParamWork::new(self.model, &self.contact))
                 .collect(),
+            multi: MultiCols::default(),
         }
     }
 }
@@ -832,6 +928,7 @@ impl ParamWork {
             },
             xbar: vec![0.0; model.dofs.n_eq],
             du_depth: 0.0,
+            rhs_a: None,
             solve: contact.solve_scratch(),
         }
     }
@@ -868,6 +965,16 @@ impl ParamStep<'_> {
     /// `q = y_{i-1} - R_i e_k` (`du` on the constrained dofs as the contact prescribes:
     /// zero, or tied to the previous step's), `y_i` into `yk` and `dF_i/dc_k` into `dfk`.
     fn solve(&self, k: usize, yk: &mut [Vec4], dfk: &mut f64, w: &mut ParamWork) {
+        self.rhs(k, yk, w);
+        self.contact
+            .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+        self.finish(k, yk, dfk, w);
+    }
+
+    /// The first part of [`ParamStep::solve`]: the right-hand side
+    /// `-sum w B^T C q` (equations) into `w.eq`, and `q`, and the right-hand side's force
+    /// dofs' sum into `w.rhs_a` when the tangent's rows give `dF_i/dc_k`.
+    fn rhs(&self, k: usize, yk: &[Vec4], w: &mut ParamWork) {
         let (model, np) = (self.model, self.np);
         for (qp, ((q, b), t)) in
             w.q.iter_mut()
@@ -884,8 +991,13 @@ impl ParamStep<'_> {
             .reactions
             .map(|_| force_dofs(model, self.rec).map(|d| w.full[d]).sum::<f64>());
         model.dofs.restrict(&w.full, &mut w.eq);
-        self.contact
-            .sensitivity_solve(&mut w.eq, &w.du_prev, &mut w.xbar, &mut w.solve);
+        w.rhs_a = rhs_a;
+    }
+
+    /// The rest of [`ParamStep::solve`], from the displacement variation in `w.eq`.
+    fn finish(&self, k: usize, yk: &mut [Vec4], dfk: &mut f64, w: &mut ParamWork) {
+        let model = self.model;
+        let rhs_a = w.rhs_a;
         let shift = self.border.as_ref().map(|b| b.shift(self, k, rhs_a, w));
         expand_into(model, &w.eq, &mut w.full);
         if !w.du_prev.is_empty() {

@@ -660,6 +660,7 @@ impl Adjoint<'_> {
             mut y,
             mut r_field,
             mut work,
+            ..
         } = self.sens_buffers(np);
         let mut df = vec![vec![0.0; np]; n];
         let mut dh = vec![vec![0.0; np]; n];

@@ -922,36 +922,86 @@ impl ConstrainedSystem {
         xbar: &[f64],
         scratch: &mut SolveScratch,
     ) {
+        self.dirichlet_before(model, b, xbar);
+        self.chol.solve_with(b, scratch);
+        self.dirichlet_after(model, b, xbar);
+    }
+
+    /// [`ConstrainedSystem::solve_dirichlet_with`] for the `k` columns of the
+    /// column-major block `b` (`n_eq x k`), column `c` with the prescribed values
+    /// `xbar[c * n_eq..]`: what precedes and follows the factor's solve column by column
+    /// as there, the factor's solves in one pass over the factor
+    /// ([`SparseCholesky::solve_multi_with`]): each column the bits of its own solve.
+    ///
+    /// # Panics
+    /// As [`ConstrainedSystem::solve_dirichlet_with`]; if `b` or `xbar` is not `n_eq * k`
+    /// long.
+    pub(crate) fn solve_dirichlet_multi(
+        &self,
+        model: &Model,
+        b: &mut [f64],
+        xbar: &[f64],
+        k: usize,
+        scratch: &mut SolveScratch,
+    ) {
+        let n = model.dofs.n_eq;
+        assert_eq!(b.len(), n * k, "right-hand sides' length");
+        assert_eq!(xbar.len(), n * k, "prescribed values' length");
+        for (bc, xc) in b.chunks_exact_mut(n).zip(xbar.chunks_exact(n)) {
+            self.dirichlet_before(model, bc, xc);
+        }
+        self.chol.solve_multi_with(b, k, scratch);
+        for (bc, xc) in b.chunks_exact_mut(n).zip(xbar.chunks_exact(n)) {
+            self.dirichlet_after(model, bc, xc);
+        }
+    }
+
+    /// What [`ConstrainedSystem::solve_dirichlet_with`] does to `b` before the factor's
+    /// solve, in each of the system's modes.
+    fn dirichlet_before(&self, model: &Model, b: &mut [f64], xbar: &[f64]) {
         if self.capacitance {
             if self.frames.is_empty() {
-                self.solve_capacitance(b, xbar, scratch);
+                for &c in &self.schur_set {
+                    b[c] = 0.0;
+                }
             } else {
-                self.solve_capacitance_frames(b, xbar, scratch);
+                self.capacitance_frames_before(b);
             }
             return;
         }
         rotate_in(&self.frames, b);
-        if self.slip_idx.is_empty() {
-            self.dirichlet_rhs(model, b, xbar);
-            self.chol.solve_with(b, scratch);
-        } else {
-            self.solve_slip(model, b, xbar, scratch);
+        if !self.slip_idx.is_empty() {
+            for &i in &self.slip_idx {
+                let f = self.frames[i];
+                if let Some(er) = f.er {
+                    b[er] += f.slip * b[f.ez] - self.slip_row(model, &f, xbar, true);
+                }
+            }
+        }
+        self.dirichlet_rhs(model, b, xbar);
+    }
+
+    /// What [`ConstrainedSystem::solve_dirichlet_with`] does to `b` after the factor's
+    /// solve.
+    fn dirichlet_after(&self, model: &Model, b: &mut [f64], xbar: &[f64]) {
+        if self.capacitance {
+            if self.frames.is_empty() {
+                self.capacitance_after(b, xbar);
+            } else {
+                self.capacitance_frames_after(b, xbar);
+            }
+            return;
+        }
+        if !self.slip_idx.is_empty() {
+            self.slip_after(model, b);
         }
         rotate_out(&self.frames, b);
     }
 
-    /// The direct solve with slipping frames (`b` rotated): the slipping rows' right-hand
-    /// side `b_t + coef b_m` less their prescribed columns, the symmetric solve, and the
-    /// Woodbury correction `y = y0 - Z (I + W^T Z)^-1 W^T y0`.
-    fn solve_slip(&self, model: &Model, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
-        for &i in &self.slip_idx {
-            let f = self.frames[i];
-            if let Some(er) = f.er {
-                b[er] += f.slip * b[f.ez] - self.slip_row(model, &f, xbar, true);
-            }
-        }
-        self.dirichlet_rhs(model, b, xbar);
-        self.chol.solve_with(b, scratch);
+    /// The direct solve's Woodbury correction with slipping frames (`b` rotated, the
+    /// slipping rows' right-hand side `b_t + coef b_m` less their prescribed columns, and
+    /// solved): `y = y0 - Z (I + W^T Z)^-1 W^T y0`.
+    fn slip_after(&self, model: &Model, b: &mut [f64]) {
         let ns = self.slip_idx.len();
         let mut h: Vec<f64> = self
             .slip_idx
@@ -1060,7 +1110,7 @@ impl ConstrainedSystem {
 
     /// The capacitance mode with frames: the unconstrained factorization (once per
     /// tangent), the columns `z = K^-1 e` of both dofs of every active node, and the LU
-    /// factor of the small system of [`ConstrainedSystem::solve_capacitance_frames`].
+    /// factor of the small system of [`ConstrainedSystem::capacitance_frames_after`].
     fn factorize_capacitance_frames(&mut self) -> Result<(), FeError> {
         let t0 = std::time::Instant::now();
         self.capacitance = true;
@@ -1135,8 +1185,9 @@ impl ConstrainedSystem {
     /// `x = y + sum_l (alpha_l K^-1 E_l t_l + beta_l K^-1 E_l m_l)` with `y = K^-1 b'` (`b'`
     /// is `b` without its normal components at the active nodes, which are reactions), and
     /// `(alpha, beta)` such that `m_k . x_k = xbar_k` and the tangential equation
-    /// `alpha_k + d_k t_k . x_k = 0` hold at every active node.
-    fn solve_capacitance_frames(&self, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
+    /// `alpha_k + d_k t_k . x_k = 0` hold at every active node: here `b'`, before the
+    /// factor's solve.
+    fn capacitance_frames_before(&self, b: &mut [f64]) {
         for f in &self.frames {
             match f.er {
                 Some(er) => {
@@ -1147,7 +1198,10 @@ impl ConstrainedSystem {
                 None => b[f.ez] = 0.0,
             }
         }
-        self.chol.solve_with(b, scratch);
+    }
+
+    /// The capacitance mode's correction with frames, after the factor's solve.
+    fn capacitance_frames_after(&self, b: &mut [f64], xbar: &[f64]) {
         let nf = self.frames.len();
         let alpha_idx = alpha_indices(&self.frames);
         let nu = self.cap_piv.len();
@@ -1204,13 +1258,10 @@ impl ConstrainedSystem {
         }
     }
 
-    /// `x = K^-1 b - sum_c mu_c z_c` with `S mu = (K^-1 b)_C - xbar_C`, `b_C = 0`.
-    fn solve_capacitance(&self, b: &mut [f64], xbar: &[f64], scratch: &mut SolveScratch) {
+    /// The capacitance mode without frames, after the factor's solve of `b` (with
+    /// `b_C = 0`): `x = K^-1 b - sum_c mu_c z_c` with `S mu = (K^-1 b)_C - xbar_C`.
+    fn capacitance_after(&self, b: &mut [f64], xbar: &[f64]) {
         let set = &self.schur_set;
-        for &c in set {
-            b[c] = 0.0;
-        }
-        self.chol.solve_with(b, scratch);
         if set.is_empty() {
             return;
         }

@@ -381,6 +381,46 @@ impl<'m> RecordedContact<'m> {
             xbar[t.eq] = 0.0;
         }
     }
+
+    /// [`RecordedContact::sensitivity_solve`] of `k` parameters at once: `b` holds their
+    /// right-hand sides as the columns of a column-major `n_eq x k` block on entry and
+    /// their displacement variations on exit, column `c`'s constrained equations tied to
+    /// `du_prev(c)` (read only when [`RecordedContact::ties_steps`]); `xbar` (`n_eq x k`)
+    /// is the caller's scratch, zero on entry and exit. The factor is read once for the
+    /// `k` solves; each column gets the bits [`RecordedContact::sensitivity_solve`] gives
+    /// it.
+    ///
+    /// # Panics
+    /// If `b` or `xbar` is not a whole number of columns of `n_eq`, or they differ in
+    /// length.
+    pub fn sensitivity_solve_multi<'a>(
+        &self,
+        b: &mut [f64],
+        du_prev: impl Fn(usize) -> &'a [f64],
+        xbar: &mut [f64],
+        scratch: &mut SolveScratch,
+    ) {
+        let n = self.model.dofs.n_eq;
+        assert!(n > 0 && b.len() % n == 0, "whole columns of the equations");
+        let k = b.len() / n;
+        for (c, xc) in xbar.chunks_exact_mut(n).enumerate().take(k) {
+            if self.ties.is_empty() {
+                break;
+            }
+            let d = du_prev(c);
+            for t in &self.ties {
+                let nd = t.node;
+                xc[t.eq] = t.coef * (t.t[0] * d[2 * nd] + t.t[1] * d[2 * nd + 1]);
+            }
+        }
+        self.system
+            .solve_dirichlet_multi(self.model, b, xbar, k, scratch);
+        for xc in xbar.chunks_exact_mut(n) {
+            for t in &self.ties {
+                xc[t.eq] = 0.0;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
