@@ -16,64 +16,16 @@
 //! does not read the rows (`Adjoint::last_pass_reaction_rows`) and a load-controlled
 //! step's force variation is the passes' round-off instead of its prescribed zero.
 
+mod common;
+
+use common::sphere_model as model;
 use indentify_adjoint::{Adjoint, FrameIndex, LoadSensitivities};
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, HistorySegment, Kinematics, LoadHistory, Model, Punch,
-    Schedule, SolverOptions, Target, Trajectory, trapezoid,
+    ContactKind, DirectSolver, Frame, Kinematics, LoadHistory, Model, Schedule, Target, Trajectory,
+    trapezoid,
 };
 use indentify_laws::{Hardening, LawMaterial, Material, Maxwell, NortonHoff, Plastic, Prony, Rate};
-use indentify_mesh::CylinderMesher;
-
-/// The 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45 towards the axis and the top, under a
-/// sphere of radius 1 mm with contact `kind` and kinematics `kin`.
-fn model(kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
-
-fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
-}
-
-fn force(duration: f64, force: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: None,
-        force: Some(force),
-        steps,
-    }
-}
-
-fn depth(duration: f64, depth: f64, steps: usize) -> HistorySegment {
-    HistorySegment {
-        duration,
-        depth: Some(depth),
-        force: None,
-        steps,
-    }
-}
-
-/// Ramp to `p` N, hold, unload to `0.4 p`, 5 steps per segment of 1 s.
-fn lhu(p: f64) -> LoadHistory {
-    LoadHistory::from_segments(&[force(1.0, p, 5), force(1.0, p, 5), force(1.0, 0.4 * p, 5)])
-        .unwrap()
-}
+use indentify_testkit::{depth, force, force_lhu, recording};
 
 /// Depth to 0.03 mm, load to `p` N, hold, depth back to 0.03 mm.
 fn mixed(p: f64) -> LoadHistory {
@@ -118,9 +70,11 @@ fn machine() -> Schedule {
 fn run(m: &Model, mat: &dyn Material, c: &[f64], drive: Drive<'_>, record: bool) -> Trajectory {
     let mut solver = DirectSolver::new(m).unwrap();
     match drive {
-        Drive::Load(h) => solver.run_history(mat, c, h, &opts(record)).unwrap(),
+        Drive::Load(h) => solver
+            .run_history(mat, c, h, &recording(record, 1e-12))
+            .unwrap(),
         Drive::Frame => solver
-            .run_compliant(mat, c, &machine(), &frame(), &opts(record))
+            .run_compliant(mat, c, &machine(), &frame(), &recording(record, 1e-12))
             .unwrap(),
     }
 }
@@ -231,7 +185,11 @@ fn compare(m: &Model, mat: &dyn Material, c: &[f64], drive: Drive<'_>) -> (f64, 
 #[test]
 fn rows_equal_the_gauss_point_passes() {
     let friction = ContactKind::normal_with_friction(0.2).unwrap();
-    let (h_nh, h_mx, h_pr) = (lhu(600.0), lhu(300.0), lhu(1500.0));
+    let (h_nh, h_mx, h_pr) = (
+        force_lhu(600.0, 5),
+        force_lhu(300.0, 5),
+        force_lhu(1500.0, 5),
+    );
     let (m_nh, m_pr) = (mixed(600.0), mixed(1500.0));
     let prony = Prony::new(2).unwrap();
     let power = Plastic::new(Hardening::Power, Rate::Norton);
@@ -366,7 +324,7 @@ fn against_differences(
 #[test]
 fn rows_match_central_differences() {
     let friction = ContactKind::normal_with_friction(0.2).unwrap();
-    let (h_nh, h_pr) = (lhu(600.0), lhu(1500.0));
+    let (h_nh, h_pr) = (force_lhu(600.0, 5), force_lhu(1500.0, 5));
     let prony = Prony::new(2).unwrap();
     let mut report = Vec::new();
     for (name, kind, kin) in [

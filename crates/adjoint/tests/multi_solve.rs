@@ -6,29 +6,14 @@
 //! step, slipping rows' Woodbury correction), finite strain, every parameter or a subset,
 //! on one thread and on a pool of two.
 
+mod common;
+
+use common::sphere_model as model;
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
-    ContactKind, DirectSolver, Kinematics, Model, Punch, Schedule, SolverOptions, trapezoid,
+    ContactKind, DirectSolver, Kinematics, Model, Schedule, SolverOptions, trapezoid,
 };
 use indentify_laws::{LawMaterial, NortonHoff};
-use indentify_mesh::CylinderMesher;
-
-fn model(kind: ContactKind, kin: Kinematics) -> Model {
-    let mesh = CylinderMesher {
-        radius: 4.0,
-        height: 4.0,
-        nr: 8,
-        nz: 8,
-        grading_r: 1.45,
-        grading_z: 1.45,
-    }
-    .build()
-    .unwrap();
-    Model::with_contact(mesh, Punch::Sphere { radius: 1.0 }, kind)
-        .unwrap()
-        .with_kinematics(kin)
-        .unwrap()
-}
 
 const NH: [f64; 5] = [1e5, 0.3, 1500.0, 5.0, 500.0];
 

@@ -16,13 +16,14 @@
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::relative_difference;
 use indentify_contact::{
-    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, SolverOptions, Trajectory,
+    ContactKind, DirectSolver, Frame, Model, Punch, Schedule, Segment, Trajectory,
 };
 use indentify_laws::{
     Elastic, ElasticDomain, Law, LawError, LawMaterial, LocalFailure, LocalUpdate, Mat4, Material,
     ParamInfo, Prony, Vec4,
 };
 use indentify_mesh::CylinderMesher;
+use indentify_testkit::recording;
 
 /// The 4 x 4 mm cylinder, 8 x 8 Q8 graded 1.45, under a cone of 68 deg, vertical contact.
 fn model() -> Model {
@@ -44,14 +45,6 @@ fn model() -> Model {
         ContactKind::Vertical,
     )
     .unwrap()
-}
-
-fn opts(record: bool) -> SolverOptions {
-    SolverOptions {
-        record_fields: record,
-        residual_tol: 1e-12,
-        ..SolverOptions::default()
-    }
 }
 
 /// To 0.06 mm in 1 s, hold 1 s, back to zero in 1 s (6 steps each), then held at zero
@@ -101,9 +94,9 @@ fn prony_held_until_relaxed_sweeps_all_nodal() {
         let run = |c: &[f64], record: bool| {
             let mut s = DirectSolver::new(&m).unwrap();
             if through_frame {
-                s.run_compliant(&mat, c, &schedule, &frame, &opts(record))
+                s.run_compliant(&mat, c, &schedule, &frame, &recording(record, 1e-12))
             } else {
-                s.run(&mat, c, &schedule, &opts(record))
+                s.run(&mat, c, &schedule, &recording(record, 1e-12))
             }
             .unwrap()
         };
@@ -264,7 +257,7 @@ fn a_residual_derivative_off_the_isotropic_form_keeps_the_gauss_point_pass_at_re
     let c = [1e5, 0.3];
     let t = DirectSolver::new(&m)
         .unwrap()
-        .run(&mat, &c, &to_rest(1.0), &opts(true))
+        .run(&mat, &c, &to_rest(1.0), &recording(true, 1e-12))
         .unwrap();
     let n = t.steps.len();
     let peak = (0..=n).fold(0.0f64, |a, j| a.max(largest_stress(&t, j)));

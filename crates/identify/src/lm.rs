@@ -118,7 +118,7 @@ pub(crate) enum Rule {
     TrustRegion,
 }
 
-/// How a [`Rule::Classic`] run updates its damping `lambda` after a trial
+/// How a classic (not trust-region) run updates its damping `lambda` after a trial
 /// ([`LmStrategy::damping`]). `rho` is the gain ratio of the accepted trial: its actual
 /// decrease of `f` over the decrease the Gauss-Newton model `f + g.s + s^T A^T A s / 2`
 /// predicts along the same (projected) step. Each is measured on the fit-cost cases in
