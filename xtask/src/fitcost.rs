@@ -150,48 +150,56 @@ struct Opts {
     both: bool,
 }
 
+impl Default for Opts {
+    fn default() -> Opts {
+        Opts {
+            only: None,
+            quick: false,
+            rounds: 3,
+            json_out: None,
+            compare: None,
+            cold: false,
+            chi2: true,
+            valley: None,
+            columns_mode: false,
+            batch_mode: false,
+            jobs: 2,
+            map_n: 10,
+            profile: false,
+            op: false,
+            lm: None,
+            stop_rejected: None,
+            damping: None,
+            c2f: None,
+            proposed: None,
+            pairs_mode: false,
+            both: false,
+        }
+    }
+}
+
 /// Parses `cargo xtask fit-cost`'s options.
 fn parse(args: &[String]) -> Result<Opts> {
-    let mut only: Option<Vec<String>> = None;
-    let mut quick = false;
-    let mut rounds = 3usize;
-    let mut json_out: Option<PathBuf> = None;
-    let mut compare: Option<PathBuf> = None;
-    let mut cold = false;
-    let mut chi2 = true;
-    let mut valley: Option<ValleyStop> = None;
-    let mut columns_mode = false;
-    let mut batch_mode = false;
-    let mut jobs = 2usize;
-    let mut map_n = 10usize;
-    let mut profile = false;
-    let mut op = false;
-    let mut lm: Option<LmStrategy> = None;
-    let mut stop_rejected: Option<bool> = None;
-    let mut damping: Option<LmDamping> = None;
-    let mut c2f: Option<C2f> = None;
-    let mut proposed: Option<bool> = None;
-    let mut pairs_mode = false;
-    let mut both = false;
+    let mut o = Opts::default();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().cloned().unwrap_or_default();
         match a.as_str() {
-            "--only" => only = Some(val().split(',').map(str::to_string).collect()),
-            "--quick" => quick = true,
-            "--rounds" => rounds = val().parse().context("--rounds: a number >= 1")?,
-            "--json" => json_out = Some(PathBuf::from(val())),
-            "--compare" => compare = Some(PathBuf::from(val())),
-            "--cold" => cold = true,
-            "--no-chi2" => chi2 = false,
-            "--valley" => valley = Some(ValleyStop::default()),
-            "--valley-steps" | "--valley-chi2" => valley_option(&mut valley, a, &val())?,
-            "--columns" => columns_mode = true,
-            "--batch" => batch_mode = true,
-            "--profile" => profile = true,
-            "--op" => op = true,
-            "--jobs" => jobs = val().parse().context("--jobs: a number >= 1")?,
-            "--map-n" => map_n = val().parse().context("--map-n: a number >= 1")?,
+            "--only" => o.only = Some(val().split(',').map(str::to_string).collect()),
+            "--quick" => o.quick = true,
+            "--rounds" => o.rounds = val().parse().context("--rounds: a number >= 1")?,
+            "--json" => o.json_out = Some(PathBuf::from(val())),
+            "--compare" => o.compare = Some(PathBuf::from(val())),
+            "--cold" => o.cold = true,
+            "--no-chi2" => o.chi2 = false,
+            "--valley" => o.valley = Some(ValleyStop::default()),
+            "--valley-steps" | "--valley-chi2" => valley_option(&mut o.valley, a, &val())?,
+            "--columns" => o.columns_mode = true,
+            "--batch" => o.batch_mode = true,
+            "--profile" => o.profile = true,
+            "--op" => o.op = true,
+            "--jobs" => o.jobs = val().parse().context("--jobs: a number >= 1")?,
+            "--map-n" => o.map_n = val().parse().context("--map-n: a number >= 1")?,
             "--lm-radius" => {
                 let r: f64 = val()
                     .parse()
@@ -199,51 +207,29 @@ fn parse(args: &[String]) -> Result<Opts> {
                 if !(r >= 0.0 && r.is_finite()) {
                     bail!("--lm-radius: a length > 0 in the scaled variables, 0 off (got {r})");
                 }
-                lm.get_or_insert_with(LmStrategy::default).first_radius = (r > 0.0).then_some(r);
+                o.lm.get_or_insert_with(LmStrategy::default).first_radius = (r > 0.0).then_some(r);
             }
-            "--line-model" => lm.get_or_insert_with(LmStrategy::default).line_model = true,
-            "--geodesic" => lm.get_or_insert_with(LmStrategy::default).geodesic = true,
-            "--no-stop-rejected" => stop_rejected = Some(false),
+            "--line-model" => o.lm.get_or_insert_with(LmStrategy::default).line_model = true,
+            "--geodesic" => o.lm.get_or_insert_with(LmStrategy::default).geodesic = true,
+            "--no-stop-rejected" => o.stop_rejected = Some(false),
             "--lm-damping" => {
                 let v = val();
                 let names: Vec<&str> = LmDamping::ALL.iter().map(|d| d.name()).collect();
-                damping = Some(LmDamping::parse(&v).with_context(|| {
+                o.damping = Some(LmDamping::parse(&v).with_context(|| {
                     format!("--lm-damping: one of {} (got `{v}`)", names.join(", "))
                 })?);
             }
-            "--proposed-step" => pairs_mode = true,
-            "--both" => both = true,
-            "--no-proposed-step" => proposed = Some(false),
+            "--proposed-step" => o.pairs_mode = true,
+            "--both" => o.both = true,
+            "--no-proposed-step" => o.proposed = Some(false),
             "--c2f" | "--c2f-space" | "--c2f-keep-time" | "--c2f-correct" | "--c2f-fine-radius" => {
-                c2f_option(&mut c2f, a, &mut val)?;
+                c2f_option(&mut o.c2f, a, &mut val)?;
             }
             "--c2f-tight" => C2F_TIGHT.store(true, std::sync::atomic::Ordering::Relaxed),
             other => bail!("unknown option {other}"),
         }
     }
-    Ok(Opts {
-        only,
-        quick,
-        rounds,
-        json_out,
-        compare,
-        cold,
-        chi2,
-        valley,
-        columns_mode,
-        batch_mode,
-        jobs,
-        map_n,
-        profile,
-        op,
-        lm,
-        stop_rejected,
-        damping,
-        c2f,
-        proposed,
-        pairs_mode,
-        both,
-    })
+    Ok(o)
 }
 
 /// `cargo xtask fit-cost [--only r2,r1-map] [--quick] [--rounds N] [--json FILE]
