@@ -89,12 +89,10 @@ mod tests {
     fn params() -> impl Strategy<Value = Vec<f64>> {
         (
             log_uniform(1e2, 1e6),
-            // below 0.45: near nu = 0.5 the volume's elastic compliance 3 (1 - 2 nu) / E
-            // vanishes beside the bulk dashpot's, and one random case (nu = 0.4846) missed
-            // the harness' tolerance for d sigma1 / d sigma0 with 1.8e-5; the update is
-            // linear, so an error in C S would show at every nu: the comparison's
-            // conditioning there, not investigated further
-            -0.9..0.45f64,
+            // up to 0.49 like the other laws: near nu = 0.5 the volume's elastic compliance
+            // 3 (1 - 2 nu) / E vanishes beside the bulk dashpot's and the local system is
+            // ill-conditioned, which the harness' round-off allowance now measures
+            -0.9..0.49f64,
             log_uniform(1e1, 1e7),
             log_uniform(1e1, 1e7),
         )
