@@ -9,7 +9,8 @@
 //! differences in `gradient_fd*.rs` and `gradient_load.rs`.
 //!
 //! Reference: this code's own results at cbe5990, which `gradient_fd*.rs` checked against
-//! central differences. Model: the 4 x 4 mm cylinder (8 x 8 Q8) under a cone,
+//! central differences; Norton-Hoff under normal contact re-pinned when diverging attempts
+//! came to be cut early (the comparison at its entry). Model: the 4 x 4 mm cylinder (8 x 8 Q8) under a cone,
 //! load-hold-unload in 6 steps per segment.
 
 mod common;
@@ -113,11 +114,17 @@ const EXPECTED: [[u64; 4]; 10] = [
         0xbac53c638c031ecf,
         0x4cf121109bf13afe,
     ],
+    // re-pinned when a diverging depth-controlled attempt came to be cut once its
+    // residual stalled (`contact/src/newton.rs`, `STALLED_ITERATIONS`): this run cuts two
+    // steps, and the retries start from the factor of a shorter failed attempt; against
+    // cbe5990's bits the forces moved by 2.2e-16, the gradient by 1.3e-14 and the
+    // sensitivities by 5.6e-15 of their largest entries, the same steps and iterations,
+    // in 149 Gauss-point passes and 34 factorizations instead of 199 and 56
     [
-        0xc71730bad8844510,
-        0x72ce0fe443dad0f3,
-        0x8c46426394c13706,
-        0xff2cde576342095b,
+        0x9568bf38dfd3e508,
+        0xe3f4f9c851d36b84,
+        0xe25faca7511cd9fc,
+        0xa3b50b8bacb1f5f0,
     ],
     [
         0xddc3e5388431904a,

@@ -37,6 +37,12 @@ pub(crate) enum StepFailure {
     Newton {
         residual: f64,
     },
+    /// Depth control: the residual norm has not gone below its best (with the contact set
+    /// unchanged) for [`STALLED_ITERATIONS`] iterations: the iteration diverges.
+    Stalled {
+        residual: f64,
+        iterations: u32,
+    },
     Cycling {
         changes: u32,
     },
@@ -67,6 +73,15 @@ impl std::fmt::Display for StepFailure {
             StepFailure::Newton { residual } => write!(
                 f,
                 "global Newton did not converge (relative residual {residual:.3e})"
+            ),
+            StepFailure::Stalled {
+                residual,
+                iterations,
+            } => write!(
+                f,
+                "global Newton diverged: no iterate below its best residual for \
+                 {STALLED_ITERATIONS} iterations, at iteration {iterations} (relative residual \
+                 {residual:.3e})"
             ),
             StepFailure::Cycling { changes } => {
                 write!(f, "active set cycling after {changes} changes")
@@ -346,6 +361,49 @@ struct Residual {
     norm: f64,
 }
 
+/// Iterations without a residual norm below the best one of the same contact set after
+/// which a depth-controlled step is given up as diverging and cut. The whole test suite
+/// and the examples measured (docs/solver.md, "Diverging iterations cut early"): every
+/// converged depth-controlled step went at most 12 iterations without a new best, and
+/// the attempts that ran to `max_iterations` (60) mostly had their best before the 10th
+/// iteration, their norm growing after it.
+pub(crate) const STALLED_ITERATIONS: u32 = 20;
+
+/// The best residual norm of the current contact set and the iteration it was reached,
+/// for [`STALLED_ITERATIONS`].
+#[derive(Clone, Copy, Debug)]
+struct Stall {
+    best: f64,
+    at: u32,
+    changes: u32,
+}
+
+impl Default for Stall {
+    fn default() -> Self {
+        Stall {
+            best: f64::INFINITY,
+            at: 0,
+            changes: u32::MAX,
+        }
+    }
+}
+
+impl Stall {
+    /// Records the iterate's residual and says whether the iteration has stalled: the
+    /// first iterate (before a solve, where the prescribed increments are not applied
+    /// yet) and a change of the contact set start the count again.
+    fn stalled(&mut self, r: &Residual, it: &Iteration) -> bool {
+        if it.iterations <= 1 || it.changes != self.changes || r.norm < self.best {
+            *self = Stall {
+                best: r.norm,
+                at: it.iterations,
+                changes: it.changes,
+            };
+        }
+        it.iterations - self.at >= STALLED_ITERATIONS
+    }
+}
+
 /// What the complementarity check of a pass found.
 enum Check {
     /// The sets hold and equilibrium has converged: the step is done.
@@ -589,6 +647,7 @@ impl<'m> Newton<'m> {
         // `gradient_load_material`'s J2 case, the joined first step changed which later
         // steps were cut, and one finite-difference run cut once more than its base)
         let mut joining = triggered && self.model.contact == ContactKind::Vertical;
+        let mut stall = Stall::default();
         loop {
             // every pass evaluates the current iterate once, then checks or solves
             let mut r = self.evaluate(spec, &law, &mut it, timing)?;
@@ -614,6 +673,12 @@ impl<'m> Newton<'m> {
             }
             if it.iterations as usize >= spec.opts.max_iterations {
                 return Err(StepFailure::Newton { residual: r.rel });
+            }
+            if spec.load.is_none() && stall.stalled(&r, &it) {
+                return Err(StepFailure::Stalled {
+                    residual: r.rel,
+                    iterations: it.iterations,
+                });
             }
             it.iterations += 1;
             self.solve(spec, &law, &mut it, r, timing)?;
