@@ -34,7 +34,12 @@ use indentify_contact::{StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};
 
 use crate::affine::Iso;
+use crate::load::Border;
+use crate::material::SensDrive;
 use crate::{Adjoint, AdjointError};
+
+/// Per-step rows of per-parameter variations (`[step][parameter]`).
+pub(crate) type Rows = Vec<Vec<f64>>;
 
 /// One parameter's state and work space in the all-nodal pass (equation vectors).
 struct NodalParam {
@@ -73,11 +78,15 @@ struct NodalStep<'a> {
     /// The active dofs' equations.
     cons: &'a [usize],
     contact: &'a indentify_contact::RecordedContact<'a>,
+    /// Load control or the frame: the step's depth column and what sets its depth
+    /// variation (`load.rs`).
+    border: Option<Border<'a>>,
 }
 
 impl NodalStep<'_> {
-    /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k`.
-    fn solve(&self, k: usize, w: &mut NodalParam) -> f64 {
+    /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k` and
+    /// `dU_i/dc_k` (zero without a border).
+    fn solve(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
         let (ds, dg, dt) = (self.ds[k], self.dg[k], self.dt);
         for e in 0..w.y.len() {
             let (a1, b1) = (self.a1[e], self.b1[e]);
@@ -98,12 +107,39 @@ impl NodalStep<'_> {
         }
         self.contact
             .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
-        // dF: the active rows of K_i (q_a + du) + (c_p + c_q) K_J q_b
         let pat = self.pattern;
-        let mut df = 0.0;
-        for &c in self.cons {
-            df += w.kq[c] + pat.row_dot(self.k, c, &w.eq) + f * w.kjq[c];
-        }
+        let (df, du_u) = match &self.border {
+            None => {
+                // dF: the active rows of K_i (q_a + du) + (c_p + c_q) K_J q_b
+                let mut df = 0.0;
+                for &c in self.cons {
+                    df += w.kq[c] + pat.row_dot(self.k, c, &w.eq) + f * w.kjq[c];
+                }
+                (-df, 0.0)
+            }
+            // the bordered step (`load.rs`): the force variation at the depth held,
+            // `rhs_A - (K du)_A`, sets the depth's, whose column joins `du`; the step's
+            // force is then prescribed or read from the rows again
+            Some(b) => {
+                let rhs_a: f64 = self.cons.iter().map(|&c| -(w.kq[c] + f * w.kjq[c])).sum();
+                let rows = |du: &[f64]| {
+                    self.cons
+                        .iter()
+                        .map(|&c| pat.row_dot(self.k, c, du))
+                        .sum::<f64>()
+                };
+                let du_u = b.depth_variation(k, rhs_a - rows(&w.eq));
+                for (e, c) in w.eq.iter_mut().zip(b.col) {
+                    *e += du_u * c;
+                }
+                let df = if b.force_prescribed {
+                    b.given[k]
+                } else {
+                    rhs_a - rows(&w.eq)
+                };
+                (df, du_u)
+            }
+        };
         for e in 0..w.y.len() {
             let du = w.eq[e];
             let wv = du + w.qa[e];
@@ -111,7 +147,7 @@ impl NodalStep<'_> {
             w.y[e] = s.p * sa - du;
             w.yb[e] = s.q * sa + (s.p + s.q) * sb;
         }
-        -df
+        (df, du_u)
     }
 }
 
@@ -139,7 +175,9 @@ impl Adjoint<'_> {
         self.reaction_rows
     }
 
-    /// The forward sensitivities `dF_i/dc_k` of `traj` all-nodal (the parameters
+    /// The forward sensitivities `dF_i/dc_k` and `dU_i/dc_k` of `traj` all-nodal, driven
+    /// by depth, under load control or through the frame (`drive`, the bordered step of
+    /// `load.rs`; `dU_i/dc_k` zero under depth control; the parameters
     /// [`Adjoint::skips`] leaves out stay zero), or `None` when the pass does not apply
     /// (the conditions of the all-nodal sweep, `Adjoint::begin_nodal`, a constraint that
     /// ties steps, an active dof without an equation, or a law whose residual's parameter
@@ -150,11 +188,10 @@ impl Adjoint<'_> {
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
-    ) -> Result<Option<Vec<Vec<f64>>>, AdjointError> {
+        drive: SensDrive<'_>,
+    ) -> Result<Option<(Rows, Rows)>, AdjointError> {
         let model = self.model;
-        if self.contact.ties_steps()
-            || (model.candidates.iter()).any(|&n| model.dofs.equation(2 * n + 1).is_none())
-        {
+        if !self.nodal_sens_applies() {
             return Ok(None);
         }
         self.begin_nodal(law, c, traj);
@@ -183,15 +220,14 @@ impl Adjoint<'_> {
             })
             .collect();
         let mut df = vec![vec![0.0; np]; n];
+        let mut dh = vec![vec![0.0; np]; n];
+        let mut carry = crate::load::SegmentCarry::new(np, n_eq);
         let mut cons = Vec::new();
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, true)?;
-            let prev = i
-                .checked_sub(1)
-                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
-            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let border = self.nodal_border(drive, traj, i, &mut carry, (&df, &dh))?;
             let ct = Iso::of(&self.tangents[0]).ok_or_else(|| AdjointError::Step {
                 step: i,
                 t: rec.t,
@@ -215,31 +251,52 @@ impl Adjoint<'_> {
                 dg: &ip.dg,
                 cons: &cons,
                 contact: &self.contact,
+                border: border.map(|load| carry.border(load, drive)),
             };
             let skip = &self.skip;
-            let one = |(k, (w, dfk)): (usize, (&mut NodalParam, &mut f64))| {
-                if !skip.get(k).copied().unwrap_or(false) {
-                    *dfk = step.solve(k, w);
-                }
-            };
-            // as the Gauss-point pass: the parameters in parallel on a pool's worker
-            let on_pool = rayon::current_thread_index().is_some();
-            if np > 1 && on_pool && rayon::current_num_threads() > 1 {
-                use rayon::prelude::*;
-                work.par_iter_mut()
-                    .zip(df[i].par_iter_mut())
-                    .enumerate()
-                    .with_max_len(1)
-                    .for_each(one);
-            } else {
-                work.iter_mut()
-                    .zip(df[i].iter_mut())
-                    .enumerate()
-                    .for_each(one);
-            }
+            let (dfi, dhi) = (&mut df[i], &mut dh[i]);
+            for_each_param(&mut work, dfi, dhi, |k, w| {
+                (!skip.get(k).copied().unwrap_or(false)).then(|| step.solve(k, w))
+            });
         }
         self.fused.nodal.params = Some(ip);
-        Ok(Some(df))
+        Ok(Some((df, dh)))
+    }
+
+    /// Whether the all-nodal sensitivity pass may run on this workspace's model and
+    /// contact: no constraint ties a step to the previous one (friction's sticking) and
+    /// every candidate's vertical dof has an equation (its row gives `dF_i/dc_k`).
+    pub(crate) fn nodal_sens_applies(&self) -> bool {
+        let model = self.model;
+        !self.contact.ties_steps()
+            && (model.candidates.iter()).all(|&n| model.dofs.equation(2 * n + 1).is_some())
+    }
+
+    /// Prepares step `i`'s sensitivities in the contact (its system prepared) and, for a
+    /// bordered drive, its depth column into `carry`: `Some(load)` when the step is
+    /// bordered ([`crate::load::SegmentCarry::step`], `FrameDrive::step`).
+    pub(crate) fn nodal_border(
+        &mut self,
+        drive: SensDrive<'_>,
+        traj: &Trajectory,
+        i: usize,
+        carry: &mut crate::load::SegmentCarry,
+        rows: (&[Vec<f64>], &[Vec<f64>]),
+    ) -> Result<Option<bool>, AdjointError> {
+        let rec = &traj.steps[i];
+        let border = match drive {
+            SensDrive::Depth => None,
+            SensDrive::Load(h) => carry.step(&mut self.contact, h, traj, i, rows)?,
+            SensDrive::Frame(f) => Some(f.step(&mut self.contact, rec, carry)),
+        };
+        let prev = match (i.checked_sub(1), drive) {
+            (Some(p), _) => Some((&traj.steps[p], traj.fields[i].u.as_slice())),
+            (None, SensDrive::Frame(f)) => Some((f.initial(), traj.fields[0].u.as_slice())),
+            (None, _) => None,
+        };
+        self.contact
+            .prepare_sensitivities(rec, &traj.fields[i + 1].u, prev);
+        Ok(border)
     }
 
     /// Whether the law's own `R_i e_k` (`Law::residual_param_derivatives`) is the
@@ -306,4 +363,37 @@ pub(crate) fn active_equations(
             .iter()
             .filter_map(|&k| model.dofs.equation(2 * model.candidates[k as usize] + 1)),
     );
+}
+
+/// Runs `one(k, work)` for every parameter `k` of a step, storing its `(dF_i/dc_k,
+/// dU_i/dc_k)` (`None`: skipped, left zero): in parallel on a pool's worker with more
+/// than one thread, as the Gauss-point pass (each parameter's recursion is the same
+/// arithmetic on any thread: the same bits), else in order.
+pub(crate) fn for_each_param<W: Send>(
+    work: &mut [W],
+    df: &mut [f64],
+    dh: &mut [f64],
+    one: impl Fn(usize, &mut W) -> Option<(f64, f64)> + Sync,
+) {
+    let each = |(k, ((w, f), h)): (usize, ((&mut W, &mut f64), &mut f64))| {
+        if let Some((a, b)) = one(k, w) {
+            (*f, *h) = (a, b);
+        }
+    };
+    let on_pool = rayon::current_thread_index().is_some();
+    if work.len() > 1 && on_pool && rayon::current_num_threads() > 1 {
+        use rayon::prelude::*;
+        work.par_iter_mut()
+            .zip(df.par_iter_mut())
+            .zip(dh.par_iter_mut())
+            .enumerate()
+            .with_max_len(1)
+            .for_each(each);
+    } else {
+        work.iter_mut()
+            .zip(df.iter_mut())
+            .zip(dh.iter_mut())
+            .enumerate()
+            .for_each(each);
+    }
 }
