@@ -11,7 +11,8 @@
 //! - against central differences of the direct solver's own runs (forces under depth
 //!   control and through the frame, depths under load control), with the contact set of
 //!   the +-h runs held;
-//! - the same bits on one and two threads;
+//! - the same bits on one and two threads, and with the parameters' solves together
+//!   (`Adjoint::set_multi_solve`) or one after the other;
 //! - normal contact and finite strain keep the Gauss-point pass.
 
 mod common;
@@ -333,20 +334,25 @@ fn one_and_two_threads_give_the_same_bits() {
     for (mat, c) in [prony(3), prony(1)] {
         for drive in DRIVES {
             let t = run(&m, &mat, &c, drive, true);
-            let on = |threads: usize| {
+            let on = |threads: usize, multi: bool| {
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
                     .build()
                     .unwrap();
                 let mut adj = Adjoint::new(&m).unwrap();
+                adj.set_multi_solve(multi);
                 let s = pool.install(|| pass(&mut adj, &mat, &c, &t, drive, None));
                 assert!(adj.last_pass_nodal());
+                assert_eq!(adj.last_pass_multi_solve(), multi);
                 (s.df_dc.iter().chain(&s.dh_dc))
                     .flatten()
                     .map(|x| x.to_bits())
                     .collect::<Vec<_>>()
             };
-            assert_eq!(on(1), on(2), "{drive:?}");
+            let one = on(1, true);
+            assert_eq!(one, on(2, true), "{drive:?}");
+            // the parameters' solves together or one after the other: the same bits
+            assert_eq!(one, on(1, false), "{drive:?}");
         }
     }
 }

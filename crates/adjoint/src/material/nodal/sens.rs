@@ -119,6 +119,8 @@ struct MatParam {
     /// `K_P z_a,0`, then the right-hand side and `du`.
     kq: Vec<f64>,
     eq: Vec<f64>,
+    /// The right-hand side's sum over the active rows.
+    rhs_a: f64,
     xbar: Vec<f64>,
     solve: indentify_fe::SolveScratch,
 }
@@ -170,6 +172,15 @@ impl MatStep<'_> {
     /// Parameter `k`'s step (the module's recursion): `dy_i` into `w.ya`, `w.yh`, `du`
     /// into `w.bdu`; returns `dF_i/dc_k` and `dU_i/dc_k` (zero without a border).
     fn solve(&self, k: usize, w: &mut MatParam) -> (f64, f64) {
+        self.rhs(k, w);
+        self.contact
+            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+        self.finish(k, w)
+    }
+
+    /// The first part of [`MatStep::solve`]: `z` into `w.za`, `w.zh`, the right-hand
+    /// side into `w.eq` and its sum over the active rows into `w.rhs_a`.
+    fn rhs(&self, k: usize, w: &mut MatParam) {
         let (nb, ne) = (self.nb, self.n_eq);
         let (ops, so) = (self.ops, self.sens);
         fn blk(v: &[f64], j: usize, ne: usize) -> &[f64] {
@@ -209,9 +220,14 @@ impl MatStep<'_> {
         for (b, kq) in w.eq.iter_mut().zip(&w.kq) {
             *b = -(*b + kq);
         }
-        let rhs_a: f64 = self.cons.iter().map(|&c| w.eq[c]).sum();
-        self.contact
-            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+        w.rhs_a = self.cons.iter().map(|&c| w.eq[c]).sum();
+    }
+
+    /// The rest of [`MatStep::solve`], from the displacement variation at the depth held
+    /// in `w.eq`.
+    fn finish(&self, k: usize, w: &mut MatParam) -> (f64, f64) {
+        let (nb, ne, ops) = (self.nb, self.n_eq, self.ops);
+        let rhs_a = w.rhs_a;
         let (pat, kv) = (self.pattern, self.k);
         let rows = |du: &[f64]| {
             self.cons
@@ -317,6 +333,7 @@ impl Adjoint<'_> {
                 bdu: vec(n_eq),
                 kq: vec(n_eq),
                 eq: vec(n_eq),
+                rhs_a: 0.0,
                 xbar: vec(n_eq),
                 solve: self.contact.solve_scratch(),
             })
@@ -328,6 +345,14 @@ impl Adjoint<'_> {
         let mut sens: Option<SensOps> = None;
         let mut du_rec = vec![0.0; n_eq];
         let mut cons = Vec::new();
+        // the parameters solved together (`Adjoint::set_multi_solve`, as the Gauss-point
+        // pass), their right-hand sides and solutions, the prescribed values
+        let cols: Vec<usize> = (0..np)
+            .filter(|&k| self.multi_solve && !self.skips(k))
+            .collect();
+        let mut block = vec![0.0; cols.len() * n_eq];
+        let mut xbar = vec![0.0; cols.len() * n_eq];
+        let mut scratch = self.contact.solve_scratch();
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -381,11 +406,34 @@ impl Adjoint<'_> {
                 border: border.map(|load| carry.border(load, drive)),
             };
             let skip = &self.skip;
+            let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
             let (dfi, dhi) = (&mut df[i], &mut dh[i]);
+            if cols.len() < 2 {
+                for_each_param(&mut work, dfi, dhi, |k, w| {
+                    active(k).then(|| step.solve(k, w))
+                });
+                continue;
+            }
+            // the parameters' right-hand sides, their solves in one pass over the factor
+            // (each column the bits of its own solve), then each parameter's remainder
             for_each_param(&mut work, dfi, dhi, |k, w| {
-                (!skip.get(k).copied().unwrap_or(false)).then(|| step.solve(k, w))
+                if active(k) {
+                    step.rhs(k, w);
+                }
+                None
+            });
+            for (col, &k) in block.chunks_exact_mut(n_eq).zip(&cols) {
+                col.copy_from_slice(&work[k].eq);
+            }
+            (self.contact).sensitivity_solve_multi(&mut block, |_| &[], &mut xbar, &mut scratch);
+            for (col, &k) in block.chunks_exact(n_eq).zip(&cols) {
+                work[k].eq.copy_from_slice(col);
+            }
+            for_each_param(&mut work, dfi, dhi, |k, w| {
+                active(k).then(|| step.finish(k, w))
             });
         }
+        self.multi_used = cols.len() > 1;
         Ok((df, dh))
     }
 }
