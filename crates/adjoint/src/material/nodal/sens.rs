@@ -116,8 +116,7 @@ struct MatParam {
     zh: Vec<f64>,
     /// `du_{i-1}`.
     bdu: Vec<f64>,
-    /// `K_P z_a,0`, then the right-hand side and `du`.
-    kq: Vec<f64>,
+    /// The right-hand side, then `du`.
     eq: Vec<f64>,
     /// The right-hand side's sum over the active rows.
     rhs_a: f64,
@@ -213,12 +212,10 @@ impl MatStep<'_> {
             }
         }
         // the right-hand side -(K_P z_a,0 + K_J z_h,0)
-        w.kq.fill(0.0);
-        self.pattern.sym_mul_add(self.kp, &w.za[..ne], &mut w.kq);
         w.eq.fill(0.0);
-        self.pattern.sym_mul_add(self.kj, &w.zh[..ne], &mut w.eq);
-        for (b, kq) in w.eq.iter_mut().zip(&w.kq) {
-            *b = -(*b + kq);
+        (self.pattern).sym_mul_add_pair((self.kp, &w.za[..ne]), (self.kj, &w.zh[..ne]), &mut w.eq);
+        for b in w.eq.iter_mut() {
+            *b = -*b;
         }
         w.rhs_a = self.cons.iter().map(|&c| w.eq[c]).sum();
     }
@@ -331,7 +328,6 @@ impl Adjoint<'_> {
                 za: vec(nb * n_eq),
                 zh: vec(nb * n_eq),
                 bdu: vec(n_eq),
-                kq: vec(n_eq),
                 eq: vec(n_eq),
                 rhs_a: 0.0,
                 xbar: vec(n_eq),
