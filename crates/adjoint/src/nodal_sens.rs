@@ -29,6 +29,16 @@
 //! checked against the recorded last state and the state of largest stress (as the sweep
 //! checks it), so an elastic run unloaded to rest, whose last stresses are round-off,
 //! runs all-nodal too (`tests/compliant_unload.rs`).
+//!
+//! Under load control (`Adjoint::sensitivities_load`) and through the frame
+//! (`Adjoint::sensitivities_compliant`) the step is bordered as the Gauss-point pass
+//! borders it (`load.rs`, [`crate::load::Border`]): the solve gives `du` at the depth
+//! held, the force variation there, `rhs_A - (K_i du)_A` from the same rows, sets
+//! `dU_i/dc_k`, whose depth column joins `du`; `dF_i/dc_k` is then prescribed (a
+//! load-controlled step) or read from the rows again. The same recursion serves a linear
+//! material whose blocks are isotropic (`Prony`, `material/nodal/sens.rs`), whose states
+//! carry one pair of nodal vectors per block; [`for_each_param`] and
+//! `Adjoint::nodal_border` are shared by both (`tests/nodal_material_sens.rs`).
 
 use indentify_contact::{StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};
