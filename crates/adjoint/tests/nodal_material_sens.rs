@@ -17,24 +17,14 @@
 
 mod common;
 
-use common::{small_model, sphere_model};
+use common::{column_rel, prony, small_model, sphere_model};
 use indentify_adjoint::{Adjoint, FrameIndex, LoadSensitivities};
 use indentify_contact::{
     ContactKind, DirectSolver, Frame, Kinematics, LoadHistory, Model, Schedule, Segment,
     SolverOptions, Target, Trajectory, trapezoid,
 };
-use indentify_laws::{LawMaterial, Material, Maxwell, Prony};
+use indentify_laws::{LawMaterial, Material, Maxwell};
 use indentify_testkit::{cone68 as cone, depth, force};
-
-/// One to three terms (the bench's parameters on R2 and a fast third term).
-fn prony(n: usize) -> (Prony, Vec<f64>) {
-    let terms = [(0.3, 0.2), (0.2, 2.0), (0.1, 0.05)];
-    let mut c = vec![1e5, 0.3];
-    for &(g, tau) in &terms[..n] {
-        c.extend([g, tau]);
-    }
-    (Prony::new(n).unwrap(), c)
-}
 
 const MAXWELL: [f64; 3] = [20000.0, 0.3, 30000.0];
 
@@ -167,21 +157,6 @@ fn pass(
     }
 }
 
-/// The largest difference over the columns, each relative to its largest entry in `a`
-/// (a column zero in `a` must be zero in `b`).
-fn rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    let np = a.first().map_or(0, Vec::len);
-    (0..np).fold(0.0f64, |m, k| {
-        let scale = a.iter().fold(0.0f64, |s, r| s.max(r[k].abs()));
-        if scale == 0.0 {
-            return m.max(b.iter().fold(0.0f64, |s, r| s.max(r[k].abs())));
-        }
-        a.iter()
-            .zip(b)
-            .fold(m, |m, (x, y)| m.max((x[k] - y[k]).abs() / scale))
-    })
-}
-
 /// The materials of the comparison: Prony with one to three terms and Maxwell.
 fn materials() -> Vec<(Box<dyn Material>, Vec<f64>)> {
     let mut out: Vec<(Box<dyn Material>, Vec<f64>)> = (1..=3)
@@ -241,8 +216,8 @@ fn nodal_columns_equal_the_gauss_point_pass() {
                         .collect()
                 };
                 let (df, dh) = (
-                    rel(&computed(&gauss.df_dc), &computed(&nodal.df_dc)),
-                    rel(&gauss.dh_dc, &nodal.dh_dc),
+                    column_rel(&computed(&gauss.df_dc), &computed(&nodal.df_dc)),
+                    column_rel(&gauss.dh_dc, &nodal.dh_dc),
                 );
                 report.push(format!(
                     "{} {drive:?} {cols:?}: dF/dc {df:.1e}, dU/dc {dh:.1e}",
