@@ -51,6 +51,87 @@ use crate::{Adjoint, AdjointError};
 /// Per-step rows of per-parameter variations (`[step][parameter]`).
 pub(crate) type Rows = Vec<Vec<f64>>;
 
+/// A parameter's work space whose right-hand side, then solution, is `eq()`.
+pub(crate) trait EqWork: Send {
+    fn eq(&mut self) -> &mut [f64];
+}
+
+impl EqWork for NodalParam {
+    fn eq(&mut self) -> &mut [f64] {
+        &mut self.eq
+    }
+}
+
+/// A step's parameter functions for [`MultiBlock::step`]: which parameters are computed,
+/// a parameter's whole step, and its parts before and after the solve.
+pub(crate) struct StepFns<'a, W> {
+    pub(crate) active: &'a (dyn Fn(usize) -> bool + Sync),
+    pub(crate) solve: &'a (dyn Fn(usize, &mut W) -> (f64, f64) + Sync),
+    pub(crate) rhs: &'a (dyn Fn(usize, &mut W) + Sync),
+    pub(crate) finish: &'a (dyn Fn(usize, &mut W) -> (f64, f64) + Sync),
+}
+
+/// The computed parameters' solves of a step together (`Adjoint::set_multi_solve`, as
+/// the Gauss-point pass): their right-hand sides, then solutions (`n_eq` per column),
+/// the prescribed values and the solve's scratch.
+pub(crate) struct MultiBlock {
+    pub(crate) cols: Vec<usize>,
+    block: Vec<f64>,
+    xbar: Vec<f64>,
+    scratch: indentify_fe::SolveScratch,
+}
+
+impl MultiBlock {
+    pub(crate) fn new(adj: &Adjoint<'_>, np: usize) -> MultiBlock {
+        let cols: Vec<usize> = (0..np)
+            .filter(|&k| adj.multi_solve && !adj.skips(k))
+            .collect();
+        let n = cols.len() * adj.model.dofs.n_eq;
+        MultiBlock {
+            cols,
+            block: vec![0.0; n],
+            xbar: vec![0.0; n],
+            scratch: adj.contact.solve_scratch(),
+        }
+    }
+
+    /// Every computed parameter's step into `(df, dh)`: one after the other
+    /// ([`for_each_param`]) with fewer than two columns, else the right-hand sides, one
+    /// multi-column solve (each column the bits of its own solve) and the remainders.
+    pub(crate) fn step<W: EqWork>(
+        &mut self,
+        contact: &indentify_contact::RecordedContact<'_>,
+        work: &mut [W],
+        (df, dh): (&mut [f64], &mut [f64]),
+        f: StepFns<'_, W>,
+    ) {
+        if self.cols.len() < 2 {
+            for_each_param(work, df, dh, |k, w| (f.active)(k).then(|| (f.solve)(k, w)));
+            return;
+        }
+        for_each_param(work, df, dh, |k, w| {
+            if (f.active)(k) {
+                (f.rhs)(k, w);
+            }
+            None
+        });
+        let n_eq = self.block.len() / self.cols.len();
+        for (col, &k) in self.block.chunks_exact_mut(n_eq).zip(&self.cols) {
+            col.copy_from_slice(work[k].eq());
+        }
+        contact.sensitivity_solve_multi(
+            &mut self.block,
+            |_| &[],
+            &mut self.xbar,
+            &mut self.scratch,
+        );
+        for (col, &k) in self.block.chunks_exact(n_eq).zip(&self.cols) {
+            work[k].eq().copy_from_slice(col);
+        }
+        for_each_param(work, df, dh, |k, w| (f.active)(k).then(|| (f.finish)(k, w)));
+    }
+}
+
 /// One parameter's state and work space in the all-nodal pass (equation vectors).
 struct NodalParam {
     /// `y_{i-1} = (y, y')`: `B y + J B y'`.
@@ -97,6 +178,15 @@ impl NodalStep<'_> {
     /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k` and
     /// `dU_i/dc_k` (zero without a border).
     fn solve(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
+        self.rhs(k, w);
+        self.contact
+            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+        self.finish(k, w)
+    }
+
+    /// The first part of [`NodalStep::solve`]: `q`, its products and the right-hand side
+    /// into `w.eq`.
+    fn rhs(&self, k: usize, w: &mut NodalParam) {
         let (ds, dg, dt) = (self.ds[k], self.dg[k], self.dt);
         for e in 0..w.y.len() {
             let (a1, b1) = (self.a1[e], self.b1[e]);
@@ -110,13 +200,16 @@ impl NodalStep<'_> {
         self.pattern.sym_mul_add(self.k, &w.qa, &mut w.kq);
         w.kjq.fill(0.0);
         self.pattern.sym_mul_add(self.kj, &w.qb, &mut w.kjq);
-        let (ct, s) = (self.ct, self.s);
-        let f = ct.p + ct.q;
+        let f = self.ct.p + self.ct.q;
         for ((b, kq), kjq) in w.eq.iter_mut().zip(&w.kq).zip(&w.kjq) {
             *b = -(kq + f * kjq);
         }
-        self.contact
-            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+    }
+
+    /// The rest of [`NodalStep::solve`], from `du` at the depth held in `w.eq`.
+    fn finish(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
+        let (ct, s) = (self.ct, self.s);
+        let f = ct.p + ct.q;
         let pat = self.pattern;
         let (df, du_u) = match &self.border {
             None => {
@@ -233,6 +326,7 @@ impl Adjoint<'_> {
         let mut dh = vec![vec![0.0; np]; n];
         let mut carry = crate::load::SegmentCarry::new(np, n_eq);
         let mut cons = Vec::new();
+        let mut multi = MultiBlock::new(self, np);
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
@@ -264,11 +358,16 @@ impl Adjoint<'_> {
                 border: border.map(|load| carry.border(load, drive)),
             };
             let skip = &self.skip;
-            let (dfi, dhi) = (&mut df[i], &mut dh[i]);
-            for_each_param(&mut work, dfi, dhi, |k, w| {
-                (!skip.get(k).copied().unwrap_or(false)).then(|| step.solve(k, w))
-            });
+            let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
+            let step_fns = StepFns {
+                active: &active,
+                solve: &|k, w| step.solve(k, w),
+                rhs: &|k, w| step.rhs(k, w),
+                finish: &|k, w| step.finish(k, w),
+            };
+            multi.step(&self.contact, &mut work, (&mut df[i], &mut dh[i]), step_fns);
         }
+        self.multi_used = multi.cols.len() > 1;
         self.fused.nodal.params = Some(ip);
         Ok(Some((df, dh)))
     }

@@ -43,7 +43,7 @@ use super::{IsoBlocks, StepOps, smooth_step};
 use crate::affine::Iso;
 use crate::load::Border;
 use crate::material::{MatSweep, SensDrive};
-use crate::nodal_sens::{Rows, active_equations, for_each_param};
+use crate::nodal_sens::{EqWork, MultiBlock, Rows, StepFns, active_equations};
 use crate::{Adjoint, AdjointError};
 
 /// A step length's blocks of the forward recursion: `G*_k = -A^-1 D*_k` per parameter
@@ -122,6 +122,12 @@ struct MatParam {
     rhs_a: f64,
     xbar: Vec<f64>,
     solve: indentify_fe::SolveScratch,
+}
+
+impl EqWork for MatParam {
+    fn eq(&mut self) -> &mut [f64] {
+        &mut self.eq
+    }
 }
 
 /// What a step shares between its parameters (read only).
@@ -341,14 +347,7 @@ impl Adjoint<'_> {
         let mut sens: Option<SensOps> = None;
         let mut du_rec = vec![0.0; n_eq];
         let mut cons = Vec::new();
-        // the parameters solved together (`Adjoint::set_multi_solve`, as the Gauss-point
-        // pass), their right-hand sides and solutions, the prescribed values
-        let cols: Vec<usize> = (0..np)
-            .filter(|&k| self.multi_solve && !self.skips(k))
-            .collect();
-        let mut block = vec![0.0; cols.len() * n_eq];
-        let mut xbar = vec![0.0; cols.len() * n_eq];
-        let mut scratch = self.contact.solve_scratch();
+        let mut multi = MultiBlock::new(self, np);
         for i in 0..n {
             let rec = &traj.steps[i];
             let (f0, f1) = (&traj.fields[i], &traj.fields[i + 1]);
@@ -403,33 +402,15 @@ impl Adjoint<'_> {
             };
             let skip = &self.skip;
             let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
-            let (dfi, dhi) = (&mut df[i], &mut dh[i]);
-            if cols.len() < 2 {
-                for_each_param(&mut work, dfi, dhi, |k, w| {
-                    active(k).then(|| step.solve(k, w))
-                });
-                continue;
-            }
-            // the parameters' right-hand sides, their solves in one pass over the factor
-            // (each column the bits of its own solve), then each parameter's remainder
-            for_each_param(&mut work, dfi, dhi, |k, w| {
-                if active(k) {
-                    step.rhs(k, w);
-                }
-                None
-            });
-            for (col, &k) in block.chunks_exact_mut(n_eq).zip(&cols) {
-                col.copy_from_slice(&work[k].eq);
-            }
-            (self.contact).sensitivity_solve_multi(&mut block, |_| &[], &mut xbar, &mut scratch);
-            for (col, &k) in block.chunks_exact(n_eq).zip(&cols) {
-                work[k].eq.copy_from_slice(col);
-            }
-            for_each_param(&mut work, dfi, dhi, |k, w| {
-                active(k).then(|| step.finish(k, w))
-            });
+            let step_fns = StepFns {
+                active: &active,
+                solve: &|k, w| step.solve(k, w),
+                rhs: &|k, w| step.rhs(k, w),
+                finish: &|k, w| step.finish(k, w),
+            };
+            multi.step(&self.contact, &mut work, (&mut df[i], &mut dh[i]), step_fns);
         }
-        self.multi_used = cols.len() > 1;
+        self.multi_used = multi.cols.len() > 1;
         Ok((df, dh))
     }
 }
