@@ -62,13 +62,12 @@ impl EqWork for NodalParam {
     }
 }
 
-/// A step's parameter functions for [`MultiBlock::step`]: which parameters are computed,
-/// a parameter's whole step, and its parts before and after the solve.
-pub(crate) struct StepFns<'a, W> {
-    pub(crate) active: &'a (dyn Fn(usize) -> bool + Sync),
-    pub(crate) solve: &'a (dyn Fn(usize, &mut W) -> (f64, f64) + Sync),
-    pub(crate) rhs: &'a (dyn Fn(usize, &mut W) + Sync),
-    pub(crate) finish: &'a (dyn Fn(usize, &mut W) -> (f64, f64) + Sync),
+/// A step's parameter functions for [`MultiBlock::step`]: a parameter's whole step, and
+/// its parts before and after the solve (each returning `(dF_i/dc_k, dU_i/dc_k)`).
+pub(crate) trait ParamSteps<W>: Sync {
+    fn solve(&self, k: usize, w: &mut W) -> (f64, f64);
+    fn rhs(&self, k: usize, w: &mut W);
+    fn finish(&self, k: usize, w: &mut W) -> (f64, f64);
 }
 
 /// The computed parameters' solves of a step together (`Adjoint::set_multi_solve`, as
@@ -103,15 +102,17 @@ impl MultiBlock {
         contact: &indentify_contact::RecordedContact<'_>,
         work: &mut [W],
         (df, dh): (&mut [f64], &mut [f64]),
-        f: StepFns<'_, W>,
+        skip: &[bool],
+        f: &impl ParamSteps<W>,
     ) {
+        let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
         if self.cols.len() < 2 {
-            for_each_param(work, df, dh, |k, w| (f.active)(k).then(|| (f.solve)(k, w)));
+            for_each_param(work, df, dh, |k, w| active(k).then(|| f.solve(k, w)));
             return;
         }
         for_each_param(work, df, dh, |k, w| {
-            if (f.active)(k) {
-                (f.rhs)(k, w);
+            if active(k) {
+                f.rhs(k, w);
             }
             None
         });
@@ -128,7 +129,7 @@ impl MultiBlock {
         for (col, &k) in self.block.chunks_exact(n_eq).zip(&self.cols) {
             work[k].eq().copy_from_slice(col);
         }
-        for_each_param(work, df, dh, |k, w| (f.active)(k).then(|| (f.finish)(k, w)));
+        for_each_param(work, df, dh, |k, w| active(k).then(|| f.finish(k, w)));
     }
 }
 
@@ -174,7 +175,7 @@ struct NodalStep<'a> {
     border: Option<Border<'a>>,
 }
 
-impl NodalStep<'_> {
+impl ParamSteps<NodalParam> for NodalStep<'_> {
     /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k` and
     /// `dU_i/dc_k` (zero without a border).
     fn solve(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
@@ -357,15 +358,8 @@ impl Adjoint<'_> {
                 contact: &self.contact,
                 border: border.map(|load| carry.border(load, drive)),
             };
-            let skip = &self.skip;
-            let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
-            let step_fns = StepFns {
-                active: &active,
-                solve: &|k, w| step.solve(k, w),
-                rhs: &|k, w| step.rhs(k, w),
-                finish: &|k, w| step.finish(k, w),
-            };
-            multi.step(&self.contact, &mut work, (&mut df[i], &mut dh[i]), step_fns);
+            let rows = (&mut df[i][..], &mut dh[i][..]);
+            multi.step(&self.contact, &mut work, rows, &self.skip, &step);
         }
         self.multi_used = multi.cols.len() > 1;
         self.fused.nodal.params = Some(ip);

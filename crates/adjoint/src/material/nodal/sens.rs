@@ -43,7 +43,7 @@ use super::{IsoBlocks, StepOps, smooth_step};
 use crate::affine::Iso;
 use crate::load::Border;
 use crate::material::{MatSweep, SensDrive};
-use crate::nodal_sens::{EqWork, MultiBlock, Rows, StepFns, active_equations};
+use crate::nodal_sens::{EqWork, MultiBlock, ParamSteps, Rows, active_equations};
 use crate::{Adjoint, AdjointError};
 
 /// A step length's blocks of the forward recursion: `G*_k = -A^-1 D*_k` per parameter
@@ -173,7 +173,7 @@ fn combine<'x>(out: &mut [f64], terms: impl Iterator<Item = (f64, &'x [f64])>) {
     }
 }
 
-impl MatStep<'_> {
+impl ParamSteps<MatParam> for MatStep<'_> {
     /// Parameter `k`'s step (the module's recursion): `dy_i` into `w.ya`, `w.yh`, `du`
     /// into `w.bdu`; returns `dF_i/dc_k` and `dU_i/dc_k` (zero without a border).
     fn solve(&self, k: usize, w: &mut MatParam) -> (f64, f64) {
@@ -400,15 +400,8 @@ impl Adjoint<'_> {
                 contact: &self.contact,
                 border: border.map(|load| carry.border(load, drive)),
             };
-            let skip = &self.skip;
-            let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
-            let step_fns = StepFns {
-                active: &active,
-                solve: &|k, w| step.solve(k, w),
-                rhs: &|k, w| step.rhs(k, w),
-                finish: &|k, w| step.finish(k, w),
-            };
-            multi.step(&self.contact, &mut work, (&mut df[i], &mut dh[i]), step_fns);
+            let rows = (&mut df[i][..], &mut dh[i][..]);
+            multi.step(&self.contact, &mut work, rows, &self.skip, &step);
         }
         self.multi_used = multi.cols.len() > 1;
         Ok((df, dh))
