@@ -5,7 +5,8 @@
 //! a law of `benches/laws_cost.rs`, the force history of the law's own depth-controlled
 //! trapezoid (0.1 mm, 30 steps per segment) from the start to the last step before the
 //! unload drops under 0.3 of the peak force, driven by force (`load`), or the trapezoid's
-//! machine depths through `Cf = 1e-4` mm/N (`frame`). Each round runs at parameters
+//! machine depths through `Cf = 1e-4` mm/N (`frame`), or the trapezoid itself by depth
+//! (`depth`, `Adjoint::sensitivities`). Each round runs at parameters
 //! changed in their last bits (a fit's new point), records the fields, then times, on one
 //! thread (on-CPU time), in an order alternated from round to round:
 //! - `rows`: `Adjoint::sensitivities_load` / `sensitivities_compliant` as they run by
@@ -15,7 +16,7 @@
 //!   points per parameter and step that the rows replace (the code before them).
 //!
 //! `RAYON_NUM_THREADS=1 cargo run --release -p indentify-adjoint --example load_sens_cost
-//! -- LAW [ROUNDS] [load|frame] [finite]` prints the median of each and its ratio to the
+//! -- LAW [ROUNDS] [load|frame|depth] [finite]` prints the median of each and its ratio to the
 //! forward, and the largest difference of the columns (`dh/dc`, `dF/dc`) against the
 //! passes', relative to each column's largest entry (the `dF/dc` rows of load-controlled
 //! steps apart: their force is prescribed, the passes give it to round-off). With
@@ -90,20 +91,32 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
     let frame_drive = std::env::args().nth(3).is_some_and(|s| s == "frame");
+    let depth_drive = std::env::args().nth(3).is_some_and(|s| s == "depth");
     let finite = std::env::args().nth(4).is_some_and(|s| s == "finite");
     let (e, nu, sy, k, m) = (1e5, 0.3, 500.0, 1500.0, 5.0);
     let (mat, base): (Box<dyn Material>, Vec<f64>) = match name.as_str() {
         "maxwell" => (Box::new(LawMaterial(&Maxwell)), vec![20000.0, 0.3, 30000.0]),
         "norton_hoff" => (Box::new(LawMaterial(&NortonHoff)), vec![e, nu, k, m, sy]),
+        "prony1" => (
+            Box::new(Prony::new(1).expect("prony")),
+            vec![e, nu, 0.3, 0.2],
+        ),
         "prony2" => (
             Box::new(Prony::new(2).expect("prony")),
             vec![e, nu, 0.3, 0.2, 0.2, 2.0],
+        ),
+        "prony3" => (
+            Box::new(Prony::new(3).expect("prony")),
+            vec![e, nu, 0.3, 0.2, 0.2, 2.0, 0.1, 0.05],
         ),
         "plastic_power_norton" => (
             Box::new(Plastic::new(Hardening::Power, Rate::Norton)),
             vec![e, nu, sy, 0.2, k, m],
         ),
-        other => panic!("unknown law {other}: maxwell, norton_hoff, prony2, plastic_power_norton"),
+        other => panic!(
+            "unknown law {other}: maxwell, norton_hoff, prony1, prony2, prony3, \
+             plastic_power_norton"
+        ),
     };
     let mat = mat.as_ref();
     let mesh = CylinderMesher::REFERENCE.build().expect("reference mesh");
@@ -155,6 +168,8 @@ fn main() {
         let t0 = Clock::now();
         let traj = if frame_drive {
             solver.run_compliant(mat, &c, &schedule, &frame, &opts)
+        } else if depth_drive {
+            solver.run(mat, &c, &schedule, &opts)
         } else {
             solver.run_history(mat, &c, &history, &opts)
         }
@@ -166,6 +181,14 @@ fn main() {
             let t0 = Clock::now();
             let s = if frame_drive {
                 adjoint.sensitivities_compliant(mat, &c, &traj, (&schedule, &frame), at)
+            } else if depth_drive {
+                adjoint
+                    .sensitivities(mat, &c, &traj)
+                    .map(|s| LoadSensitivities {
+                        dh_dc: vec![vec![0.0; c.len()]; s.df_dc.len()],
+                        df_dc: s.df_dc,
+                        seconds: s.seconds,
+                    })
             } else {
                 adjoint.sensitivities_load(mat, &c, &traj, &history)
             }
@@ -184,6 +207,7 @@ fn main() {
         // a load-controlled step's force is prescribed: those rows apart
         let load_step = |i: usize| {
             !frame_drive
+                && !depth_drive
                 && matches!(
                     history.segment_at(traj.steps[i].t).1,
                     indentify_contact::Target::Force(_)
@@ -223,7 +247,13 @@ fn main() {
         }
     }
     let m: Vec<f64> = t.iter_mut().map(|v| median(v)).collect();
-    let drive = if frame_drive { "frame" } else { "load" };
+    let drive = if frame_drive {
+        "frame"
+    } else if depth_drive {
+        "depth"
+    } else {
+        "load"
+    };
     let kin = if finite { " finite" } else { "" };
     println!(
         "{name} {drive}{kin} ({steps} steps, {rounds} rounds): forward {:.1} ms; sensitivities \

@@ -409,6 +409,18 @@ impl Adjoint<'_> {
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
         self.contact.begin();
+        // a law with one isotropic tangent under vertical contact: the bordered all-nodal
+        // pass (`nodal_sens.rs`), which reads the tangent's rows
+        let sd = crate::material::SensDrive::Frame(&drive);
+        if let Some((df, dh)) = self.sensitivities_nodal(law, c, traj, sd)? {
+            self.nodal_sens = true;
+            self.reaction_rows = true;
+            return Ok(crate::LoadSensitivities {
+                dh_dc: dh,
+                df_dc: df,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
         let s_mat = law.compliance(c);
         let np = c.len();
         let SensBuffers {

@@ -687,7 +687,9 @@ impl<'m> Adjoint<'m> {
         self.reaction_rows = false;
         self.compact_used = false;
         self.multi_used = false;
-        if let Some(df_dc) = self.sensitivities_nodal(law, c, traj)? {
+        if let Some((df_dc, _)) =
+            self.sensitivities_nodal(law, c, traj, material::SensDrive::Depth)?
+        {
             self.nodal_sens = true;
             return Ok(Sensitivities {
                 df_dc,

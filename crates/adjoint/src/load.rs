@@ -562,6 +562,17 @@ pub(crate) struct Border<'a> {
 }
 
 impl Border<'_> {
+    /// Parameter `k`'s depth variation `dU_i/dc_k` from the force variation at the depth
+    /// held, `df_held` (N per unit parameter): `(dP_i - dF_i^U) / s` under load control
+    /// (the frame's spring in the same form), the given `dU_i` under depth control.
+    pub(crate) fn depth_variation(&self, k: usize, df_held: f64) -> f64 {
+        if self.load {
+            (self.given[k] - df_held) / self.s
+        } else {
+            self.given[k]
+        }
+    }
+
     /// Adds `dU_i/dc_k du_U` to the displacement variation `w.eq` (on entry: at the
     /// depth held) and returns `dU_i/dc_k`. Under load control the force variation at
     /// the depth held comes from the force dofs' rows of the step's tangent, `rhs_A -
@@ -576,7 +587,7 @@ impl Border<'_> {
         w: &mut crate::ParamWork,
     ) -> f64 {
         let du = if let (true, Some(cons), Some(rhs_a)) = (self.load, step.reactions, rhs_a) {
-            (self.given[k] - (rhs_a - step.force_rows(cons, &w.eq))) / self.s
+            self.depth_variation(k, rhs_a - step.force_rows(cons, &w.eq))
         } else if self.load {
             let model = step.model;
             crate::expand_into(model, &w.eq, &mut w.full);
@@ -597,7 +608,7 @@ impl Border<'_> {
             let df: f64 = -crate::force_dofs(model, step.rec)
                 .map(|d| w.full[d])
                 .sum::<f64>();
-            (self.given[k] - df) / self.s
+            self.depth_variation(k, df)
         } else {
             self.given[k]
         };
@@ -654,6 +665,18 @@ impl Adjoint<'_> {
         let n = traj.steps.len();
         check_inputs(law, c, traj, n)?;
         self.contact.begin();
+        // a law with one isotropic tangent under vertical contact: the bordered all-nodal
+        // pass (`nodal_sens.rs`), which reads the tangent's rows
+        let drive = crate::material::SensDrive::Load(history);
+        if let Some((df, dh)) = self.sensitivities_nodal(law, c, traj, drive)? {
+            self.nodal_sens = true;
+            self.reaction_rows = true;
+            return Ok(LoadSensitivities {
+                dh_dc: dh,
+                df_dc: df,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
         let s_mat = law.compliance(c);
         let np = c.len();
         let SensBuffers {
@@ -745,6 +768,19 @@ impl SegmentCarry {
                 kv: vec![0.0; n_eq],
             },
             s: 0.0,
+        }
+    }
+
+    /// The step's [`Border`] as [`SegmentCarry::step`] or `FrameDrive::step` set it
+    /// (`load` their answer): the force is prescribed on a load-controlled step of a
+    /// load history, computed through the frame.
+    pub(crate) fn border(&self, load: bool, drive: crate::material::SensDrive<'_>) -> Border<'_> {
+        Border {
+            col: &self.col.col,
+            s: self.s,
+            load,
+            given: &self.given,
+            force_prescribed: load && matches!(drive, crate::material::SensDrive::Load(_)),
         }
     }
 

@@ -461,6 +461,14 @@ impl Adjoint<'_> {
         let n = traj.steps.len();
         self.check_material(mat, c, traj, n, true)?;
         self.contact.begin();
+        // a linear material with isotropic blocks under vertical contact: the all-nodal
+        // pass (`material/nodal/sens.rs`), which reads the tangent's rows
+        self.nodal_sens = false;
+        if let Some(out) = self.material_sensitivities_nodal(mat, c, traj, drive)? {
+            self.nodal_sens = true;
+            self.reaction_rows = !matches!(drive, SensDrive::Depth);
+            return Ok(out);
+        }
         let (m, np, nq) = (mat.state_len(), c.len(), model.disc.n_qp());
         let mut sw = MatSweep::new(mat, np, nq);
         // per point of the step: A^-1, D, E, P

@@ -29,12 +29,109 @@
 //! checked against the recorded last state and the state of largest stress (as the sweep
 //! checks it), so an elastic run unloaded to rest, whose last stresses are round-off,
 //! runs all-nodal too (`tests/compliant_unload.rs`).
+//!
+//! Under load control (`Adjoint::sensitivities_load`) and through the frame
+//! (`Adjoint::sensitivities_compliant`) the step is bordered as the Gauss-point pass
+//! borders it (`load.rs`, [`crate::load::Border`]): the solve gives `du` at the depth
+//! held, the force variation there, `rhs_A - (K_i du)_A` from the same rows, sets
+//! `dU_i/dc_k`, whose depth column joins `du`; `dF_i/dc_k` is then prescribed (a
+//! load-controlled step) or read from the rows again. The same recursion serves a linear
+//! material whose blocks are isotropic (`Prony`, `material/nodal/sens.rs`), whose states
+//! carry one pair of nodal vectors per block; [`for_each_param`] and
+//! `Adjoint::nodal_border` are shared by both (`tests/nodal_material_sens.rs`).
 
 use indentify_contact::{StepRecord, Trajectory};
 use indentify_laws::{Law, Vec4};
 
 use crate::affine::Iso;
+use crate::load::Border;
+use crate::material::SensDrive;
 use crate::{Adjoint, AdjointError};
+
+/// Per-step rows of per-parameter variations (`[step][parameter]`).
+pub(crate) type Rows = Vec<Vec<f64>>;
+
+/// A parameter's work space whose right-hand side, then solution, is `eq()`.
+pub(crate) trait EqWork: Send {
+    fn eq(&mut self) -> &mut [f64];
+}
+
+impl EqWork for NodalParam {
+    fn eq(&mut self) -> &mut [f64] {
+        &mut self.eq
+    }
+}
+
+/// A step's parameter functions for [`MultiBlock::step`]: a parameter's whole step, and
+/// its parts before and after the solve (each returning `(dF_i/dc_k, dU_i/dc_k)`).
+pub(crate) trait ParamSteps<W>: Sync {
+    fn solve(&self, k: usize, w: &mut W) -> (f64, f64);
+    fn rhs(&self, k: usize, w: &mut W);
+    fn finish(&self, k: usize, w: &mut W) -> (f64, f64);
+}
+
+/// The computed parameters' solves of a step together (`Adjoint::set_multi_solve`, as
+/// the Gauss-point pass): their right-hand sides, then solutions (`n_eq` per column),
+/// the prescribed values and the solve's scratch.
+pub(crate) struct MultiBlock {
+    pub(crate) cols: Vec<usize>,
+    block: Vec<f64>,
+    xbar: Vec<f64>,
+    scratch: indentify_fe::SolveScratch,
+}
+
+impl MultiBlock {
+    pub(crate) fn new(adj: &Adjoint<'_>, np: usize) -> MultiBlock {
+        let cols: Vec<usize> = (0..np)
+            .filter(|&k| adj.multi_solve && !adj.skips(k))
+            .collect();
+        let n = cols.len() * adj.model.dofs.n_eq;
+        MultiBlock {
+            cols,
+            block: vec![0.0; n],
+            xbar: vec![0.0; n],
+            scratch: adj.contact.solve_scratch(),
+        }
+    }
+
+    /// Every computed parameter's step into `(df, dh)`: one after the other
+    /// ([`for_each_param`]) with fewer than two columns, else the right-hand sides, one
+    /// multi-column solve (each column the bits of its own solve) and the remainders.
+    pub(crate) fn step<W: EqWork>(
+        &mut self,
+        contact: &indentify_contact::RecordedContact<'_>,
+        work: &mut [W],
+        (df, dh): (&mut [f64], &mut [f64]),
+        skip: &[bool],
+        f: &impl ParamSteps<W>,
+    ) {
+        let active = |k: usize| !skip.get(k).copied().unwrap_or(false);
+        if self.cols.len() < 2 {
+            for_each_param(work, df, dh, |k, w| active(k).then(|| f.solve(k, w)));
+            return;
+        }
+        for_each_param(work, df, dh, |k, w| {
+            if active(k) {
+                f.rhs(k, w);
+            }
+            None
+        });
+        let n_eq = self.block.len() / self.cols.len();
+        for (col, &k) in self.block.chunks_exact_mut(n_eq).zip(&self.cols) {
+            col.copy_from_slice(work[k].eq());
+        }
+        contact.sensitivity_solve_multi(
+            &mut self.block,
+            |_| &[],
+            &mut self.xbar,
+            &mut self.scratch,
+        );
+        for (col, &k) in self.block.chunks_exact(n_eq).zip(&self.cols) {
+            work[k].eq().copy_from_slice(col);
+        }
+        for_each_param(work, df, dh, |k, w| active(k).then(|| f.finish(k, w)));
+    }
+}
 
 /// One parameter's state and work space in the all-nodal pass (equation vectors).
 struct NodalParam {
@@ -73,11 +170,24 @@ struct NodalStep<'a> {
     /// The active dofs' equations.
     cons: &'a [usize],
     contact: &'a indentify_contact::RecordedContact<'a>,
+    /// Load control or the frame: the step's depth column and what sets its depth
+    /// variation (`load.rs`).
+    border: Option<Border<'a>>,
 }
 
-impl NodalStep<'_> {
-    /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k`.
-    fn solve(&self, k: usize, w: &mut NodalParam) -> f64 {
+impl ParamSteps<NodalParam> for NodalStep<'_> {
+    /// Parameter `k`'s step: `y_i` into `w.y`, `w.yb`, returns `dF_i/dc_k` and
+    /// `dU_i/dc_k` (zero without a border).
+    fn solve(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
+        self.rhs(k, w);
+        self.contact
+            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
+        self.finish(k, w)
+    }
+
+    /// The first part of [`NodalStep::solve`]: `q`, its products and the right-hand side
+    /// into `w.eq`.
+    fn rhs(&self, k: usize, w: &mut NodalParam) {
         let (ds, dg, dt) = (self.ds[k], self.dg[k], self.dt);
         for e in 0..w.y.len() {
             let (a1, b1) = (self.a1[e], self.b1[e]);
@@ -91,19 +201,49 @@ impl NodalStep<'_> {
         self.pattern.sym_mul_add(self.k, &w.qa, &mut w.kq);
         w.kjq.fill(0.0);
         self.pattern.sym_mul_add(self.kj, &w.qb, &mut w.kjq);
-        let (ct, s) = (self.ct, self.s);
-        let f = ct.p + ct.q;
+        let f = self.ct.p + self.ct.q;
         for ((b, kq), kjq) in w.eq.iter_mut().zip(&w.kq).zip(&w.kjq) {
             *b = -(kq + f * kjq);
         }
-        self.contact
-            .sensitivity_solve(&mut w.eq, &[], &mut w.xbar, &mut w.solve);
-        // dF: the active rows of K_i (q_a + du) + (c_p + c_q) K_J q_b
+    }
+
+    /// The rest of [`NodalStep::solve`], from `du` at the depth held in `w.eq`.
+    fn finish(&self, k: usize, w: &mut NodalParam) -> (f64, f64) {
+        let (ct, s) = (self.ct, self.s);
+        let f = ct.p + ct.q;
         let pat = self.pattern;
-        let mut df = 0.0;
-        for &c in self.cons {
-            df += w.kq[c] + pat.row_dot(self.k, c, &w.eq) + f * w.kjq[c];
-        }
+        let (df, du_u) = match &self.border {
+            None => {
+                // dF: the active rows of K_i (q_a + du) + (c_p + c_q) K_J q_b
+                let mut df = 0.0;
+                for &c in self.cons {
+                    df += w.kq[c] + pat.row_dot(self.k, c, &w.eq) + f * w.kjq[c];
+                }
+                (-df, 0.0)
+            }
+            // the bordered step (`load.rs`): the force variation at the depth held,
+            // `rhs_A - (K du)_A`, sets the depth's, whose column joins `du`; the step's
+            // force is then prescribed or read from the rows again
+            Some(b) => {
+                let rhs_a: f64 = self.cons.iter().map(|&c| -(w.kq[c] + f * w.kjq[c])).sum();
+                let rows = |du: &[f64]| {
+                    self.cons
+                        .iter()
+                        .map(|&c| pat.row_dot(self.k, c, du))
+                        .sum::<f64>()
+                };
+                let du_u = b.depth_variation(k, rhs_a - rows(&w.eq));
+                for (e, c) in w.eq.iter_mut().zip(b.col) {
+                    *e += du_u * c;
+                }
+                let df = if b.force_prescribed {
+                    b.given[k]
+                } else {
+                    rhs_a - rows(&w.eq)
+                };
+                (df, du_u)
+            }
+        };
         for e in 0..w.y.len() {
             let du = w.eq[e];
             let wv = du + w.qa[e];
@@ -111,7 +251,7 @@ impl NodalStep<'_> {
             w.y[e] = s.p * sa - du;
             w.yb[e] = s.q * sa + (s.p + s.q) * sb;
         }
-        -df
+        (df, du_u)
     }
 }
 
@@ -139,7 +279,9 @@ impl Adjoint<'_> {
         self.reaction_rows
     }
 
-    /// The forward sensitivities `dF_i/dc_k` of `traj` all-nodal (the parameters
+    /// The forward sensitivities `dF_i/dc_k` and `dU_i/dc_k` of `traj` all-nodal, driven
+    /// by depth, under load control or through the frame (`drive`, the bordered step of
+    /// `load.rs`; `dU_i/dc_k` zero under depth control; the parameters
     /// [`Adjoint::skips`] leaves out stay zero), or `None` when the pass does not apply
     /// (the conditions of the all-nodal sweep, `Adjoint::begin_nodal`, a constraint that
     /// ties steps, an active dof without an equation, or a law whose residual's parameter
@@ -150,11 +292,10 @@ impl Adjoint<'_> {
         law: &dyn Law,
         c: &[f64],
         traj: &Trajectory,
-    ) -> Result<Option<Vec<Vec<f64>>>, AdjointError> {
+        drive: SensDrive<'_>,
+    ) -> Result<Option<(Rows, Rows)>, AdjointError> {
         let model = self.model;
-        if self.contact.ties_steps()
-            || (model.candidates.iter()).any(|&n| model.dofs.equation(2 * n + 1).is_none())
-        {
+        if !self.nodal_sens_applies() {
             return Ok(None);
         }
         self.begin_nodal(law, c, traj);
@@ -183,15 +324,15 @@ impl Adjoint<'_> {
             })
             .collect();
         let mut df = vec![vec![0.0; np]; n];
+        let mut dh = vec![vec![0.0; np]; n];
+        let mut carry = crate::load::SegmentCarry::new(np, n_eq);
         let mut cons = Vec::new();
+        let mut multi = MultiBlock::new(self, np);
         for i in 0..n {
             let rec = &traj.steps[i];
             let f1 = &traj.fields[i + 1];
             self.prepare_step(law, c, rec, (&f1.sigma, &f1.u), i, true)?;
-            let prev = i
-                .checked_sub(1)
-                .map(|p| (&traj.steps[p], traj.fields[i].u.as_slice()));
-            self.contact.prepare_sensitivities(rec, &f1.u, prev);
+            let border = self.nodal_border(drive, traj, i, &mut carry, (&df, &dh))?;
             let ct = Iso::of(&self.tangents[0]).ok_or_else(|| AdjointError::Step {
                 step: i,
                 t: rec.t,
@@ -215,31 +356,50 @@ impl Adjoint<'_> {
                 dg: &ip.dg,
                 cons: &cons,
                 contact: &self.contact,
+                border: border.map(|load| carry.border(load, drive)),
             };
-            let skip = &self.skip;
-            let one = |(k, (w, dfk)): (usize, (&mut NodalParam, &mut f64))| {
-                if !skip.get(k).copied().unwrap_or(false) {
-                    *dfk = step.solve(k, w);
-                }
-            };
-            // as the Gauss-point pass: the parameters in parallel on a pool's worker
-            let on_pool = rayon::current_thread_index().is_some();
-            if np > 1 && on_pool && rayon::current_num_threads() > 1 {
-                use rayon::prelude::*;
-                work.par_iter_mut()
-                    .zip(df[i].par_iter_mut())
-                    .enumerate()
-                    .with_max_len(1)
-                    .for_each(one);
-            } else {
-                work.iter_mut()
-                    .zip(df[i].iter_mut())
-                    .enumerate()
-                    .for_each(one);
-            }
+            let rows = (&mut df[i][..], &mut dh[i][..]);
+            multi.step(&self.contact, &mut work, rows, &self.skip, &step);
         }
+        self.multi_used = multi.cols.len() > 1;
         self.fused.nodal.params = Some(ip);
-        Ok(Some(df))
+        Ok(Some((df, dh)))
+    }
+
+    /// Whether the all-nodal sensitivity pass may run on this workspace's model and
+    /// contact: no constraint ties a step to the previous one (friction's sticking) and
+    /// every candidate's vertical dof has an equation (its row gives `dF_i/dc_k`).
+    pub(crate) fn nodal_sens_applies(&self) -> bool {
+        let model = self.model;
+        !self.contact.ties_steps()
+            && (model.candidates.iter()).all(|&n| model.dofs.equation(2 * n + 1).is_some())
+    }
+
+    /// Prepares step `i`'s sensitivities in the contact (its system prepared) and, for a
+    /// bordered drive, its depth column into `carry`: `Some(load)` when the step is
+    /// bordered ([`crate::load::SegmentCarry::step`], `FrameDrive::step`).
+    pub(crate) fn nodal_border(
+        &mut self,
+        drive: SensDrive<'_>,
+        traj: &Trajectory,
+        i: usize,
+        carry: &mut crate::load::SegmentCarry,
+        rows: (&[Vec<f64>], &[Vec<f64>]),
+    ) -> Result<Option<bool>, AdjointError> {
+        let rec = &traj.steps[i];
+        let border = match drive {
+            SensDrive::Depth => None,
+            SensDrive::Load(h) => carry.step(&mut self.contact, h, traj, i, rows)?,
+            SensDrive::Frame(f) => Some(f.step(&mut self.contact, rec, carry)),
+        };
+        let prev = match (i.checked_sub(1), drive) {
+            (Some(p), _) => Some((&traj.steps[p], traj.fields[i].u.as_slice())),
+            (None, SensDrive::Frame(f)) => Some((f.initial(), traj.fields[0].u.as_slice())),
+            (None, _) => None,
+        };
+        self.contact
+            .prepare_sensitivities(rec, &traj.fields[i + 1].u, prev);
+        Ok(border)
     }
 
     /// Whether the law's own `R_i e_k` (`Law::residual_param_derivatives`) is the
@@ -306,4 +466,37 @@ pub(crate) fn active_equations(
             .iter()
             .filter_map(|&k| model.dofs.equation(2 * model.candidates[k as usize] + 1)),
     );
+}
+
+/// Runs `one(k, work)` for every parameter `k` of a step, storing its `(dF_i/dc_k,
+/// dU_i/dc_k)` (`None`: skipped, left zero): in parallel on a pool's worker with more
+/// than one thread, as the Gauss-point pass (each parameter's recursion is the same
+/// arithmetic on any thread: the same bits), else in order.
+pub(crate) fn for_each_param<W: Send>(
+    work: &mut [W],
+    df: &mut [f64],
+    dh: &mut [f64],
+    one: impl Fn(usize, &mut W) -> Option<(f64, f64)> + Sync,
+) {
+    let each = |(k, ((w, f), h)): (usize, ((&mut W, &mut f64), &mut f64))| {
+        if let Some((a, b)) = one(k, w) {
+            (*f, *h) = (a, b);
+        }
+    };
+    let on_pool = rayon::current_thread_index().is_some();
+    if work.len() > 1 && on_pool && rayon::current_num_threads() > 1 {
+        use rayon::prelude::*;
+        work.par_iter_mut()
+            .zip(df.par_iter_mut())
+            .zip(dh.par_iter_mut())
+            .enumerate()
+            .with_max_len(1)
+            .for_each(each);
+    } else {
+        work.iter_mut()
+            .zip(df.iter_mut())
+            .zip(dh.iter_mut())
+            .enumerate()
+            .for_each(each);
+    }
 }

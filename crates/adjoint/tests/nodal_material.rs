@@ -8,24 +8,14 @@
 
 mod common;
 
-use common::small_model;
+use common::{prony, small_model};
 use indentify_adjoint::Adjoint;
 use indentify_contact::{
     ContactKind, DirectSolver, Model, Punch, Schedule, Segment, SolverOptions, Trajectory,
     trapezoid,
 };
-use indentify_laws::{Material, Prony};
+use indentify_laws::Material;
 use indentify_testkit::cone68 as cone;
-
-/// One to three terms: the bench's parameters on R2 and a fast third term.
-fn prony(n: usize) -> (Prony, Vec<f64>) {
-    let terms = [(0.3, 0.2), (0.2, 2.0), (0.1, 0.05)];
-    let mut c = vec![1e5, 0.3];
-    for &(g, tau) in &terms[..n] {
-        c.extend([g, tau]);
-    }
-    (Prony::new(n).unwrap(), c)
-}
 
 fn schedules() -> [Schedule; 2] {
     let seg = |duration: f64, depth: f64, steps: usize| Segment {

@@ -10,22 +10,12 @@
 
 mod common;
 
-use common::small_model;
+use common::{prony, small_model};
 use indentify_adjoint::Adjoint;
 use indentify_adjoint::check::central_difference;
 use indentify_contact::{ContactKind, DirectSolver, LoadHistory, Punch, SolverOptions, Trajectory};
-use indentify_laws::{Material, Prony};
+use indentify_laws::Material;
 use indentify_testkit::{cone68 as cone, depth, force};
-
-/// One to three terms (the bench's parameters on R2 and a fast third term).
-fn prony(n: usize) -> (Prony, Vec<f64>) {
-    let terms = [(0.3, 0.2), (0.2, 2.0), (0.1, 0.05)];
-    let mut c = vec![1e5, 0.3];
-    for &(g, tau) in &terms[..n] {
-        c.extend([g, tau]);
-    }
-    (Prony::new(n).unwrap(), c)
-}
 
 /// The histories (peak 1000 N, about 0.08 mm under the cone):
 /// - load, hold, unload to 0.4 of the peak, step lengths 1/6, 1/2 and 1/5 s;

@@ -16,7 +16,7 @@
 
 mod common;
 
-use common::small_model;
+use common::{column_rel, small_model};
 use indentify_adjoint::{Adjoint, Sensitivities};
 use indentify_contact::{
     ContactKind, DirectSolver, HistorySegment, LoadHistory, Model, Schedule, Segment,
@@ -86,20 +86,6 @@ fn pass(
     .unwrap()
 }
 
-/// The largest difference over the columns, each relative to its largest entry.
-fn rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    let np = a[0].len();
-    (0..np).fold(0.0f64, |m, k| {
-        let scale = a.iter().fold(0.0f64, |s, r| s.max(r[k].abs()));
-        if scale == 0.0 {
-            return m.max(b.iter().fold(0.0f64, |s, r| s.max(r[k].abs())));
-        }
-        a.iter()
-            .zip(b)
-            .fold(m, |m, (x, y)| m.max((x[k] - y[k]).abs() / scale))
-    })
-}
-
 fn bits(s: &Sensitivities) -> Vec<u64> {
     s.df_dc.iter().flatten().map(|x| x.to_bits()).collect()
 }
@@ -122,7 +108,7 @@ fn nodal_sensitivities_equal_the_gauss_point_pass() {
             let gauss = pass(&mut adj, law, &c, &traj, &cols);
             assert!(!adj.last_pass_nodal());
             adj.set_fused(true);
-            let d = rel(&gauss.df_dc, &nodal.df_dc);
+            let d = column_rel(&gauss.df_dc, &nodal.df_dc);
             println!("{} {cols:?}: nodal vs Gauss-point pass {d:.1e}", law.name());
             assert!(d <= 1e-12, "{d:e}");
             // the skipped columns stay exactly zero, the others are not
@@ -224,7 +210,7 @@ fn taken_vs_fresh(
     let fresh = pass(&mut fresh_adj, law, c, &traj, cols);
     let f_fresh = fresh_adj.factorizations();
     (
-        rel(&fresh.df_dc, &taken.df_dc),
+        column_rel(&fresh.df_dc, &taken.df_dc),
         bits(&fresh) == bits(&taken),
         f_taken,
         f_fresh,
@@ -298,8 +284,8 @@ fn load_controlled_sensitivities_with_the_forward_factor_equal_the_fresh_ones() 
             .sensitivities_load(&mat, &c, &traj, &h)
             .unwrap();
         let (dh, df) = (
-            rel(&fresh.dh_dc, &taken.dh_dc),
-            rel(&fresh.df_dc, &taken.df_dc),
+            column_rel(&fresh.dh_dc, &taken.dh_dc),
+            column_rel(&fresh.df_dc, &taken.df_dc),
         );
         println!("{kind:?} load control: dh {dh:.1e}, dF {df:.1e}");
         assert!(dh <= 1e-12 && df <= 1e-12, "{dh:e} {df:e}");

@@ -44,6 +44,8 @@ use indentify_fe::dofs::NO_EQ;
 use indentify_laws::material::{Regime, Step, dense_solve_many};
 use indentify_laws::{Mat4, Material, Vec4};
 
+mod sens;
+
 use super::MatSweep;
 use crate::affine::Iso;
 use crate::load::{BorderedRho, not_positive};
@@ -296,6 +298,9 @@ pub(crate) struct NodalMat {
     nb: usize,
     /// `K_J = sum w B^T J B` on the model's pattern (formed once).
     kj: Vec<f64>,
+    /// `K_P = sum w B^T P B` (formed once, by the first forward sensitivity pass:
+    /// `nodal/sens.rs`).
+    kp: Vec<f64>,
     /// The dofs without an equation (formed once).
     fixed: Vec<usize>,
     /// `a_{j,I}`, `h_{j,I}` of every recorded state: `[(j nb + I) n_eq + e]`.

@@ -519,3 +519,33 @@ pub fn friction_law_check(
     }
     all.assert_stick_and_slip();
 }
+
+/// A Prony solid of one to three terms and its parameters: `E = 1e5` MPa, `nu = 0.3` and
+/// the terms `(g, tau)` `(0.3, 0.2 s)`, `(0.2, 2 s)`, `(0.1, 0.05 s)` (the bench's
+/// parameters on R2 and a fast third term).
+#[allow(dead_code)]
+pub fn prony(n: usize) -> (indentify_laws::Prony, Vec<f64>) {
+    let terms = [(0.3, 0.2), (0.2, 2.0), (0.1, 0.05)];
+    let mut c = vec![1e5, 0.3];
+    for &(g, tau) in &terms[..n] {
+        c.extend([g, tau]);
+    }
+    (indentify_laws::Prony::new(n).unwrap(), c)
+}
+
+/// The largest difference between two tables of columns (`[row][column]`), each
+/// relative to the column's largest entry in `a` (a column zero in `a` must be zero in
+/// `b`: its largest entry in `b` counts).
+#[allow(dead_code)]
+pub fn column_rel(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    let np = a.first().map_or(0, Vec::len);
+    (0..np).fold(0.0f64, |m, k| {
+        let scale = a.iter().fold(0.0f64, |s, r| s.max(r[k].abs()));
+        if scale == 0.0 {
+            return m.max(b.iter().fold(0.0f64, |s, r| s.max(r[k].abs())));
+        }
+        a.iter()
+            .zip(b)
+            .fold(m, |m, (x, y)| m.max((x[k] - y[k]).abs() / scale))
+    })
+}
