@@ -13,8 +13,9 @@
 //! trials: the first damping from the scaled Gauss-Newton step's length (configurations'
 //! default, `identify.stop.lm_radius`), rejected trials shortened by a quadratic line
 //! model, geodesic acceleration, and the damping update after each trial ([`LmDamping`]:
-//! the classic `/3, x4`, or a gain-ratio update without the trust radius);
-//! docs/performance.md measures each.
+//! the classic `/3, x4`, or a gain-ratio update without the trust radius), and the steps
+//! in the determined subspace while a parameter is undetermined ([`LmStrategy::subspace`],
+//! `crate::subspace`); docs/performance.md measures each.
 
 use crate::IdentifyError;
 use nalgebra::{DMatrix, DVector};
