@@ -57,7 +57,7 @@ fn malformed_lm_subspace_is_refused_with_the_field_named() {
 fn lm_subspace_is_off_by_default_and_reaches_the_strategy() {
     let r = identify::resolve(&IdentifyOptions::new(ConfigSource::Default))
         .unwrap_or_else(|e| panic!("{:?}", e.messages()));
-    assert!(!DEFAULT_LM_SUBSPACE);
+    assert_eq!(r.id_cfg.stop.lm.subspace, DEFAULT_LM_SUBSPACE);
     assert!(!r.id_cfg.stop.lm.subspace);
     let r = identify::resolve(&opts("identify.stop.lm_subspace=true"))
         .unwrap_or_else(|e| panic!("{:?}", e.messages()));
