@@ -27,6 +27,9 @@
 //! (`StopCriteria::lm`: the first damping from the Gauss-Newton step's length, rejected
 //! trials shortened by the quadratic line model, geodesic acceleration), for before/after
 //! counts; `--lm-radius 0` turns the first radius off where the configuration sets one.
+//! `--lm-subspace` adds the steps in the determined subspace while a parameter is
+//! undetermined (`LmStrategy::subspace`); `--compare` then also prints each parameter's
+//! 2-sigma interval before and after and whether each end point lies inside the other's.
 //! `--c2f N` runs each fit coarse to fine (`study::coarse_to_fine`: at most N iterations
 //! on the 2x coarser model, then the full-fidelity fit from its optimum); the fit's time
 //! then includes the coarse phase, and the coarse phase's iterations and solves are
@@ -78,6 +81,11 @@ fn valley_option(valley: &mut Option<ValleyStop>, a: &str, v: &str) -> Result<()
 /// `--c2f-tight`: the coarse phase without the statistical stops (`step_sigma`,
 /// `proposed_step`), to its own gradient or relative-decrease stop.
 static C2F_TIGHT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `--lm-subspace`: Levenberg-Marquardt's steps in the determined subspace while a
+/// parameter is undetermined (`LmStrategy::subspace`), on top of the configuration's or
+/// the options' strategy.
+static LM_SUBSPACE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// `--c2f N` with `--c2f-space F`, `--c2f-keep-time` and `--c2f-correct K`: at most N
 /// coarse iterations on the model F x coarser in space (and 2x in time unless kept), then
@@ -226,6 +234,7 @@ fn parse(args: &[String]) -> Result<Opts> {
                 c2f_option(&mut o.c2f, a, &mut val)?;
             }
             "--c2f-tight" => C2F_TIGHT.store(true, std::sync::atomic::Ordering::Relaxed),
+            "--lm-subspace" => LM_SUBSPACE.store(true, std::sync::atomic::Ordering::Relaxed),
             other => bail!("unknown option {other}"),
         }
     }
@@ -236,7 +245,7 @@ fn parse(args: &[String]) -> Result<Opts> {
 /// [--compare FILE] [--cold] [--no-chi2] [--valley [--valley-steps N] [--valley-chi2 X]] [--lm-radius R] [--line-model] [--geodesic]
 /// [--c2f N [--c2f-tight] [--c2f-space F] [--c2f-keep-time] [--c2f-correct K]]
 /// [--columns] [--batch [--jobs N] [--map-n N] [--profile]] [--proposed-step [--both]]
-/// [--no-proposed-step] [--no-stop-rejected] [--lm-damping NAME]`.
+/// [--no-proposed-step] [--no-stop-rejected] [--lm-damping NAME] [--lm-subspace]`.
 pub fn run(args: &[String]) -> Result<()> {
     let Opts {
         only,
@@ -511,6 +520,9 @@ fn measure(
     if let Some(d) = damping {
         s.id_cfg.stop.lm.damping = d;
     }
+    if LM_SUBSPACE.load(std::sync::atomic::Ordering::Relaxed) {
+        s.id_cfg.stop.lm.subspace = true;
+    }
     s.problem.set_threads(1)?;
     // the forward runs are timed cold (their points are 1e-6 apart: warm, each would start
     // from the last one's solution)
@@ -561,7 +573,14 @@ fn measure(
                     .position(|n| *n == p.name)
                     .map(|k| id.std_dev[k])
             });
-            json!({ "name": p.name, "value": p.value, "sd": sd })
+            // the summary's 2-sigma interval (the undetermined parameters accounted for)
+            let interval = r.identifiability.as_ref().and_then(|id| {
+                id.names
+                    .iter()
+                    .position(|n| *n == p.name)
+                    .and_then(|k| id.intervals.get(k).copied())
+            });
+            json!({ "name": p.name, "value": p.value, "sd": sd, "interval": interval })
         })
         .collect();
     Ok(json!({
@@ -724,7 +743,61 @@ fn compare_table(before: &Value, after: &[Value]) -> String {
             );
         }
     }
+    let _ = writeln!(
+        s,
+        "\n| case | parameter | before's 2-sigma interval | after's | after in before's | before in after's |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for a in after {
+        let case = a["case"].as_str().unwrap_or("");
+        let Some(b) = find(case) else { continue };
+        let empty = Vec::new();
+        let bp = b["params"].as_array().unwrap_or(&empty);
+        for p in a["params"].as_array().unwrap_or(&empty) {
+            let Some(q) = bp.iter().find(|q| q["name"] == p["name"]) else {
+                continue;
+            };
+            let (va, vb) = (
+                p["value"].as_f64().unwrap_or(f64::NAN),
+                q["value"].as_f64().unwrap_or(f64::NAN),
+            );
+            let (ia, ib) = (interval_of(p), interval_of(q));
+            let inside = |i: Option<(f64, f64)>, v: f64| {
+                i.map_or(
+                    "-",
+                    |(lo, hi)| if lo <= v && v <= hi { "yes" } else { "NO" },
+                )
+            };
+            let _ = writeln!(
+                s,
+                "| {case} | {} | {} | {} | {} | {} |",
+                p["name"].as_str().unwrap_or(""),
+                interval_cell(ib),
+                interval_cell(ia),
+                inside(ib, va),
+                inside(ia, vb)
+            );
+        }
+    }
     s
+}
+
+/// A parameter's `interval` in the JSON (`null` entries, infinite ends, are open).
+fn interval_of(p: &Value) -> Option<(f64, f64)> {
+    let i = p["interval"].as_array()?;
+    let end = |v: &Value, inf: f64| v.as_f64().unwrap_or(inf);
+    Some((
+        end(i.first()?, f64::NEG_INFINITY),
+        end(i.get(1)?, f64::INFINITY),
+    ))
+}
+
+/// An interval's cell, six significant digits.
+fn interval_cell(i: Option<(f64, f64)>) -> String {
+    i.map_or_else(
+        || "-".to_owned(),
+        |(lo, hi)| format!("[{}, {}]", sig(lo), sig(hi)),
+    )
 }
 
 /// A deviation's cell: six significant digits, or "undetermined" where the fit gave none.

@@ -744,6 +744,7 @@ fn short_stop(r: &IdentifyResult) -> &'static str {
         Chi2BelowSigma { .. } => "chi2 < sigma^2",
         ProposedBelowSigma { .. } => "next step < sigma",
         ValleyBelowSigma { .. } => "valley",
+        SubspaceBelowSigma { .. } => "subspace",
         MaxIterations => "max-iter",
         Interrupted => "interrupted",
         Stalled(_) => "stalled",

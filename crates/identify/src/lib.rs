@@ -78,6 +78,7 @@ pub mod profile;
 mod argmin_glue;
 mod chi2_stop;
 mod lm;
+mod subspace;
 mod tasks;
 mod valley_stop;
 

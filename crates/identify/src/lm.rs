@@ -13,8 +13,9 @@
 //! trials: the first damping from the scaled Gauss-Newton step's length (configurations'
 //! default, `identify.stop.lm_radius`), rejected trials shortened by a quadratic line
 //! model, geodesic acceleration, and the damping update after each trial ([`LmDamping`]:
-//! the classic `/3, x4`, or a gain-ratio update without the trust radius);
-//! docs/performance.md measures each.
+//! the classic `/3, x4`, or a gain-ratio update without the trust radius), and the steps
+//! in the determined subspace while a parameter is undetermined ([`LmStrategy::subspace`],
+//! `crate::subspace`); docs/performance.md measures each.
 
 use crate::IdentifyError;
 use nalgebra::{DMatrix, DVector};
@@ -235,6 +236,17 @@ pub struct LmStrategy {
     /// The update of the damping after each trial ([`LmDamping`]; the classic one by
     /// default).
     pub damping: LmDamping,
+    /// Steps in the determined subspace while a parameter is undetermined
+    /// (`crate::subspace`): where the identifiability summary at an iterate says `n_u`
+    /// parameters are undetermined (and the Gauss-Newton model predicts a chi-square
+    /// decrease below 4, the chi-square of two deviations, along their directions), the damped
+    /// step is solved orthogonally to the right singular vectors of the `n_u` smallest
+    /// singular values (the truncated-SVD step at zero damping), and the statistical stop
+    /// on the determined combinations ends the run
+    /// ([`crate::StopReason::SubspaceBelowSigma`], with `step_sigma`). Decided again at
+    /// every iterate; where every parameter is determined the run is the one without it,
+    /// bit for bit. Measured in docs/performance.md ("Steps in the determined subspace").
+    pub subspace: bool,
 }
 
 /// The finite-difference step of [`LmStrategy::geodesic`] along the damped step.
@@ -244,7 +256,7 @@ pub(crate) const GEODESIC_ALPHA: f64 = 0.75;
 
 /// The damping state of a run: `lambda` of `(A^T A + lambda diag(A^T A)) d = -A^T r`,
 /// Nielsen's growth factor `nu` and the trust radius.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Damping {
     /// The rule.
     pub rule: Rule,
@@ -260,6 +272,9 @@ pub(crate) struct Damping {
     /// A bound on the next step's length only ([`LmStrategy::first_radius`],
     /// [`LmStrategy::line_model`]; infinite otherwise), lifted once a step is accepted.
     pub cap: f64,
+    /// The subspace the steps are restricted to ([`LmStrategy::subspace`]): orthonormal
+    /// vectors over the scaled variables; `None`, the whole space.
+    pub basis: Option<Vec<Vec<f64>>>,
 }
 
 impl Damping {
@@ -275,14 +290,23 @@ impl Damping {
                 Rule::TrustRegion => INITIAL_RADIUS,
             },
             cap: f64::INFINITY,
+            basis: None,
         }
     }
 
     /// The damped matrix's solve at the current `lambda`.
     fn solve(&self, ata: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
+        self.solve_at(self.lambda, ata, g)
+    }
+
+    /// The damped matrix's solve at `lambda`, in [`Damping::basis`]'s subspace if any.
+    fn solve_at(&self, lambda: f64, ata: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
+        if let Some(basis) = &self.basis {
+            return crate::subspace::restricted_solve(ata, lambda, g, basis);
+        }
         let mut m = ata.to_vec();
         for (k, row) in m.iter_mut().enumerate() {
-            row[k] += self.lambda * ata[k][k].max(1e-12 * (1.0 + ata[k][k]));
+            row[k] += lambda * ata[k][k].max(1e-12 * (1.0 + ata[k][k]));
         }
         solve_spd(&m, g)
     }
@@ -306,12 +330,8 @@ impl Damping {
             let (mut lo, mut hi) = ((self.lambda / 4.0).max(lambda0).ln(), self.lambda.ln());
             for _ in 0..8 {
                 let mid = 0.5 * (lo + hi);
-                let trial = Damping {
-                    lambda: mid.exp(),
-                    ..*self
-                };
-                match trial
-                    .solve(ata, g)
+                match self
+                    .solve_at(mid.exp(), ata, g)
                     .filter(|s| norm_inf(s) <= self.cap.min(self.radius))
                 {
                     Some(s) => {
@@ -416,6 +436,12 @@ pub(crate) trait LeastSquares {
     fn residuals(&mut self, y: &[f64]) -> Result<Option<Vec<f64>>, IdentifyError>;
     /// The projection onto the box.
     fn project(&self, y: &[f64]) -> Vec<f64>;
+    /// The determined subspace at the iterate `y` just linearized
+    /// ([`LmStrategy::subspace`], `crate::subspace::determined_basis`); `None` (the
+    /// default): full steps.
+    fn determined_basis(&mut self, _y: &[f64]) -> Option<Vec<Vec<f64>>> {
+        None
+    }
     /// An accepted iterate; true stops the run.
     fn iterate(&mut self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> bool;
     /// A trial that did not decrease `f`.
@@ -525,6 +551,14 @@ pub(crate) fn minimize(
         let ata: Vec<Vec<f64>> = (0..np)
             .map(|i| (0..np).map(|k| ata[(i, k)]).collect())
             .collect();
+        // decided again at every iterate: full steps where every parameter is determined
+        damping.basis = if strategy.subspace {
+            // a gradient with nothing in the subspace leaves it (no step there decreases f)
+            ls.determined_basis(&y)
+                .filter(|b| b.iter().any(|q| dot(q, &g) != 0.0))
+        } else {
+            None
+        };
         let mut accepted = false;
         for _ in 0..max_trials {
             let Some(d) = damping.capped_step(&ata, &g) else {
@@ -657,6 +691,11 @@ impl LeastSquares for Fit<'_, '_, '_> {
         self.monitor.objective.param.project(y)
     }
 
+    fn determined_basis(&mut self, y: &[f64]) -> Option<Vec<Vec<f64>>> {
+        self.monitor
+            .determined_basis(&self.monitor.objective.param.to_physical(y))
+    }
+
     fn iterate(&mut self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> bool {
         self.monitor.iterate(iter, y, f, g).is_some()
     }
@@ -709,6 +748,16 @@ mod tests {
         last: Vec<f64>,
         /// A hash of every accepted iterate's bits and cost (FNV-1a over the `u64`s).
         trace: u64,
+        /// Every accepted iterate.
+        path: Vec<Vec<f64>>,
+        /// The determined-subspace queries ([`LmStrategy::subspace`]) and how many gave a
+        /// subspace.
+        queries: (usize, usize),
+        /// Stop on the gradient projected onto the determined subspace (where there is
+        /// one) instead of the whole gradient.
+        stop_in_subspace: bool,
+        /// The gradient's infinity norm that stops the run.
+        gtol: f64,
     }
 
     impl Closed {
@@ -723,6 +772,10 @@ mod tests {
                 iterations: 0,
                 last: vec![],
                 trace: 0xcbf2_9ce4_8422_2325,
+                path: vec![],
+                queries: (0, 0),
+                stop_in_subspace: false,
+                gtol: 1e-14,
             }
         }
     }
@@ -756,14 +809,69 @@ mod tests {
         fn iterate(&mut self, iter: usize, y: &[f64], f: f64, g: &[f64]) -> bool {
             self.iterations = iter;
             self.last = y.to_vec();
+            self.path.push(y.to_vec());
             for v in y.iter().chain(std::iter::once(&f)) {
                 self.trace = (self.trace ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
             }
-            f <= self.tol || norm_inf(g) <= 1e-14 || iter >= 500
+            let g = match self.basis_at(y).filter(|_| self.stop_in_subspace) {
+                // the gradient's component in the determined subspace
+                Some(b) => (0..g.len())
+                    .map(|i| b.iter().map(|q| q[i] * dot(q, g)).sum())
+                    .collect(),
+                None => g.to_vec(),
+            };
+            f <= self.tol || norm_inf(&g) <= self.gtol || iter >= 500
+        }
+
+        fn determined_basis(&mut self, y: &[f64]) -> Option<Vec<Vec<f64>>> {
+            let b = self.basis_at(y);
+            self.queries.0 += 1;
+            self.queries.1 += usize::from(b.is_some());
+            b
         }
 
         fn rejected(&mut self) {
             self.rejected += 1;
+        }
+    }
+
+    impl Closed {
+        /// The determined subspace at `y` as a fit decides it: the identifiability summary
+        /// of the residuals' Jacobian (unit weights, linear scaling, the residual noise
+        /// model) and `crate::subspace::determined_basis`.
+        fn basis_at(&self, y: &[f64]) -> Option<Vec<Vec<f64>>> {
+            use crate::identifiability::{Column, Identifiability};
+            let jac = (self.jac)(y);
+            let r = (self.r)(y);
+            let n = y.len();
+            let cols: Vec<Column> = (0..n)
+                .map(|index| Column {
+                    index,
+                    name: ["p0", "p1", "p2", "p3"][index],
+                    scaling: crate::Scaling::Linear,
+                    dc_dy: 1.0,
+                    lower: f64::NEG_INFINITY,
+                    upper: f64::INFINITY,
+                })
+                .collect();
+            let f = 0.5 * dot(&r, &r);
+            let w = vec![1.0; r.len()];
+            let id = Identifiability::with_noise(
+                &jac,
+                &w,
+                f,
+                y,
+                &cols,
+                crate::NoiseModel::Residual,
+                None,
+            );
+            if id.undetermined.is_empty() {
+                return None;
+            }
+            let zero = vec![0.0; r.len()];
+            let g = crate::subspace::scaled_gradient(&jac, &r, (&w, &zero), &cols);
+            let var = crate::chi2_stop::noise_variance(&id)?;
+            crate::subspace::determined_basis(&id, &g, var)
         }
     }
 
@@ -1168,6 +1276,185 @@ mod tests {
         d.cap = 1e6;
         d.capped_step(&ata, &g).expect("a step");
         assert_eq!(d.lambda, 1e-3);
+    }
+
+    /// `r_i = x_i a + 1e-9 x_i^2 b - d_i` (20 points, noisy `d`): `b` barely acts on the
+    /// data (undetermined, its column 1e-9 of `a`'s).
+    fn flat(y: &[f64]) -> Vec<f64> {
+        (0..20)
+            .map(|i| {
+                let x = 0.1 + 0.05 * f64::from(i);
+                x * y[0] + 1e-9 * x * x * y[1] - (2.0 * x + 0.01 * (1.7 * f64::from(i)).sin())
+            })
+            .collect()
+    }
+
+    fn flat_jac(_: &[f64]) -> Vec<Vec<f64>> {
+        (0..20)
+            .map(|i| {
+                let x = 0.1 + 0.05 * f64::from(i);
+                vec![x, 1e-9 * x * x]
+            })
+            .collect()
+    }
+
+    /// [`flat`] with `b` held at 1: the determined problem.
+    fn flat_held(y: &[f64]) -> Vec<f64> {
+        flat(&[y[0], 1.0])
+    }
+
+    fn flat_held_jac(y: &[f64]) -> Vec<Vec<f64>> {
+        flat_jac(y).into_iter().map(|row| vec![row[0]]).collect()
+    }
+
+    /// `r_i = a exp(-b t_i) - d_i`, `d` from `a = 2`, `b = 1.3` with a little noise.
+    fn decay(y: &[f64]) -> Vec<f64> {
+        (0..20)
+            .map(|i| {
+                let t = 0.15 * f64::from(i);
+                y[0] * (-y[1] * t).exp()
+                    - (2.0 * (-1.3 * t).exp() + 0.002 * (2.3 * f64::from(i)).sin())
+            })
+            .collect()
+    }
+
+    fn decay_jac(y: &[f64]) -> Vec<Vec<f64>> {
+        (0..20)
+            .map(|i| {
+                let t = 0.15 * f64::from(i);
+                let e = (-y[1] * t).exp();
+                vec![e, -y[0] * t * e]
+            })
+            .collect()
+    }
+
+    fn subspace_on() -> LmStrategy {
+        LmStrategy {
+            subspace: true,
+            ..LmStrategy::default()
+        }
+    }
+
+    /// With one insensitive column the subspace steps never move the flat parameter and
+    /// reach the determined one's optimum in the iterations of the problem with the flat
+    /// parameter held; the full steps (the strategy off) move it by orders of magnitude.
+    #[test]
+    fn subspace_steps_leave_the_flat_parameter_alone() {
+        let mut on = Closed::new(flat, flat_jac);
+        on.stop_in_subspace = true;
+        on.gtol = 1e-12;
+        minimize(&mut on, &[0.5, 1.0], Rule::Classic, subspace_on(), 60).expect("flat");
+        let mut held = Closed::new(flat_held, flat_held_jac);
+        held.gtol = 1e-12;
+        minimize(&mut held, &[0.5], Rule::Classic, LmStrategy::default(), 60).expect("held");
+        eprintln!(
+            "subspace: {} iterations, {} trials, end {:?}; held: {} iterations, {} trials, end {:?}; queries {:?}",
+            on.iterations, on.trials, on.last, held.iterations, held.trials, held.last, on.queries
+        );
+        assert_eq!(on.queries.0, on.queries.1, "every iterate in the subspace");
+        for y in &on.path {
+            assert!((y[1] - 1.0).abs() < 1e-6, "b moved: {y:?}");
+        }
+        assert_eq!(on.iterations, held.iterations);
+        assert!(
+            (on.last[0] - held.last[0]).abs() < 1e-9 * held.last[0].abs(),
+            "{:?} {:?}",
+            on.last,
+            held.last
+        );
+        // without the strategy the steps walk the flat direction
+        let mut off = Closed::new(flat, flat_jac);
+        off.stop_in_subspace = true;
+        off.gtol = 1e-12;
+        minimize(
+            &mut off,
+            &[0.5, 1.0],
+            Rule::Classic,
+            LmStrategy::default(),
+            60,
+        )
+        .expect("off");
+        assert!((off.last[1] - 1.0).abs() > 1.0, "{:?}", off.last);
+    }
+
+    /// A problem determined at every iterate runs the same bits with the strategy on or
+    /// off (the strategy asked at every iterate, no subspace given): the test problems
+    /// whose iterates are all determined keep the pinned classic record (Beale's, with
+    /// three residuals for two parameters, is undetermined on the way and runs other
+    /// iterates), and the decay from a near start its classic run.
+    #[test]
+    fn a_determined_problem_is_the_same_bits_with_the_subspace_strategy() {
+        let mut same = 0;
+        for ((name, r, jac, start, _), pinned) in CASES.into_iter().zip(PINNED_CLASSIC) {
+            let mut p = Closed::new(r, jac);
+            minimize(&mut p, &start, Rule::Classic, subspace_on(), 60).expect(name);
+            eprintln!("{name}: queries {:?}", p.queries);
+            if p.queries.1 == 0 {
+                assert_eq!(
+                    (p.iterations, p.trials, p.rejected, p.trace),
+                    pinned,
+                    "{name}"
+                );
+                same += 1;
+            }
+        }
+        assert_eq!(same, 2);
+        let mut on = Closed::new(decay, decay_jac);
+        minimize(&mut on, &[1.8, 1.2], Rule::Classic, subspace_on(), 60).expect("on");
+        let mut off = Closed::new(decay, decay_jac);
+        minimize(
+            &mut off,
+            &[1.8, 1.2],
+            Rule::Classic,
+            LmStrategy::default(),
+            60,
+        )
+        .expect("off");
+        assert!(on.queries.0 > 2 && on.queries.1 == 0, "{:?}", on.queries);
+        assert_eq!(
+            (on.iterations, on.trials, on.trace),
+            (off.iterations, off.trials, off.trace)
+        );
+    }
+
+    /// An exponential decay from a start where its rate is undetermined (rate 20 against
+    /// the data's 1.3, amplitude 6: the rate's column is tiny and the residual nearly all
+    /// along the amplitude, so the flat direction's predicted chi-square decrease is 2.2,
+    /// below 4): the first step is taken in the determined subspace (the amplitude), then
+    /// the flat direction predicts more than 4 and full steps resume (a parameter
+    /// undetermined far from the optimum is not frozen), and the run ends at the optimum
+    /// the classic run finds.
+    #[test]
+    fn a_rate_undetermined_far_away_still_reaches_the_optimum() {
+        let start = [6.0, 20.0];
+        let mut on = Closed::new(decay, decay_jac);
+        on.stop_in_subspace = true;
+        minimize(&mut on, &start, Rule::Classic, subspace_on(), 60).expect("on");
+        let mut off = Closed::new(decay, decay_jac);
+        minimize(&mut off, &start, Rule::Classic, LmStrategy::default(), 60).expect("off");
+        eprintln!(
+            "decay on: {} iterations, {} trials, queries {:?}, path {:?}\ndecay off: {} iterations, {} trials, end {:?}",
+            on.iterations, on.trials, on.queries, on.path, off.iterations, off.trials, off.last
+        );
+        assert!(
+            on.queries.1 >= 1,
+            "the start is in the subspace: {:?}",
+            on.queries
+        );
+        assert!(
+            on.queries.1 < on.queries.0,
+            "full steps resumed: {:?}",
+            on.queries
+        );
+        for (v, m) in on.last.iter().zip(&off.last) {
+            assert!(
+                (v - m).abs() < 1e-8 * m.abs(),
+                "{:?} {:?}",
+                on.last,
+                off.last
+            );
+        }
+        assert!((off.last[1] - 1.3).abs() < 0.01, "{:?}", off.last);
     }
 
     /// Every strategy reaches the published minima of the test problems; the counts

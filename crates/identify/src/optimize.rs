@@ -413,6 +413,15 @@ pub enum StopReason {
         /// The chi-square decrease per step.
         chi2: f64,
     },
+    /// With [`LmStrategy::subspace`], where the data leave a parameter undetermined:
+    /// Levenberg-Marquardt's steps were kept off the undetermined directions, and the last
+    /// step and the next truncated Gauss-Newton step moved every determined combination by
+    /// less than `fraction` of its conditional deviation (`crate::subspace`; the run still
+    /// ends undetermined).
+    SubspaceBelowSigma {
+        /// The fraction of a conditional deviation.
+        fraction: f64,
+    },
     /// The iteration limit.
     MaxIterations,
     /// Stopped on request ([`Cancel::raise`]) after the last recorded iteration.
@@ -452,6 +461,7 @@ impl StopReason {
                 | StopReason::Chi2BelowSigma { .. }
                 | StopReason::ProposedBelowSigma { .. }
                 | StopReason::ValleyBelowSigma { .. }
+                | StopReason::SubspaceBelowSigma { .. }
         )
     }
 }
@@ -488,6 +498,11 @@ impl std::fmt::Display for StopReason {
                 "stopped along an undetermined valley: each of the last {steps} steps moved \
                  every determined combination by < {fraction} \u{3c3} and the chi-square by < \
                  {chi2}"
+            ),
+            StopReason::SubspaceBelowSigma { fraction } => write!(
+                f,
+                "steps kept off the undetermined direction: the last step and the next moved \
+                 every determined combination by < {fraction} \u{3c3}"
             ),
             StopReason::MaxIterations => write!(f, "iteration limit reached"),
             StopReason::Interrupted => write!(f, "interrupted"),
@@ -813,6 +828,16 @@ impl<'a, 'p> Monitor<'a, 'p> {
             Some(StopReason::StepBelowSigma { fraction })
         } else if let Some(fraction) = self
             .step_sigma
+            .filter(|_| s.lm.subspace && iter > 0 && !repeated)
+            .filter(|&fr| {
+                previous
+                    .as_ref()
+                    .is_some_and(|p| self.subspace_below(fr, &p.params, &rec.params))
+            })
+        {
+            Some(StopReason::SubspaceBelowSigma { fraction })
+        } else if let Some(fraction) = self
+            .step_sigma
             .filter(|_| s.proposed_step && iter > 0 && !repeated)
             .filter(|_| (self.last_gain.get() - 1.0).abs() <= PROPOSED_GAIN_TOL)
             .filter(|&fr| self.steps_below_sigma(fr, None, &rec.params))
@@ -997,6 +1022,61 @@ impl<'a, 'p> Monitor<'a, 'p> {
             })
             .collect();
         crate::valley_stop::holds(rule, &lin.id, &recent, var)
+    }
+
+    /// The determined subspace at `c` (physical parameters; Levenberg-Marquardt has just
+    /// linearized there) for [`LmStrategy::subspace`] (`crate::subspace::determined_basis`);
+    /// `None` for full steps.
+    pub fn determined_basis(&self, c: &[f64]) -> Option<Vec<Vec<f64>>> {
+        let p = self.objective.eval.borrow().problem();
+        let lin = self.linearize(p, c)?;
+        if lin.id.undetermined.is_empty() {
+            return None;
+        }
+        let var = crate::chi2_stop::noise_variance(&lin.id)?;
+        let g = crate::subspace::scaled_gradient(
+            &lin.jac,
+            &lin.forces,
+            (&p.weights, &p.target),
+            &lin.columns,
+        );
+        crate::subspace::determined_basis(&lin.id, &g, var)
+    }
+
+    /// Whether the statistical stop of [`LmStrategy::subspace`] holds at `c` (physical
+    /// parameters) after the step from `prev`: the steps are in the determined subspace
+    /// there, and the last step and the next truncated Gauss-Newton step move every
+    /// determined combination by less than `fraction` of its conditional deviation
+    /// (`crate::subspace::determined_steps_below`).
+    fn subspace_below(&self, fraction: f64, prev: &[f64], c: &[f64]) -> bool {
+        let p = self.objective.eval.borrow().problem();
+        let Some(lin) = self.linearize(p, c) else {
+            return false;
+        };
+        if lin.id.undetermined.is_empty() {
+            return false;
+        }
+        let Some(var) = crate::chi2_stop::noise_variance(&lin.id) else {
+            return false;
+        };
+        let g = crate::subspace::scaled_gradient(
+            &lin.jac,
+            &lin.forces,
+            (&p.weights, &p.target),
+            &lin.columns,
+        );
+        if crate::subspace::determined_basis(&lin.id, &g, var).is_none() {
+            return false;
+        }
+        let at = |x: &[f64]| -> Vec<f64> { lin.columns.iter().map(|col| x[col.index]).collect() };
+        crate::subspace::determined_steps_below(
+            &lin.id,
+            &lin.columns,
+            &g,
+            fraction,
+            Some(&at(prev)),
+            &at(c),
+        )
     }
 
     /// The stopping rules.

@@ -27,7 +27,7 @@ use serde_json::Value;
 
 pub use design::{Candidate, DesignSection};
 pub use identify::{
-    BfgsStartName, CoarseToFineSetting, DEFAULT_LM_DAMPING, DEFAULT_LM_RADIUS,
+    BfgsStartName, CoarseToFineSetting, DEFAULT_LM_DAMPING, DEFAULT_LM_RADIUS, DEFAULT_LM_SUBSPACE,
     DEFAULT_PROPOSED_STEP, IdentifySection, LmDampingName, MethodName, NoiseSetting, Overrides,
     ParamSetting, ScalingName, fixed_item, instrument_of, instrumented, name_value,
 };

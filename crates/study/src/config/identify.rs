@@ -432,6 +432,24 @@ pub struct StopSection {
     /// `Nielsen`, `MarquardtFletcher`, `GainCapped`, `Delayed`; see
     /// `indentify_identify::LmDamping`). Default [`DEFAULT_LM_DAMPING`].
     pub lm_damping: LmDampingName,
+    /// Levenberg-Marquardt only: while the identifiability summary at an iterate says a
+    /// parameter is undetermined, solve the damped step orthogonally to the undetermined
+    /// directions and stop on the determined combinations' steps (see
+    /// `indentify_identify::LmStrategy::subspace`). Default false
+    /// ([`DEFAULT_LM_SUBSPACE`]).
+    #[serde(deserialize_with = "read_lm_subspace")]
+    pub lm_subspace: bool,
+}
+
+/// The default `identify.stop.lm_subspace` of configurations: off. Measured in
+/// docs/performance.md ("Steps in the determined subspace").
+pub const DEFAULT_LM_SUBSPACE: bool = false;
+
+/// `identify.stop.lm_subspace` as read, for an error that names the field.
+fn read_lm_subspace<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<bool, D::Error> {
+    use serde::de::Error;
+    bool::deserialize(d)
+        .map_err(|e| D::Error::custom(format!("stop.lm_subspace: {e} (expected true or false)")))
 }
 
 impl Default for StopSection {
@@ -449,6 +467,7 @@ impl Default for StopSection {
             proposed_step: DEFAULT_PROPOSED_STEP,
             lm_stop_rejected: DEFAULT_LM_STOP_REJECTED,
             lm_damping: DEFAULT_LM_DAMPING,
+            lm_subspace: DEFAULT_LM_SUBSPACE,
         }
     }
 }
@@ -468,6 +487,7 @@ impl StopSection {
                 first_radius: self.lm_radius,
                 stop_rejected: self.lm_stop_rejected,
                 damping: self.lm_damping.damping(),
+                subspace: self.lm_subspace,
                 ..LmStrategy::default()
             },
             ..StopCriteria::default()
