@@ -73,11 +73,12 @@ fn linear(duration: f64, force: f64, steps: usize) -> SegmentSpec {
     }
 }
 
-/// A trigger ramp to 4 N in 0.1 s (40 N/s), then to 64 N at Pdot/P = 0.5/s (2 N/s at
-/// its start, steps 9.2 times longer) or linearly over the same 5.545 s, 12 steps; a
-/// 1 s hold (the history of `examples/pdotp_cost.rs`, small mesh).
-fn histories() -> [(&'static str, LoadHistory); 2] {
-    let (p0, r) = (4.0, 0.5);
+/// A trigger ramp to `p0` in 0.1 s (4 N: 40 N/s), then to `16 p0` at Pdot/P = 0.5/s (2
+/// N/s at its start for 4 N, steps 9.2 times longer) or linearly over the same 5.545 s,
+/// 12 steps; a 1 s hold (the history of `examples/pdotp_cost.rs`: the small mesh with
+/// 4 N, the reference mesh with 32 N).
+fn histories(p0: f64) -> [(&'static str, LoadHistory); 2] {
+    let r = 0.5;
     let duration = 16f64.ln() / r;
     let pdotp = LoadHistory::from_specs(&[
         linear(0.1, p0, 2),
@@ -119,7 +120,7 @@ fn trigger_then_slow_segment_converges_without_cuts() {
     let m = model();
     let mut solver = DirectSolver::new(&m).unwrap();
     let mat = LawMaterial(&NortonHoff);
-    for (name, history) in histories() {
+    for (name, history) in histories(4.0) {
         let by_force = solver.run_history(&mat, &R2, &history, &opts()).unwrap();
         let cuts = by_force.steps.iter().filter(|s| !s.on_schedule).count();
         let by_depth = solver
@@ -161,7 +162,7 @@ fn trigger_then_slow_segment_converges_without_cuts() {
 /// first step of each configured segment restarts; a force record is one segment.
 #[test]
 fn only_configured_segment_boundaries_restart() {
-    let [(_, pdotp), _] = histories();
+    let [(_, pdotp), _] = histories(4.0);
     let t = &pdotp.schedule.t;
     assert_eq!(t.len(), 19);
     let starts: Vec<usize> = (1..t.len() - 1)
@@ -236,19 +237,8 @@ fn step_after_the_trigger_starts_on_the_power_law() {
 #[test]
 fn reference_pdotp_steps_stay_near_the_depth_controlled_ones() {
     let m = reference_model();
-    let (p0, r) = (32.0, 0.5);
-    let history = LoadHistory::from_specs(&[
-        linear(0.1, p0, 2),
-        SegmentSpec {
-            duration: None,
-            depth: None,
-            force: Some(16.0 * p0),
-            pdot_over_p: Some(r),
-            steps: 12,
-        },
-        linear(1.0, 16.0 * p0, 4),
-    ])
-    .unwrap();
+    let p0 = 32.0;
+    let [(_, history), _] = histories(p0);
     let mut solver = DirectSolver::new(&m).unwrap();
     let mat = LawMaterial(&NortonHoff);
     let by_force = solver.run_history(&mat, &R2, &history, &opts()).unwrap();
@@ -294,19 +284,8 @@ fn reference_pdotp_steps_stay_near_the_depth_controlled_ones() {
 #[test]
 fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
     let m = reference_model();
-    let (p0, r) = (32.0, 0.5);
-    let history = LoadHistory::from_specs(&[
-        linear(0.1, p0, 2),
-        SegmentSpec {
-            duration: None,
-            depth: None,
-            force: Some(16.0 * p0),
-            pdot_over_p: Some(r),
-            steps: 12,
-        },
-        linear(1.0, 16.0 * p0, 4),
-    ])
-    .unwrap();
+    let p0 = 32.0;
+    let [(_, history), _] = histories(p0);
     let mut solver = DirectSolver::new(&m).unwrap();
     let mat = LawMaterial(&NortonHoff);
     let by_force = solver.run_history(&mat, &R2, &history, &opts()).unwrap();
@@ -394,13 +373,7 @@ fn reference_pdotp_carries_the_column_and_keeps_the_line_search_iterate() {
 #[test]
 fn a_diverging_depth_step_is_cut_once_its_residual_stalls() {
     let m = reference_model();
-    let (p0, r) = (32.0, 0.5);
-    let ramp = LoadHistory::from_specs(&[
-        linear(0.1, p0, 2),
-        linear(16f64.ln() / r, 16.0 * p0, 12),
-        linear(1.0, 16.0 * p0, 4),
-    ])
-    .unwrap();
+    let [_, (_, ramp)] = histories(32.0);
     let mut solver = DirectSolver::new(&m).unwrap();
     let mat = LawMaterial(&NortonHoff);
     let by_force = solver.run_history(&mat, &R2, &ramp, &opts()).unwrap();
