@@ -15,20 +15,10 @@ use indentify_contact::{
 use indentify_laws::{LawMaterial, NortonHoff};
 use indentify_mesh::CylinderMesher;
 
-/// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3, under the 68 deg cone, vertical contact.
-fn model() -> Model {
-    let mesh = CylinderMesher {
-        radius: 2.0,
-        height: 2.0,
-        nr: 10,
-        nz: 10,
-        grading_r: 1.3,
-        grading_z: 1.3,
-    }
-    .build()
-    .unwrap();
+/// `mesh` under the 68 deg cone, vertical contact, small strain.
+fn cone_model(mesh: CylinderMesher) -> Model {
     Model::with_contact(
-        mesh,
+        mesh.build().unwrap(),
         Punch::Cone {
             half_angle_deg: 68.0,
         },
@@ -39,18 +29,21 @@ fn model() -> Model {
     .unwrap()
 }
 
-/// R2's reference mesh under the 68 deg cone, vertical contact, small strain.
+/// A 2 x 2 mm cylinder, 10 x 10 Q8 graded 1.3 (the small mesh).
+fn model() -> Model {
+    cone_model(CylinderMesher {
+        radius: 2.0,
+        height: 2.0,
+        nr: 10,
+        nz: 10,
+        grading_r: 1.3,
+        grading_z: 1.3,
+    })
+}
+
+/// R2's reference mesh.
 fn reference_model() -> Model {
-    Model::with_contact(
-        CylinderMesher::REFERENCE.build().unwrap(),
-        Punch::Cone {
-            half_angle_deg: 68.0,
-        },
-        ContactKind::Vertical,
-    )
-    .unwrap()
-    .with_kinematics(Kinematics::Small)
-    .unwrap()
+    cone_model(CylinderMesher::REFERENCE)
 }
 
 fn opts() -> SolverOptions {
