@@ -34,17 +34,7 @@ pub(crate) fn predicted_chi2_decrease(
     id: &Identifiability,
 ) -> Option<f64> {
     let var = noise_variance(id)?;
-    // g = S^T r
-    let mut g = vec![0.0; columns.len()];
-    for ((row, w), (f, d)) in jac.iter().zip(weights).zip(forces.iter().zip(target)) {
-        if *w <= 0.0 {
-            continue;
-        }
-        let r = w * (f - d);
-        for (gk, col) in g.iter_mut().zip(columns) {
-            *gk += r * row[col.index] * col.dc_dy;
-        }
-    }
+    let g = crate::subspace::scaled_gradient(jac, forces, (weights, target), columns);
     let s_max = id.singular_values.first().copied()?;
     if !(s_max > 0.0 && s_max.is_finite()) {
         return None;
